@@ -1,0 +1,36 @@
+# objmap — set-up, build, test, demo and benchmarks. `make demo` and `make test` do all set-up.
+BUILD ?= build
+JOBS ?= 2
+DATA ?= $(if $(OBJMAP_DATA),$(OBJMAP_DATA),$(abspath ../shared/data))
+DEMO ?= out/demo
+OBJMAP := $(BUILD)/bin/objmap
+
+.PHONY: all deps configure build test demo bench format clean
+
+all: build
+
+deps:
+	@bash scripts/install-deps.sh
+
+$(BUILD)/CMakeCache.txt:
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DOBJMAP_BUILD_TESTS=ON -DOBJMAP_BUILD_BENCHMARKS=ON
+
+configure: $(BUILD)/CMakeCache.txt
+
+build: deps configure
+	cmake --build $(BUILD) -j$(JOBS)
+
+test: deps build
+	cd $(BUILD) && OBJMAP_DATA=$(DATA) ctest --output-on-failure -j$(JOBS)
+
+demo: deps build
+	@bash scripts/demo.sh $(OBJMAP) $(DEMO)
+
+bench: deps build
+	@bash scripts/bench.sh $(OBJMAP) $(DATA)
+
+format:
+	@bash scripts/format.sh
+
+clean:
+	rm -rf $(BUILD) out

@@ -1,0 +1,22 @@
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+
+// Each subcommand lives in its own file: an options struct, a `setup_<name>(CLI::App&)` that declares
+// the flags and a `run_<name>(const Options&)` that does the work and returns the exit code. The file
+// registers its setup with OBJMAP_COMMAND so main.cpp needs no list.
+namespace objmap::app {
+
+using SetupFn = std::function<void(CLI::App& parent)>;
+
+// Registers a subcommand; `order` sorts them in --help (the pipeline's order).
+bool register_command(int order, const std::string& name, SetupFn setup);
+
+// Calls every registered setup in order.
+void setup_all(CLI::App& app);
+
+}  // namespace objmap::app
+
+#define OBJMAP_COMMAND(order, name, fn) \
+  static const bool objmap_registered_##fn = ::objmap::app::register_command(order, name, fn)

@@ -1,0 +1,25 @@
+#pragma once
+#include <string>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+namespace objmap {
+
+// One pose of a trajectory: time in seconds and the camera pose in the world (TUM convention:
+// `t tx ty tz qx qy qz qw` is world_from_cam).
+struct StampedPose {
+  double timestamp = 0.0;
+  Pose world_from_cam = Pose::Identity();
+};
+
+// A trajectory sorted by strictly increasing timestamp (the readers enforce it).
+struct Trajectory {
+  std::vector<StampedPose> poses;
+  std::string source;  // file it came from, for messages
+
+  std::size_t size() const { return poses.size(); }
+  bool empty() const { return poses.empty(); }
+};
+
+}  // namespace objmap

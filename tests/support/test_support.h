@@ -1,0 +1,58 @@
+#pragma once
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace objmap::test {
+
+namespace fs = std::filesystem;
+
+// The real data folder: $OBJMAP_DATA, else <repo>/../shared/data.
+fs::path data_dir();
+
+// True when the real data folder has `relative` (e.g. "tum/fr1_desk_9").
+bool has_data(const std::string& relative);
+
+// With OBJMAP_REQUIRE_DATA=1 (CI sets it) a missing data folder is a failure, not a skip.
+bool data_required();
+
+// A fresh empty folder under the system temp dir, removed with the object.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+// Runs the built objmap binary with `args` (no shell interpretation of the arguments).
+RunResult run_objmap(const std::vector<std::string>& args);
+
+std::string read_text(const fs::path& file);
+void write_text(const fs::path& file, const std::string& text);
+// Copies a folder recursively (to make malformed copies of real data).
+void copy_tree(const fs::path& from, const fs::path& to);
+
+}  // namespace objmap::test
+
+// Declares `fs::path var` = data_dir()/relative, or skips the test (fails under OBJMAP_REQUIRE_DATA=1)
+// when that folder is not there.
+#define OBJMAP_DATA_OR_SKIP(var, relative)                                              \
+  const ::objmap::test::fs::path var = ::objmap::test::data_dir() / (relative);         \
+  if (!::objmap::test::fs::exists(var)) {                                               \
+    if (::objmap::test::data_required()) FAIL() << "real data missing: " << var;        \
+    GTEST_SKIP() << "real data missing: " << var << " (set OBJMAP_DATA to the folder)"; \
+  }
