@@ -1,0 +1,29 @@
+#pragma once
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+namespace objmap::app {
+
+// A progress bar on stderr: "fuse  [#######.....]  57/174  41.2 frames/s  ETA 3 s". On a terminal it
+// redraws one line; otherwise (CI, a log file) it prints a line at every 10% so logs stay short.
+class ProgressBar {
+ public:
+  ProgressBar(std::string label, std::size_t total, std::string unit = "frames");
+  void update(std::size_t done);
+  void finish();
+  ~ProgressBar();
+
+ private:
+  std::string label_;
+  std::size_t total_;
+  std::string unit_;
+  bool tty_;
+  bool finished_ = false;
+  int last_decile_ = -1;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_draw_{};
+  void draw(std::size_t done, bool final_line);
+};
+
+}  // namespace objmap::app
