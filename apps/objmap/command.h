@@ -3,9 +3,9 @@
 #include <functional>
 #include <string>
 
-// Each subcommand lives in its own file: an options struct, a `setup_<name>(CLI::App&)` that declares
-// the flags and a `run_<name>(const Options&)` that does the work and returns the exit code. The file
-// registers its setup with OBJMAP_COMMAND so main.cpp needs no list.
+// Each subcommand lives in its own file: an options struct, a `setup_<name>(CLI::App&)` that
+// declares the flags and a `run_<name>(const Options&)` that does the work and returns the exit
+// code. The file registers its setup with OBJMAP_COMMAND so main.cpp needs no list.
 namespace objmap::app {
 
 using SetupFn = std::function<void(CLI::App& parent)>;

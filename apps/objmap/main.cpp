@@ -1,5 +1,6 @@
-// objmap: turns a finished RGB-D SLAM run into an object map. One binary, subcommands in the order of
-// the pipeline. Exit codes: 0 success, 2 bad input or usage (one line on stderr), 1 internal error.
+// objmap: turns a finished RGB-D SLAM run into an object map. One binary, subcommands in the order
+// of the pipeline. Exit codes: 0 success, 2 bad input or usage (one line on stderr), 1 internal
+// error.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <exception>

@@ -5,8 +5,8 @@
 
 namespace objmap::app {
 
-// A progress bar on stderr: "fuse  [#######.....]  57/174  41.2 frames/s  ETA 3 s". On a terminal it
-// redraws one line; otherwise (CI, a log file) it prints a line at every 10% so logs stay short.
+// A progress bar on stderr: "fuse  [#######.....]  57/174  41.2 frames/s  ETA 3 s". On a terminal
+// it redraws one line; otherwise (CI, a log file) it prints a line at every 10% so logs stay short.
 class ProgressBar {
  public:
   ProgressBar(std::string label, std::size_t total, std::string unit = "frames");

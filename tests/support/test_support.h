@@ -48,8 +48,8 @@ void copy_tree(const fs::path& from, const fs::path& to);
 
 }  // namespace objmap::test
 
-// Declares `fs::path var` = data_dir()/relative, or skips the test (fails under OBJMAP_REQUIRE_DATA=1)
-// when that folder is not there.
+// Declares `fs::path var` = data_dir()/relative, or skips the test (fails under
+// OBJMAP_REQUIRE_DATA=1) when that folder is not there.
 #define OBJMAP_DATA_OR_SKIP(var, relative)                                              \
   const ::objmap::test::fs::path var = ::objmap::test::data_dir() / (relative);         \
   if (!::objmap::test::fs::exists(var)) {                                               \

@@ -1,0 +1,62 @@
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "objmap/pipeline/config.h"
+
+namespace objmap::app {
+
+// Declares one flag per field of a command's config table, bound to the options struct, and applies
+// a --config file afterwards to the fields whose flag was not given (flags win over the file).
+class ConfigFlags {
+ public:
+  // table_of(Options&) -> std::vector<pipeline::ConfigField>
+  template <typename Options, typename TableFn>
+  ConfigFlags(CLI::App* cmd, TableFn table_of, Options& options) {
+    fields_ = table_of(options);
+    for (auto& f : fields_) {
+      CLI::Option* opt = nullptr;
+      std::visit(
+          [&](auto* target) {
+            using T = std::remove_pointer_t<decltype(target)>;
+            if constexpr (std::is_same_v<T, bool>)
+              opt = cmd->add_option(f.flag, *target, f.help + " (true/false)");
+            else
+              opt = cmd->add_option(f.flag, *target, f.help);
+          },
+          f.target);
+      opt->capture_default_str()->group("Tuning (also in --config)");
+      options_.push_back(opt);
+    }
+    apply_ = [this, table_of](const std::string& file, void* opts) {
+      Options& target = *static_cast<Options*>(opts);
+      Options from_file = target;  // flags already applied; the file fills the rest
+      auto file_fields = table_of(from_file);
+      pipeline::apply_config_file(file, file_fields);
+      auto target_fields = table_of(target);
+      for (std::size_t i = 0; i < target_fields.size(); ++i) {
+        if (options_[i]->count() > 0) continue;
+        std::visit(
+            [&](auto* dst) {
+              using P = decltype(dst);
+              *dst = *std::get<P>(file_fields[i].target);
+            },
+            target_fields[i].target);
+      }
+    };
+  }
+
+  template <typename Options>
+  void apply_config(const std::string& file, Options& options) {
+    if (!file.empty()) apply_(file, &options);
+  }
+
+ private:
+  std::vector<pipeline::ConfigField> fields_;
+  std::vector<CLI::Option*> options_;
+  std::function<void(const std::string&, void*)> apply_;
+};
+
+}  // namespace objmap::app

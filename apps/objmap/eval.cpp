@@ -1,0 +1,182 @@
+// objmap eval: evaluation against ground truth, a group of subcommands. Each subcommand is an
+// options struct, a setup_eval_<name>(CLI::App& eval) that declares its flags and a
+// run_eval_<name>() that does the work. To add one, write those three below and list
+// setup_eval_<name> in kEvalSubcommands.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "command.h"
+#include "objmap/eval/ate.h"
+#include "objmap/eval/format.h"
+#include "objmap/eval/json.h"
+#include "objmap/eval/rpe.h"
+#include "objmap/io/atomic.h"
+#include "objmap/io/trajectory.h"
+
+namespace objmap::app {
+
+namespace {
+
+// One row "  rmse    0.013473" per statistic; `columns` are printed side by side.
+void print_stats_rows(std::ostream& out, const std::vector<const eval::ErrorStats*>& columns) {
+  const auto row = [&](const char* name, double eval::ErrorStats::*field) {
+    char label[16];
+    std::snprintf(label, sizeof(label), "  %-8s", name);
+    out << label;
+    for (const eval::ErrorStats* s : columns) {
+      char cell[32];
+      std::snprintf(cell, sizeof(cell), "%16.6f", s->*field);
+      out << cell;
+    }
+    out << "\n";
+  };
+  row("rmse", &eval::ErrorStats::rmse);
+  row("mean", &eval::ErrorStats::mean);
+  row("median", &eval::ErrorStats::median);
+  row("std", &eval::ErrorStats::stddev);
+  row("min", &eval::ErrorStats::min);
+  row("max", &eval::ErrorStats::max);
+}
+
+// ---- objmap eval ate
+// ------------------------------------------------------------------------------
+
+struct EvalAteArgs {
+  std::string gt_file;
+  std::string est_file;
+  eval::AteOptions options;
+  std::string save_aligned_file;  // empty: not written
+  std::string json_file;          // empty: not written
+};
+
+void run_eval_ate(const EvalAteArgs& args) {
+  const Trajectory gt = io::read_trajectory(args.gt_file);
+  const Trajectory est = io::read_trajectory(args.est_file);
+  const eval::AteResult result = eval::evaluate_ate(gt, est, args.options);
+
+  const eval::Similarity& a = result.gt_from_est;
+  if (!args.save_aligned_file.empty())
+    io::write_trajectory(args.save_aligned_file, result.aligned,
+                         "objmap eval ate: " + args.est_file + " aligned onto " + args.gt_file +
+                             "\n" + (args.options.with_scale ? "sim3" : "se3") +
+                             " alignment, scale " + eval::number_text(a.scale));
+  if (!args.json_file.empty())
+    io::write_file_atomic(args.json_file, eval::ate_json(result, args.options));
+
+  std::cout << "ATE  " << args.est_file << "  vs  " << args.gt_file << "\n"
+            << "  pairs   " << result.stats.count
+            << " (max_diff " + eval::number_text(args.options.max_diff_s) << " s, offset "
+            << eval::number_text(args.options.offset_s) << " s)\n"
+            << "  align   " << (args.options.with_scale ? "sim3" : "se3") << ", scale "
+            << eval::fixed_text(a.scale, 6) << ", translation ["
+            << eval::fixed_text(a.translation.x(), 4) << ", "
+            << eval::fixed_text(a.translation.y(), 4) << ", "
+            << eval::fixed_text(a.translation.z(), 4) << "] m\n"
+            << "  translational error [m]\n";
+  print_stats_rows(std::cout, {&result.stats});
+}
+
+void setup_eval_ate(CLI::App& eval_app) {
+  auto args = std::make_shared<EvalAteArgs>();
+  CLI::App* cmd = eval_app.add_subcommand(
+      "ate",
+      "Absolute trajectory error (as TUM's evaluate_ate.py): associate stamps, align the "
+      "estimate onto the ground truth (rigid; --scale: with scale), position error statistics");
+  cmd->add_option("--gt", args->gt_file, "Ground-truth trajectory (TUM format)")->required();
+  cmd->add_option("--est", args->est_file, "Estimated trajectory (TUM format)")->required();
+  cmd->add_option("--max-diff", args->options.max_diff_s,
+                  "Largest stamp difference of a pose pair, seconds")
+      ->capture_default_str();
+  cmd->add_option("--offset", args->options.offset_s,
+                  "Time offset added to the estimate's stamps, seconds")
+      ->capture_default_str();
+  cmd->add_flag("--scale", args->options.with_scale,
+                "Also estimate a scale (Sim(3), Umeyama), e.g. for monocular runs");
+  cmd->add_option("--save-aligned", args->save_aligned_file,
+                  "Write the aligned estimate here (TUM format)");
+  cmd->add_option("--json", args->json_file, "Write the result as JSON here");
+  cmd->callback([args] { run_eval_ate(*args); });
+}
+
+// ---- objmap eval rpe
+// ------------------------------------------------------------------------------
+
+struct EvalRpeArgs {
+  std::string gt_file;
+  std::string est_file;
+  eval::RpeOptions options;
+  std::string delta_unit = "s";
+  double max_diff_s = 0.0;  // used only when --max-diff is given (max_diff_given)
+  bool max_diff_given = false;
+  std::string json_file;
+};
+
+void run_eval_rpe(EvalRpeArgs args) {
+  args.options.delta_unit = eval::parse_delta_unit(args.delta_unit);
+  if (args.max_diff_given) args.options.max_diff_s = args.max_diff_s;
+  args.options.check();  // bad options before reading the files
+  const Trajectory gt = io::read_trajectory(args.gt_file);
+  const Trajectory est = io::read_trajectory(args.est_file);
+  const eval::RpeResult result = eval::evaluate_rpe(gt, est, args.options);
+  if (!args.json_file.empty())
+    io::write_file_atomic(args.json_file, eval::rpe_json(result, args.options));
+
+  std::cout << "RPE  " << args.est_file << "  vs  " << args.gt_file << "\n"
+            << "  pairs   " << result.pairs.size() << " (delta "
+            << eval::number_text(args.options.delta) << " "
+            << eval::to_string(args.options.delta_unit) << ", max_diff "
+            << eval::fixed_text(result.max_diff_s, 4) << " s, offset "
+            << eval::number_text(args.options.offset_s) << " s)\n"
+            << "          translational [m]  rotational [deg]\n";
+  print_stats_rows(std::cout, {&result.translational_m, &result.rotational_deg});
+}
+
+void setup_eval_rpe(CLI::App& eval_app) {
+  auto args = std::make_shared<EvalRpeArgs>();
+  CLI::App* cmd = eval_app.add_subcommand(
+      "rpe",
+      "Relative pose error (as TUM's evaluate_rpe.py --fixed_delta): error of the motion "
+      "over delta, translational and rotational statistics");
+  cmd->add_option("--gt", args->gt_file, "Ground-truth trajectory (TUM format)")->required();
+  cmd->add_option("--est", args->est_file, "Estimated trajectory (TUM format)")->required();
+  cmd->add_option("--delta", args->options.delta, "Length of the compared motions, in --delta-unit")
+      ->capture_default_str();
+  cmd->add_option("--delta-unit", args->delta_unit,
+                  "s (seconds), m (metres travelled), rad or deg (rotation), f (frames)")
+      ->capture_default_str();
+  cmd->add_option("--offset", args->options.offset_s,
+                  "Time offset added to the estimate's stamps, seconds")
+      ->capture_default_str();
+  CLI::Option* max_diff = cmd->add_option(
+      "--max-diff", args->max_diff_s,
+      "Largest stamp difference between an estimate pose and its ground-truth pose, "
+      "seconds (default: 2 x the median ground-truth interval, as evaluate_rpe.py)");
+  cmd->add_option("--json", args->json_file, "Write the result as JSON here");
+  cmd->callback([args, max_diff] {
+    args->max_diff_given = max_diff->count() > 0;
+    run_eval_rpe(*args);
+  });
+}
+
+// ---- the group
+// ------------------------------------------------------------------------------------
+
+// The subcommands of `objmap eval`, in --help order.
+const SetupFn kEvalSubcommands[] = {setup_eval_ate, setup_eval_rpe};
+
+void setup_eval(CLI::App& app) {
+  CLI::App* eval_app = app.add_subcommand(
+      "eval", "Evaluate against ground truth: trajectories (ate, rpe), objects, tracks");
+  eval_app->require_subcommand(1);
+  for (const SetupFn& setup : kEvalSubcommands) setup(*eval_app);
+}
+
+}  // namespace
+
+OBJMAP_COMMAND(60, "eval", setup_eval);
+
+}  // namespace objmap::app

@@ -1,0 +1,93 @@
+// objmap fuse: the object-oriented semantic map from a trajectory, RGB-D frames and instances.
+#include <cstdio>
+#include <memory>
+
+#include "command.h"
+#include "config_flags.h"
+#include "objmap/pipeline/fuse.h"
+#include "progress.h"
+
+namespace objmap::app {
+namespace {
+
+void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseResult& r) {
+  std::printf("camera      %s (%s)\n", r.camera.name.c_str(), r.camera_reason.c_str());
+  std::printf("keyframes   %zu of %zu frames (%zu with a pose; mode %s)\n",
+              r.keyframes.keyframes.size(), r.frames, r.keyframes.frames_with_pose,
+              r.keyframes.mode.c_str());
+  std::printf("instances   %zu (format %s; %zu masks from boxes, %zu without usable points)\n",
+              r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_empty);
+  std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass)\n", r.objects.size(),
+              r.objects_total, r.merges.size());
+  std::printf("\n  %4s  %-16s %9s %9s %9s  %8s  %5s\n", "id", "class", "x", "y", "z", "points",
+              "obs");
+  for (const auto& o : r.objects)
+    std::printf("  %4d  %-16s %9.3f %9.3f %9.3f  %8zu  %5d\n", o.id, o.class_name.c_str(),
+                o.centroid.x(), o.centroid.y(), o.centroid.z(), o.points_filtered, o.observations);
+  const auto pct = [](double before, double after) {
+    return before > 0 ? 100.0 * (1.0 - after / before) : 0.0;
+  };
+  std::printf("\npoints      dense: %llu back-projected -> %zu in the map (1 voxel = 1 point)\n",
+              static_cast<unsigned long long>(r.dense_points_raw), r.dense_points_map);
+  std::printf("            objects: %zu -> %zu voxel-filtered -> %zu outlier-filtered (-%.1f%%)\n",
+              r.object_points_raw, r.object_points_voxel, r.object_points_filtered,
+              pct(r.object_points_raw, r.object_points_filtered));
+  const std::size_t kf = r.keyframes.keyframes.size();
+  std::printf("time        %.2f s (%.1f ms per keyframe), peak memory %.0f MB\n", r.seconds_total,
+              kf ? 1000.0 * r.seconds_total / kf : 0.0, r.peak_rss_kb / 1024.0);
+  std::printf(
+      "written     %s/{objects.json, objects/, map_dense.ply, map_semantic.ply, "
+      "map_objects.ply, run.json}\n",
+      options.out.c_str());
+}
+
+void setup_fuse(CLI::App& app) {
+  auto options = std::make_shared<pipeline::FuseOptions>();
+  auto config = std::make_shared<std::string>();
+  auto* cmd = app.add_subcommand(
+      "fuse",
+      "Build the object-oriented semantic map (paper 3.2-3.3): back-project the keyframes, "
+      "associate "
+      "each instance with an object by track ID, centroid distance and voxel overlap (eq 22), "
+      "confirm objects seen >= 3 times, filter outliers (eq 18). Writes OUT/objects.json, "
+      "OUT/objects/<id>_<class>.ply, OUT/map_dense.ply, OUT/map_semantic.ply, OUT/map_objects.ply, "
+      "OUT/run.json.");
+  cmd->add_option("--dataset", options->dataset,
+                  "TUM RGB-D folder (rgb.txt, depth.txt, rgb/, depth/)")
+      ->required();
+  cmd->add_option(
+         "--trajectory", options->trajectory,
+         "trajectory, TUM format (ORB-SLAM2 KeyFrameTrajectory.txt / CameraTrajectory.txt, "
+         "groundtruth.txt)")
+      ->required();
+  cmd->add_option("--segmentation", options->segmentation,
+                  "segmentation folder (canonical JSON, PNG instance images, paper txt, box txt)")
+      ->required();
+  cmd->add_option("--out", options->out, "run folder to write (replaced when complete)")
+      ->required();
+  cmd->add_option(
+      "--camera", options->camera,
+      "preset fr1|fr2|fr3, ORB-SLAM2 .yaml or camera .json (default: camera.json in the "
+      "dataset, else from the folder name or rgb.txt header)");
+  cmd->add_option("--config", *config,
+                  "JSON file with any of the options below (keys as in run.json 'options'); flags "
+                  "given on the command line win");
+  auto flags = std::make_shared<ConfigFlags>(
+      cmd, [](pipeline::FuseOptions& o) { return pipeline::fuse_config_fields(o); }, *options);
+  cmd->callback([options, config, flags] {
+    flags->apply_config(*config, *options);
+    std::unique_ptr<ProgressBar> bar;
+    const auto result = pipeline::run_fuse(*options, [&](std::size_t done, std::size_t total) {
+      if (!bar) bar = std::make_unique<ProgressBar>("fuse", total, "keyframes");
+      bar->update(done);
+    });
+    if (bar) bar->finish();
+    print_summary(*options, result);
+  });
+}
+
+}  // namespace
+
+OBJMAP_COMMAND(40, "fuse", setup_fuse);
+
+}  // namespace objmap::app

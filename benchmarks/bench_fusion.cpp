@@ -1,0 +1,293 @@
+// Hot paths of `objmap fuse` on 640×480 frames, with PCL's filters on the same data for comparison.
+// Real frames come from $OBJMAP_DATA (default <repo>/../shared/data)/tum/fr1_rpy_every4; without them
+// the frame benchmarks use a synthetic depth image (a tilted plane with a box).
+//   build-*/bin/bench_fusion --benchmark_min_time=0.5
+#include <benchmark/benchmark.h>
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "objmap/filters/outlier.h"
+#include "objmap/filters/voxel.h"
+#include "objmap/fusion/object_map.h"
+#include "objmap/fusion/voxel_map.h"
+#include "objmap/geometry/backproject.h"
+
+namespace fs = std::filesystem;
+using namespace objmap;
+
+namespace {
+
+fs::path data_dir() {
+  if (const char* env = std::getenv("OBJMAP_DATA")) return env;
+  return fs::path(OBJMAP_SOURCE_DIR) / ".." / "shared" / "data";
+}
+
+// The first `n` (rgb, depth) file pairs of fr1_rpy_every4 (by sorted file name), or none.
+std::vector<std::pair<fs::path, fs::path>> real_frames(std::size_t n) {
+  const fs::path dir = data_dir() / "tum" / "fr1_rpy_every4";
+  std::vector<std::pair<fs::path, fs::path>> out;
+  if (!fs::exists(dir / "rgb") || !fs::exists(dir / "depth")) return out;
+  std::vector<fs::path> rgb, depth;
+  for (const auto& e : fs::directory_iterator(dir / "rgb")) rgb.push_back(e.path());
+  for (const auto& e : fs::directory_iterator(dir / "depth")) depth.push_back(e.path());
+  std::sort(rgb.begin(), rgb.end());
+  std::sort(depth.begin(), depth.end());
+  for (std::size_t i = 0; i < std::min({n, rgb.size(), depth.size()}); ++i)
+    out.emplace_back(rgb[i], depth[i]);
+  return out;
+}
+
+struct Frame {
+  cv::Mat bgr, depth;
+  Pose world_from_cam = Pose::Identity();
+};
+
+// A real frame when the data is there, else a synthetic one.
+const Frame& test_frame() {
+  static const Frame frame = [] {
+    Frame f;
+    const auto files = real_frames(1);
+    if (!files.empty()) {
+      f.bgr = cv::imread(files[0].first.string(), cv::IMREAD_COLOR);
+      f.depth = cv::imread(files[0].second.string(), cv::IMREAD_UNCHANGED);
+    }
+    if (f.depth.empty()) {
+      f.bgr = cv::Mat(480, 640, CV_8UC3);
+      f.depth = cv::Mat(480, 640, CV_16UC1);
+      for (int v = 0; v < 480; ++v)
+        for (int u = 0; u < 640; ++u) {
+          const bool box = u > 250 && u < 400 && v > 200 && v < 330;
+          f.depth.at<std::uint16_t>(v, u) =
+              static_cast<std::uint16_t>(box ? 5000 : 6000 + 8 * v + (u * 7919 % 13 == 0 ? 0 : 1));
+          f.bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(u % 256, v % 256, 77);
+        }
+    }
+    f.world_from_cam.linear() =
+        Eigen::AngleAxisd(0.4, Vec3(0.2, 1.0, 0.1).normalized()).toRotationMatrix();
+    f.world_from_cam.translation() = Vec3(1.3, 0.6, 1.5);
+    return f;
+  }();
+  return frame;
+}
+
+const geometry::RayTable& rays() {
+  static const geometry::RayTable table = geometry::make_ray_table(camera_preset("fr1"));
+  return table;
+}
+
+// A surface-like cloud of n points (noisy sphere patches) with 0.5% scattered outliers.
+PointCloud surface_cloud(std::size_t n) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uni(0.f, 1.f);
+  std::normal_distribution<float> noise(0.f, 0.002f);
+  PointCloud c;
+  c.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 200 == 199) {
+      c.push_back(Vec3f(uni(rng) * 3, uni(rng) * 3, uni(rng) * 3), Rgb{1, 2, 3});
+      continue;
+    }
+    const float th = uni(rng) * 3.14159f, ph = uni(rng) * 6.28318f;
+    c.push_back(Vec3f(1.5f + 0.5f * std::sin(th) * std::cos(ph) + noise(rng),
+                      1.5f + 0.5f * std::sin(th) * std::sin(ph) + noise(rng),
+                      1.5f + 0.5f * std::cos(th) + noise(rng)),
+                Rgb{static_cast<std::uint8_t>(i), 100, 200});
+  }
+  return c;
+}
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const PointCloud& c) {
+  auto out = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  out->resize(c.size());
+  for (std::size_t i = 0; i < c.size(); ++i)
+    (*out)[i] = pcl::PointXYZ(c.points[i].x(), c.points[i].y(), c.points[i].z());
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reference: decoding one frame's PNGs (what `fuse` must read anyway).
+
+void BM_DecodeFramePngs(benchmark::State& state) {
+  const auto files = real_frames(8);
+  if (files.empty()) {
+    state.SkipWithError("real data missing (OBJMAP_DATA)");
+    return;
+  }
+  std::vector<std::vector<unsigned char>> rgb, depth;
+  for (const auto& [r, d] : files) {
+    std::ifstream fr(r, std::ios::binary), fd(d, std::ios::binary);
+    rgb.emplace_back(std::istreambuf_iterator<char>(fr), std::istreambuf_iterator<char>());
+    depth.emplace_back(std::istreambuf_iterator<char>(fd), std::istreambuf_iterator<char>());
+  }
+  std::size_t i = 0;
+  for (auto _ : state) {
+    cv::Mat a = cv::imdecode(rgb[i % rgb.size()], cv::IMREAD_COLOR);
+    cv::Mat b = cv::imdecode(depth[i % depth.size()], cv::IMREAD_UNCHANGED);
+    benchmark::DoNotOptimize(a.data);
+    benchmark::DoNotOptimize(b.data);
+    ++i;
+  }
+  state.SetLabel("rgb + depth PNG, 640x480, from memory");
+}
+BENCHMARK(BM_DecodeFramePngs)->Unit(benchmark::kMillisecond);
+
+// ---------------------------------------------------------------------------------------------
+// Back-projection.
+
+void BM_MakeRayTable(benchmark::State& state) {
+  const Camera camera = camera_preset("fr1");
+  for (auto _ : state) benchmark::DoNotOptimize(geometry::make_ray_table(camera).x_over_z.data());
+}
+BENCHMARK(BM_MakeRayTable)->Unit(benchmark::kMillisecond);
+
+void BM_BackprojectFrame(benchmark::State& state) {
+  const Frame& f = test_frame();
+  geometry::BackprojectOptions options;
+  options.stride = static_cast<int>(state.range(0));
+  std::size_t points = 0;
+  for (auto _ : state) {
+    const auto r = geometry::backproject(rays(), {f.depth, f.world_from_cam, &f.bgr}, options);
+    points = r.points_in_world.size();
+    benchmark::DoNotOptimize(r.points_in_world.points.data());
+  }
+  state.counters["points"] = static_cast<double>(points);
+}
+BENCHMARK(BM_BackprojectFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// ---------------------------------------------------------------------------------------------
+// Dense voxel map: one back-projected frame inserted into a map that already holds it (steady
+// state of a slowly moving camera), 1 and 2 threads.
+
+void BM_VoxelMapInsertFrame(benchmark::State& state) {
+  const Frame& f = test_frame();
+  const auto cloud =
+      geometry::backproject(rays(), {f.depth, f.world_from_cam, &f.bgr}).points_in_world;
+  fusion::VoxelMap map({0.01, static_cast<int>(state.range(0))});
+  map.insert(cloud);
+  for (auto _ : state) map.insert(cloud);
+  state.counters["points"] = static_cast<double>(cloud.size());
+  state.counters["voxels"] = static_cast<double>(map.size());
+  state.counters["Mpts/s"] = benchmark::Counter(static_cast<double>(cloud.size()) * state.iterations() / 1e6,
+                                                benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Back-projection + insertion, the whole per-frame dense-map work, on real consecutive frames (poses
+// identity: the worst case for voxel reuse is a moving camera, the best a static one).
+void BM_DenseMapRealFrames(benchmark::State& state) {
+  const auto files = real_frames(16);
+  if (files.empty()) {
+    state.SkipWithError("real data missing (OBJMAP_DATA)");
+    return;
+  }
+  std::vector<Frame> frames;
+  for (const auto& [r, d] : files)
+    frames.push_back({cv::imread(r.string(), cv::IMREAD_COLOR), cv::imread(d.string(), cv::IMREAD_UNCHANGED)});
+  fusion::VoxelMap map({0.01, static_cast<int>(state.range(0))});
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Frame& f = frames[i++ % frames.size()];
+    const auto r = geometry::backproject(rays(), {f.depth, f.world_from_cam, &f.bgr});
+    map.insert(r.points_in_world);
+  }
+  state.counters["voxels"] = static_cast<double>(map.size());
+  state.counters["MB"] = static_cast<double>(map.memory_bytes()) / 1e6;
+}
+BENCHMARK(BM_DenseMapRealFrames)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// ---------------------------------------------------------------------------------------------
+// Filters on 100k points: objmap's (PCL kd-tree, own statistics) against PCL's classes.
+
+void BM_OutlierObjmap100k(benchmark::State& state) {
+  const PointCloud c = surface_cloud(100000);
+  filters::OutlierOptions options;
+  options.threads = static_cast<int>(state.range(0));
+  std::size_t kept = 0;
+  for (auto _ : state) kept = filters::remove_outliers(c, options).kept.size();
+  state.counters["kept"] = static_cast<double>(kept);
+}
+BENCHMARK(BM_OutlierObjmap100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_OutlierPclSor100k(benchmark::State& state) {
+  const auto c = to_pcl(surface_cloud(100000));
+  std::size_t kept = 0;
+  for (auto _ : state) {
+    pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+    sor.setInputCloud(c);
+    sor.setMeanK(20);
+    sor.setStddevMulThresh(1.0);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    sor.filter(out);
+    kept = out.size();
+  }
+  state.counters["kept"] = static_cast<double>(kept);
+}
+BENCHMARK(BM_OutlierPclSor100k)->Unit(benchmark::kMillisecond);
+
+void BM_VoxelFilterObjmap100k(benchmark::State& state) {
+  const PointCloud c = surface_cloud(100000);
+  std::size_t kept = 0;
+  for (auto _ : state) kept = filters::voxel_filter(c, {0.01}).kept.size();
+  state.counters["kept"] = static_cast<double>(kept);
+}
+BENCHMARK(BM_VoxelFilterObjmap100k)->Unit(benchmark::kMillisecond);
+
+void BM_VoxelFilterPclVoxelGrid100k(benchmark::State& state) {
+  const auto c = to_pcl(surface_cloud(100000));
+  std::size_t kept = 0;
+  for (auto _ : state) {
+    pcl::VoxelGrid<pcl::PointXYZ> grid;
+    grid.setInputCloud(c);
+    grid.setLeafSize(0.01f, 0.01f, 0.01f);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    grid.filter(out);
+    kept = out.size();
+  }
+  state.counters["kept"] = static_cast<double>(kept);
+}
+BENCHMARK(BM_VoxelFilterPclVoxelGrid100k)->Unit(benchmark::kMillisecond);
+
+// ---------------------------------------------------------------------------------------------
+// Object map: one observation (a masked 160×120 region: ~19k points) against 20 objects.
+
+void BM_ObjectMapAdd(benchmark::State& state) {
+  const Frame& f = test_frame();
+  segmentation::Mask mask;
+  mask.width = 640;
+  mask.height = 480;
+  mask.data.assign(640 * 480, 0);
+  for (int v = 180; v < 300; ++v)
+    for (int u = 240; u < 400; ++u) mask.data[v * 640 + u] = 1;
+  const auto points =
+      geometry::backproject(rays(), {f.depth, f.world_from_cam, &f.bgr, &mask}).points_in_world;
+  fusion::ObjectMap map;
+  for (int k = 0; k < 20; ++k) {  // 20 other objects, 30 cm apart
+    fusion::Observation o;
+    o.class_name = "book";
+    o.track_id = 100 + k;
+    for (const Vec3f& p : points.points) o.points_in_world.push_back(p + Vec3f(0.3f * (k + 1), 0, 0));
+    map.add(o);
+  }
+  fusion::Observation o;
+  o.class_name = "cup";
+  o.track_id = 1;
+  o.points_in_world = points;
+  for (auto _ : state) benchmark::DoNotOptimize(map.add(o).object_id);
+  state.counters["points"] = static_cast<double>(points.size());
+}
+BENCHMARK(BM_ObjectMapAdd)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

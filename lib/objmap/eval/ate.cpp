@@ -1,0 +1,105 @@
+#include "objmap/eval/ate.h"
+
+#include <Eigen/SVD>
+#include <cmath>
+
+#include "objmap/core/error.h"
+#include "objmap/eval/format.h"
+
+namespace objmap::eval {
+
+void AteOptions::check() const {
+  require(std::isfinite(max_diff_s) && max_diff_s > 0.0, "AteOptions.max_diff_s",
+          "is " + number_text(max_diff_s) + "; expected a finite number of seconds > 0");
+  require(std::isfinite(offset_s), "AteOptions.offset_s",
+          "is " + number_text(offset_s) + "; expected a finite number of seconds");
+}
+
+Vec3 Similarity::operator*(const Vec3& point_in_source) const {
+  return scale * (rotation * point_in_source) + translation;
+}
+
+Pose Similarity::apply(const Pose& source_world_from_cam) const {
+  Pose pose = Pose::Identity();
+  pose.linear() = rotation * source_world_from_cam.linear();
+  pose.translation() = (*this) * source_world_from_cam.translation();
+  return pose;
+}
+
+Similarity align_points(const std::vector<Vec3>& source, const std::vector<Vec3>& target,
+                        bool with_scale) {
+  require(source.size() == target.size() && !source.empty(), "align_points",
+          std::to_string(source.size()) + " source and " + std::to_string(target.size()) +
+              " target points; expected the same number, at least 1");
+  const double n = static_cast<double>(source.size());
+  Vec3 source_mean = Vec3::Zero(), target_mean = Vec3::Zero();
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    source_mean += source[i];
+    target_mean += target[i];
+  }
+  source_mean /= n;
+  target_mean /= n;
+
+  // W = Σ source_c · target_cᵀ (evaluate_ate.py: model = estimate, data = ground truth).
+  Eigen::Matrix3d w = Eigen::Matrix3d::Zero();
+  double source_spread = 0.0;  // Σ‖source_c‖², n·σ² of Umeyama
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    const Vec3 s = source[i] - source_mean;
+    w += s * (target[i] - target_mean).transpose();
+    source_spread += s.squaredNorm();
+  }
+  // Wᵀ = U D Vᵀ; R = U S Vᵀ with S = diag(1, 1, ±1) making R proper (Horn / Umeyama).
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(w.transpose(),
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Vector3d s_diag(1.0, 1.0, 1.0);
+  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0) s_diag(2) = -1.0;
+  Similarity result;
+  result.rotation = svd.matrixU() * s_diag.asDiagonal() * svd.matrixV().transpose();
+  if (with_scale) {
+    // Umeyama (1991) eq. 42: s = tr(D S) / (n σ²_source).
+    require(
+        source_spread > 0.0, "align_points",
+        "all estimate positions coincide; expected a trajectory that moves to estimate a scale");
+    result.scale = svd.singularValues().dot(s_diag) / source_spread;
+  }
+  result.translation = target_mean - result.scale * (result.rotation * source_mean);
+  return result;
+}
+
+AteResult evaluate_ate(const Trajectory& gt, const Trajectory& est, const AteOptions& options) {
+  options.check();
+  AteResult result;
+  result.gt_source = gt.source;
+  result.est_source = est.source;
+  // 1. Associate the stamps (associate.py); evaluate_ate.py needs at least 2 pairs.
+  AssociateOptions association;
+  association.max_diff_s = options.max_diff_s;
+  association.offset_s = options.offset_s;
+  result.matches = associate(gt, est, association);
+  require_pairs(result.matches, 2, gt, est, association);
+
+  // 2. Align the estimate's positions onto the ground truth's (evaluate_ate.py `align`).
+  std::vector<Vec3> est_points, gt_points;
+  est_points.reserve(result.matches.size());
+  gt_points.reserve(result.matches.size());
+  for (const StampMatch& m : result.matches) {
+    est_points.push_back(est.poses[m.est_index].world_from_cam.translation());
+    gt_points.push_back(gt.poses[m.gt_index].world_from_cam.translation());
+  }
+  result.gt_from_est = align_points(est_points, gt_points, options.with_scale);
+
+  // 3. Translational error of each pair and its statistics.
+  result.errors_m.reserve(result.matches.size());
+  for (std::size_t i = 0; i < est_points.size(); ++i)
+    result.errors_m.push_back((result.gt_from_est * est_points[i] - gt_points[i]).norm());
+  result.stats = compute_stats(result.errors_m);
+
+  // 4. The whole estimate in the ground truth's world (for --save-aligned and plots).
+  result.aligned.source = est.source;
+  result.aligned.poses.reserve(est.size());
+  for (const StampedPose& p : est.poses)
+    result.aligned.poses.push_back({p.timestamp, result.gt_from_est.apply(p.world_from_cam)});
+  return result;
+}
+
+}  // namespace objmap::eval

@@ -1,0 +1,336 @@
+#include "objmap/fusion/object_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "objmap/core/error.h"
+#include "objmap/geometry/bounds.h"
+#include "objmap/fusion/palette.h"
+
+namespace objmap::fusion {
+
+void ObjectMapOptions::check() const {
+  auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  require(std::isfinite(voxel_m) && voxel_m >= 1e-4 && voxel_m <= 100.0, "ObjectMapOptions.voxel_m",
+          "must be in [0.0001, 100] metres, got " + std::to_string(voxel_m));
+  require(std::isfinite(distance_gate_m) && distance_gate_m > 0.0, "ObjectMapOptions.distance_gate_m",
+          "must be > 0, got " + std::to_string(distance_gate_m));
+  require(finite_nonneg(weight_id), "ObjectMapOptions.weight_id",
+          "must be >= 0, got " + std::to_string(weight_id));
+  require(finite_nonneg(weight_distance), "ObjectMapOptions.weight_distance",
+          "must be >= 0, got " + std::to_string(weight_distance));
+  require(finite_nonneg(weight_overlap), "ObjectMapOptions.weight_overlap",
+          "must be >= 0, got " + std::to_string(weight_overlap));
+  require(weight_id + weight_distance + weight_overlap > 0.0, "ObjectMapOptions.weight_*",
+          "at least one weight must be > 0");
+  require(finite_nonneg(match_threshold), "ObjectMapOptions.match_threshold",
+          "must be >= 0, got " + std::to_string(match_threshold));
+  require(finite_nonneg(merge_threshold), "ObjectMapOptions.merge_threshold",
+          "must be >= 0, got " + std::to_string(merge_threshold));
+  require(min_observations >= 1, "ObjectMapOptions.min_observations",
+          "must be >= 1, got " + std::to_string(min_observations));
+  require(min_points >= 1, "ObjectMapOptions.min_points",
+          "must be >= 1, got " + std::to_string(min_points));
+}
+
+struct ObjectMap::Object {
+  int id = -1;
+  bool alive = true;
+  int absorbed_into = -1;
+  VoxelMap voxels;
+  Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();  // voxel bounds
+  Vec3 centroid = Vec3::Zero();                                                // voxel-weighted
+  std::map<std::string, ClassVote> histogram;
+  double score_sum = 0.0;
+  int observations = 0;
+  std::set<int> track_ids;
+  double first_seen = 0.0, last_seen = 0.0;
+  std::vector<ObservationLink> provenance;
+  std::vector<MergeLink> merges;
+
+  explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
+  void refresh() {
+    voxels.key_bounds(lo, hi);
+    centroid = voxels.centroid();
+  }
+};
+
+ObjectMap::ObjectMap(const ObjectMapOptions& options) : options_(options) { options_.check(); }
+ObjectMap::~ObjectMap() = default;
+ObjectMap::ObjectMap(ObjectMap&&) noexcept = default;
+ObjectMap& ObjectMap::operator=(ObjectMap&&) noexcept = default;
+
+std::string ObjectMap::voted_class(const Object& o) {
+  // Score-weighted vote; ties: more observations, then the smaller name (deterministic).
+  const std::pair<const std::string, ClassVote>* best = nullptr;
+  for (const auto& entry : o.histogram) {
+    if (!best || entry.second.score_sum > best->second.score_sum ||
+        (entry.second.score_sum == best->second.score_sum && entry.second.count > best->second.count))
+      best = &entry;
+  }
+  return best ? best->first : std::string();
+}
+
+ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, const VoxelMap& a,
+                                   const Eigen::Vector3i& a_lo, const Eigen::Vector3i& a_hi,
+                                   const Object& b) const {
+  const ObjectMapOptions& o = options_;
+  Scores s;
+  s.p_id = same_id ? 1.0 : 0.0;
+  // Eq 17: centroid distance, mapped to [0, 1] (1/2 at the gate).
+  s.distance_m = (centroid_a - b.centroid).norm();
+  const double f = std::max(0.0, 1.0 - s.distance_m / (2.0 * o.distance_gate_m));
+  const double partial = o.weight_id * s.p_id + o.weight_distance * f;
+  // Eq 21 only when it can change the decision: IoU <= min(|A|,|B|)/max(|A|,|B|), and 0 for
+  // disjoint voxel bounds.
+  const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.voxels.size());
+  const double iou_bound = std::min(na, nb) / std::max(na, nb);
+  const bool disjoint = (a_hi.array() < b.lo.array()).any() || (b.hi.array() < a_lo.array()).any();
+  if (!disjoint && partial + o.weight_overlap * iou_bound > std::min(o.match_threshold, o.merge_threshold)) {
+    const double common = static_cast<double>(common_voxels(a, b.voxels));
+    s.overlap = common / (na + nb - common);
+  }
+  // Eq 22.
+  s.score_p = partial + o.weight_overlap * s.overlap;
+  return s;
+}
+
+AddResult ObjectMap::add(const Observation& obs) {
+  AddResult result;
+  if (obs.points_in_world.size() < static_cast<std::size_t>(options_.min_points)) return result;
+
+  // 1. The observation's voxel set and centroid at the map resolution.
+  VoxelMap obs_voxels(VoxelMapOptions{options_.voxel_m, 1});
+  obs_voxels.insert(obs.points_in_world);
+  Eigen::Vector3i lo, hi;
+  if (!obs_voxels.key_bounds(lo, hi)) return result;  // no finite point
+  const Vec3 obs_centroid = obs_voxels.centroid();
+
+  // 2. Eq 22 against every live object; the best P > K wins (ties: the lower id).
+  Object* best = nullptr;
+  Scores best_scores;
+  for (auto& object : objects_) {
+    if (!object->alive) continue;
+    if (options_.require_same_class &&
+        normalize_class_name(voted_class(*object)) != normalize_class_name(obs.class_name))
+      continue;
+    const bool same_id = obs.track_id && object->track_ids.count(*obs.track_id) > 0;
+    const Scores s = score(same_id, obs_centroid, obs_voxels, lo, hi, *object);
+    if (s.score_p > options_.match_threshold && (!best || s.score_p > best_scores.score_p)) {
+      best = object.get();
+      best_scores = s;
+    }
+  }
+
+  // 3. No match: a new object.
+  if (!best) {
+    objects_.push_back(std::make_unique<Object>(options_.voxel_m));
+    best = objects_.back().get();
+    best->id = static_cast<int>(objects_.size()) - 1;
+    best->first_seen = best->last_seen = obs.timestamp;
+    result.created = true;
+  }
+
+  // 4. Fuse: points into the voxel set, class vote, track ids, provenance.
+  Object& o = *best;
+  o.voxels.insert(obs.points_in_world);
+  o.refresh();
+  ClassVote& vote = o.histogram[obs.class_name];
+  vote.score_sum += obs.score;
+  ++vote.count;
+  o.score_sum += obs.score;
+  ++o.observations;
+  if (obs.track_id) o.track_ids.insert(*obs.track_id);
+  o.first_seen = std::min(o.first_seen, obs.timestamp);
+  o.last_seen = std::max(o.last_seen, obs.timestamp);
+
+  ObservationLink link;
+  link.timestamp = obs.timestamp;
+  link.track_id = obs.track_id;
+  link.class_name = obs.class_name;
+  link.score = obs.score;
+  link.keyframe_index = obs.keyframe_index;
+  link.centroid_in_cam = obs.centroid_in_cam;
+  link.centroid_in_world = obs_centroid;
+  link.points = obs.points_in_world.size();
+  link.created = result.created;
+  if (!result.created) {
+    link.p_id = best_scores.p_id;
+    link.distance_m = best_scores.distance_m;
+    link.overlap = best_scores.overlap;
+    link.score_p = best_scores.score_p;
+  }
+  o.provenance.push_back(link);
+
+  result.object_id = o.id;
+  result.p_id = link.p_id;
+  result.distance_m = link.distance_m;
+  result.overlap = link.overlap;
+  result.score_p = link.score_p;
+  return result;
+}
+
+std::vector<MergeLink> ObjectMap::merge_pass() {
+  std::vector<MergeLink> made;
+  while (true) {
+    Object* into = nullptr;
+    Object* absorbed = nullptr;
+    Scores best;
+    for (std::size_t i = 0; i < objects_.size(); ++i) {
+      const Object& a = *objects_[i];
+      if (!a.alive) continue;
+      const std::string class_a = normalize_class_name(voted_class(a));
+      for (std::size_t j = i + 1; j < objects_.size(); ++j) {
+        const Object& b = *objects_[j];
+        if (!b.alive) continue;
+        if (options_.require_same_class && class_a != normalize_class_name(voted_class(b))) continue;
+        bool same_id = false;
+        for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
+        const Scores s = score(same_id, a.centroid, a.voxels, a.lo, a.hi, b);
+        if (s.score_p > options_.merge_threshold && (!into || s.score_p > best.score_p)) {
+          into = objects_[i].get();
+          absorbed = objects_[j].get();
+          best = s;
+        }
+      }
+    }
+    if (!into) break;
+
+    // Join `absorbed` into `into` (the lower id).
+    MergeLink link{into->id, absorbed->id, best.p_id, best.distance_m, best.overlap, best.score_p};
+    into->voxels.merge(absorbed->voxels);
+    into->refresh();
+    for (const auto& [name, vote] : absorbed->histogram) {
+      into->histogram[name].score_sum += vote.score_sum;
+      into->histogram[name].count += vote.count;
+    }
+    into->score_sum += absorbed->score_sum;
+    into->observations += absorbed->observations;
+    into->track_ids.insert(absorbed->track_ids.begin(), absorbed->track_ids.end());
+    into->first_seen = std::min(into->first_seen, absorbed->first_seen);
+    into->last_seen = std::max(into->last_seen, absorbed->last_seen);
+    into->provenance.insert(into->provenance.end(), absorbed->provenance.begin(),
+                            absorbed->provenance.end());
+    std::stable_sort(into->provenance.begin(), into->provenance.end(),
+                     [](const ObservationLink& x, const ObservationLink& y) {
+                       return x.timestamp < y.timestamp;
+                     });
+    into->merges.push_back(link);
+    into->merges.insert(into->merges.end(), absorbed->merges.begin(), absorbed->merges.end());
+    absorbed->alive = false;
+    absorbed->absorbed_into = into->id;
+    absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
+    absorbed->provenance.clear();
+    absorbed->merges.clear();
+    made.push_back(link);
+  }
+  return made;
+}
+
+std::size_t ObjectMap::size() const {
+  std::size_t n = 0;
+  for (const auto& o : objects_) n += o->alive;
+  return n;
+}
+
+std::size_t ObjectMap::confirmed_count() const {
+  std::size_t n = 0;
+  for (const auto& o : objects_) n += o->alive && o->observations >= options_.min_observations;
+  return n;
+}
+
+int ObjectMap::resolve(int object_id) const {
+  if (object_id < 0 || object_id >= static_cast<int>(objects_.size())) return -1;
+  while (!objects_[object_id]->alive) object_id = objects_[object_id]->absorbed_into;
+  return object_id;
+}
+
+Vec3 ObjectMap::centroid(int object_id) const {
+  const int id = resolve(object_id);
+  require(id >= 0, "ObjectMap::centroid", "unknown object id " + std::to_string(object_id));
+  return objects_[id]->centroid;
+}
+
+std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const {
+  std::vector<ObjectRecord> out;
+  for (const auto& op : objects_) {
+    const Object& o = *op;
+    if (!o.alive) continue;
+    const bool confirmed = o.observations >= options_.min_observations;
+    if (options.confirmed_only && !confirmed) continue;
+    ObjectRecord r;
+    r.id = o.id;
+    r.class_name = voted_class(o);
+    r.class_histogram = o.histogram;
+    r.mean_score = o.observations > 0 ? o.score_sum / o.observations : 0.0;
+    r.observations = o.observations;
+    r.confirmed = confirmed;
+    r.first_seen = o.first_seen;
+    r.last_seen = o.last_seen;
+    r.track_ids.assign(o.track_ids.begin(), o.track_ids.end());
+    r.provenance = o.provenance;
+    r.merges = o.merges;
+    r.points_raw = o.voxels.points_inserted();
+    // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
+    PointCloud voxel_cloud = o.voxels.to_cloud();
+    r.points_voxel = voxel_cloud.size();
+    if (options.outlier_filter) {
+      // Eq 18 on the voxel cloud.
+      filters::OutlierResult filtered = filters::remove_outliers(voxel_cloud, options.outlier);
+      r.cloud = std::move(filtered.kept);
+      r.outlier_threshold = filtered.threshold;
+    } else {
+      r.cloud = std::move(voxel_cloud);
+    }
+    r.points_filtered = r.cloud.size();
+    r.centroid = geometry::centroid(r.cloud);
+    r.aabb = geometry::compute_aabb(r.cloud);
+    r.obb = geometry::compute_obb(r.cloud);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+SemanticMaps make_semantic_maps(const VoxelMap& dense, const std::vector<ObjectRecord>& records) {
+  SemanticMaps maps;
+  // Which confirmed record each voxel belongs to (stored as index + 1).
+  geometry::VoxelHashTable<std::uint32_t> owner;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const ObjectRecord& r = records[i];
+    if (!r.confirmed) continue;
+    for (const Vec3f& p : r.cloud.points) {
+      const VoxelKey key = dense.key_of(p);
+      if (key == geometry::kNoVoxel) continue;
+      std::uint32_t& slot = owner[key];
+      if (slot != 0) {
+        const ObjectRecord& other = records[slot - 1];
+        const bool better = r.observations > other.observations ||
+                            (r.observations == other.observations && r.id < other.id);
+        if (!better) continue;
+      }
+      slot = static_cast<std::uint32_t>(i + 1);
+    }
+  }
+  const auto voxels = dense.sorted_voxels();
+  maps.semantic.reserve(voxels.size());
+  for (const auto& [key, v] : voxels) {
+    const std::uint32_t* slot = owner.find(key);
+    const Vec3f p = dense.mean_position(key, *v).cast<float>();
+    if (slot) {
+      maps.semantic.push_back(p, class_color(records[*slot - 1].class_name));
+      ++maps.voxels_painted;
+    } else {
+      maps.semantic.push_back(p, v->mean_color());
+    }
+  }
+  for (const ObjectRecord& r : records) {
+    if (!r.confirmed) continue;
+    const Rgb c = class_color(r.class_name);
+    for (const Vec3f& p : r.cloud.points) maps.objects_only.push_back(p, c);
+  }
+  return maps;
+}
+
+}  // namespace objmap::fusion

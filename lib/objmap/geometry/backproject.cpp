@@ -1,0 +1,170 @@
+#include "objmap/geometry/backproject.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "objmap/core/error.h"
+
+namespace objmap::geometry {
+
+RayTable make_ray_table(const Camera& camera) {
+  camera.check();
+  RayTable rays;
+  rays.width = camera.width;
+  rays.height = camera.height;
+  rays.depth_factor = camera.depth_factor;
+  const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
+  rays.x_over_z.resize(n);
+  rays.y_over_z.resize(n);
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      // Eqs 12-13 with the distortion removed: the normalised coordinates of the pixel's ray.
+      const Eigen::Vector2d xy = camera.undistort_pixel(u, v);
+      const std::size_t i = static_cast<std::size_t>(v) * camera.width + u;
+      rays.x_over_z[i] = static_cast<float>(xy.x());
+      rays.y_over_z[i] = static_cast<float>(xy.y());
+    }
+  }
+  return rays;
+}
+
+void BackprojectOptions::check() const {
+  require(std::isfinite(min_depth_m) && min_depth_m >= 0.0, "BackprojectOptions.min_depth_m",
+          "must be finite and >= 0, got " + std::to_string(min_depth_m));
+  require(std::isfinite(max_depth_m) && max_depth_m > min_depth_m, "BackprojectOptions.max_depth_m",
+          "must be finite and > min_depth_m (" + std::to_string(min_depth_m) + "), got " +
+              std::to_string(max_depth_m));
+  require(stride >= 1, "BackprojectOptions.stride", "must be >= 1, got " + std::to_string(stride));
+}
+
+cv::Rect mask_bounds(const segmentation::Mask& mask) {
+  int u0 = mask.width, v0 = mask.height, u1 = -1, v1 = -1;
+  for (int v = 0; v < mask.height; ++v) {
+    const std::uint8_t* row = mask.data.data() + static_cast<std::size_t>(v) * mask.width;
+    for (int u = 0; u < mask.width; ++u) {
+      if (!row[u]) continue;
+      u0 = std::min(u0, u);
+      u1 = std::max(u1, u);
+      v0 = std::min(v0, v);
+      v1 = std::max(v1, v);
+    }
+  }
+  if (u1 < 0) return {};
+  return {u0, v0, u1 - u0 + 1, v1 - v0 + 1};
+}
+
+namespace {
+std::string size_text(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+}  // namespace
+
+BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
+                              const BackprojectOptions& options) {
+  options.check();
+  require(!rays.empty(), "backproject", "empty ray table; expected make_ray_table(camera)");
+  require(frame.depth != nullptr && frame.depth->type() == CV_16UC1, "backproject: depth",
+          "expected a 16-bit single-channel (CV_16UC1) depth image");
+  const cv::Mat& depth = *frame.depth;
+  require(depth.cols == rays.width && depth.rows == rays.height, "backproject: depth",
+          "image is " + size_text(depth.cols, depth.rows) + "; expected the camera's " +
+              size_text(rays.width, rays.height));
+  if (frame.bgr) {
+    require(frame.bgr->type() == CV_8UC3, "backproject: rgb",
+            "expected an 8-bit 3-channel (CV_8UC3, BGR) image");
+    require(frame.bgr->cols == rays.width && frame.bgr->rows == rays.height, "backproject: rgb",
+            "image is " + size_text(frame.bgr->cols, frame.bgr->rows) + "; expected " +
+                size_text(rays.width, rays.height) + " like the depth image");
+  }
+  if (frame.mask) {
+    require(frame.mask->width == rays.width && frame.mask->height == rays.height &&
+                frame.mask->data.size() == static_cast<std::size_t>(rays.width) * rays.height,
+            "backproject: mask",
+            "mask is " + size_text(frame.mask->width, frame.mask->height) + "; expected " +
+                size_text(rays.width, rays.height) + " like the depth image");
+  }
+
+  cv::Rect roi(0, 0, rays.width, rays.height);
+  if (!frame.roi.empty()) roi &= frame.roi;
+
+  BackprojectResult result;
+  PointCloud& cloud = result.points_in_world;
+  const bool colour = frame.bgr != nullptr;
+  const int s = options.stride;
+  const std::size_t capacity =
+      static_cast<std::size_t>((roi.width + s - 1) / s) * ((roi.height + s - 1) / s);
+  // Written through raw pointers into arrays sized for every pixel, trimmed at the end.
+  cloud.points.resize(capacity);
+  if (colour) cloud.colors.resize(capacity);
+  if (options.pixel_indices) result.pixel_index.resize(capacity);
+  Vec3f* out_p = cloud.points.data();
+  Rgb* out_c = colour ? cloud.colors.data() : nullptr;
+  std::uint32_t* out_i = options.pixel_indices ? result.pixel_index.data() : nullptr;
+  std::size_t n = 0;
+
+  // Depth range as raw image values, so the per-pixel test is on integers: value / factor in
+  // [min_depth_m, max_depth_m] (eq 11 and the validity test of §3.2).
+  const double f = rays.depth_factor;
+  // 0 means "no depth" whatever min_depth_m is.
+  const std::uint32_t raw_min =
+      std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::ceil(options.min_depth_m * f)));
+  const double raw_max_d = std::floor(options.max_depth_m * f);
+  const std::uint32_t raw_max = raw_max_d >= 65535.0 ? 65535u : static_cast<std::uint32_t>(raw_max_d);
+  const float inv_factor = static_cast<float>(1.0 / f);
+
+  // Eq 15: the rigid transform, in float (points are stored as float).
+  const Eigen::Matrix3f R = frame.world_from_cam.linear().cast<float>();
+  const Eigen::Vector3f t = frame.world_from_cam.translation().cast<float>();
+  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1),
+              r12 = R(1, 2), r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  double sx = 0.0, sy = 0.0, sz = 0.0;
+  std::size_t considered = 0, no_depth = 0;
+
+  for (int v = roi.y; v < roi.y + roi.height; v += s) {
+    const std::uint16_t* drow = depth.ptr<std::uint16_t>(v);
+    const cv::Vec3b* crow = colour ? frame.bgr->ptr<cv::Vec3b>(v) : nullptr;
+    const std::uint8_t* mrow =
+        frame.mask ? frame.mask->data.data() + static_cast<std::size_t>(v) * rays.width : nullptr;
+    const std::size_t row0 = static_cast<std::size_t>(v) * rays.width;
+    const float* rx = rays.x_over_z.data() + row0;
+    const float* ry = rays.y_over_z.data() + row0;
+    // Per-row sums in float (short, exact enough), accumulated in double per row.
+    float rsx = 0.f, rsy = 0.f, rsz = 0.f;
+    for (int u = roi.x; u < roi.x + roi.width; u += s) {
+      if (mrow && !mrow[u]) continue;
+      ++considered;
+      const std::uint32_t raw = drow[u];
+      if (raw < raw_min || raw > raw_max) {
+        no_depth += raw == 0;
+        continue;
+      }
+      // Eqs 11-14: depth in metres, then the camera-frame point along the pixel's ray.
+      const float z = static_cast<float>(raw) * inv_factor;
+      const float x = rx[u] * z;
+      const float y = ry[u] * z;
+      rsx += x;
+      rsy += y;
+      rsz += z;
+      out_p[n] = Vec3f(r00 * x + r01 * y + r02 * z + t.x(), r10 * x + r11 * y + r12 * z + t.y(),
+                       r20 * x + r21 * y + r22 * z + t.z());
+      if (out_c) {
+        const cv::Vec3b& c = crow[u];
+        out_c[n] = Rgb{c[2], c[1], c[0]};
+      }
+      if (out_i) out_i[n] = static_cast<std::uint32_t>(row0 + u);
+      ++n;
+    }
+    sx += rsx;
+    sy += rsy;
+    sz += rsz;
+  }
+  cloud.points.resize(n);
+  if (colour) cloud.colors.resize(n);
+  if (out_i) result.pixel_index.resize(n);
+  result.pixels_considered = considered;
+  result.pixels_no_depth = no_depth;
+  result.pixels_out_of_range = considered - no_depth - n;
+  if (n > 0) result.centroid_in_cam = Vec3(sx, sy, sz) / static_cast<double>(n);
+  return result;
+}
+
+}  // namespace objmap::geometry

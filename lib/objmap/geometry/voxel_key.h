@@ -1,0 +1,198 @@
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+// Voxel keys and a flat open-addressing hash table keyed by them. Shared by the voxel filter
+// (filters/), the dense voxel map and the per-object voxel sets (fusion/), so that every part of
+// objmap agrees on which voxel a point falls in.
+namespace objmap::geometry {
+
+// A voxel is (ix, iy, iz) = floor(point / voxel_m), packed as 3 × 21 bits with an offset of 2^20:
+// ±2^20 voxels per axis (±10 km at 1 cm). Sorting keys sorts by (ix, iy, iz). The all-ones value is
+// never a valid key (bit 63 is always 0).
+using VoxelKey = std::uint64_t;
+constexpr VoxelKey kNoVoxel = ~VoxelKey{0};
+constexpr std::int32_t kVoxelCoordLimit = 1 << 20;
+
+inline VoxelKey pack_voxel(std::int32_t ix, std::int32_t iy, std::int32_t iz) {
+  return (static_cast<VoxelKey>(ix + kVoxelCoordLimit) << 42) |
+         (static_cast<VoxelKey>(iy + kVoxelCoordLimit) << 21) |
+         static_cast<VoxelKey>(iz + kVoxelCoordLimit);
+}
+
+inline Eigen::Vector3i unpack_voxel(VoxelKey key) {
+  constexpr VoxelKey mask = (VoxelKey{1} << 21) - 1;
+  return {static_cast<int>((key >> 42) & mask) - kVoxelCoordLimit,
+          static_cast<int>((key >> 21) & mask) - kVoxelCoordLimit,
+          static_cast<int>(key & mask) - kVoxelCoordLimit};
+}
+
+// floor() for |x| < 2^31 without a libm call (x86-64's baseline SSE2 has no rounding instruction).
+inline std::int32_t fast_floor(float x) {
+  const std::int32_t i = static_cast<std::int32_t>(x);  // truncates toward zero
+  return i - static_cast<std::int32_t>(x < static_cast<float>(i));
+}
+
+// Voxel coordinates of `point` scaled by 1 / voxel size (`inv_voxel_m`) and the point's position
+// inside its voxel in voxel units, each in [0, 1). False when the point is not finite or outside the
+// key range.
+inline bool voxel_coords(const Vec3f& point, float inv_voxel_m, Eigen::Vector3i& ijk,
+                         Eigen::Vector3f& offset) {
+  const float sx = point.x() * inv_voxel_m, sy = point.y() * inv_voxel_m, sz = point.z() * inv_voxel_m;
+  constexpr float lim = static_cast<float>(kVoxelCoordLimit);
+  // Written so that NaN fails the test.
+  if (!(sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim)) return false;
+  ijk = {fast_floor(sx), fast_floor(sy), fast_floor(sz)};
+  offset = {sx - static_cast<float>(ijk.x()), sy - static_cast<float>(ijk.y()),
+            sz - static_cast<float>(ijk.z())};
+  return true;
+}
+
+// The key of the voxel holding `point` (metres) for 1 / voxel size `inv_voxel_m`, or kNoVoxel when
+// the point is not finite or outside the key range.
+inline VoxelKey voxel_key(const Vec3f& point, float inv_voxel_m) {
+  const float sx = point.x() * inv_voxel_m, sy = point.y() * inv_voxel_m, sz = point.z() * inv_voxel_m;
+  constexpr float lim = static_cast<float>(kVoxelCoordLimit);
+  if (!(sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim)) return kNoVoxel;
+  return pack_voxel(fast_floor(sx), fast_floor(sy), fast_floor(sz));
+}
+
+// Lower corner of a voxel in metres.
+inline Vec3 voxel_corner(VoxelKey key, double voxel_m) {
+  return unpack_voxel(key).cast<double>() * voxel_m;
+}
+
+// MurmurHash3 finaliser: every key bit reaches the high bits used for the slot index and the low
+// bits used to pick a shard.
+inline std::uint64_t mix_voxel_key(VoxelKey key) {
+  key ^= key >> 33;
+  key *= 0xff51afd7ed558ccdULL;
+  key ^= key >> 33;
+  key *= 0xc4ceb9fe1a85ec53ULL;
+  key ^= key >> 33;
+  return key;
+}
+
+// Open addressing with linear probing, power-of-two capacity, at most 5/8 full. Keys and values sit
+// in one slot array (one cache line for a probe and the update). No erase (maps only grow).
+// Iteration order depends on the insertion history; callers that export sort by key.
+template <typename Value>
+class VoxelHashTable {
+ public:
+  struct Slot {
+    VoxelKey key = kNoVoxel;
+    Value value{};
+  };
+
+  VoxelHashTable() = default;
+  explicit VoxelHashTable(std::size_t expected) { reserve(expected); }
+
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  std::size_t capacity() const { return slots_.size(); }
+  std::size_t memory_bytes() const { return slots_.capacity() * sizeof(Slot); }
+
+  void reserve(std::size_t expected) {
+    std::size_t cap = 16;
+    while (cap * 5 < expected * 8) cap *= 2;
+    if (cap > slots_.size()) rehash(cap);
+  }
+
+  void clear() {
+    slots_.clear();
+    slots_.shrink_to_fit();
+    size_ = 0;
+    shift_ = 64;
+  }
+
+  // The value of `key`, inserted value-initialised when absent (key must not be kNoVoxel).
+  Value& operator[](VoxelKey key) {
+    if ((size_ + 1) * 8 > slots_.size() * 5) rehash(slots_.empty() ? 16 : slots_.size() * 2);
+    std::size_t i = index(key);
+    const std::size_t m = slots_.size() - 1;
+    while (true) {
+      Slot& s = slots_[i];
+      if (s.key == key) return s.value;
+      if (s.key == kNoVoxel) {
+        s.key = key;
+        ++size_;
+        return s.value;
+      }
+      i = (i + 1) & m;
+    }
+  }
+
+  const Value* find(VoxelKey key) const {
+    if (slots_.empty()) return nullptr;
+    std::size_t i = index(key);
+    const std::size_t m = slots_.size() - 1;
+    while (true) {
+      const Slot& s = slots_[i];
+      if (s.key == key) return &s.value;
+      if (s.key == kNoVoxel) return nullptr;
+      i = (i + 1) & m;
+    }
+  }
+  Value* find(VoxelKey key) {
+    return const_cast<Value*>(static_cast<const VoxelHashTable*>(this)->find(key));
+  }
+  bool contains(VoxelKey key) const { return find(key) != nullptr; }
+
+  // f(key, value) for every entry, in slot order.
+  template <typename F>
+  void for_each(F&& f) const {
+    for (const Slot& s : slots_)
+      if (s.key != kNoVoxel) f(s.key, s.value);
+  }
+  template <typename F>
+  void for_each_mutable(F&& f) {
+    for (Slot& s : slots_)
+      if (s.key != kNoVoxel) f(s.key, s.value);
+  }
+
+  // All keys, ascending.
+  std::vector<VoxelKey> sorted_keys() const;
+
+ private:
+  std::size_t index(VoxelKey key) const {
+    return static_cast<std::size_t>(mix_voxel_key(key) >> shift_);
+  }
+  void rehash(std::size_t cap) {
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(cap, Slot{});
+    int bits = 0;
+    while ((std::size_t{1} << bits) < cap) ++bits;
+    shift_ = 64 - bits;
+    const std::size_t m = cap - 1;
+    for (Slot& s : old) {
+      if (s.key == kNoVoxel) continue;
+      std::size_t i = index(s.key);
+      while (slots_[i].key != kNoVoxel) i = (i + 1) & m;
+      slots_[i] = std::move(s);
+    }
+  }
+
+  std::vector<Slot> slots_;
+  std::size_t size_ = 0;
+  int shift_ = 64;
+};
+
+}  // namespace objmap::geometry
+
+#include <algorithm>
+
+template <typename Value>
+std::vector<objmap::geometry::VoxelKey> objmap::geometry::VoxelHashTable<Value>::sorted_keys()
+    const {
+  std::vector<VoxelKey> keys;
+  keys.reserve(size_);
+  for (const Slot& s : slots_)
+    if (s.key != kNoVoxel) keys.push_back(s.key);
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}

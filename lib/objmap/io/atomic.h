@@ -1,0 +1,43 @@
+#pragma once
+#include <filesystem>
+#include <string>
+
+// Atomic outputs: a file or a run folder is written under a temporary name in the same folder and
+// renamed into place, so a failed or interrupted run never leaves a half-written output behind.
+namespace objmap::io {
+
+// Writes `bytes` to "<file>.tmp-<pid>" and renames it to `file` (replacing an existing
+// file). Creates the parent folders if needed. Throws InputError(file, reason) when the file cannot
+// be written; the temporary file is removed then.
+void write_file_atomic(const std::filesystem::path& file, const std::string& bytes);
+
+// A run folder written atomically: files go to "<out>.tmp-<pid>" (created, empty, by the
+// constructor); commit() renames it to `out`, replacing an existing `out` folder. The destructor
+// removes the temporary folder if commit() was not called (e.g. an exception unwound the run).
+//
+//   io::StagingDir staging(out);
+//   write_file_atomic(staging.path() / "objects.json", json);
+//   staging.commit();
+class StagingDir {
+ public:
+  // Throws InputError when `out` exists and is not a folder, or the temporary folder cannot be
+  // made.
+  explicit StagingDir(const std::filesystem::path& out);
+  ~StagingDir();
+  StagingDir(const StagingDir&) = delete;
+  StagingDir& operator=(const StagingDir&) = delete;
+
+  const std::filesystem::path& path() const { return staging_; }  // where to write now
+  const std::filesystem::path& out() const { return out_; }       // where it ends up
+  bool committed() const { return committed_; }
+  // Renames the temporary folder to `out`. An existing `out` is moved aside first and deleted only
+  // after the rename succeeded (restored if it failed). Throws InputError on failure.
+  void commit();
+
+ private:
+  std::filesystem::path out_;
+  std::filesystem::path staging_;
+  bool committed_ = false;
+};
+
+}  // namespace objmap::io

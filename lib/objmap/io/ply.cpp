@@ -1,0 +1,217 @@
+#include "objmap/io/ply.h"
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "objmap/core/error.h"
+#include "objmap/io/atomic.h"
+
+namespace objmap::io {
+
+namespace fs = std::filesystem;
+
+void write_ply(const fs::path& path, const PointCloud& cloud, const PlyWriteOptions& options) {
+  const bool colour = cloud.has_colors();
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\n";
+  if (!options.comment.empty()) header << "comment " << options.comment << "\n";
+  header << "element vertex " << cloud.size() << "\n"
+         << "property float x\nproperty float y\nproperty float z\n";
+  if (colour) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  header << "end_header\n";
+
+  // Header and body in one buffer (bytes written as the format says, whatever the host order).
+  static_assert(sizeof(float) == 4, "PLY float is 4 bytes");
+  std::string bytes = header.str();
+  const std::size_t head = bytes.size();
+  const std::size_t stride = 12 + (colour ? 3 : 0);
+  bytes.resize(head + cloud.size() * stride);
+  char* out = bytes.data() + head;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Vec3f& p = cloud.points[i];
+    const float xyz[3] = {p.x(), p.y(), p.z()};
+    for (int a = 0; a < 3; ++a) {
+      std::uint32_t bits;
+      std::memcpy(&bits, &xyz[a], 4);
+      for (int b = 0; b < 4; ++b) *out++ = static_cast<char>((bits >> (8 * b)) & 0xff);
+    }
+    if (colour) {
+      *out++ = static_cast<char>(cloud.colors[i].r);
+      *out++ = static_cast<char>(cloud.colors[i].g);
+      *out++ = static_cast<char>(cloud.colors[i].b);
+    }
+  }
+  // Temporary name + rename (io/atomic.h).
+  write_file_atomic(path, bytes);
+}
+
+namespace {
+
+struct Property {
+  std::string type;  // normalised: char uchar short ushort int uint float double
+  std::string name;
+  int size = 0;
+};
+
+int type_size(const std::string& t) {
+  if (t == "char" || t == "uchar") return 1;
+  if (t == "short" || t == "ushort") return 2;
+  if (t == "int" || t == "uint" || t == "float") return 4;
+  if (t == "double") return 8;
+  return 0;
+}
+
+std::string normalise_type(const std::string& t) {
+  if (t == "int8") return "char";
+  if (t == "uint8") return "uchar";
+  if (t == "int16") return "short";
+  if (t == "uint16") return "ushort";
+  if (t == "int32") return "int";
+  if (t == "uint32") return "uint";
+  if (t == "float32") return "float";
+  if (t == "float64") return "double";
+  return t;
+}
+
+double read_binary(const char* p, const std::string& type) {
+  std::uint64_t bits = 0;
+  const int n = type_size(type);
+  for (int b = 0; b < n; ++b) bits |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[b])) << (8 * b);
+  if (type == "float") {
+    const std::uint32_t b32 = static_cast<std::uint32_t>(bits);
+    float f;
+    std::memcpy(&f, &b32, 4);
+    return f;
+  }
+  if (type == "double") {
+    double d;
+    std::memcpy(&d, &bits, 8);
+    return d;
+  }
+  if (type == "char") return static_cast<std::int8_t>(bits);
+  if (type == "short") return static_cast<std::int16_t>(bits);
+  if (type == "int") return static_cast<std::int32_t>(bits);
+  return static_cast<double>(bits);  // unsigned
+}
+
+}  // namespace
+
+PointCloud read_ply(const fs::path& path) {
+  const std::string where = path.string();
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(where, "cannot open for reading");
+  std::string line;
+  int line_no = 0;
+  auto next_line = [&]() -> bool {
+    if (!std::getline(f, line)) return false;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return true;
+  };
+  if (!next_line() || line != "ply") throw InputError(where + ":1", "not a PLY file; expected 'ply'");
+
+  std::string format;
+  std::size_t vertices = 0;
+  bool in_vertex = false, seen_vertex = false, vertex_first = true;
+  std::vector<Property> props;
+  while (true) {
+    if (!next_line()) throw InputError(where, "header has no 'end_header'");
+    std::istringstream ls(line);
+    std::string word;
+    ls >> word;
+    const std::string at = where + ":" + std::to_string(line_no);
+    if (word == "end_header") break;
+    if (word == "comment" || word == "obj_info" || word.empty()) continue;
+    if (word == "format") {
+      ls >> format;
+      if (format != "binary_little_endian" && format != "ascii")
+        throw InputError(at, "format '" + format + "' not supported; expected binary_little_endian or ascii");
+    } else if (word == "element") {
+      std::string name;
+      std::size_t count = 0;
+      ls >> name >> count;
+      if (!ls) throw InputError(at, "bad element line; expected 'element <name> <count>'");
+      in_vertex = name == "vertex";
+      if (in_vertex) {
+        seen_vertex = true;
+        vertices = count;
+      } else if (!seen_vertex && count > 0) {
+        vertex_first = false;
+      }
+    } else if (word == "property") {
+      std::string type, name;
+      ls >> type;
+      if (!in_vertex) continue;
+      if (type == "list") throw InputError(at, "list property in 'vertex' is not supported");
+      ls >> name;
+      type = normalise_type(type);
+      const int size = type_size(type);
+      if (size == 0 || name.empty()) throw InputError(at, "unknown property type '" + type + "'");
+      props.push_back({type, name, size});
+    } else {
+      throw InputError(at, "unexpected header line '" + line + "'");
+    }
+  }
+  if (format.empty()) throw InputError(where, "header has no 'format' line");
+  if (!seen_vertex) throw InputError(where, "no 'element vertex'; expected a point cloud");
+  if (!vertex_first) throw InputError(where, "'vertex' is not the first element; not supported");
+
+  int ix = -1, iy = -1, iz = -1, ir = -1, ig = -1, ib = -1;
+  std::vector<std::size_t> offset(props.size());
+  std::size_t stride = 0;
+  for (std::size_t i = 0; i < props.size(); ++i) {
+    offset[i] = stride;
+    stride += props[i].size;
+    const std::string& n = props[i].name;
+    const int k = static_cast<int>(i);
+    if (n == "x") ix = k;
+    if (n == "y") iy = k;
+    if (n == "z") iz = k;
+    if (n == "red" || n == "r") ir = k;
+    if (n == "green" || n == "g") ig = k;
+    if (n == "blue" || n == "b") ib = k;
+  }
+  if (ix < 0 || iy < 0 || iz < 0) throw InputError(where, "vertex has no x, y and z properties");
+  const bool colour = ir >= 0 && ig >= 0 && ib >= 0;
+
+  PointCloud cloud;
+  cloud.points.resize(vertices);
+  if (colour) cloud.colors.resize(vertices);
+  auto to_byte = [](double v) {
+    return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v);
+  };
+  if (format == "binary_little_endian") {
+    std::vector<char> body(vertices * stride);
+    f.read(body.data(), static_cast<std::streamsize>(body.size()));
+    if (static_cast<std::size_t>(f.gcount()) != body.size())
+      throw InputError(where, "file ends after " + std::to_string(f.gcount() / (stride ? stride : 1)) +
+                                  " of " + std::to_string(vertices) + " vertices (truncated)");
+    for (std::size_t i = 0; i < vertices; ++i) {
+      const char* row = body.data() + i * stride;
+      auto value = [&](int k) { return read_binary(row + offset[k], props[k].type); };
+      cloud.points[i] = Vec3f(static_cast<float>(value(ix)), static_cast<float>(value(iy)),
+                              static_cast<float>(value(iz)));
+      if (colour) cloud.colors[i] = Rgb{to_byte(value(ir)), to_byte(value(ig)), to_byte(value(ib))};
+    }
+  } else {
+    std::vector<double> v(props.size());
+    for (std::size_t i = 0; i < vertices; ++i) {
+      if (!next_line())
+        throw InputError(where, "file ends after " + std::to_string(i) + " of " +
+                                    std::to_string(vertices) + " vertices (truncated)");
+      std::istringstream ls(line);
+      for (double& x : v) ls >> x;
+      if (!ls)
+        throw InputError(where + ":" + std::to_string(line_no),
+                         "expected " + std::to_string(props.size()) + " numbers per vertex");
+      cloud.points[i] = Vec3f(static_cast<float>(v[ix]), static_cast<float>(v[iy]), static_cast<float>(v[iz]));
+      if (colour) cloud.colors[i] = Rgb{to_byte(v[ir]), to_byte(v[ig]), to_byte(v[ib])};
+    }
+  }
+  return cloud;
+}
+
+}  // namespace objmap::io

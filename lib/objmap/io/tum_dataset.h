@@ -1,0 +1,49 @@
+#pragma once
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+// A TUM RGB-D folder: rgb.txt and depth.txt list `timestamp filename` (filename relative to the
+// folder; '#' comments and blank lines allowed), the images are in rgb/ and depth/.
+namespace objmap::io {
+
+struct FramePair {
+  double rgb_timestamp = 0;
+  double depth_timestamp = 0;
+  std::filesystem::path rgb_file, depth_file;  // root / the name listed in rgb.txt / depth.txt
+};
+
+struct TumDataset {
+  std::filesystem::path root;
+  std::vector<FramePair> frames;  // associated pairs, sorted by rgb timestamp
+  std::size_t rgb_rows = 0, depth_rows = 0;
+  std::string recorded_from;  // from rgb.txt's "# file: '<name>'" header, e.g.
+                              // "rgbd_dataset_freiburg1_desk.bag"; empty when there is none
+};
+
+struct TumOptions {
+  double max_diff_s = 0.02;  // rgb and depth stamps pair when |t_rgb - t_depth| < max_diff_s
+                             // (strictly, as associate.py); finite, > 0
+  void check() const;        // throws InputError naming the bad field
+};
+
+// Reads rgb.txt and depth.txt of `dir` and associates them one to one exactly as the TUM
+// benchmark's associate.py: every candidate pair with |a - b| < max_diff_s, sorted by (difference,
+// rgb time, depth time), taken greedily when both are still free, then sorted by rgb time.
+// Every listed image must exist. Throws InputError for a missing folder, rgb.txt or depth.txt, a
+// line that is not `timestamp filename`, timestamps not strictly increasing, a listed image that
+// does not exist, a list with no image, and no associated pair at all.
+TumDataset read_tum_dataset(const std::filesystem::path& dir, const TumOptions& options = {});
+
+// The association alone, on two increasing lists of stamps: pairs of indices (rgb, depth), sorted
+// by rgb index.
+std::vector<std::pair<std::size_t, std::size_t>> associate_stamps(
+    const std::vector<double>& rgb_stamps, const std::vector<double>& depth_stamps,
+    double max_diff_s);
+
+// The name inside a "file: '<name>'" comment of a TUM list (rgb.txt, groundtruth.txt), or "".
+std::string recorded_from_header(const std::filesystem::path& list_file);
+
+}  // namespace objmap::io

@@ -1,0 +1,517 @@
+#include "objmap/pipeline/fuse.h"
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <fstream>
+#include <future>
+#include <nlohmann/json.hpp>
+
+#include "objmap/core/error.h"
+#include "objmap/fusion/voxel_map.h"
+#include "objmap/io/atomic.h"
+#include "objmap/io/camera_io.h"
+#include "objmap/io/image.h"
+#include "objmap/io/ply.h"
+#include "objmap/io/trajectory.h"
+#include "objmap/io/tum_dataset.h"
+#include "objmap/segmentation/read.h"
+#include "objmap/version.h"
+
+namespace objmap::pipeline {
+
+namespace fs = std::filesystem;
+using ordered_json = nlohmann::ordered_json;
+
+std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
+  auto& k = o.keyframes;
+  auto& m = o.objects;
+  auto& b = o.box_mask;
+  return {
+      {"max_diff_s", "--max-diff", "rgb/depth and frame/pose association window, s", &o.max_diff_s},
+      {"threads", "--threads", "worker threads; outputs are identical for any count", &o.threads},
+      {"keyframes.mode", "--keyframes",
+       "auto|all|motion|stride (auto: all frames of a keyframe "
+       "trajectory, else by motion)",
+       &k.mode},
+      {"keyframes.min_translation_m", "--kf-translation",
+       "motion keyframes: new after this "
+       "translation, m",
+       &k.min_translation_m},
+      {"keyframes.min_rotation_deg", "--kf-rotation", "motion keyframes: ... or this rotation, deg",
+       &k.min_rotation_deg},
+      {"keyframes.stride", "--stride", "stride keyframes: every n-th posed frame", &k.stride},
+      {"depth.min_m", "--min-depth", "nearest depth used, m (the paper: 0.01)",
+       &o.depth.min_depth_m},
+      {"depth.max_m", "--max-depth", "farthest depth used, m", &o.depth.max_depth_m},
+      {"map.voxel_m", "--voxel", "dense and semantic map voxel, m", &o.map_voxel_m},
+      {"map.dense_stride", "--dense-stride", "back-project every n-th pixel into the dense map",
+       &o.dense_stride},
+      {"segmentation.format", "--seg-format",
+       "auto|json|png|txt-paper|boxes-named|boxes-coco|boxes-xywh", &o.seg_format},
+      {"segmentation.default_class", "--default-class", "class of box files without one",
+       &o.default_class},
+      {"segmentation.min_score", "--min-score", "instances below this detector score are ignored",
+       &o.min_instance_score},
+      {"objects.voxel_m", "--object-voxel", "object voxel sets and overlap M (eq 21), m",
+       &m.voxel_m},
+      {"objects.distance_gate_m", "--distance-gate", "centroid gate D (eq 17), m",
+       &m.distance_gate_m},
+      {"objects.weight_id", "--weight-id", "w_id of eq 22", &m.weight_id},
+      {"objects.weight_distance", "--weight-distance", "w_d of eq 22", &m.weight_distance},
+      {"objects.weight_overlap", "--weight-overlap", "w_m of eq 22", &m.weight_overlap},
+      {"objects.match_threshold", "--match-threshold", "K of eq 22: match when P > K",
+       &m.match_threshold},
+      {"objects.merge_threshold", "--merge-threshold", "K of the final merge pass",
+       &m.merge_threshold},
+      {"objects.min_observations", "--min-observations", "observations to confirm an object",
+       &m.min_observations},
+      {"objects.min_points", "--min-points", "observations with fewer points are ignored",
+       &m.min_points},
+      {"objects.require_same_class", "--same-class", "match only objects of the same voted class",
+       &m.require_same_class},
+      {"outlier.enabled", "--outlier-filter", "statistical outlier removal (eq 18) per object",
+       &o.outlier_filter},
+      {"outlier.neighbours", "--outlier-k", "K nearest neighbours of eq 18", &o.outlier.neighbours},
+      {"outlier.std_ratio", "--outlier-std", "k of t = m + k·s (eq 18)", &o.outlier.std_ratio},
+      {"box_mask.bin_m", "--box-bin", "box masks: depth histogram bin, m", &b.bin_m},
+      {"box_mask.near_mode_min_share", "--box-near-share",
+       "box masks: share of the largest peak for the nearest peak to win", &b.near_mode_min_share},
+      {"box_mask.band_size_factor", "--box-band", "box masks: depth band / metric box size",
+       &b.band_size_factor},
+      {"box_mask.remove_support_plane", "--box-support-plane",
+       "box masks: remove the supporting table/floor plane", &b.remove_support_plane},
+      {"box_mask.support_inlier_m", "--box-support-inlier", "box masks: plane inlier distance, m",
+       &b.support_inlier_m},
+  };
+}
+
+void FuseOptions::check() const {
+  require(!dataset.empty(), "--dataset", "missing; expected a TUM RGB-D folder");
+  require(!trajectory.empty(), "--trajectory", "missing; expected a TUM trajectory file");
+  require(!segmentation.empty(), "--segmentation", "missing; expected a segmentation folder");
+  require(!out.empty(), "--out", "missing; expected the run folder to write");
+  require(std::isfinite(max_diff_s) && max_diff_s > 0 && max_diff_s < 1, "max_diff_s",
+          "must be in (0, 1) s");
+  keyframes.check();
+  depth.check();
+  require(std::isfinite(map_voxel_m) && map_voxel_m >= 0.001 && map_voxel_m <= 1.0, "map.voxel_m",
+          "must be in [0.001, 1] m");
+  require(dense_stride >= 1 && dense_stride <= 64, "map.dense_stride", "must be in [1, 64]");
+  require(std::isfinite(min_instance_score) && min_instance_score >= 0 && min_instance_score <= 1,
+          "segmentation.min_score", "must be in [0, 1]");
+  box_mask.check();
+  objects.check();
+  outlier.check();
+  require(threads >= 1 && threads <= 64, "threads", "must be in [1, 64]");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+long peak_rss_kb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+// FNV-1a 64 of a file's bytes, as 16 hex digits (input provenance in run.json).
+std::uint64_t fnv1a(const std::string& bytes, std::uint64_t h = 1469598103934665603ULL) {
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+std::string read_all(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+std::string hex64(std::uint64_t h) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+std::string file_checksum(const fs::path& file) { return hex64(fnv1a(read_all(file))); }
+// Over the sorted relative names and contents of every file of a folder.
+std::string folder_checksum(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::uint64_t h = 1469598103934665603ULL;
+  for (const auto& f : files) {
+    h = fnv1a(fs::relative(f, dir).generic_string(), h);
+    h = fnv1a(read_all(f), h);
+  }
+  return hex64(h);
+}
+
+// A file-name-safe class name: "teddy bear" -> "teddy_bear".
+std::string file_safe(const std::string& name) {
+  std::string s;
+  for (char c : name) s += std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_';
+  return s.empty() ? "object" : s;
+}
+
+// What a worker hands back for one keyframe.
+struct FrameWork {
+  fusion::VoxelMap dense;
+  std::vector<fusion::Observation> observations;
+  std::uint64_t dense_points = 0;
+  std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0;
+  explicit FrameWork(const fusion::VoxelMapOptions& o) : dense(o) {}
+};
+
+// Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so the
+// main thread merges voxels, not pixels), and each instance's pixels into an observation.
+FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
+                           const geometry::RayTable& rays, const io::FramePair& frame,
+                           const Keyframe& keyframe, int keyframe_index,
+                           const segmentation::FrameSegmentation* seg) {
+  fusion::VoxelMapOptions map_options;
+  map_options.voxel_m = options.map_voxel_m;
+  FrameWork work(map_options);
+
+  // 1. The images (checked: size, type).
+  const cv::Mat bgr = io::read_rgb(frame.rgb_file, camera.width, camera.height);
+  const cv::Mat depth = io::read_depth(frame.depth_file, camera.width, camera.height);
+
+  // 2. Dense map: every valid pixel (eqs 11-15) with its colour.
+  geometry::BackprojectOptions dense_options = options.depth;
+  dense_options.stride = options.dense_stride;
+  const geometry::DepthFrame dense_frame(depth, keyframe.world_from_cam, &bgr);
+  const auto dense = geometry::backproject(rays, dense_frame, dense_options);
+  work.dense_points = dense.points_in_world.size();
+  work.dense.insert(dense.points_in_world);
+
+  // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
+  if (!seg) return work;
+  for (const auto& instance : seg->instances) {
+    ++work.instances;
+    if (instance.score < options.min_instance_score) {
+      ++work.skipped_score;
+      continue;
+    }
+    segmentation::Mask box_mask;
+    const segmentation::Mask* mask = instance.mask ? &*instance.mask : nullptr;
+    if (!mask) {
+      ++work.from_box;
+      auto made = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
+      if (made.status != segmentation::BoxMaskStatus::kOk) {
+        ++work.empty;
+        continue;
+      }
+      box_mask = std::move(made.mask);
+      mask = &box_mask;
+    }
+    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, mask,
+                                              geometry::mask_bounds(*mask));
+    if (instance_frame.roi.empty()) {
+      ++work.empty;
+      continue;
+    }
+    auto points = geometry::backproject(rays, instance_frame, options.depth);
+    if (points.points_in_world.size() < static_cast<std::size_t>(options.objects.min_points)) {
+      ++work.empty;
+      continue;
+    }
+    fusion::Observation obs;
+    obs.timestamp = keyframe.timestamp;
+    obs.track_id = instance.track_id;
+    obs.class_name = instance.class_name;
+    obs.score = instance.score;
+    obs.points_in_world = std::move(points.points_in_world);
+    obs.keyframe_index = keyframe_index;
+    obs.centroid_in_cam = points.centroid_in_cam;
+    work.observations.push_back(std::move(obs));
+  }
+  return work;
+}
+
+ordered_json vec_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
+
+ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_name) {
+  ordered_json o;
+  o["id"] = r.id;
+  o["class"] = r.class_name;
+  ordered_json hist = ordered_json::object();
+  for (const auto& [name, vote] : r.class_histogram)
+    hist[name] = {{"count", vote.count}, {"score_sum", vote.score_sum}};
+  o["class_histogram"] = hist;
+  o["score"] = r.mean_score;
+  o["centroid"] = vec_json(r.centroid);
+  o["aabb"] = {{"min", vec_json(r.aabb.min)}, {"max", vec_json(r.aabb.max)}};
+  ordered_json rot = ordered_json::array();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) rot.push_back(r.obb.rotation(i, j));
+  o["obb"] = {{"center", vec_json(r.obb.center)},
+              {"rotation", rot},
+              {"half_extent", vec_json(r.obb.half_extent)}};
+  o["points"] = {
+      {"raw", r.points_raw},
+      {"voxel_filtered", r.points_voxel},
+      {"outlier_filtered", r.points_filtered},
+      {"outlier_threshold", std::isfinite(r.outlier_threshold) ? ordered_json(r.outlier_threshold)
+                                                               : ordered_json(nullptr)}};
+  o["observation_count"] = r.observations;
+  o["first_seen"] = r.first_seen;
+  o["last_seen"] = r.last_seen;
+  o["track_ids"] = r.track_ids;
+  o["ply"] = ply_name;
+  ordered_json obs = ordered_json::array();
+  for (const auto& l : r.provenance) {
+    ordered_json e;
+    e["timestamp"] = l.timestamp;
+    e["track_id"] = l.track_id ? ordered_json(*l.track_id) : ordered_json(nullptr);
+    e["class"] = l.class_name;
+    e["score"] = l.score;
+    e["keyframe"] = l.keyframe_index ? ordered_json(*l.keyframe_index) : ordered_json(nullptr);
+    e["points"] = l.points;
+    e["centroid"] = vec_json(l.centroid_in_world);
+    e["centroid_in_cam"] = l.centroid_in_cam ? vec_json(*l.centroid_in_cam) : ordered_json(nullptr);
+    e["why"] = l.created ? "new" : "match";
+    e["p_id"] = l.p_id;
+    e["distance_m"] = l.distance_m;
+    e["overlap"] = l.overlap;
+    e["p"] = l.score_p;
+    obs.push_back(e);
+  }
+  o["observations"] = obs;
+  ordered_json merges = ordered_json::array();
+  for (const auto& mlink : r.merges)
+    merges.push_back({{"absorbed", mlink.absorbed},
+                      {"p_id", mlink.p_id},
+                      {"distance_m", mlink.distance_m},
+                      {"overlap", mlink.overlap},
+                      {"p", mlink.score_p}});
+  o["merged"] = merges;
+  return o;
+}
+
+}  // namespace
+
+FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
+  options.check();
+  const auto t_start = Clock::now();
+  FuseResult result;
+
+  // 1. Inputs: the TUM folder, the camera, the trajectory, the segmentation.
+  auto t0 = Clock::now();
+  io::TumOptions tum;
+  tum.max_diff_s = options.max_diff_s;
+  const io::TumDataset dataset = io::read_tum_dataset(options.dataset, tum);
+  result.frames = dataset.frames.size();
+  const io::CameraChoice choice = io::choose_camera(options.dataset, options.camera);
+  result.camera = choice.camera;
+  result.camera_reason = choice.reason;
+  const Camera& camera = result.camera;
+  const Trajectory trajectory = io::read_trajectory(options.trajectory);
+  segmentation::ReadOptions read;
+  read.format = options.seg_format;
+  read.image_width = camera.width;
+  read.image_height = camera.height;
+  read.default_class = options.default_class;
+  const segmentation::Segmentation seg =
+      segmentation::read_segmentation(options.segmentation, read);
+  result.seg_format = seg.format;
+  require(!seg.frames.empty(), options.segmentation.string(),
+          "no segmentation frame; expected one file per rgb frame");
+  result.times.push_back({"read inputs", seconds_since(t0)});
+
+  // 2. Keyframes: the frames that have a pose (thinned by motion for a per-frame trajectory).
+  t0 = Clock::now();
+  KeyframeOptions kf = options.keyframes;
+  kf.max_diff_s = options.max_diff_s;
+  result.keyframes = select_keyframes(dataset, trajectory, kf);
+  const auto& keyframes = result.keyframes.keyframes;
+
+  // Each keyframe's segmentation frame: the one named by its rgb timestamp (within 1 ms).
+  std::vector<const segmentation::FrameSegmentation*> seg_of(keyframes.size(), nullptr);
+  std::size_t with_seg = 0;
+  {
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < keyframes.size(); ++i) {
+      const double t = keyframes[i].timestamp;
+      while (j < seg.frames.size() && seg.frames[j].timestamp < t - 1e-3) ++j;
+      if (j < seg.frames.size() && std::abs(seg.frames[j].timestamp - t) <= 1e-3) {
+        seg_of[i] = &seg.frames[j];
+        ++with_seg;
+      }
+    }
+  }
+  require(
+      with_seg > 0, options.segmentation.string(),
+      "no segmentation frame has the timestamp of one of the " + std::to_string(keyframes.size()) +
+          " keyframes; expected files named by the rgb timestamps of " + options.dataset.string());
+  result.times.push_back({"select keyframes", seconds_since(t0)});
+
+  // 3. Back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead; this
+  // thread
+  //    merges their results strictly in keyframe order, so the maps do not depend on the thread
+  //    count.
+  t0 = Clock::now();
+  const geometry::RayTable rays = geometry::make_ray_table(camera);
+  fusion::VoxelMapOptions dense_options;
+  dense_options.voxel_m = options.map_voxel_m;
+  fusion::VoxelMap dense(dense_options);
+  fusion::ObjectMap objects(options.objects);
+
+  const std::size_t window = static_cast<std::size_t>(std::max(1, options.threads));
+  std::deque<std::future<FrameWork>> pending;
+  std::size_t next = 0;
+  auto launch = [&](std::size_t i) {
+    return std::async(std::launch::async, [&, i] {
+      return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
+                              keyframes[i], static_cast<int>(i), seg_of[i]);
+    });
+  };
+  auto drain = [&] {
+    for (auto& f : pending)
+      if (f.valid()) f.wait();
+  };
+  try {
+    for (std::size_t done = 0; done < keyframes.size(); ++done) {
+      while (next < keyframes.size() && pending.size() < window + 1)
+        pending.push_back(launch(next++));
+      FrameWork work = pending.front().get();
+      pending.pop_front();
+      dense.merge(work.dense);
+      result.dense_points_raw += work.dense_points;
+      result.instances_seen += work.instances;
+      result.instances_skipped_score += work.skipped_score;
+      result.instances_from_box += work.from_box;
+      result.instances_empty += work.empty;
+      for (const auto& obs : work.observations) {
+        if (objects.add(obs).object_id >= 0)
+          ++result.observations;
+        else
+          ++result.instances_empty;
+      }
+      if (progress) progress(done + 1, keyframes.size());
+    }
+  } catch (...) {
+    drain();
+    throw;
+  }
+  result.times.push_back({"back-project and fuse", seconds_since(t0)});
+
+  // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
+  t0 = Clock::now();
+  result.merges = objects.merge_pass();
+  result.objects_total = objects.size();
+  fusion::RecordOptions record_options;
+  record_options.confirmed_only = true;
+  record_options.outlier_filter = options.outlier_filter;
+  record_options.outlier = options.outlier;
+  record_options.outlier.threads = options.threads;
+  result.objects = objects.records(record_options);
+  for (const auto& r : result.objects) {
+    result.object_points_raw += r.points_raw;
+    result.object_points_voxel += r.points_voxel;
+    result.object_points_filtered += r.points_filtered;
+  }
+  result.times.push_back({"merge and filter objects", seconds_since(t0)});
+
+  // 5. The maps and the run folder, written under a temporary name and renamed when complete.
+  t0 = Clock::now();
+  const PointCloud dense_cloud = dense.to_cloud();
+  result.dense_points_map = dense_cloud.size();
+  const fusion::SemanticMaps maps = fusion::make_semantic_maps(dense, result.objects);
+
+  io::StagingDir staging(options.out);
+  const fs::path dir = staging.path();
+  io::PlyWriteOptions ply;
+  ply.comment = std::string("objmap ") + objmap::version();
+  io::write_ply(dir / "map_dense.ply", dense_cloud, ply);
+  io::write_ply(dir / "map_semantic.ply", maps.semantic, ply);
+  io::write_ply(dir / "map_objects.ply", maps.objects_only, ply);
+  fs::create_directories(dir / "objects");
+  ordered_json objects_json = ordered_json::array();
+  for (const auto& r : result.objects) {
+    const std::string name =
+        "objects/" + std::to_string(r.id) + "_" + file_safe(r.class_name) + ".ply";
+    io::write_ply(dir / name, r.cloud, ply);
+    objects_json.push_back(object_json(r, name));
+  }
+  ordered_json doc;
+  doc["schema_version"] = 1;
+  doc["generator"] = std::string("objmap ") + objmap::version();
+  doc["frame"] = "world";
+  doc["units"] = "metres";
+  doc["objects"] = objects_json;
+  io::write_file_atomic(dir / "objects.json", doc.dump(2) + "\n");
+  result.times.push_back({"write outputs", seconds_since(t0)});
+  result.seconds_total = seconds_since(t_start);
+  result.peak_rss_kb = peak_rss_kb();
+
+  // run.json: options, inputs with checksums, counts per stage, Table 6, time per stage, memory.
+  FuseOptions echo = options;
+  ordered_json run;
+  run["schema_version"] = 1;
+  run["generator"] = std::string("objmap ") + objmap::version();
+  run["command"] = "fuse";
+  run["inputs"] = {
+      {"dataset",
+       {{"path", options.dataset.string()},
+        {"rgb.txt", file_checksum(options.dataset / "rgb.txt")},
+        {"depth.txt", file_checksum(options.dataset / "depth.txt")}}},
+      {"trajectory",
+       {{"path", options.trajectory.string()}, {"checksum", file_checksum(options.trajectory)}}},
+      {"segmentation",
+       {{"path", options.segmentation.string()},
+        {"format", seg.format},
+        {"checksum", folder_checksum(options.segmentation)}}},
+      {"camera", nlohmann::ordered_json::parse(io::camera_json(camera))},
+      {"camera_reason", choice.reason}};
+  run["options"] = ordered_json::parse(config_to_json(fuse_config_fields(echo)));
+  run["counts"] = {{"frames", result.frames},
+                   {"frames_with_pose", result.keyframes.frames_with_pose},
+                   {"keyframe_mode", result.keyframes.mode},
+                   {"keyframes", keyframes.size()},
+                   {"keyframes_with_segmentation", with_seg},
+                   {"instances", result.instances_seen},
+                   {"instances_below_min_score", result.instances_skipped_score},
+                   {"instances_mask_from_box", result.instances_from_box},
+                   {"instances_without_points", result.instances_empty},
+                   {"observations", result.observations},
+                   {"objects_before_confirmation", result.objects_total},
+                   {"objects_confirmed", result.objects.size()},
+                   {"merges", result.merges.size()}};
+  const auto reduction = [](double before, double after) {
+    return before > 0 ? 1.0 - after / before : 0.0;
+  };
+  run["points"] = {
+      {"dense_back_projected", result.dense_points_raw},
+      {"dense_map", result.dense_points_map},
+      {"objects_raw", result.object_points_raw},
+      {"objects_voxel_filtered", result.object_points_voxel},
+      {"objects_outlier_filtered", result.object_points_filtered},
+      {"semantic_map", maps.semantic.size()},
+      {"objects_map", maps.objects_only.size()},
+      {"reduction_objects_voxel", reduction(result.object_points_raw, result.object_points_voxel)},
+      {"reduction_objects_total",
+       reduction(result.object_points_raw, result.object_points_filtered)},
+      {"reduction_dense", reduction(result.dense_points_raw, result.dense_points_map)}};
+  // The only part of the run folder that differs between two runs of the same inputs.
+  ordered_json perf;
+  for (const auto& t : result.times) perf["seconds"][t.stage] = t.seconds;
+  perf["seconds"]["total"] = result.seconds_total;
+  perf["ms_per_keyframe"] =
+      keyframes.empty() ? 0.0 : 1000.0 * result.seconds_total / keyframes.size();
+  perf["peak_rss_mb"] = result.peak_rss_kb / 1024.0;
+  perf["threads"] = options.threads;
+  run["performance"] = perf;
+  io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+  staging.commit();
+  return result;
+}
+
+}  // namespace objmap::pipeline

@@ -1,0 +1,87 @@
+#pragma once
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "objmap/core/camera.h"
+#include "objmap/filters/outlier.h"
+#include "objmap/fusion/object_map.h"
+#include "objmap/geometry/backproject.h"
+#include "objmap/pipeline/config.h"
+#include "objmap/pipeline/keyframes.h"
+#include "objmap/segmentation/box_mask.h"
+
+// `objmap fuse`: the object-oriented semantic map (paper §3.2–3.3). Keyframes with their poses are
+// back-projected into a dense voxel map; each instance of each keyframe becomes an observation that
+// the ObjectMap associates (eq 22) with an object or starts one; a final merge pass repairs ID
+// switches; each confirmed object's cloud is outlier-filtered (eq 18). Written atomically to one
+// run folder: objects.json, objects/<id>_<class>.ply, map_dense.ply, map_semantic.ply,
+// map_objects.ply, run.json.
+namespace objmap::pipeline {
+
+struct FuseOptions {
+  // Inputs and output.
+  std::filesystem::path dataset;         // TUM folder
+  std::filesystem::path trajectory;      // TUM trajectory, world_from_cam
+  std::filesystem::path segmentation;    // segmentation folder, any supported format
+  std::filesystem::path out;             // run folder (replaced atomically when complete)
+  std::string camera;                    // empty: camera.json, folder name or rgb.txt header
+  std::string seg_format = "auto";       // segmentation format or auto-detect
+  std::string default_class = "object";  // class of box formats without one (fr3_cabinet)
+
+  double max_diff_s = 0.02;               // rgb/depth association window
+  KeyframeOptions keyframes;              // which frames are fused
+  geometry::BackprojectOptions depth;     // depth range [0.1, 4.0] m (the paper's lower bound 0.01)
+  double map_voxel_m = 0.01;              // dense/semantic map voxel (1 cm)
+  int dense_stride = 1;                   // back-project every n-th pixel into the dense map
+  double min_instance_score = 0.0;        // instances below this detector score are ignored
+  segmentation::BoxMaskOptions box_mask;  // masks for instances that have only a box
+  fusion::ObjectMapOptions objects;       // association (eq 22), confirmation, merge pass
+  bool outlier_filter = true;             // eq 18 on each object's cloud
+  filters::OutlierOptions outlier;        // K = 20, k = 1.0
+  int threads = 2;                        // worker threads; outputs are identical for any count
+  void check() const;                     // throws InputError naming the bad field
+};
+
+struct StageTime {
+  std::string stage;
+  double seconds = 0.0;
+};
+
+struct FuseResult {
+  Camera camera;
+  std::string camera_reason;
+  std::string seg_format;
+  std::size_t frames = 0;  // associated rgb/depth pairs
+  KeyframeSelection keyframes;
+  std::size_t instances_seen = 0;  // instances on keyframes
+  std::size_t instances_skipped_score = 0;
+  std::size_t instances_from_box = 0;  // masks made from boxes
+  std::size_t instances_empty = 0;  // no usable pixels (box mask empty, no depth, too few points)
+  std::size_t observations = 0;     // added to the object map
+  std::size_t objects_total = 0;    // objects before the confirmation rule
+  std::vector<fusion::MergeLink> merges;
+  std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
+  // Table 6: points.
+  std::uint64_t dense_points_raw = 0;      // back-projected points of all keyframes
+  std::size_t dense_points_map = 0;        // voxels of the dense map (= points of map_dense.ply)
+  std::size_t object_points_raw = 0;       // points of the confirmed objects' observations
+  std::size_t object_points_voxel = 0;     // after the voxel filter
+  std::size_t object_points_filtered = 0;  // after the outlier filter (map_objects.ply)
+  std::vector<StageTime> times;
+  double seconds_total = 0.0;
+  long peak_rss_kb = 0;
+};
+
+// Every tunable field of FuseOptions (not the input/output paths) with its JSON key, flag and help.
+std::vector<ConfigField> fuse_config_fields(FuseOptions& options);
+
+// done/total keyframes, for a progress bar.
+using FuseProgress = std::function<void(std::size_t done, std::size_t total)>;
+
+// Runs the whole fuse and writes the run folder. Throws InputError for bad input; nothing is left
+// behind then.
+FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress = {});
+
+}  // namespace objmap::pipeline

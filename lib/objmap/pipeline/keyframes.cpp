@@ -1,0 +1,73 @@
+#include "objmap/pipeline/keyframes.h"
+
+#include <cmath>
+
+#include "objmap/core/error.h"
+#include "objmap/io/trajectory.h"
+
+namespace objmap::pipeline {
+
+void KeyframeOptions::check() const {
+  require(std::isfinite(max_diff_s) && max_diff_s > 0 && max_diff_s < 1, "keyframes.max_diff_s",
+          "must be in (0, 1) s");
+  require(mode == "auto" || mode == "all" || mode == "motion" || mode == "stride", "keyframes.mode",
+          "'" + mode + "'; expected auto, all, motion or stride");
+  require(std::isfinite(min_translation_m) && min_translation_m >= 0, "keyframes.min_translation_m",
+          "must be >= 0");
+  require(std::isfinite(min_rotation_deg) && min_rotation_deg >= 0, "keyframes.min_rotation_deg",
+          "must be >= 0");
+  require(stride >= 1, "keyframes.stride", "must be >= 1, got " + std::to_string(stride));
+}
+
+KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajectory& trajectory,
+                                   const KeyframeOptions& options) {
+  options.check();
+  io::PoseLookupOptions lookup;
+  lookup.max_diff_s = options.max_diff_s;
+  lookup.interpolate = true;
+
+  // 1. Every frame that has a pose.
+  std::vector<Keyframe> posed;
+  for (std::size_t i = 0; i < dataset.frames.size(); ++i) {
+    const double t = dataset.frames[i].rgb_timestamp;
+    if (auto pose = io::lookup_pose(trajectory, t, lookup)) posed.push_back({i, t, *pose});
+  }
+  KeyframeSelection result;
+  result.frames_with_pose = posed.size();
+  if (posed.empty()) {
+    const std::string span = trajectory.empty()
+                                 ? std::string("no pose")
+                                 : std::to_string(trajectory.poses.front().timestamp) + " .. " +
+                                       std::to_string(trajectory.poses.back().timestamp);
+    throw InputError(trajectory.source,
+                     "no pose within " + std::to_string(options.max_diff_s) + " s of any of the " +
+                         std::to_string(dataset.frames.size()) + " frames (poses span " + span +
+                         "); expected the trajectory of this sequence");
+  }
+
+  // 2. The mode: a keyframe trajectory is used as it is.
+  result.mode = options.mode;
+  if (result.mode == "auto")
+    result.mode = 2 * posed.size() <= dataset.frames.size() ? "all" : "motion";
+
+  if (result.mode == "all") {
+    result.keyframes = std::move(posed);
+  } else if (result.mode == "stride") {
+    for (std::size_t i = 0; i < posed.size(); i += options.stride)
+      result.keyframes.push_back(posed[i]);
+  } else {  // motion: translation or rotation since the last keyframe
+    const double min_rotation_rad = options.min_rotation_deg * M_PI / 180.0;
+    result.keyframes.push_back(posed.front());
+    for (std::size_t i = 1; i < posed.size(); ++i) {
+      const Pose last_from_this =
+          result.keyframes.back().world_from_cam.inverse() * posed[i].world_from_cam;
+      const double moved_m = last_from_this.translation().norm();
+      const double turned_rad = Eigen::AngleAxisd(last_from_this.rotation()).angle();
+      if (moved_m >= options.min_translation_m || turned_rad >= min_rotation_rad)
+        result.keyframes.push_back(posed[i]);
+    }
+  }
+  return result;
+}
+
+}  // namespace objmap::pipeline

@@ -1,0 +1,712 @@
+#include "objmap/segmentation/box_mask.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "objmap/core/error.h"
+#ifdef BOXMASK_DEBUG
+#include <cstdio>
+#endif
+
+namespace objmap::segmentation {
+
+namespace {
+
+std::string num(double v) {
+  std::string s = std::to_string(v);
+  while (s.size() > 1 && s.back() == '0') s.pop_back();
+  if (!s.empty() && s.back() == '.') s.pop_back();
+  return s;
+}
+
+void require_range(double value, double lo, double hi, const char* field, const std::string& what) {
+  require(std::isfinite(value) && value >= lo && value <= hi,
+          std::string("BoxMaskOptions.") + field, what + ", got " + num(value));
+}
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Per-pixel flags of the box-local buffers.
+constexpr std::uint8_t kValid = 1;    // depth within [min_depth_m, max_depth_m]
+constexpr std::uint8_t kSupport = 2;  // on or beyond the support plane
+constexpr std::uint8_t kInMask = 4;   // grown region
+constexpr std::uint8_t kBand = 8;     // valid, not support, within the depth band
+constexpr std::uint8_t kChecked = 16;  // refused once by the region growing
+constexpr std::uint8_t kSeed = 32;     // seed candidate: central, at the mode depth
+
+// Buffers reused from call to call on the same thread (no allocation per pixel, few per call).
+struct Workspace {
+  std::vector<float> z_m;                       // box-local depth in metres, 0 = invalid
+  std::vector<std::uint8_t> flags;              // box-local flags
+  std::vector<std::uint8_t> scratch, scratch2;  // morphology
+  std::vector<std::int32_t> queue;              // region growing
+  std::vector<float> ray_x, ray_y;              // (u − cx)/fx per column, (v − cy)/fy per row
+  std::vector<float> weight_u, weight_v;        // centre weights per column / row
+  std::vector<double> hist, hist3;
+  std::vector<Eigen::Vector3f> samples;
+  std::vector<std::uint8_t> sample_inlier;
+};
+
+Workspace& workspace() {
+  thread_local Workspace ws;
+  return ws;
+}
+
+// Deterministic generator for RANSAC (same sequence on every platform).
+struct Lcg {
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  std::uint32_t next() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<std::uint32_t>(state >> 33);
+  }
+  std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
+};
+
+struct Plane {
+  Eigen::Vector3f n = Eigen::Vector3f::Zero();
+  float d = 0;  // n·X + d = 0, d > 0: the camera is on the positive side
+  std::size_t inliers = 0;
+  bool valid = false;
+};
+
+// RANSAC on the samples, then a least-squares refit on the inliers.
+Plane fit_plane(const std::vector<Eigen::Vector3f>& pts, float inlier_m, int iterations,
+                std::vector<std::uint8_t>& inlier) {
+  Plane best;
+  const std::size_t n = pts.size();
+  if (n < 3) return best;
+  Lcg rng;
+  for (int it = 0; it < iterations; ++it) {
+    const std::size_t i0 = rng.below(n), i1 = rng.below(n), i2 = rng.below(n);
+    if (i0 == i1 || i0 == i2 || i1 == i2) continue;
+    const Eigen::Vector3f a = pts[i1] - pts[i0], b = pts[i2] - pts[i0];
+    Eigen::Vector3f normal = a.cross(b);
+    const float len = normal.norm();
+    if (!(len > 1e-6f * a.norm() * b.norm()) || len <= 0) continue;  // collinear
+    normal /= len;
+    const float d = -normal.dot(pts[i0]);
+    std::size_t count = 0;
+    for (const auto& p : pts) count += std::abs(normal.dot(p) + d) <= inlier_m;
+    if (count > best.inliers) {
+      best.n = normal;
+      best.d = d;
+      best.inliers = count;
+      best.valid = true;
+      if (count * 20 >= n * 19) break;  // 95 % inliers: nothing better to find
+    }
+  }
+  if (!best.valid) return best;
+  // Refit: the plane through the inliers' centroid, normal = least-variance direction.
+  inlier.assign(n, 0);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (std::abs(best.n.dot(pts[i]) + best.d) <= inlier_m) {
+      inlier[i] = 1;
+      mean += pts[i].cast<double>();
+      ++m;
+    }
+  }
+  if (m >= 3) {
+    mean /= static_cast<double>(m);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!inlier[i]) continue;
+      const Eigen::Vector3d q = pts[i].cast<double>() - mean;
+      cov += q * q.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+    const Eigen::Vector3f normal = solver.eigenvectors().col(0).cast<float>();
+    const float d = static_cast<float>(-normal.cast<double>().dot(mean));
+    std::size_t count = 0;
+    for (const auto& p : pts) count += std::abs(normal.dot(p) + d) <= inlier_m;
+    if (count >= best.inliers) {
+      best.n = normal;
+      best.d = d;
+      best.inliers = count;
+    }
+  }
+  if (best.d < 0) {
+    best.n = -best.n;
+    best.d = -best.d;
+  }
+  return best;
+}
+
+// The object's depth: the nearest peak of the centre-weighted histogram (3-bin sums) holding at
+// least `min_share` of the largest peak, over the valid pixels without `exclude` flags. Returns the
+// weighted mean depth of the pixels in that peak's three bins, or 0 when there is none.
+double near_mode(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin_m,
+                 double min_share, std::uint8_t exclude) {
+  auto& hist = ws.hist;
+  auto& hist3 = ws.hist3;
+  hist.assign(static_cast<std::size_t>(bins), 0.0);
+  hist3.assign(static_cast<std::size_t>(bins), 0.0);
+  const float inv_bin = static_cast<float>(1.0 / bin_m);
+  bool any = false;
+  for (int y = 0; y < bh; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * bw;
+    const double wv = ws.weight_v[y];
+    for (int x = 0; x < bw; ++x) {
+      const std::uint8_t f = ws.flags[row + x];
+      if (!(f & kValid) || (f & exclude)) continue;
+      const int b = std::min(bins - 1, static_cast<int>((ws.z_m[row + x] - z_lo) * inv_bin));
+      hist[b] += wv * ws.weight_u[x];
+      any = true;
+    }
+  }
+  if (!any) return 0.0;
+  for (int b = 0; b < bins; ++b) {
+    hist3[b] = hist[b] + (b > 0 ? hist[b - 1] : 0.0) + (b + 1 < bins ? hist[b + 1] : 0.0);
+  }
+  double largest = 0;
+  for (int b = 0; b < bins; ++b) largest = std::max(largest, hist3[b]);
+  int chosen = -1;
+  for (int b = 0; b < bins; ++b) {  // nearest first
+    const double left = b > 0 ? hist3[b - 1] : -1.0;
+    const double right = b + 1 < bins ? hist3[b + 1] : -1.0;
+    if (hist3[b] >= left && hist3[b] > right && hist3[b] >= min_share * largest && hist3[b] > 0) {
+      chosen = b;
+      break;
+    }
+  }
+  if (chosen < 0) return 0.0;
+  // Mean depth of the peak's three bins (centre-weighted).
+  const float lo = z_lo + static_cast<float>((chosen - 1) * bin_m);
+  const float hi = z_lo + static_cast<float>((chosen + 2) * bin_m);
+  double sum_w = 0, sum_wz = 0;
+  for (int y = 0; y < bh; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * bw;
+    const double wv = ws.weight_v[y];
+    for (int x = 0; x < bw; ++x) {
+      const std::uint8_t f = ws.flags[row + x];
+      const float z = ws.z_m[row + x];
+      if (!(f & kValid) || (f & exclude) || z < lo || z >= hi) continue;
+      const double w = wv * ws.weight_u[x];
+      sum_w += w;
+      sum_wz += w * z;
+    }
+  }
+  return sum_w > 0 ? sum_wz / sum_w : 0.0;
+}
+
+// Separable square dilation (grow = true) or erosion of `bits` (0/1) in place, radius r. Outside the
+// box counts as the neutral element (the border is neither grown into nor eroded from). Inner loops
+// run along rows so that they vectorise.
+void morph(std::vector<std::uint8_t>& bits, std::vector<std::uint8_t>& tmp, int bw, int bh, int r,
+           bool grow) {
+  tmp = bits;
+  for (int y = 0; y < bh; ++y) {
+    const std::uint8_t* in = bits.data() + static_cast<std::size_t>(y) * bw;
+    std::uint8_t* out = tmp.data() + static_cast<std::size_t>(y) * bw;
+    for (int k = 1; k <= r && k < bw; ++k) {
+      if (grow) {
+        for (int x = k; x < bw; ++x) out[x] |= in[x - k];
+        for (int x = 0; x + k < bw; ++x) out[x] |= in[x + k];
+      } else {
+        for (int x = k; x < bw; ++x) out[x] &= in[x - k];
+        for (int x = 0; x + k < bw; ++x) out[x] &= in[x + k];
+      }
+    }
+  }
+  bits = tmp;
+  for (int y = 0; y < bh; ++y) {
+    std::uint8_t* out = bits.data() + static_cast<std::size_t>(y) * bw;
+    for (int k = -r; k <= r; ++k) {
+      const int yy = y + k;
+      if (k == 0 || yy < 0 || yy >= bh) continue;
+      const std::uint8_t* in = tmp.data() + static_cast<std::size_t>(yy) * bw;
+      if (grow) {
+        for (int x = 0; x < bw; ++x) out[x] |= in[x];
+      } else {
+        for (int x = 0; x < bw; ++x) out[x] &= in[x];
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void BoxMaskOptions::check() const {
+  require_range(min_depth_m, 0.0, 1e3, "min_depth_m", "must be >= 0");
+  require_range(max_depth_m, min_depth_m + 1e-9, 1e3, "max_depth_m", "must be > min_depth_m");
+  require_range(bin_m, 1e-4, 1.0, "bin_m", "must be in (0, 1] metres");
+  require(bin_m > 0 && (max_depth_m - min_depth_m) / bin_m <= 100000, "BoxMaskOptions.bin_m",
+          "gives more than 100000 histogram bins over [min_depth_m, max_depth_m]");
+  require_range(center_sigma_fraction, 1e-3, 1e3, "center_sigma_fraction", "must be > 0");
+  require_range(near_mode_min_share, 0.0, 1.0, "near_mode_min_share", "must be in [0, 1]");
+  require_range(seed_tolerance_bins, 0.5, 100.0, "seed_tolerance_bins", "must be in [0.5, 100]");
+  require(
+      std::isfinite(seed_center_fraction) && seed_center_fraction > 0 && seed_center_fraction <= 1,
+      "BoxMaskOptions.seed_center_fraction", "must be in (0, 1], got " + num(seed_center_fraction));
+  require_range(smooth_max_slope_deg, 0.0, 89.9, "smooth_max_slope_deg",
+                "must be in [0, 89.9] degrees");
+  require_range(smooth_noise_m_per_m2, 0.0, 1.0, "smooth_noise_m_per_m2", "must be in [0, 1]");
+  require(smooth_max_slope_deg > 0 || smooth_noise_m_per_m2 > 0,
+          "BoxMaskOptions.smooth_noise_m_per_m2", "must be > 0 when smooth_max_slope_deg is 0");
+  require(connectivity == 4 || connectivity == 8, "BoxMaskOptions.connectivity",
+          "must be 4 or 8, got " + std::to_string(connectivity));
+  require_range(band_size_factor, 0.0, 100.0, "band_size_factor", "must be >= 0");
+  require_range(band_min_m, 0.0, 1e3, "band_min_m", "must be >= 0");
+  require_range(band_near_fraction, 0.0, 1.0, "band_near_fraction", "must be in [0, 1]");
+  require_range(band_max_m, band_min_m, 1e3, "band_max_m", "must be >= band_min_m");
+  require_range(support_inlier_m, 1e-4, 1.0, "support_inlier_m", "must be in (0, 1] metres");
+  require_range(support_bottom_fraction, 0.0, 1.0, "support_bottom_fraction", "must be in [0, 1]");
+  require_range(support_below_fraction, 0.0, 10.0, "support_below_fraction", "must be in [0, 10]");
+  require(support_bottom_fraction > 0 || support_below_fraction > 0,
+          "BoxMaskOptions.support_below_fraction",
+          "must be > 0 when support_bottom_fraction is 0 (no rows to fit the plane to)");
+  require_range(support_min_inlier_share, 0.0, 1.0, "support_min_inlier_share",
+                "must be in [0, 1]");
+  require(support_min_inliers >= 3, "BoxMaskOptions.support_min_inliers",
+          "must be >= 3, got " + std::to_string(support_min_inliers));
+  require(support_max_samples >= 3, "BoxMaskOptions.support_max_samples",
+          "must be >= 3, got " + std::to_string(support_max_samples));
+  require(support_ransac_iterations >= 1, "BoxMaskOptions.support_ransac_iterations",
+          "must be >= 1, got " + std::to_string(support_ransac_iterations));
+  require_range(support_reclaim_angle_deg, 0.0, 90.0, "support_reclaim_angle_deg",
+                "must be in [0, 90] degrees");
+  require(support_max_planes >= 1 && support_max_planes <= 10, "BoxMaskOptions.support_max_planes",
+          "must be in [1, 10], got " + std::to_string(support_max_planes));
+  require_range(support_min_object_height_m, 0.0, 10.0, "support_min_object_height_m",
+                "must be >= 0");
+  require(close_radius_px >= 0 && close_radius_px <= 50, "BoxMaskOptions.close_radius_px",
+          "must be in [0, 50], got " + std::to_string(close_radius_px));
+  require(min_pixels >= 0, "BoxMaskOptions.min_pixels",
+          "must be >= 0, got " + std::to_string(min_pixels));
+  require_range(min_box_fraction, 0.0, 1.0, "min_box_fraction", "must be in [0, 1]");
+}
+
+const char* to_string(BoxMaskStatus status) {
+  switch (status) {
+    case BoxMaskStatus::kOk:
+      return "ok";
+    case BoxMaskStatus::kOutsideImage:
+      return "box outside the image";
+    case BoxMaskStatus::kNoValidDepth:
+      return "no valid depth in the box";
+    case BoxMaskStatus::kTooSmall:
+      return "region below the minimum area";
+  }
+  return "?";
+}
+
+BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& camera,
+                            const BoxMaskOptions& options) {
+  require(depth.empty() || depth.type() == CV_16UC1, "mask_from_box: depth",
+          "image type " + std::to_string(depth.type()) + "; expected CV_16UC1 (16-bit raw depth)");
+  require(camera.fx > 0 && camera.fy > 0 && std::isfinite(camera.fx) && std::isfinite(camera.fy),
+          "mask_from_box: camera", "fx and fy must be finite and > 0");
+  require(camera.depth_factor > 0 && std::isfinite(camera.depth_factor), "mask_from_box: camera",
+          "depth_factor must be finite and > 0");
+
+  BoxMaskResult result;
+  if (depth.empty()) {
+    result.status = BoxMaskStatus::kOutsideImage;
+    return result;
+  }
+  const int width = depth.cols, height = depth.rows;
+  result.mask.width = width;
+  result.mask.height = height;
+  result.mask.data.assign(static_cast<std::size_t>(width) * height, 0);
+
+  // 1. Clip the box to the image: pixels [u0, u1) × [v0, v1).
+  const auto clip = [](double value, int hi) {
+    if (!std::isfinite(value)) return 0;
+    return static_cast<int>(std::clamp(value, 0.0, static_cast<double>(hi)));
+  };
+  const int u0 = clip(std::floor(box.x), width), u1 = clip(std::ceil(box.x + box.w), width);
+  const int v0 = clip(std::floor(box.y), height), v1 = clip(std::ceil(box.y + box.h), height);
+  result.u0 = u0;
+  result.v0 = v0;
+  result.u1 = std::max(u0, u1);
+  result.v1 = std::max(v0, v1);
+  if (u1 <= u0 || v1 <= v0) {
+    result.status = BoxMaskStatus::kOutsideImage;
+    return result;
+  }
+  const int bw = u1 - u0, bh = v1 - v0;
+  const std::size_t area = static_cast<std::size_t>(bw) * bh;
+
+  Workspace& ws = workspace();
+  const float to_m = static_cast<float>(1.0 / camera.depth_factor);
+  const float zmin = static_cast<float>(options.min_depth_m);
+  const float zmax = static_cast<float>(options.max_depth_m);
+  ws.ray_x.resize(static_cast<std::size_t>(width));
+  for (int u = 0; u < width; ++u) ws.ray_x[u] = static_cast<float>((u - camera.cx) / camera.fx);
+  ws.ray_y.resize(static_cast<std::size_t>(height));
+  for (int v = 0; v < height; ++v) ws.ray_y[v] = static_cast<float>((v - camera.cy) / camera.fy);
+  const auto depth_at = [&](int u, int v) {
+    const float z = depth.at<std::uint16_t>(v, u) * to_m;
+    return (z >= zmin && z <= zmax) ? z : 0.0f;
+  };
+
+  // Valid depths of the box.
+  ws.z_m.resize(area);
+  ws.flags.assign(area, 0);
+  float z_lo = zmax, z_hi = 0;
+  for (int y = 0; y < bh; ++y) {
+    const std::uint16_t* src = depth.ptr<std::uint16_t>(v0 + y) + u0;
+    float* dst = ws.z_m.data() + static_cast<std::size_t>(y) * bw;
+    std::uint8_t* fl = ws.flags.data() + static_cast<std::size_t>(y) * bw;
+    for (int x = 0; x < bw; ++x) {
+      const float z = src[x] * to_m;
+      if (z >= zmin && z <= zmax) {
+        dst[x] = z;
+        fl[x] = kValid;
+        z_lo = std::min(z_lo, z);
+        z_hi = std::max(z_hi, z);
+        ++result.valid_pixels;
+      } else {
+        dst[x] = 0;
+      }
+    }
+  }
+  if (result.valid_pixels == 0) {
+    result.status = BoxMaskStatus::kNoValidDepth;
+    return result;
+  }
+
+  // Centre weights (separable Gaussian), in box-local coordinates.
+  ws.weight_u.resize(static_cast<std::size_t>(bw));
+  ws.weight_v.resize(static_cast<std::size_t>(bh));
+  {
+    const double cu = box.x + 0.5 * box.w, cv = box.y + 0.5 * box.h;
+    const double su = std::max(1.0, options.center_sigma_fraction * box.w);
+    const double sv = std::max(1.0, options.center_sigma_fraction * box.h);
+    for (int x = 0; x < bw; ++x) {
+      const double t = (u0 + x + 0.5 - cu) / su;
+      ws.weight_u[x] = static_cast<float>(std::exp(-0.5 * t * t));
+    }
+    for (int y = 0; y < bh; ++y) {
+      const double t = (v0 + y + 0.5 - cv) / sv;
+      ws.weight_v[y] = static_cast<float>(std::exp(-0.5 * t * t));
+    }
+  }
+  const int bins = std::max(1, static_cast<int>((z_hi - z_lo) / options.bin_m) + 1);
+
+  // 2–3. Support plane and the object's depth. Planes are fitted to the box's bottom rows and the
+  // rows just below it; a plane is accepted when it is well supported, leaves a fair share of the box
+  // in front of it, and the object found there (the near mode without the plane's pixels) stands on
+  // the camera's side of it. A rejected plane (an occluder's or the object's own face) takes its
+  // samples with it and the next plane is tried.
+  const float tol = static_cast<float>(options.seed_tolerance_bins * options.bin_m);
+  const float thr = static_cast<float>(options.support_inlier_m);
+  struct Window {
+    int x0, x1, y0, y1;
+  };
+  const auto seed_window = [&](double frac) {
+    const double cu = box.x + 0.5 * box.w - u0, cv = box.y + 0.5 * box.h - v0;
+    return Window{std::max(0, static_cast<int>(std::floor(cu - 0.5 * frac * box.w))),
+                  std::min(bw, static_cast<int>(std::ceil(cu + 0.5 * frac * box.w))),
+                  std::max(0, static_cast<int>(std::floor(cv - 0.5 * frac * box.h))),
+                  std::min(bh, static_cast<int>(std::ceil(cv + 0.5 * frac * box.h)))};
+  };
+  // The object's depth without any plane: the near mode of the histogram.
+  const double mode0 =
+      near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share, 0);
+  if (mode0 <= 0) {
+    result.status = BoxMaskStatus::kNoValidDepth;
+    return result;
+  }
+  double mode = mode0;
+  bool have_plane = false;
+  if (options.remove_support_plane) {
+    const int rows_bottom = static_cast<int>(std::ceil(options.support_bottom_fraction * bh));
+    const int rows_below = static_cast<int>(std::ceil(options.support_below_fraction * box.h));
+    const int s0 = std::max(v0, v1 - rows_bottom), s1 = std::min(height, v1 + rows_below);
+    ws.samples.clear();
+    if (s1 > s0) {
+      const double strip = static_cast<double>(bw) * (s1 - s0);
+      const int stride =
+          std::max(1, static_cast<int>(std::ceil(std::sqrt(strip / options.support_max_samples))));
+      for (int v = s0; v < s1; v += stride) {
+        for (int u = u0; u < u1; u += stride) {
+          const float z = depth_at(u, v);
+          if (z > 0) ws.samples.emplace_back(ws.ray_x[u] * z, ws.ray_y[v] * z, z);
+        }
+      }
+    }
+    for (int attempt = 0; attempt < options.support_max_planes && !have_plane; ++attempt) {
+      const Plane plane = fit_plane(ws.samples, thr, options.support_ransac_iterations,
+                                    ws.sample_inlier);
+      const double needed = std::max<double>(
+          options.support_min_inliers, options.support_min_inlier_share * ws.samples.size());
+      if (!plane.valid || static_cast<double>(plane.inliers) < needed) break;
+      // Set aside the box pixels on the plane or beyond it (the object stands on the camera's side).
+      std::size_t removed = 0;
+      for (int y = 0; y < bh; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y) * bw;
+        const float ry = ws.ray_y[v0 + y];
+        for (int x = 0; x < bw; ++x) {
+          std::uint8_t& f = ws.flags[row + x];
+          f &= static_cast<std::uint8_t>(~kSupport);
+          if (!(f & kValid)) continue;
+          const float z = ws.z_m[row + x];
+          const float dist =
+              z * (plane.n.x() * ws.ray_x[u0 + x] + plane.n.y() * ry + plane.n.z()) + plane.d;
+          if (dist < thr) {
+            f |= kSupport;
+            ++removed;
+          }
+        }
+      }
+      // The plane must leave a fair share of the box, and the object found without any plane
+      // (mode0's central pixels) must stand on the camera's side of it: an occluder's face or the
+      // object's own face has the object behind it or on it.
+      bool ok = removed * 10 <= result.valid_pixels * 9;
+      double height_m = 0;
+      if (ok) {
+        std::size_t on_plane = 0, count = 0;
+        double sum = 0;
+        for (int pass = 0; pass < 2 && count == 0; ++pass) {
+          const Window win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
+          for (int y = win.y0; y < win.y1; ++y) {
+            const std::size_t row = static_cast<std::size_t>(y) * bw;
+            const float ry = ws.ray_y[v0 + y];
+            for (int x = win.x0; x < win.x1; ++x) {
+              const float z = ws.z_m[row + x];
+              if (!(ws.flags[row + x] & kValid) || std::abs(z - mode0) > tol) continue;
+              sum += z * (plane.n.x() * ws.ray_x[u0 + x] + plane.n.y() * ry + plane.n.z()) +
+                     plane.d;
+              on_plane += (ws.flags[row + x] & kSupport) ? 1 : 0;
+              ++count;
+            }
+          }
+        }
+        height_m = count ? sum / count : 0.0;
+        ok = count > 0 && on_plane * 5 <= count &&
+             height_m >= options.support_min_object_height_m;
+        if (ok) {
+          mode = near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share,
+                           kSupport);
+          ok = mode > 0;
+        }
+      }
+#ifdef BOXMASK_DEBUG
+      fprintf(stderr,
+              "plane %d samples %zu inliers %zu removed %zu of %zu n %.2f %.2f %.2f d %.3f mode "
+              "%.3f height %.3f ok %d\n",
+              attempt, ws.samples.size(), plane.inliers, removed, result.valid_pixels,
+              plane.n.x(), plane.n.y(), plane.n.z(), plane.d, mode, height_m, ok);
+#endif
+      if (ok) {
+        have_plane = true;
+        result.support_plane_removed = true;
+        result.support_inliers = plane.inliers;
+        result.support_pixels_removed = removed;
+        result.support_plane_in_cam << plane.n.cast<double>(), plane.d;
+      } else {
+        // Drop this plane's samples and try the next one.
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < ws.samples.size(); ++i) {
+          if (std::abs(plane.n.dot(ws.samples[i]) + plane.d) > thr) ws.samples[kept++] = ws.samples[i];
+        }
+        ws.samples.resize(kept);
+      }
+    }
+    if (!have_plane) {
+      for (auto& f : ws.flags) f &= static_cast<std::uint8_t>(~kSupport);
+    }
+  }
+  if (!have_plane) mode = mode0;
+  result.mode_depth_m = mode;
+
+  // Depth band from the box's metric size at the mode depth.
+  const double metric_size = std::max(box.w * mode / camera.fx, box.h * mode / camera.fy);
+  const double band = std::clamp(options.band_size_factor * metric_size, options.band_min_m,
+                                 std::max(options.band_min_m, options.band_max_m));
+  result.band_half_width_m = band;
+  const float band_lo = static_cast<float>(mode - band * options.band_near_fraction);
+  const float band_hi = static_cast<float>(mode + band);
+  for (std::size_t i = 0; i < area; ++i) {
+    const std::uint8_t f = ws.flags[i];
+    if ((f & kValid) && !(f & kSupport) && ws.z_m[i] >= band_lo && ws.z_m[i] <= band_hi) {
+      ws.flags[i] |= kBand;
+    }
+  }
+
+  // 4. Seeds: central pixels at the mode depth (the whole box when the centre has none), and of
+  // those only the smooth-connected component with the most centre weight: an occluder's surface
+  // that crosses the mode depth elsewhere in the centre is not seeded.
+  const float slope_per_m = static_cast<float>(
+      std::tan(options.smooth_max_slope_deg * kPi / 180) * 2 / (camera.fx + camera.fy));
+  const float noise_per_m2 = static_cast<float>(options.smooth_noise_m_per_m2);
+  const auto step_at = [&](float z) { return z * (slope_per_m + noise_per_m2 * z); };
+  const int n_neigh = options.connectivity;
+  static constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+  static constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+  ws.queue.clear();
+  ws.queue.reserve(area);
+  std::size_t candidates = 0;
+  Window win{};
+  for (int pass = 0; pass < 2 && candidates == 0; ++pass) {
+    win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
+    for (int y = win.y0; y < win.y1; ++y) {
+      for (int x = win.x0; x < win.x1; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * bw + x;
+        if ((ws.flags[i] & kBand) && std::abs(ws.z_m[i] - static_cast<float>(mode)) <= tol) {
+          ws.flags[i] |= kSeed;
+          ++candidates;
+        }
+      }
+    }
+  }
+  {
+    // Components of the candidates (flag kInMask marks "visited" meanwhile).
+    double best_weight = -1;
+    std::int32_t best_start = -1;
+    for (int y = win.y0; y < win.y1; ++y) {
+      for (int x = win.x0; x < win.x1; ++x) {
+        const std::int32_t start = y * bw + x;
+        if (!(ws.flags[start] & kSeed) || (ws.flags[start] & kInMask)) continue;
+        ws.queue.clear();
+        ws.queue.push_back(start);
+        ws.flags[start] |= kInMask;
+        double weight = 0;
+        for (std::size_t head = 0; head < ws.queue.size(); ++head) {
+          const std::int32_t i = ws.queue[head];
+          const int xi = i % bw, yi = i / bw;
+          weight += static_cast<double>(ws.weight_u[xi]) * ws.weight_v[yi];
+          const float z = ws.z_m[i];
+          const float step = step_at(z);
+          for (int k = 0; k < n_neigh; ++k) {
+            const int xx = xi + kDx[k], yy = yi + kDy[k];
+            if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
+            const std::int32_t j = yy * bw + xx;
+            const std::uint8_t f = ws.flags[j];
+            if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
+            ws.flags[j] = f | kInMask;
+            ws.queue.push_back(j);
+          }
+        }
+        if (weight > best_weight) {
+          best_weight = weight;
+          best_start = start;
+        }
+      }
+    }
+    for (int y = win.y0; y < win.y1; ++y) {
+      for (int x = win.x0; x < win.x1; ++x) {
+        ws.flags[static_cast<std::size_t>(y) * bw + x] &= static_cast<std::uint8_t>(~kInMask);
+      }
+    }
+    // Seed the best component again; the growing below takes it from there.
+    ws.queue.clear();
+    if (best_start >= 0) {
+      ws.queue.push_back(best_start);
+      ws.flags[best_start] |= kInMask;
+    }
+    std::size_t seeds = 0;
+    for (std::size_t head = 0; head < ws.queue.size(); ++head) {
+      const std::int32_t i = ws.queue[head];
+      ++seeds;
+      const int xi = i % bw, yi = i / bw;
+      const float z = ws.z_m[i];
+      const float step = step_at(z);
+      for (int k = 0; k < n_neigh; ++k) {
+        const int xx = xi + kDx[k], yy = yi + kDy[k];
+        if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
+        const std::int32_t j = yy * bw + xx;
+        const std::uint8_t f = ws.flags[j];
+        if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
+        ws.flags[j] = f | kInMask;
+        ws.queue.push_back(j);
+      }
+    }
+    result.seed_pixels = seeds;
+  }
+
+  // Region growing across smooth depth inside the band.
+  // Support pixels may be taken back (see below) when they lie on the plane, not beyond it, and
+  // their normal (3D central differences over ±2 px) is off the plane's by the reclaim angle.
+  const bool reclaim = have_plane && options.support_reclaim_angle_deg < 90.0;
+  const Eigen::Vector3f plane_n = result.support_plane_in_cam.head<3>().cast<float>();
+  const float plane_d = static_cast<float>(result.support_plane_in_cam[3]);
+  const float max_cos = static_cast<float>(std::cos(options.support_reclaim_angle_deg * kPi / 180));
+  const auto point = [&](int x, int y) {
+    const float z = ws.z_m[static_cast<std::size_t>(y) * bw + x];
+    return Eigen::Vector3f(ws.ray_x[u0 + x] * z, ws.ray_y[v0 + y] * z, z);
+  };
+  const auto off_plane = [&](int x, int y) {
+    constexpr int k = 2;
+    if (x < k || y < k || x + k >= bw || y + k >= bh) return false;
+    const Eigen::Vector3f p = point(x, y);
+    if (plane_n.dot(p) + plane_d < -thr) return false;  // beyond the plane
+    // A smooth neighbourhood only (no step, no kink): across a depth edge the "normal" is
+    // meaningless. Second differences along both axes below half a smoothness step.
+    const float z = p.z(), tol = 0.5f * step_at(z);
+    const std::size_t c = static_cast<std::size_t>(y) * bw + x;
+    const std::size_t l = c - k, r = c + k, u = c - k * bw, d = c + k * bw;
+    if (!(ws.flags[l] & ws.flags[r] & ws.flags[u] & ws.flags[d] & kValid)) return false;
+    if (std::abs(ws.z_m[l] + ws.z_m[r] - 2 * z) > tol) return false;
+    if (std::abs(ws.z_m[u] + ws.z_m[d] - 2 * z) > tol) return false;
+    const Eigen::Vector3f n = (point(x + k, y) - point(x - k, y)).cross(point(x, y + k) - point(x, y - k));
+    const float len = n.norm();
+    return len > 0 && std::abs(n.dot(plane_n)) < max_cos * len;
+  };
+  for (std::size_t head = 0; head < ws.queue.size(); ++head) {
+    const std::int32_t i = ws.queue[head];
+    const int x = i % bw, y = i / bw;
+    const float z = ws.z_m[i];
+    const float step = step_at(z);
+    for (int k = 0; k < n_neigh; ++k) {
+      const int xx = x + kDx[k], yy = y + kDy[k];
+      if (xx < 0 || yy < 0 || xx >= bw || yy >= bh) continue;
+      const std::int32_t j = yy * bw + xx;
+      const std::uint8_t f = ws.flags[j];
+      if ((f & kInMask) || !(f & kValid) || std::abs(ws.z_m[j] - z) > step) continue;
+      if (!(f & kBand)) {
+        // A pixel within the plane's inlier distance joins when its surface is not the plane's:
+        // the object's lowest rows, not the table.
+        if (!reclaim || (f & kChecked) || !(f & kSupport) || ws.z_m[j] < band_lo ||
+            ws.z_m[j] > band_hi || !off_plane(xx, yy)) {
+          ws.flags[j] = f | kChecked;
+          continue;
+        }
+      }
+      ws.flags[j] = f | kInMask;
+      ws.queue.push_back(j);
+    }
+  }
+
+  // 5. Closing, restricted to pixels that may belong to the object (no depth, or in the band).
+  auto& bits = ws.scratch;
+  bits.resize(area);
+  for (std::size_t i = 0; i < area; ++i) bits[i] = (ws.flags[i] & kInMask) ? 1 : 0;
+  if (options.close_radius_px > 0) {
+    morph(bits, ws.scratch2, bw, bh, options.close_radius_px, true);
+    morph(bits, ws.scratch2, bw, bh, options.close_radius_px, false);
+    for (std::size_t i = 0; i < area; ++i) {
+      const std::uint8_t f = ws.flags[i];
+      if (bits[i] && !(f & kInMask) && (f & kValid) && !(f & kBand)) bits[i] = 0;
+    }
+  }
+  std::size_t pixels = 0;
+  for (int y = 0; y < bh; ++y) {
+    std::uint8_t* out = result.mask.data.data() + static_cast<std::size_t>(v0 + y) * width + u0;
+    const std::uint8_t* in = bits.data() + static_cast<std::size_t>(y) * bw;
+    for (int x = 0; x < bw; ++x) {
+      out[x] = in[x];
+      pixels += in[x];
+    }
+  }
+
+  const double min_area =
+      std::max<double>(options.min_pixels, options.min_box_fraction * static_cast<double>(area));
+  if (static_cast<double>(pixels) < min_area || pixels == 0) {
+    std::fill(result.mask.data.begin(), result.mask.data.end(), 0);
+    result.status = BoxMaskStatus::kTooSmall;
+    return result;
+  }
+  result.pixels = pixels;
+  result.status = BoxMaskStatus::kOk;
+  return result;
+}
+
+}  // namespace objmap::segmentation

@@ -1,0 +1,12 @@
+#include "objmap/segmentation/types.h"
+
+#include <algorithm>
+
+namespace objmap::segmentation {
+
+std::size_t Mask::area() const {
+  return static_cast<std::size_t>(
+      std::count_if(data.begin(), data.end(), [](std::uint8_t v) { return v != 0; }));
+}
+
+}  // namespace objmap::segmentation

@@ -1,0 +1,151 @@
+#include "objmap/sim/camera_path.h"
+
+#include <cmath>
+#include <string>
+
+#include "objmap/core/error.h"
+#include "objmap/sim/random.h"
+
+namespace objmap::sim {
+
+namespace {
+constexpr double kDeg = M_PI / 180.0;
+
+bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
+}  // namespace
+
+void CameraPathOptions::check() const {
+  require(std::isfinite(radius_m) && radius_m > 0.0, "CameraPathOptions.radius_m",
+          "must be > 0, got " + std::to_string(radius_m));
+  require(std::isfinite(height_m) && std::isfinite(look_at_height_m) &&
+              std::isfinite(start_angle_deg) && std::isfinite(sweep_deg) &&
+              orbit_center_world.allFinite(),
+          "CameraPathOptions", "heights, angles and the orbit centre must be finite");
+  require(finite_nonneg(jitter_translation_m), "CameraPathOptions.jitter_translation_m",
+          "must be >= 0, got " + std::to_string(jitter_translation_m));
+  require(finite_nonneg(jitter_rotation_deg), "CameraPathOptions.jitter_rotation_deg",
+          "must be >= 0, got " + std::to_string(jitter_rotation_deg));
+}
+
+void DriftOptions::check() const {
+  require(finite_nonneg(translation_fraction), "--drift",
+          "translation drift fraction must be >= 0, got " + std::to_string(translation_fraction));
+  require(finite_nonneg(yaw_deg_per_m), "--yaw-drift",
+          "yaw drift must be >= 0 deg/m, got " + std::to_string(yaw_deg_per_m));
+  require(std::isfinite(random_walk) && random_walk >= 0.0 && random_walk <= 1.0,
+          "DriftOptions.random_walk", "must be in [0, 1], got " + std::to_string(random_walk));
+  require(finite_nonneg(white_noise_m), "DriftOptions.white_noise_m",
+          "must be >= 0, got " + std::to_string(white_noise_m));
+}
+
+Pose look_at(const Vec3& eye, const Vec3& target) {
+  const Vec3 z = (target - eye).normalized();
+  Vec3 x = z.cross(Vec3::UnitZ());
+  if (x.norm() < 1e-9) x = Vec3::UnitX();  // looking straight up or down
+  x.normalize();
+  const Vec3 y = z.cross(x);
+  Pose pose = Pose::Identity();
+  pose.linear().col(0) = x;
+  pose.linear().col(1) = y;
+  pose.linear().col(2) = z;
+  pose.translation() = eye;
+  return pose;
+}
+
+Trajectory make_camera_path(const CameraPathOptions& o, const std::vector<double>& timestamps,
+                            std::uint64_t seed) {
+  o.check();
+  Rng rng(derive_seed(seed, 0, 0xCA3E7A));
+  // Three sinusoids per degree of freedom (6: position xyz, rotation xyz); unit std overall.
+  struct Wave {
+    double amp, freq_hz, phase;
+  };
+  std::vector<std::vector<Wave>> waves(6);
+  for (auto& dof : waves)
+    for (int k = 0; k < 3; ++k)
+      dof.push_back({rng.uniform(0.5, 1.0), rng.uniform(0.4, 2.5), rng.uniform(0.0, 2.0 * M_PI)});
+  auto shake = [&](int dof, double t) {
+    double v = 0.0, norm = 0.0;
+    for (const auto& w : waves[dof]) {
+      v += w.amp * std::sin(2.0 * M_PI * w.freq_hz * t + w.phase);
+      norm += 0.5 * w.amp * w.amp;
+    }
+    return v / std::sqrt(norm);  // unit variance over time
+  };
+
+  Trajectory path;
+  path.source = "synthetic";
+  const double t0 = timestamps.empty() ? 0.0 : timestamps.front();
+  const double t1 = timestamps.empty() ? 0.0 : timestamps.back();
+  for (double ts : timestamps) {
+    const double s = t1 > t0 ? (ts - t0) / (t1 - t0) : 0.0;
+    const double azimuth = (o.start_angle_deg + s * o.sweep_deg) * kDeg;
+    const Vec3 eye = o.orbit_center_world +
+                     Vec3(o.radius_m * std::cos(azimuth), o.radius_m * std::sin(azimuth), 0.0);
+    Vec3 eye_world(eye.x(), eye.y(), o.height_m);
+    const Vec3 target(o.orbit_center_world.x(), o.orbit_center_world.y(), o.look_at_height_m);
+    Pose pose = look_at(eye_world, target);
+    const double dt = ts - t0;
+    const Vec3 dp(shake(0, dt), shake(1, dt), shake(2, dt));
+    const Vec3 dr(shake(3, dt), shake(4, dt), shake(5, dt));
+    pose.translation() += o.jitter_translation_m * dp;
+    const Vec3 rot = o.jitter_rotation_deg * kDeg * dr;  // small rotation in the camera frame
+    if (rot.norm() > 0.0)
+      pose.linear() = pose.linear() * Eigen::AngleAxisd(rot.norm(), rot.normalized()).matrix();
+    path.poses.push_back({ts, pose});
+  }
+  return path;
+}
+
+double path_length_m(const Trajectory& trajectory) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < trajectory.poses.size(); ++i)
+    length += (trajectory.poses[i].world_from_cam.translation() -
+               trajectory.poses[i - 1].world_from_cam.translation())
+                  .norm();
+  return length;
+}
+
+Trajectory add_drift(const Trajectory& gt, const DriftOptions& o, std::uint64_t seed) {
+  o.check();
+  Rng rng(derive_seed(seed, 0, 0xD81F7));
+  Trajectory est;
+  est.source = "synthetic estimate";
+  if (gt.empty()) return est;
+
+  // Drift direction: a constant bias plus a random walk, both per metre travelled.
+  Vec3 bias(rng.normal(), rng.normal(), 0.3 * rng.normal());
+  bias.normalize();
+  const double yaw_rate = o.yaw_deg_per_m * kDeg * rng.normal();  // rad per metre
+  std::vector<Vec3> error(gt.size(), Vec3::Zero());
+  std::vector<double> yaw(gt.size(), 0.0);
+  Vec3 wander = Vec3::Zero();
+  for (std::size_t i = 1; i < gt.size(); ++i) {
+    const double step =
+        (gt.poses[i].world_from_cam.translation() - gt.poses[i - 1].world_from_cam.translation())
+            .norm();
+    wander += Vec3(rng.normal(), rng.normal(), 0.3 * rng.normal()) * 0.3;
+    if (wander.norm() > 1.0) wander.normalize();
+    const Vec3 direction = (1.0 - o.random_walk) * bias + o.random_walk * (bias + wander);
+    error[i] = error[i - 1] + step * direction;
+    yaw[i] = yaw[i - 1] + step * yaw_rate;
+  }
+  // Scale the accumulated translation error to the requested fraction of the path length.
+  const double length = path_length_m(gt);
+  const double end = error.back().norm();
+  const double scale = end > 0.0 ? o.translation_fraction * length / end : 0.0;
+
+  const Vec3 pivot = gt.poses.front().world_from_cam.translation();
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    Pose drift = Pose::Identity();
+    drift.linear() = Eigen::AngleAxisd(yaw[i], Vec3::UnitZ()).matrix();
+    drift.translation() = pivot - drift.linear() * pivot + scale * error[i];
+    Pose pose = drift * gt.poses[i].world_from_cam;
+    if (i > 0 && o.white_noise_m > 0.0)
+      pose.translation() += o.white_noise_m * Vec3(rng.normal(), rng.normal(), rng.normal());
+    est.poses.push_back({gt.poses[i].timestamp, pose});
+  }
+  return est;
+}
+
+}  // namespace objmap::sim

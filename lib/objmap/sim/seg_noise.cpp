@@ -1,0 +1,241 @@
+#include "objmap/sim/seg_noise.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "objmap/core/error.h"
+
+namespace objmap::sim {
+
+namespace seg = objmap::segmentation;
+
+namespace {
+bool probability(double p) { return std::isfinite(p) && p >= 0.0 && p <= 1.0; }
+
+// Classes a spurious detection may get.
+const char* const kFalsePositiveClasses[] = {"person", "chair",        "cup",        "book",
+                                             "bottle", "potted plant", "cell phone", "laptop"};
+}  // namespace
+
+void SegNoiseOptions::check() const {
+  require(min_area_px >= 1, "--min-area", "must be >= 1 pixel, got " + std::to_string(min_area_px));
+  require(boundary_px >= 0 && boundary_px <= 20, "--mask-boundary",
+          "must be in [0, 20] pixels, got " + std::to_string(boundary_px));
+  require(probability(miss_prob), "--miss-rate",
+          "must be a probability in [0, 1], got " + std::to_string(miss_prob));
+  require(std::isfinite(false_positives_per_frame) && false_positives_per_frame >= 0.0 &&
+              false_positives_per_frame <= 20.0,
+          "--false-positives",
+          "must be in [0, 20] per frame, got " + std::to_string(false_positives_per_frame));
+  for (const auto& c : confusions)
+    require(probability(c.probability) && !c.from.empty() && !c.to.empty(), "--confusion",
+            "'" + c.from + "' -> '" + c.to + "' needs two class names and a probability in [0, 1]");
+  require(probability(id_switch_prob), "--id-switch-rate",
+          "must be a probability in [0, 1], got " + std::to_string(id_switch_prob));
+  require(probability(id_reuse_prob), "--id-reuse",
+          "must be a probability in [0, 1], got " + std::to_string(id_reuse_prob));
+  require(std::isfinite(score_min) && std::isfinite(score_max) && 0.0 <= score_min &&
+              score_min <= score_max && score_max <= 1.0,
+          "SegNoiseOptions.score_min", "scores must satisfy 0 <= score_min <= score_max <= 1");
+}
+
+SegNoiseOptions SegNoiseOptions::none() {
+  SegNoiseOptions o;
+  o.boundary_px = 0;
+  o.miss_prob = 0.0;
+  o.false_positives_per_frame = 0.0;
+  o.confusions.clear();
+  o.id_switch_prob = 0.0;
+  o.id_reuse_prob = 0.0;
+  o.score_min = o.score_max = 1.0;
+  return o;
+}
+
+cv::Mat to_mat(const seg::Mask& mask) {
+  cv::Mat m(mask.height, mask.width, CV_8UC1, cv::Scalar::all(0));
+  if (!mask.data.empty()) std::copy(mask.data.begin(), mask.data.end(), m.data);
+  return m;
+}
+
+seg::Mask to_mask(const cv::Mat& binary) {
+  seg::Mask mask;
+  mask.width = binary.cols;
+  mask.height = binary.rows;
+  mask.data.resize(static_cast<std::size_t>(binary.rows) * binary.cols);
+  for (int v = 0; v < binary.rows; ++v) {
+    const auto* row = binary.ptr<std::uint8_t>(v);
+    for (int u = 0; u < binary.cols; ++u)
+      mask.data[static_cast<std::size_t>(v) * binary.cols + u] = row[u] ? 1 : 0;
+  }
+  return mask;
+}
+
+seg::Box mask_box(const seg::Mask& mask) {
+  if (mask.data.empty()) return {};
+  const cv::Mat view(mask.height, mask.width, CV_8UC1, const_cast<std::uint8_t*>(mask.data.data()));
+  const cv::Rect r = cv::boundingRect(view);
+  if (r.area() == 0) return {};
+  return {static_cast<double>(r.x), static_cast<double>(r.y), static_cast<double>(r.width),
+          static_cast<double>(r.height)};
+}
+
+seg::FrameSegmentation exact_segmentation(const cv::Mat& labels, const Scene& scene,
+                                          double timestamp, int min_area_px) {
+  require(labels.type() == CV_16UC1, "exact_segmentation", "expected a CV_16UC1 label image");
+  seg::FrameSegmentation frame;
+  frame.timestamp = timestamp;
+  frame.source = "synthetic";
+  struct Extent {
+    int pixels = 0, u0 = 1 << 30, v0 = 1 << 30, u1 = -1, v1 = -1;
+  };
+  std::map<int, Extent> extents;
+  for (int v = 0; v < labels.rows; ++v) {
+    const auto* row = labels.ptr<std::uint16_t>(v);
+    for (int u = 0; u < labels.cols; ++u) {
+      if (!row[u]) continue;
+      Extent& e = extents[row[u]];
+      ++e.pixels;
+      e.u0 = std::min(e.u0, u);
+      e.u1 = std::max(e.u1, u);
+      e.v0 = std::min(e.v0, v);
+      e.v1 = std::max(e.v1, v);
+    }
+  }
+  for (const auto& [id, e] : extents) {
+    if (e.pixels < min_area_px) continue;
+    const SceneObject* object = scene.find(id);
+    if (!object) continue;
+    seg::Instance instance;
+    instance.class_name = object->class_name;
+    instance.score = 1.0;
+    instance.track_id = id;
+    seg::Mask mask;
+    mask.width = labels.cols;
+    mask.height = labels.rows;
+    mask.data.assign(static_cast<std::size_t>(labels.rows) * labels.cols, 0);
+    for (int v = e.v0; v <= e.v1; ++v) {
+      const auto* row = labels.ptr<std::uint16_t>(v);
+      for (int u = e.u0; u <= e.u1; ++u)
+        if (row[u] == id) mask.data[static_cast<std::size_t>(v) * labels.cols + u] = 1;
+    }
+    instance.mask = std::move(mask);
+    instance.bbox = {static_cast<double>(e.u0), static_cast<double>(e.v0),
+                     static_cast<double>(e.u1 - e.u0 + 1), static_cast<double>(e.v1 - e.v0 + 1)};
+    frame.instances.push_back(std::move(instance));
+  }
+  return frame;
+}
+
+SegmentationNoise::SegmentationNoise(const SegNoiseOptions& options, std::uint64_t seed)
+    : options_(options), rng_(derive_seed(seed, 0, 0x5E6)) {
+  options_.check();
+}
+
+seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& exact, int width,
+                                                int height) {
+  const SegNoiseOptions& o = options_;
+  seg::FrameSegmentation out;
+  out.timestamp = exact.timestamp;
+  out.source = "synthetic";
+  for (const auto& truth : exact.instances) {
+    ++stats_.true_instances;
+    // Same number of draws per instance, whatever the knobs.
+    const double miss_draw = rng_.uniform();
+    const double confusion_draw = rng_.uniform();
+    const double switch_draw = rng_.uniform();
+    const double reuse_draw = rng_.uniform();
+    const double reuse_pick = rng_.uniform();
+    const int radius =
+        o.boundary_px > 0 ? rng_.uniform_int(2 * o.boundary_px + 1) - o.boundary_px : 0;
+    const double score = rng_.uniform(o.score_min, o.score_max);
+    const int object_id = truth.track_id.value_or(0);
+
+    // Track identity: the tracker keeps an ID per object, switching now and then.
+    auto it = track_of_object_.find(object_id);
+    if (it == track_of_object_.end()) {
+      it = track_of_object_.emplace(object_id, next_track_id_++).first;
+    } else if (switch_draw < o.id_switch_prob) {
+      ++stats_.id_switches;
+      const int old_id = it->second;
+      // Re-use an ID dropped by another track (never this object's own previous ID).
+      std::vector<int> candidates;
+      for (int id : dropped_ids_)
+        if (id != old_id) candidates.push_back(id);
+      bool in_use = false;
+      if (reuse_draw < o.id_reuse_prob && !candidates.empty()) {
+        const int id = candidates[static_cast<std::size_t>(reuse_pick * candidates.size())];
+        for (const auto& [obj, track] : track_of_object_)
+          in_use |= (track == id && obj != object_id);
+        if (!in_use) {
+          it->second = id;
+          dropped_ids_.erase(std::find(dropped_ids_.begin(), dropped_ids_.end(), id));
+          ++stats_.id_reuses;
+        }
+      }
+      if (it->second == old_id) it->second = next_track_id_++;
+      dropped_ids_.push_back(old_id);
+    }
+
+    if (miss_draw < o.miss_prob) {
+      ++stats_.missed;
+      continue;
+    }
+    seg::Instance instance;
+    instance.class_name = truth.class_name;
+    for (const auto& c : o.confusions) {
+      if (c.from == truth.class_name) {
+        if (confusion_draw < c.probability) {
+          instance.class_name = c.to;
+          ++stats_.confused;
+        }
+        break;
+      }
+    }
+    instance.score = score;
+    instance.track_id = it->second;
+    cv::Mat mask = to_mat(*truth.mask);
+    if (radius != 0) {
+      const int r = std::abs(radius);
+      const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
+      if (radius > 0)
+        cv::dilate(mask, mask, kernel);
+      else
+        cv::erode(mask, mask, kernel);
+    }
+    if (cv::countNonZero(mask) == 0) {  // eroded away: the detector saw nothing
+      ++stats_.missed;
+      continue;
+    }
+    instance.mask = to_mask(mask);
+    instance.bbox = mask_box(*instance.mask);
+    out.instances.push_back(std::move(instance));
+  }
+
+  // False positives: an ellipse somewhere, a plausible class, a low score, a fresh ID each time.
+  const int spurious =
+      o.false_positives_per_frame > 0.0 ? rng_.poisson(o.false_positives_per_frame) : 0;
+  for (int k = 0; k < spurious; ++k) {
+    const cv::Point centre(rng_.uniform_int(width), rng_.uniform_int(height));
+    const cv::Size axes(5 + rng_.uniform_int(std::max(1, width / 12)),
+                        5 + rng_.uniform_int(std::max(1, height / 12)));
+    const double angle = rng_.uniform(0.0, 180.0);
+    const int cls = rng_.uniform_int(static_cast<int>(std::size(kFalsePositiveClasses)));
+    const double score = rng_.uniform(0.3, 0.6);
+    cv::Mat mask(height, width, CV_8UC1, cv::Scalar::all(0));
+    cv::ellipse(mask, centre, axes, angle, 0.0, 360.0, cv::Scalar(1), cv::FILLED);
+    seg::Instance instance;
+    instance.class_name = kFalsePositiveClasses[cls];
+    instance.score = score;
+    instance.track_id = next_track_id_++;
+    if (cv::countNonZero(mask) == 0) continue;
+    instance.mask = to_mask(mask);
+    instance.bbox = mask_box(*instance.mask);
+    out.instances.push_back(std::move(instance));
+    ++stats_.false_positives;
+  }
+  return out;
+}
+
+}  // namespace objmap::sim

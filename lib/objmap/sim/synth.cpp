@@ -1,0 +1,147 @@
+#include "objmap/sim/synth.h"
+
+#include <cmath>
+#include <mutex>
+
+#include "objmap/core/error.h"
+#include "objmap/sim/parallel.h"
+#include "objmap/sim/presets.h"
+#include "objmap/sim/random.h"
+#include "objmap/sim/render.h"
+
+namespace objmap::sim {
+
+namespace {
+double round_us(double t) { return std::round(t * 1e6) / 1e6; }
+}  // namespace
+
+void SynthOptions::check() const {
+  bool known = false;
+  for (const auto& p : scene_presets()) known |= (p == preset);
+  require(known, "--preset", "unknown scene preset '" + preset + "'; expected tabletop or office");
+  require(frames >= 1 && frames <= 100000, "--frames",
+          "must be in [1, 100000], got " + std::to_string(frames));
+  require(std::isfinite(frame_rate_hz) && frame_rate_hz > 0.0 && frame_rate_hz <= 1000.0,
+          "SynthOptions.frame_rate_hz",
+          "must be in (0, 1000], got " + std::to_string(frame_rate_hz));
+  require(std::isfinite(start_time_s) && start_time_s >= 0.0 && start_time_s < 1e10,
+          "SynthOptions.start_time_s", "must be in [0, 1e10), got " + std::to_string(start_time_s));
+  require(std::isfinite(depth_time_offset_s) && std::abs(depth_time_offset_s) < 0.5 / frame_rate_hz,
+          "--depth-offset",
+          "must be shorter than half a frame period, got " + std::to_string(depth_time_offset_s));
+  require(std::isfinite(resolution_scale) && resolution_scale >= 0.05 && resolution_scale <= 4.0,
+          "--scale", "must be in [0.05, 4], got " + std::to_string(resolution_scale));
+  require(std::isfinite(rgb_noise_sigma) && rgb_noise_sigma >= 0.0 && rgb_noise_sigma <= 50.0,
+          "--rgb-noise", "must be in [0, 50] grey levels, got " + std::to_string(rgb_noise_sigma));
+  require(threads >= 0 && threads <= 256, "--threads",
+          "must be in [0, 256] (0 = all cores), got " + std::to_string(threads));
+  depth_noise.check();
+  seg_noise.check();
+  drift.check();
+  if (!use_preset_path) path.check();
+}
+
+void SynthOptions::set_noise_free() {
+  rgb_noise_sigma = 0.0;
+  depth_noise = DepthNoiseOptions::none();
+  seg_noise = SegNoiseOptions::none();
+  drift.translation_fraction = 0.0;
+  drift.yaw_deg_per_m = 0.0;
+  drift.white_noise_m = 0.0;
+}
+
+Camera synthetic_camera(double s) {
+  Camera c = camera_preset("fr1");
+  c.name = "synthetic (fr1 intrinsics, no distortion)";
+  c.distortion = {0, 0, 0, 0, 0};
+  c.width = static_cast<int>(std::lround(640 * s));
+  c.height = static_cast<int>(std::lround(480 * s));
+  // Pixel centres scale about the image corner (-0.5, -0.5).
+  c.fx *= s;
+  c.fy *= s;
+  c.cx = (c.cx + 0.5) * s - 0.5;
+  c.cy = (c.cy + 0.5) * s - 0.5;
+  return c;
+}
+
+double frame_timestamp(double start_time_s, double frame_rate_hz, int index) {
+  return round_us(start_time_s + index / frame_rate_hz);
+}
+
+segmentation::Segmentation SynthSequence::segmentation() const {
+  segmentation::Segmentation s;
+  s.format = "json";
+  s.source = "synthetic";
+  for (const auto& f : frames) s.frames.push_back(f.segmentation);
+  return s;
+}
+
+segmentation::Segmentation SynthSequence::segmentation_gt() const {
+  segmentation::Segmentation s;
+  s.format = "json";
+  s.source = "synthetic (exact)";
+  for (const auto& f : frames) s.frames.push_back(f.segmentation_gt);
+  return s;
+}
+
+SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progress) {
+  options.check();
+  SynthSequence seq;
+  seq.options = options;
+  seq.camera = synthetic_camera(options.resolution_scale);
+
+  // 1. The scene and the camera path (ground truth), then the drifting estimate.
+  seq.scene = make_scene(options.preset, options.seed);
+  const CameraPathOptions path =
+      options.use_preset_path ? preset_camera_path(options.preset) : options.path;
+  std::vector<double> timestamps;
+  for (int i = 0; i < options.frames; ++i)
+    timestamps.push_back(frame_timestamp(options.start_time_s, options.frame_rate_hz, i));
+  seq.groundtruth = make_camera_path(path, timestamps, options.seed);
+  seq.groundtruth.source = "synthetic ground truth";
+  seq.estimated = add_drift(seq.groundtruth, options.drift, options.seed);
+
+  // 2. Render each frame and apply the sensor noise. Frames are independent (each has its own
+  // random stream), so they are spread over the threads without changing the result.
+  seq.frames.resize(options.frames);
+  std::mutex progress_mutex;
+  std::size_t done = 0;
+  parallel_for(seq.frames.size(), options.threads, [&](std::size_t i) {
+    SynthFrame& f = seq.frames[i];
+    f.index = static_cast<int>(i);
+    f.timestamp = timestamps[i];
+    f.depth_timestamp = round_us(f.timestamp + options.depth_time_offset_s);
+    RenderedFrame r =
+        render_frame(seq.scene, seq.camera, seq.groundtruth.poses[i].world_from_cam, 1);
+    Rng rng(derive_seed(options.seed, i, 0xF7A3E));
+    const cv::Mat noisy = apply_depth_noise(r.depth_m, seq.camera, options.depth_noise, rng);
+    f.depth = depth_to_u16(noisy, seq.camera.depth_factor);
+    if (options.rgb_noise_sigma > 0.0) {
+      for (int v = 0; v < r.rgb.rows; ++v) {
+        auto* row = r.rgb.ptr<std::uint8_t>(v);
+        for (int k = 0; k < r.rgb.cols * 3; ++k) {
+          const double value = row[k] + options.rgb_noise_sigma * rng.fast_normal();
+          row[k] = static_cast<std::uint8_t>(std::clamp(value + 0.5, 0.0, 255.0));
+        }
+      }
+    }
+    f.rgb = r.rgb;
+    f.depth_exact_m = r.depth_m;
+    f.labels = r.labels;
+    f.segmentation_gt =
+        exact_segmentation(r.labels, seq.scene, f.timestamp, options.seg_noise.min_area_px);
+    if (progress) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(++done, seq.frames.size());
+    }
+  });
+
+  // 3. The detector + tracker output, in time order (track IDs carry from frame to frame).
+  SegmentationNoise noise(options.seg_noise, derive_seed(options.seed, 0, 0x5E9));
+  for (auto& f : seq.frames)
+    f.segmentation = noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height);
+  seq.seg_stats = noise.stats();
+  return seq;
+}
+
+}  // namespace objmap::sim

@@ -1,0 +1,179 @@
+#include "objmap/sim/writer.h"
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "objmap/core/error.h"
+#include "objmap/io/atomic.h"
+#include "objmap/io/camera_io.h"
+#include "objmap/io/trajectory.h"
+#include "objmap/segmentation/write.h"
+#include "objmap/sim/parallel.h"
+
+namespace objmap::sim {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+void write_text(const fs::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw InputError(file.string(), "cannot write the file");
+}
+
+void write_png(const fs::path& file, const cv::Mat& image) {
+  std::vector<uchar> bytes;
+  if (!cv::imencode(".png", image, bytes,
+                    {cv::IMWRITE_PNG_COMPRESSION, 1, cv::IMWRITE_PNG_STRATEGY,
+                     cv::IMWRITE_PNG_STRATEGY_HUFFMAN_ONLY}))
+    throw InputError(file.string(), "PNG encoding failed");
+  write_text(file, std::string(bytes.begin(), bytes.end()));
+}
+
+std::string describe(const SynthOptions& o) {
+  return "synthetic " + o.preset + " seed " + std::to_string(o.seed) + " (objmap synth)";
+}
+
+}  // namespace
+
+void check_output_dir(const fs::path& out) {
+  require(!out.empty(), "--out", "is empty; expected a folder to write the sequence into");
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw InputError(out.string(), "exists and is not a folder; expected a folder (or a new name)");
+  const fs::path parent = fs::absolute(out, ec).parent_path();
+  fs::create_directories(parent, ec);
+  if (ec || !fs::is_directory(parent))
+    throw InputError(out.string(), "cannot create the parent folder " + parent.string() + ": " +
+                                       (ec ? ec.message() : std::string("not a folder")));
+}
+
+std::string timestamp_name(double timestamp) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.6f", timestamp);
+  return buffer;
+}
+
+std::string objects_gt_json(const Scene& scene) {
+  json objects = json::array();
+  for (const auto& o : scene.objects) {
+    json rotation = json::array();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) rotation.push_back(o.obb.rotation(r, c));
+    objects.push_back({{"id", o.id},
+                       {"class", o.class_name},
+                       {"centroid", vec(o.centroid)},
+                       {"obb",
+                        {{"center", vec(o.obb.center)},
+                         {"rotation", rotation},
+                         {"half_extent", vec(o.obb.half_extent)}}},
+                       {"volume_m3", o.volume_m3}});
+  }
+  json doc = {{"schema_version", 1},
+              {"frame", "world frame of groundtruth.txt (z up, metres)"},
+              {"centroid_definition", "solid volume"},
+              {"objects", objects}};
+  return doc.dump(2) + "\n";
+}
+
+std::string synth_json(const SynthSequence& s) {
+  const SynthOptions& o = s.options;
+  json confusions = json::array();
+  for (const auto& c : o.seg_noise.confusions)
+    confusions.push_back({{"from", c.from}, {"to", c.to}, {"probability", c.probability}});
+  const auto& d = o.depth_noise;
+  json doc = {{"generator", "objmap synth"},
+              {"preset", o.preset},
+              {"seed", o.seed},
+              {"frames", o.frames},
+              {"frame_rate_hz", o.frame_rate_hz},
+              {"depth_time_offset_s", o.depth_time_offset_s},
+              {"resolution_scale", o.resolution_scale},
+              {"rgb_noise_sigma", o.rgb_noise_sigma},
+              {"depth_noise",
+               {{"enabled", d.enabled},
+                {"sigma_base_m", d.sigma_base_m},
+                {"sigma_quadratic", d.sigma_quadratic},
+                {"sigma_ref_z_m", d.sigma_ref_z_m},
+                {"disparity_step_px", d.disparity_step_px},
+                {"baseline_m", d.baseline_m},
+                {"min_range_m", d.min_range_m},
+                {"max_range_m", d.max_range_m},
+                {"edge_jump_m", d.edge_jump_m},
+                {"edge_width_px", d.edge_width_px},
+                {"edge_missing_prob", d.edge_missing_prob},
+                {"dropout_prob", d.dropout_prob}}},
+              {"segmentation_noise",
+               {{"min_area_px", o.seg_noise.min_area_px},
+                {"boundary_px", o.seg_noise.boundary_px},
+                {"miss_prob", o.seg_noise.miss_prob},
+                {"false_positives_per_frame", o.seg_noise.false_positives_per_frame},
+                {"confusions", confusions},
+                {"id_switch_prob", o.seg_noise.id_switch_prob},
+                {"id_reuse_prob", o.seg_noise.id_reuse_prob}}},
+              {"drift",
+               {{"translation_fraction", o.drift.translation_fraction},
+                {"yaw_deg_per_m", o.drift.yaw_deg_per_m},
+                {"random_walk", o.drift.random_walk},
+                {"white_noise_m", o.drift.white_noise_m}}},
+              {"made",
+               {{"true_instances", s.seg_stats.true_instances},
+                {"missed", s.seg_stats.missed},
+                {"confused", s.seg_stats.confused},
+                {"false_positives", s.seg_stats.false_positives},
+                {"id_switches", s.seg_stats.id_switches},
+                {"id_reuses", s.seg_stats.id_reuses}}}};
+  return doc.dump(2) + "\n";
+}
+
+void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
+  io::StagingDir staging(out);
+  const fs::path dir = staging.path();
+  std::error_code ec;
+  fs::create_directories(dir / "rgb", ec);
+  fs::create_directories(dir / "depth", ec);
+  if (ec) throw InputError(dir.string(), "cannot create folders: " + ec.message());
+
+  // Images (the expensive part) in parallel; each frame writes its own two files.
+  parallel_for(s.frames.size(), threads, [&](std::size_t i) {
+    const SynthFrame& f = s.frames[i];
+    write_png(dir / "rgb" / (timestamp_name(f.timestamp) + ".png"), f.rgb);
+    write_png(dir / "depth" / (timestamp_name(f.depth_timestamp) + ".png"), f.depth);
+  });
+
+  const std::string what = describe(s.options);
+  std::ostringstream rgb_txt, depth_txt;
+  rgb_txt << "# color images\n# file: '" << what << "'\n# timestamp filename\n";
+  depth_txt << "# depth maps\n# file: '" << what << "'\n# timestamp filename\n";
+  for (const auto& f : s.frames) {
+    rgb_txt << timestamp_name(f.timestamp) << " rgb/" << timestamp_name(f.timestamp) << ".png\n";
+    depth_txt << timestamp_name(f.depth_timestamp) << " depth/" << timestamp_name(f.depth_timestamp)
+              << ".png\n";
+  }
+  write_text(dir / "rgb.txt", rgb_txt.str());
+  write_text(dir / "depth.txt", depth_txt.str());
+
+  io::write_camera_json(dir / "camera.json", s.camera);
+  io::write_trajectory(dir / "groundtruth.txt", s.groundtruth,
+                       "ground truth trajectory (world_from_cam) of " + what);
+  io::write_trajectory(dir / "estimated.txt", s.estimated,
+                       "SLAM-like estimate with drift (" +
+                           std::to_string(s.options.drift.translation_fraction * 100.0) +
+                           "% of the path length) of " + what);
+  write_text(dir / "objects_gt.json", objects_gt_json(s.scene));
+  write_text(dir / "synth.json", synth_json(s));
+  segmentation::write_segmentation(dir / "segmentation", s.segmentation());
+  segmentation::write_segmentation(dir / "segmentation_gt", s.segmentation_gt());
+  staging.commit();
+}
+
+}  // namespace objmap::sim

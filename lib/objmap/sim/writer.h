@@ -1,0 +1,32 @@
+#pragma once
+#include <filesystem>
+#include <string>
+
+#include "objmap/sim/synth.h"
+
+// Writes a SynthSequence as a TUM RGB-D folder with ground truth:
+//   rgb/<t>.png  depth/<t>.png (16-bit, factor 5000)  rgb.txt  depth.txt  camera.json
+//   groundtruth.txt  estimated.txt  objects_gt.json  synth.json
+//   segmentation/<t>.json (noisy)  segmentation_gt/<t>.json (exact, track_id = object id)
+namespace objmap::sim {
+
+// The whole folder is written under a temporary name and renamed to `out` at the end (an existing
+// `out` is replaced). PNGs are encoded on `threads` threads (0 = all cores); the bytes do not
+// depend on it. Throws InputError when `out` cannot be written.
+void write_sequence(const std::filesystem::path& out, const SynthSequence& sequence,
+                    int threads = 0);
+
+// Fails early (InputError naming `out`) when `out` cannot become a folder: it is a file, or its
+// parent cannot be created. Call it before the expensive synthesis.
+void check_output_dir(const std::filesystem::path& out);
+
+// objects_gt.json text (schemas/objects_gt.schema.json): id, class, centroid, obb per object.
+std::string objects_gt_json(const Scene& scene);
+
+// synth.json text: the generator's options and the counts of segmentation errors made.
+std::string synth_json(const SynthSequence& sequence);
+
+// "%.6f" of a timestamp: the file stem used for rgb/, depth/ and segmentation files.
+std::string timestamp_name(double timestamp);
+
+}  // namespace objmap::sim

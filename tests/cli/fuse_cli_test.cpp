@@ -1,0 +1,81 @@
+// objmap fuse: bad input gives exit 2, one line naming the file and what is wrong, and no output.
+#include <gtest/gtest.h>
+
+#include "support/test_support.h"
+
+namespace objmap::test {
+namespace {
+
+constexpr const char* kFirstFrame = "1305031453.359684";
+
+class FuseBadInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    data_ = data_dir() / "tum/fr1_desk_9";
+    if (!fs::exists(data_)) {
+      if (data_required()) FAIL() << "real data missing: " << data_;
+      GTEST_SKIP() << "real data missing: " << data_;
+    }
+    fs::create_directories(dir_ / "seg");
+  }
+
+  RunResult fuse(const fs::path& trajectory) {
+    return run_objmap({"fuse", "--dataset", data_.string(), "--trajectory", trajectory.string(),
+                       "--segmentation", (dir_ / "seg").string(), "--out",
+                       (dir_ / "run").string()});
+  }
+  RunResult fuse() { return fuse(data_ / "groundtruth.txt"); }
+
+  // Exit 2, one line on stderr containing `needle`, and nothing written.
+  void expect_rejected(const RunResult& r, const std::string& needle) {
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "run"));
+    for (const auto& e : fs::directory_iterator(dir_.path()))
+      EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+  }
+
+  fs::path data_;
+  TempDir dir_;
+};
+
+TEST_F(FuseBadInput, MaskOfAnotherSizeThanTheImage) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".json"),
+             R"({"instances":[{"class":"cup","score":0.9,"bbox":[0,0,2,2],)"
+             R"("mask":{"size":[10,10],"counts":"0d1"}}]})");
+  expect_rejected(fuse(), "10");
+}
+
+TEST_F(FuseBadInput, InstanceOutsideTheImage) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".json"),
+             R"({"instances":[{"class":"cup","score":0.9,"bbox":[700,10,50,50]}]})");
+  expect_rejected(fuse(), kFirstFrame);
+}
+
+TEST_F(FuseBadInput, NoFrameWithAPose) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".json"),
+             R"({"instances":[{"class":"cup","score":0.9,"bbox":[10,10,50,50]}]})");
+  write_text(dir_ / "traj.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n");
+  expect_rejected(fuse(dir_ / "traj.txt"), "traj.txt");
+}
+
+TEST_F(FuseBadInput, EmptySegmentation) { expect_rejected(fuse(), "seg"); }
+
+TEST(FuseCli, MissingRequiredFlagIsAUsageError) {
+  const auto r = run_objmap({"fuse", "--dataset", "x"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--trajectory"), std::string::npos) << r.err;
+}
+
+TEST(FuseCli, UnknownConfigKeyIsNamed) {
+  TempDir dir;
+  write_text(dir / "c.json", R"({"objects":{"weight_idd":0.3}})");
+  const auto r = run_objmap({"fuse", "--dataset", "x", "--trajectory", "t", "--segmentation", "s",
+                             "--out", (dir / "o").string(), "--config", (dir / "c.json").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("objects.weight_idd"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace objmap::test

@@ -1,0 +1,101 @@
+#include "objmap/io/ply.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "objmap/core/error.h"
+#include "support/test_support.h"
+
+namespace objmap::io {
+namespace {
+
+using objmap::test::read_text;
+using objmap::test::TempDir;
+using objmap::test::write_text;
+
+PointCloud sample(bool colours) {
+  PointCloud c;
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3f p(0.001f * i, -0.5f + 1e-4f * i, 3.25f);
+    if (colours)
+      c.push_back(p, Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(255 - i % 256), 7});
+    else
+      c.push_back(p);
+  }
+  return c;
+}
+
+TEST(Ply, BinaryRoundTripIsExact) {
+  TempDir dir;
+  for (bool colours : {true, false}) {
+    const PointCloud c = sample(colours);
+    write_ply(dir / "a.ply", c);
+    const PointCloud back = read_ply(dir / "a.ply");
+    EXPECT_EQ(back.points, c.points);
+    EXPECT_EQ(back.colors, c.colors);
+    EXPECT_EQ(std::filesystem::file_size(dir / "a.ply"),
+              read_text(dir / "a.ply").find("end_header\n") + 11 + c.size() * (colours ? 15 : 12));
+  }
+  // No temporary file left behind.
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+}
+
+TEST(Ply, HeaderIsTheStandardOne) {
+  TempDir dir;
+  write_ply(dir / "h.ply", sample(true));
+  const std::string text = read_text(dir / "h.ply");
+  const std::string header = text.substr(0, text.find("end_header\n") + 11);
+  EXPECT_EQ(header,
+            "ply\nformat binary_little_endian 1.0\ncomment objmap\nelement vertex 1000\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n");
+  write_ply(dir / "empty.ply", PointCloud{});
+  EXPECT_TRUE(read_ply(dir / "empty.ply").empty());
+}
+
+TEST(Ply, ReadsAsciiWithExtraPropertiesAndDoubles) {
+  TempDir dir;
+  write_text(dir / "a.ply",
+             "ply\nformat ascii 1.0\ncomment from somewhere\nelement vertex 2\n"
+             "property double x\nproperty double y\nproperty double z\nproperty float nx\n"
+             "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+             "element face 0\nproperty list uchar int vertex_indices\nend_header\n"
+             "1 2 3 0.5 10 20 30\n-1.5 0 2.25 0 255 0 1\n");
+  const PointCloud c = read_ply(dir / "a.ply");
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.points[1], Vec3f(-1.5f, 0.f, 2.25f));
+  EXPECT_EQ(c.colors[0], (Rgb{10, 20, 30}));
+}
+
+TEST(Ply, MalformedFilesSayWhatIsWrong) {
+  TempDir dir;
+  write_text(dir / "be.ply",
+             "ply\nformat binary_big_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n");
+  try {
+    read_ply(dir / "be.ply");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (dir / "be.ply").string() + ":2");
+    EXPECT_NE(e.reason().find("binary_big_endian"), std::string::npos);
+  }
+  write_ply(dir / "t.ply", sample(true));
+  const std::string full = read_text(dir / "t.ply");
+  write_text(dir / "t.ply", full.substr(0, full.size() - 100));
+  try {
+    read_ply(dir / "t.ply");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(e.reason().find("truncated"), std::string::npos) << e.what();
+  }
+  write_text(dir / "noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n");
+  EXPECT_THROW(read_ply(dir / "noxyz.ply"), InputError);
+  EXPECT_THROW(read_ply(dir / "missing.ply"), InputError);
+  write_text(dir / "a_file", "x");  // a file where the folder should be
+  EXPECT_THROW(write_ply(dir / "a_file" / "x.ply", sample(false)), InputError);
+}
+
+}  // namespace
+}  // namespace objmap::io

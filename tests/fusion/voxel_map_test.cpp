@@ -1,0 +1,122 @@
+#include "objmap/fusion/voxel_map.h"
+
+#include <gtest/gtest.h>
+
+#include "objmap/fusion/palette.h"
+
+namespace objmap::fusion {
+namespace {
+
+TEST(VoxelMap, CountsAndColourAveragesAreExact) {
+  VoxelMap map({0.01, 1});
+  PointCloud a;
+  a.push_back(Vec3f(0.002f, 0.002f, 0.002f), Rgb{10, 20, 30});
+  a.push_back(Vec3f(0.004f, 0.006f, 0.008f), Rgb{20, 40, 61});  // same voxel (0,0,0)
+  a.push_back(Vec3f(-0.005f, 0.005f, 0.005f), Rgb{255, 0, 0});   // voxel (-1,0,0)
+  map.insert(a);
+  PointCloud b;
+  b.push_back(Vec3f(0.006f, 0.004f, 0.002f), Rgb{30, 60, 92});  // voxel (0,0,0) again, next frame
+  map.insert(b);
+  EXPECT_EQ(map.size(), 2u);
+  EXPECT_EQ(map.points_inserted(), 4u);
+
+  const VoxelData* v = map.find(geometry::pack_voxel(0, 0, 0));
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->count, 3u);
+  EXPECT_EQ(v->color_sum[0], 60u);
+  EXPECT_EQ(v->mean_color(), (Rgb{20, 40, 61}));  // 183/3 = 61
+  const Vec3 mean = map.mean_position(geometry::pack_voxel(0, 0, 0), *v);
+  EXPECT_NEAR(mean.x(), 0.004, 1e-7);
+  EXPECT_NEAR(mean.y(), 0.004, 1e-7);
+  EXPECT_NEAR(mean.z(), 0.004, 1e-7);
+
+  const PointCloud cloud = map.to_cloud();  // sorted by key: (-1,0,0) first
+  ASSERT_EQ(cloud.size(), 2u);
+  EXPECT_NEAR(cloud.points[0].x(), -0.005f, 1e-7);
+  EXPECT_EQ(cloud.colors[0], (Rgb{255, 0, 0}));
+  EXPECT_EQ(cloud.colors[1], (Rgb{20, 40, 61}));
+}
+
+TEST(VoxelMap, LabelIsTheMajorityAndLabelledExportPaintsIt) {
+  VoxelMap map;
+  PointCloud p;
+  p.push_back(Vec3f(0.005f, 0.005f, 0.005f), Rgb{1, 1, 1});
+  map.insert(p, 7);
+  map.insert(p, 7);
+  map.insert(p, 3);
+  PointCloud q;
+  q.push_back(Vec3f(0.105f, 0.005f, 0.005f), Rgb{9, 9, 9});
+  map.insert(q);
+  EXPECT_EQ(map.find(geometry::pack_voxel(0, 0, 0))->label, 7);
+  EXPECT_EQ(map.find(geometry::pack_voxel(10, 0, 0))->label, kNoLabel);
+
+  const std::map<std::int32_t, Rgb> colours{{7, class_color("cup")}};
+  const PointCloud all = map.to_labelled_cloud(colours, true);
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all.colors[0], class_color("cup"));
+  EXPECT_EQ(all.colors[1], (Rgb{9, 9, 9}));
+  EXPECT_EQ(map.to_labelled_cloud(colours, false).size(), 1u);
+}
+
+// A synthetic "frame": a noisy-looking but deterministic surface of 200k points with colours.
+PointCloud frame(int f) {
+  PointCloud c;
+  for (int i = 0; i < 200000; ++i) {
+    const float u = static_cast<float>(i % 500) * 0.002f, v = static_cast<float>(i / 500) * 0.002f;
+    c.push_back(Vec3f(u + 0.0007f * f, v, 1.0f + 0.05f * std::sin(u * 9 + f)),
+                Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(f), 3});
+  }
+  return c;
+}
+
+TEST(VoxelMap, IdenticalOutputForOneAndTwoThreads) {
+  VoxelMap one({0.01, 1}), two({0.01, 2});
+  for (int f = 0; f < 3; ++f) {
+    const PointCloud c = frame(f);
+    one.insert(c, f);
+    two.insert(c, f);
+  }
+  EXPECT_EQ(one.size(), two.size());
+  const PointCloud a = one.to_cloud(), b = two.to_cloud();
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.colors, b.colors);
+  for (const auto& [key, v] : one.sorted_voxels()) {
+    const VoxelData* w = two.find(key);
+    ASSERT_NE(w, nullptr);
+    EXPECT_EQ(v->label, w->label);
+    EXPECT_EQ(v->count, w->count);
+  }
+}
+
+TEST(VoxelMap, MergeAddsVoxelsAndCommonCountsOverlap) {
+  VoxelMap a, b;
+  PointCloud pa, pb;
+  for (int i = 0; i < 10; ++i) pa.push_back(Vec3f(0.01f * i + 0.005f, 0.005f, 0.005f));
+  for (int i = 5; i < 15; ++i) pb.push_back(Vec3f(0.01f * i + 0.005f, 0.005f, 0.005f));
+  a.insert(pa);
+  b.insert(pb);
+  EXPECT_EQ(common_voxels(a, b), 5u);
+  a.merge(b);
+  EXPECT_EQ(a.size(), 15u);
+  EXPECT_EQ(a.find(geometry::pack_voxel(7, 0, 0))->count, 2u);
+  EXPECT_EQ(a.points_inserted(), 20u);
+}
+
+TEST(Palette, CocoNamesAndFixedColours) {
+  ASSERT_EQ(coco80_names().size(), 80u);
+  EXPECT_EQ(coco80_names()[77], "teddy bear");
+  EXPECT_EQ(class_color("teddy_bear"), class_color("teddy bear"));
+  EXPECT_EQ(class_color("tvmonitor"), class_color("tv"));
+  EXPECT_EQ(class_color("person"), (Rgb{220, 20, 60}));
+  EXPECT_EQ(class_color("no such class"), (Rgb{128, 128, 128}));
+  // All 80 colours are distinct.
+  std::set<std::tuple<int, int, int>> seen;
+  for (const auto& n : coco80_names()) {
+    const Rgb c = class_color(n);
+    seen.insert({c.r, c.g, c.b});
+  }
+  EXPECT_EQ(seen.size(), 80u);
+}
+
+}  // namespace
+}  // namespace objmap::fusion

@@ -1,0 +1,126 @@
+// objmap synth -> objmap fuse on synthetic scenes whose objects are known exactly.
+#include <gtest/gtest.h>
+
+#include "fuse_helpers.h"
+#include "objmap/io/ply.h"
+#include "support/schema_check.h"
+
+namespace objmap::test {
+namespace {
+
+// One scene and one fuse run per configuration, shared by the tests of this file.
+struct Run {
+  std::unique_ptr<TempDir> dir;
+  fs::path scene, out;
+  RunResult synth, fuse;
+};
+
+Run make_run(const std::vector<std::string>& synth_args,
+             const std::vector<std::string>& fuse_args) {
+  Run r;
+  r.dir = std::make_unique<TempDir>();
+  r.scene = r.dir->path() / "scene";
+  r.out = r.dir->path() / "run";
+  std::vector<std::string> s{"synth", "--out", r.scene.string()};
+  s.insert(s.end(), synth_args.begin(), synth_args.end());
+  r.synth = run_objmap(s);
+  std::vector<std::string> f{"fuse",
+                             "--dataset",
+                             r.scene.string(),
+                             "--trajectory",
+                             (r.scene / "groundtruth.txt").string(),
+                             "--segmentation",
+                             (r.scene / "segmentation").string(),
+                             "--out",
+                             r.out.string()};
+  f.insert(f.end(), fuse_args.begin(), fuse_args.end());
+  if (r.synth.exit_code == 0) r.fuse = run_objmap(f);
+  return r;
+}
+
+const Run& default_run() {
+  static Run run = make_run({"--seed", "3"}, {});
+  return run;
+}
+
+TEST(FuseSynthetic, EveryObjectFoundOnceWithinTolerance) {
+  const Run& r = default_run();
+  ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  const auto gt = read_gt_objects(r.scene / "objects_gt.json");
+  const auto fused = read_fused_objects(r.out / "objects.json");
+  EXPECT_EQ(fused.size(), gt.size()) << r.fuse.out;
+  const auto matches = match_objects(gt, fused, 0.3, /*same_class=*/true);
+  EXPECT_EQ(matches.size(), gt.size()) << r.fuse.out;
+  for (const auto& [i, j] : matches) {
+    const double error = (gt[i].centroid - fused[j].centroid).norm();
+    const double tolerance = std::max(0.02, 0.1 * gt[i].largest_dimension());
+    EXPECT_LE(error, tolerance) << gt[i].cls << " " << gt[i].id << " (fused " << fused[j].id << ")";
+  }
+}
+
+TEST(FuseSynthetic, OutputsValidateAndReadBack) {
+  const Run& r = default_run();
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  const auto doc = read_json(r.out / "objects.json");
+  const auto errors = validate_json(doc, load_schema("objects.schema.json"));
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  for (const auto& o : read_fused_objects(r.out / "objects.json")) {
+    const PointCloud cloud = io::read_ply(r.out / o.ply);
+    EXPECT_EQ(static_cast<long>(cloud.size()), o.points) << o.ply;
+    EXPECT_TRUE(cloud.has_colors());
+  }
+  const PointCloud dense = io::read_ply(r.out / "map_dense.ply");
+  const PointCloud semantic = io::read_ply(r.out / "map_semantic.ply");
+  const PointCloud objects = io::read_ply(r.out / "map_objects.ply");
+  EXPECT_GT(dense.size(), 10000u);
+  EXPECT_EQ(semantic.size(), dense.size());
+  EXPECT_GT(objects.size(), 0u);
+  EXPECT_LT(objects.size(), dense.size());
+  const auto run = read_json(r.out / "run.json");
+  EXPECT_TRUE(validate_json(run, load_schema("run.schema.json")).empty());
+  EXPECT_EQ(run["points"]["dense_map"].get<std::size_t>(), dense.size());
+}
+
+TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
+  const Run& r = default_run();
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  TempDir other;
+  const auto f = run_objmap({"fuse", "--dataset", r.scene.string(), "--trajectory",
+                             (r.scene / "groundtruth.txt").string(), "--segmentation",
+                             (r.scene / "segmentation").string(), "--out",
+                             (other.path() / "run").string(), "--threads", "1"});
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  for (const auto& e : fs::recursive_directory_iterator(r.out)) {
+    if (!e.is_regular_file()) continue;
+    const auto rel = fs::relative(e.path(), r.out);
+    if (rel == "run.json") {
+      auto a = read_json(e.path()), b = read_json(other.path() / "run" / rel);
+      a.erase("performance");
+      b.erase("performance");
+      a["options"].erase("threads");
+      b["options"].erase("threads");
+      EXPECT_EQ(a, b);
+    } else {
+      EXPECT_EQ(read_text(e.path()), read_text(other.path() / "run" / rel)) << rel;
+    }
+  }
+}
+
+TEST(FuseSynthetic, ClassConfusionAndIdSwitchesStillGiveRightClasses) {
+  const Run r = make_run({"--seed", "5", "--confusion-rate", "0.2", "--id-switch-rate", "0.2"}, {});
+  ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  const auto gt = read_gt_objects(r.scene / "objects_gt.json");
+  const auto fused = read_fused_objects(r.out / "objects.json");
+  const double count_error =
+      std::abs(static_cast<double>(fused.size()) - gt.size()) / static_cast<double>(gt.size());
+  EXPECT_LE(count_error, 0.10) << fused.size() << " objects for " << gt.size() << "\n"
+                               << r.fuse.out;
+  const auto matches = match_objects(gt, fused, 0.3, /*same_class=*/false);
+  EXPECT_EQ(matches.size(), gt.size());
+  for (const auto& [i, j] : matches) EXPECT_EQ(fused[j].cls, gt[i].cls) << "object " << gt[i].id;
+}
+
+}  // namespace
+}  // namespace objmap::test

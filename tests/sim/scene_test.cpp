@@ -1,0 +1,158 @@
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "objmap/core/error.h"
+#include "objmap/sim/presets.h"
+#include "objmap/sim/scene.h"
+
+namespace objmap::sim {
+namespace {
+
+SceneObject single(Shape shape, const Vec3& half, const Pose& world_from_object) {
+  SceneObject o;
+  o.id = 1;
+  o.class_name = "thing";
+  o.world_from_object = world_from_object;
+  Part p;
+  p.shape = shape;
+  p.half_extent = half;
+  o.parts.push_back(p);
+  o.finalize(64);
+  return o;
+}
+
+Pose pose(double x, double y, double z, double yaw_rad) {
+  Pose p = Pose::Identity();
+  p.linear() = Eigen::AngleAxisd(yaw_rad, Vec3::UnitZ()).matrix();
+  p.translation() = Vec3(x, y, z);
+  return p;
+}
+
+TEST(Scene, RayHitsEachPrimitiveAtTheAnalyticDistance) {
+  // Ray from (0, -2, 0.5) along +y (direction not unit: t scales with it).
+  Ray ray;
+  ray.origin = Vec3(0, -2, 0.5);
+  ray.direction = Vec3(0, 2, 0);
+  const SceneObject box = single(Shape::kBox, Vec3(0.2, 0.3, 0.5), pose(0, 0, 0.5, 0));
+  SurfaceHit hit;
+  ASSERT_TRUE(intersect_object(box, ray, 1e-9, &hit));
+  EXPECT_NEAR(hit.t, (2.0 - 0.3) / 2.0, 1e-12);
+  EXPECT_NEAR(hit.normal_in_part.y(), -1.0, 1e-12);
+
+  const SceneObject cyl = single(Shape::kCylinder, Vec3(0.1, 0.1, 0.2), pose(0, 0, 0.5, 0.7));
+  hit = SurfaceHit();
+  ASSERT_TRUE(intersect_object(cyl, ray, 1e-9, &hit));
+  EXPECT_NEAR(hit.t, (2.0 - 0.1) / 2.0, 1e-12);
+
+  const SceneObject ell = single(Shape::kEllipsoid, Vec3(0.1, 0.25, 0.3), pose(0, 0, 0.5, 0));
+  hit = SurfaceHit();
+  ASSERT_TRUE(intersect_object(ell, ray, 1e-9, &hit));
+  EXPECT_NEAR(hit.t, (2.0 - 0.25) / 2.0, 1e-12);
+
+  // From above onto the cylinder cap.
+  Ray down;
+  down.origin = Vec3(0.05, 0, 2.0);
+  down.direction = Vec3(0, 0, -1);
+  hit = SurfaceHit();
+  ASSERT_TRUE(intersect_object(cyl, down, 1e-9, &hit));
+  EXPECT_NEAR(hit.t, 2.0 - 0.7, 1e-12);
+
+  // A ray passing beside misses.
+  Ray beside;
+  beside.origin = Vec3(0.5, -2, 0.5);
+  beside.direction = Vec3(0, 1, 0);
+  hit = SurfaceHit();
+  EXPECT_FALSE(intersect_object(cyl, beside, 1e-9, &hit));
+}
+
+TEST(Scene, DistanceToSurfaceIsExactForBoxesAndCylinders) {
+  const SceneObject box = single(Shape::kBox, Vec3(0.2, 0.3, 0.5), pose(1, 2, 0.5, 0.4));
+  const Pose& w = box.world_from_part[0];
+  EXPECT_NEAR(distance_to_surface(box, w * Vec3(0.2, 0.1, 0.0)), 0.0, 1e-12);
+  EXPECT_NEAR(distance_to_surface(box, w * Vec3(0.25, 0.1, 0.0)), 0.05, 1e-12);
+  EXPECT_NEAR(distance_to_surface(box, w * Vec3(0.15, 0.0, 0.0)), 0.05, 1e-12);   // inside
+  EXPECT_NEAR(distance_to_surface(box, w * Vec3(0.23, 0.34, 0.0)), 0.05, 1e-12);  // corner
+
+  const SceneObject cyl = single(Shape::kCylinder, Vec3(0.1, 0.1, 0.2), pose(0, 0, 0.2, 0));
+  EXPECT_NEAR(distance_to_surface(cyl, Vec3(0.13, 0, 0.2)), 0.03, 1e-12);
+  EXPECT_NEAR(distance_to_surface(cyl, Vec3(0.0, 0, 0.45)), 0.05, 1e-12);
+
+  const SceneObject ball = single(Shape::kEllipsoid, Vec3(0.1, 0.1, 0.1), pose(0, 0, 0, 0));
+  EXPECT_NEAR(distance_to_surface(ball, Vec3(0.0, 0.13, 0.0)), 0.03, 1e-9);
+  const SceneObject ell = single(Shape::kEllipsoid, Vec3(0.1, 0.2, 0.3), pose(0, 0, 0, 0));
+  EXPECT_NEAR(distance_to_surface(ell, Vec3(0.0, 0.0, 0.3)), 0.0, 1e-12);
+  EXPECT_NEAR(distance_to_surface(ell, Vec3(0.0, 0.201, 0.0)), 0.001, 1e-5);
+}
+
+TEST(Scene, CentroidAndVolumeOfSimpleSolids) {
+  const SceneObject box = single(Shape::kBox, Vec3(0.1, 0.2, 0.3), pose(1, 2, 3, 0.3));
+  EXPECT_LT((box.centroid - Vec3(1, 2, 3)).norm(), 1e-9);
+  EXPECT_NEAR(box.volume_m3, 0.2 * 0.4 * 0.6, 1e-9);
+  const SceneObject cyl = single(Shape::kCylinder, Vec3(0.05, 0.05, 0.1), pose(0, 0, 0, 0));
+  EXPECT_NEAR(cyl.volume_m3, M_PI * 0.05 * 0.05 * 0.2, 0.02 * M_PI * 0.05 * 0.05 * 0.2);
+  EXPECT_NEAR(cyl.obb.half_extent.x(), 0.05, 1e-12);
+  EXPECT_NEAR(cyl.obb.half_extent.z(), 0.1, 1e-12);
+}
+
+TEST(Scene, PresetsHaveThePaperClassesAndTheirBoxesCoverEveryPart) {
+  for (const std::string preset : {"tabletop", "office"}) {
+    const Scene scene = make_scene(preset, 3);
+    std::multiset<std::string> classes;
+    for (const auto& o : scene.objects) classes.insert(o.class_name);
+    for (const auto& name : paper_classes()) EXPECT_GE(classes.count(name), 1u) << preset << name;
+    EXPECT_GE(classes.count("cup"), 2u);
+    EXPECT_GE(classes.count("book"), 3u);
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+      const SceneObject& o = scene.objects[i];
+      EXPECT_EQ(o.id, static_cast<int>(i) + 1);
+      EXPECT_TRUE(o.obb.contains(o.centroid)) << o.class_name;
+      EXPECT_TRUE(inside_object(o, o.centroid) || o.class_name == "chair" ||
+                  o.class_name == "tv monitor")
+          << o.class_name;  // compositions may have their centroid in a gap
+      // Sample each part's box of points: those inside the part must be inside the object's OBB.
+      for (std::size_t p = 0; p < o.parts.size(); ++p) {
+        const Part& part = o.parts[p];
+        int inside = 0;
+        for (int a = -4; a <= 4; ++a)
+          for (int b = -4; b <= 4; ++b)
+            for (int c = -4; c <= 4; ++c) {
+              const Vec3 q = Vec3(a, b, c).cwiseProduct(part.half_extent) / 4.0;
+              if (!inside_part(part, q)) continue;
+              ++inside;
+              EXPECT_TRUE(o.obb.contains(o.world_from_part[p] * q, 1e-9)) << o.class_name;
+            }
+        EXPECT_GT(inside, 0);
+      }
+      // Plausible sizes: 3 cm .. 1 m.
+      EXPECT_GT(o.obb.half_extent.maxCoeff(), 0.015) << o.class_name;
+      EXPECT_LT(o.obb.half_extent.maxCoeff(), 0.5) << o.class_name;
+    }
+  }
+}
+
+TEST(Scene, UnknownPresetIsAnInputError) {
+  try {
+    make_scene("garden", 1);
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "--preset");
+    EXPECT_NE(std::string(e.what()).find("garden"), std::string::npos);
+  }
+}
+
+TEST(Scene, SeedMovesObjectsByCentimetres) {
+  const Scene a = make_scene("tabletop", 1);
+  const Scene b = make_scene("tabletop", 2);
+  ASSERT_EQ(a.objects.size(), b.objects.size());
+  double moved = 0.0;
+  for (std::size_t i = 0; i < a.objects.size(); ++i) {
+    const double d = (a.objects[i].centroid - b.objects[i].centroid).norm();
+    EXPECT_LT(d, 0.1);
+    moved = std::max(moved, d);
+  }
+  EXPECT_GT(moved, 0.002);
+}
+
+}  // namespace
+}  // namespace objmap::sim

@@ -1,0 +1,221 @@
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "objmap/core/error.h"
+#include "objmap/sim/presets.h"
+#include "objmap/sim/seg_noise.h"
+#include "objmap/sim/synth.h"
+
+namespace objmap::sim {
+namespace {
+
+namespace seg = objmap::segmentation;
+
+// A tiny label image with four objects (ids 1..4) as rectangles, and a scene that names them.
+struct Fixture {
+  Scene scene;
+  cv::Mat labels;
+  Fixture() {
+    const char* classes[] = {"teddy bear", "mouse", "cup", "book"};
+    for (int i = 0; i < 4; ++i) {
+      SceneObject o;
+      o.id = i + 1;
+      o.class_name = classes[i];
+      scene.objects.push_back(o);
+    }
+    labels = cv::Mat(60, 80, CV_16UC1, cv::Scalar::all(0));
+    labels(cv::Rect(5, 5, 20, 20)).setTo(1);
+    labels(cv::Rect(40, 5, 15, 10)).setTo(2);
+    labels(cv::Rect(5, 35, 12, 18)).setTo(3);
+    labels(cv::Rect(40, 30, 30, 25)).setTo(4);
+  }
+};
+
+double iou(const seg::Mask& a, const seg::Mask& b) {
+  std::size_t inter = 0, uni = 0;
+  for (std::size_t i = 0; i < a.data.size(); ++i) {
+    inter += a.data[i] && b.data[i];
+    uni += a.data[i] || b.data[i];
+  }
+  return uni ? static_cast<double>(inter) / uni : 0.0;
+}
+
+TEST(SegNoise, ExactSegmentationHasOneInstancePerVisibleObject) {
+  Fixture f;
+  const auto exact = exact_segmentation(f.labels, f.scene, 12.5, 50);
+  ASSERT_EQ(exact.instances.size(), 4u);
+  EXPECT_EQ(exact.instances[0].class_name, "teddy bear");
+  EXPECT_EQ(*exact.instances[1].track_id, 2);
+  EXPECT_EQ(exact.instances[3].bbox.x, 40);
+  EXPECT_EQ(exact.instances[3].bbox.w, 30);
+  EXPECT_EQ(exact.instances[3].bbox.h, 25);
+  std::size_t area = 0;
+  for (auto b : exact.instances[2].mask->data) area += b;
+  EXPECT_EQ(area, 12u * 18u);
+  // A minimum area above the mouse's 150 pixels drops it.
+  EXPECT_EQ(exact_segmentation(f.labels, f.scene, 12.5, 151).instances.size(), 3u);
+}
+
+TEST(SegNoise, ErrorsOccurAtTheConfiguredRates) {
+  Fixture f;
+  const auto exact = exact_segmentation(f.labels, f.scene, 0.0, 10);
+  SegNoiseOptions o;
+  o.miss_prob = 0.2;
+  o.confusions = {{"teddy bear", "person", 0.5}, {"mouse", "cup", 0.25}};
+  o.false_positives_per_frame = 0.0;  // separately below: a spurious ellipse may overlap an object
+  o.id_switch_prob = 0.05;
+  o.boundary_px = 1;
+  SegmentationNoise noise(o, 11);
+  const int frames = 600;
+  int detected = 0, teddy = 0, teddy_person = 0, mouse = 0, mouse_cup = 0, spurious = 0;
+  int switches = 0;
+  std::map<int, int> last_track;  // object -> last track id seen
+  std::map<int, std::set<int>> objects_of_track;
+  for (int k = 0; k < frames; ++k) {
+    const auto out = noise.apply(exact, f.labels.cols, f.labels.rows);
+    for (const auto& inst : out.instances) {
+      // Match to the truth by IoU.
+      int object = 0;
+      for (const auto& truth : exact.instances)
+        if (iou(*truth.mask, *inst.mask) > 0.5) object = *truth.track_id;
+      if (object == 0) {
+        ++spurious;
+        EXPECT_LE(inst.score, 0.6);
+        continue;
+      }
+      ++detected;
+      EXPECT_GE(inst.score, o.score_min);
+      if (object == 1) {
+        ++teddy;
+        teddy_person += inst.class_name == "person";
+      }
+      if (object == 2) {
+        ++mouse;
+        mouse_cup += inst.class_name == "cup";
+      }
+      if (last_track.count(object) && last_track[object] != *inst.track_id) ++switches;
+      last_track[object] = *inst.track_id;
+      objects_of_track[*inst.track_id].insert(object);
+    }
+  }
+  const double n = frames * 4.0;
+  EXPECT_NEAR(1.0 - detected / n, 0.2, 0.03);  // sd 0.008
+  EXPECT_NEAR(static_cast<double>(teddy_person) / teddy, 0.5, 0.07);
+  EXPECT_NEAR(static_cast<double>(mouse_cup) / mouse, 0.25, 0.06);
+  EXPECT_EQ(spurious, 0);
+  // 2400 instance-frames at 5%: ~120 switches; the observed changes include those hidden by misses.
+  EXPECT_NEAR(noise.stats().id_switches, 120, 40);
+  EXPECT_GT(switches, 60);
+  EXPECT_LE(switches, noise.stats().id_switches);
+  // Re-used IDs: some track id was worn by two different objects over time.
+  EXPECT_GT(noise.stats().id_reuses, 0);
+  int shared = 0;
+  for (const auto& [track, objects] : objects_of_track) shared += objects.size() > 1;
+  EXPECT_GT(shared, 0);
+  EXPECT_EQ(noise.stats().missed + detected, noise.stats().true_instances);
+}
+
+TEST(SegNoise, FalsePositivesAtTheConfiguredRate) {
+  Fixture f;
+  const auto exact = exact_segmentation(f.labels, f.scene, 0.0, 10);
+  SegNoiseOptions o;
+  o.miss_prob = 1.0;  // every true instance is missed: what remains is spurious
+  o.false_positives_per_frame = 0.5;
+  SegmentationNoise noise(o, 4);
+  int spurious = 0;
+  std::set<int> ids;
+  const int frames = 1000;
+  for (int k = 0; k < frames; ++k)
+    for (const auto& inst : noise.apply(exact, f.labels.cols, f.labels.rows).instances) {
+      ++spurious;
+      EXPECT_LE(inst.score, 0.6);
+      EXPECT_GT(inst.mask->data.size(), 0u);
+      EXPECT_TRUE(ids.insert(*inst.track_id).second);  // a fresh ID each time
+    }
+  EXPECT_NEAR(spurious / static_cast<double>(frames), 0.5, 0.07);  // sd 0.022
+  EXPECT_EQ(noise.stats().false_positives, spurious);
+}
+
+TEST(SegNoise, NoneGivesTheExactSegmentationWithStableIds) {
+  Fixture f;
+  const auto exact = exact_segmentation(f.labels, f.scene, 0.0, 10);
+  SegmentationNoise noise(SegNoiseOptions::none(), 1);
+  std::map<int, int> track_of_object;
+  for (int k = 0; k < 20; ++k) {
+    const auto out = noise.apply(exact, f.labels.cols, f.labels.rows);
+    ASSERT_EQ(out.instances.size(), exact.instances.size());
+    for (std::size_t i = 0; i < out.instances.size(); ++i) {
+      EXPECT_EQ(out.instances[i].class_name, exact.instances[i].class_name);
+      EXPECT_EQ(out.instances[i].mask->data, exact.instances[i].mask->data);
+      const int object = *exact.instances[i].track_id;
+      if (k == 0) track_of_object[object] = *out.instances[i].track_id;
+      EXPECT_EQ(*out.instances[i].track_id, track_of_object[object]);
+    }
+  }
+}
+
+TEST(SegNoise, BoundaryNoiseErodesOrDilates) {
+  Fixture f;
+  const auto exact = exact_segmentation(f.labels, f.scene, 0.0, 10);
+  SegNoiseOptions o = SegNoiseOptions::none();
+  o.boundary_px = 2;
+  SegmentationNoise noise(o, 5);
+  int smaller = 0, larger = 0;
+  for (int k = 0; k < 50; ++k) {
+    const auto out = noise.apply(exact, f.labels.cols, f.labels.rows);
+    const auto a = [](const seg::Mask& m) {
+      std::size_t n = 0;
+      for (auto b : m.data) n += b;
+      return n;
+    };
+    for (std::size_t i = 0; i < out.instances.size(); ++i) {
+      const std::size_t got = a(*out.instances[i].mask), want = a(*exact.instances[i].mask);
+      smaller += got < want;
+      larger += got > want;
+      EXPECT_GT(iou(*out.instances[i].mask, *exact.instances[i].mask), 0.4);
+    }
+  }
+  EXPECT_GT(smaller, 20);
+  EXPECT_GT(larger, 20);
+}
+
+TEST(SegNoise, SmallSceneMakesMissesAndConfusions) {
+  SynthOptions options;
+  options.frames = 30;
+  options.resolution_scale = 0.25;
+  options.seg_noise.min_area_px = 10;
+  options.seg_noise.boundary_px = 0;  // no masks eroded away: misses are the miss knob only
+  options.seg_noise.false_positives_per_frame = 0.0;
+  options.seg_noise.miss_prob = 0.25;
+  options.seg_noise.confusions = {{"teddy bear", "person", 0.5}, {"mouse", "cup", 0.5}};
+  const SynthSequence seq = synthesize(options);
+  int truth = 0, reported_true = 0, person = 0, teddy = 0;
+  for (const auto& f : seq.frames) {
+    truth += static_cast<int>(f.segmentation_gt.instances.size());
+    for (const auto& t : f.segmentation_gt.instances) teddy += t.class_name == "teddy bear";
+    for (const auto& i : f.segmentation.instances) {
+      reported_true += i.score >= options.seg_noise.score_min;
+      person += i.class_name == "person" && i.score >= options.seg_noise.score_min;
+    }
+  }
+  ASSERT_GT(truth, 200);
+  EXPECT_NEAR(1.0 - static_cast<double>(reported_true) / truth, 0.25, 0.08);
+  ASSERT_GT(teddy, 20);
+  EXPECT_NEAR(static_cast<double>(person) / (teddy * 0.75), 0.5, 0.25);
+}
+
+TEST(SegNoise, BadOptionsNameTheKnob) {
+  SegNoiseOptions o;
+  o.miss_prob = -0.1;
+  try {
+    o.check();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "--miss-rate");
+  }
+}
+
+}  // namespace
+}  // namespace objmap::sim
