@@ -1,6 +1,6 @@
 // Hot paths of `objmap fuse` on 640×480 frames, with PCL's filters on the same data for comparison.
-// Real frames come from $OBJMAP_DATA (default <repo>/../shared/data)/tum/fr1_rpy_every4; without them
-// the frame benchmarks use a synthetic depth image (a tilted plane with a box).
+// Real frames come from $OBJMAP_DATA (default <repo>/../shared/data)/tum/fr1_rpy_every4; without
+// them the frame benchmarks use a synthetic depth image (a tilted plane with a box).
 //   build-*/bin/bench_fusion --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
 #include <pcl/filters/statistical_outlier_removal.h>
@@ -178,13 +178,13 @@ void BM_VoxelMapInsertFrame(benchmark::State& state) {
   for (auto _ : state) map.insert(cloud);
   state.counters["points"] = static_cast<double>(cloud.size());
   state.counters["voxels"] = static_cast<double>(map.size());
-  state.counters["Mpts/s"] = benchmark::Counter(static_cast<double>(cloud.size()) * state.iterations() / 1e6,
-                                                benchmark::Counter::kIsRate);
+  state.counters["Mpts/s"] = benchmark::Counter(
+      static_cast<double>(cloud.size()) * state.iterations() / 1e6, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Back-projection + insertion, the whole per-frame dense-map work, on real consecutive frames (poses
-// identity: the worst case for voxel reuse is a moving camera, the best a static one).
+// Back-projection + insertion, the whole per-frame dense-map work, on real consecutive frames
+// (poses identity: the worst case for voxel reuse is a moving camera, the best a static one).
 void BM_DenseMapRealFrames(benchmark::State& state) {
   const auto files = real_frames(16);
   if (files.empty()) {
@@ -193,7 +193,8 @@ void BM_DenseMapRealFrames(benchmark::State& state) {
   }
   std::vector<Frame> frames;
   for (const auto& [r, d] : files)
-    frames.push_back({cv::imread(r.string(), cv::IMREAD_COLOR), cv::imread(d.string(), cv::IMREAD_UNCHANGED)});
+    frames.push_back(
+        {cv::imread(r.string(), cv::IMREAD_COLOR), cv::imread(d.string(), cv::IMREAD_UNCHANGED)});
   fusion::VoxelMap map({0.01, static_cast<int>(state.range(0))});
   std::size_t i = 0;
   for (auto _ : state) {
@@ -276,7 +277,8 @@ void BM_ObjectMapAdd(benchmark::State& state) {
     fusion::Observation o;
     o.class_name = "book";
     o.track_id = 100 + k;
-    for (const Vec3f& p : points.points) o.points_in_world.push_back(p + Vec3f(0.3f * (k + 1), 0, 0));
+    for (const Vec3f& p : points.points)
+      o.points_in_world.push_back(p + Vec3f(0.3f * (k + 1), 0, 0));
     map.add(o);
   }
   fusion::Observation o;

@@ -2,6 +2,7 @@
 // segmentation) and a noisy segmentation and drifting trajectory, for tests and benchmarks.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "command.h"
@@ -16,25 +17,26 @@ namespace {
 struct SynthCommand {
   std::string out;
   bool noise_free = false;
-  double confusion_rate = -1.0;  // < 0: keep the per-pair defaults
+  std::optional<double> confusion_rate;  // unset: keep the per-pair defaults
   sim::SynthOptions options;
 };
 
 void run_synth(SynthCommand& cmd) {
   sim::SynthOptions& o = cmd.options;
-  if (cmd.confusion_rate >= 0.0)
-    for (auto& c : o.seg_noise.confusions) c.probability = cmd.confusion_rate;
+  if (cmd.confusion_rate)
+    for (auto& c : o.seg_noise.confusions) c.probability = *cmd.confusion_rate;
   if (cmd.noise_free) o.set_noise_free();
   o.check();
   sim::check_output_dir(cmd.out);
 
   std::unique_ptr<ProgressBar> bar;
-  const sim::SynthSequence seq = sim::synthesize(o, [&](std::size_t done, std::size_t total) {
-    if (!bar) bar = std::make_unique<ProgressBar>("synth", total);
-    bar->update(done);
-  });
+  // Streaming: render and write a few frames at a time (memory does not grow with --frames).
+  const sim::SynthSequence seq =
+      sim::write_synthetic_sequence(cmd.out, o, [&](std::size_t done, std::size_t total) {
+        if (!bar) bar = std::make_unique<ProgressBar>("synth", total);
+        bar->update(done);
+      });
   if (bar) bar->finish();
-  sim::write_sequence(cmd.out, seq, o.threads);
 
   std::set<std::string> classes;
   for (const auto& obj : seq.scene.objects) classes.insert(obj.class_name);
@@ -45,8 +47,8 @@ void run_synth(SynthCommand& cmd) {
   std::printf("wrote         %s\n", cmd.out.c_str());
   std::printf("scene         %s, seed %llu: %zu objects of %zu classes\n", o.preset.c_str(),
               static_cast<unsigned long long>(o.seed), seq.scene.objects.size(), classes.size());
-  std::printf("frames        %zu at %.0f Hz, %dx%d, depth %s\n", seq.frames.size(), o.frame_rate_hz,
-              seq.camera.width, seq.camera.height,
+  std::printf("frames        %zu at %.0f Hz, %dx%d, depth %s\n", seq.groundtruth.size(),
+              o.frame_rate_hz, seq.camera.width, seq.camera.height,
               o.depth_noise.enabled ? "with Kinect-like noise" : "exact");
   std::printf("path          %.3f m; estimate ends %.3f m off (%.2f%% of the path)\n", length,
               end_error, length > 0 ? 100.0 * end_error / length : 0.0);

@@ -19,7 +19,7 @@ PointCloud sample_plane(double side, double step) {
 
 TEST(Outlier, RemovesIsolatedPointsKeepsTheSurface) {
   PointCloud plane = sample_plane(/*side=*/1.0, /*step=*/0.01);  // 10k points
-  plane.push_back({5.0f, 5.0f, 5.0f}, Rgb{1, 2, 3});               // one far outlier
+  plane.push_back({5.0f, 5.0f, 5.0f}, Rgb{1, 2, 3});             // one far outlier
   const auto result = remove_outliers(plane, {});
   ASSERT_EQ(result.keep_mask.size(), plane.size());
   EXPECT_FALSE(result.keep_mask.back());

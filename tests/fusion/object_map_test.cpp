@@ -123,7 +123,8 @@ TEST(ObjectMap, FinalMergePassRepairsAnIdSwitchTheOnlineStepMissed) {
 
 TEST(ObjectMap, TwoObjectsFiveCentimetresApartWithDifferentIdsStayTwo) {
   ObjectMap map;
-  const Vec3 a(0.005, 0.005, 1.005), b(0.055, 0.005, 1.005);  // 3 cm boxes, 2 cm gap, no shared voxel
+  const Vec3 a(0.005, 0.005, 1.005),
+      b(0.055, 0.005, 1.005);  // 3 cm boxes, 2 cm gap, no shared voxel
   for (int f = 0; f < 4; ++f) {
     map.add(obs(f, 1, "cup", 0.9, box(a, 1)));
     const AddResult r = map.add(obs(f, 2, "cup", 0.9, box(b, 1)));

@@ -19,7 +19,8 @@ PointCloud sample(bool colours) {
   for (int i = 0; i < 1000; ++i) {
     const Vec3f p(0.001f * i, -0.5f + 1e-4f * i, 3.25f);
     if (colours)
-      c.push_back(p, Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(255 - i % 256), 7});
+      c.push_back(p,
+                  Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(255 - i % 256), 7});
     else
       c.push_back(p);
   }
@@ -39,7 +40,8 @@ TEST(Ply, BinaryRoundTripIsExact) {
   }
   // No temporary file left behind.
   int files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    files += e.is_regular_file();
   EXPECT_EQ(files, 1);
 }
 
@@ -90,7 +92,8 @@ TEST(Ply, MalformedFilesSayWhatIsWrong) {
   } catch (const InputError& e) {
     EXPECT_NE(e.reason().find("truncated"), std::string::npos) << e.what();
   }
-  write_text(dir / "noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n");
+  write_text(dir / "noxyz.ply",
+             "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n");
   EXPECT_THROW(read_ply(dir / "noxyz.ply"), InputError);
   EXPECT_THROW(read_ply(dir / "missing.ply"), InputError);
   write_text(dir / "a_file", "x");  // a file where the folder should be

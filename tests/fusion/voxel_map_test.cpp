@@ -12,7 +12,7 @@ TEST(VoxelMap, CountsAndColourAveragesAreExact) {
   PointCloud a;
   a.push_back(Vec3f(0.002f, 0.002f, 0.002f), Rgb{10, 20, 30});
   a.push_back(Vec3f(0.004f, 0.006f, 0.008f), Rgb{20, 40, 61});  // same voxel (0,0,0)
-  a.push_back(Vec3f(-0.005f, 0.005f, 0.005f), Rgb{255, 0, 0});   // voxel (-1,0,0)
+  a.push_back(Vec3f(-0.005f, 0.005f, 0.005f), Rgb{255, 0, 0});  // voxel (-1,0,0)
   map.insert(a);
   PointCloud b;
   b.push_back(Vec3f(0.006f, 0.004f, 0.002f), Rgb{30, 60, 92});  // voxel (0,0,0) again, next frame

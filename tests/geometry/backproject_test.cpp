@@ -57,11 +57,11 @@ TEST(Backproject, PlaneAtKnownDepthGivesPointsOnThePlane) {
 TEST(Backproject, KeepsOnlyDepthsInRangeAndCountsTheRest) {
   const RayTable rays = make_ray_table(camera_preset("fr3"));
   cv::Mat depth(480, 640, CV_16UC1, cv::Scalar(5000));
-  depth.row(0).setTo(0);                          // no depth
-  depth.row(1).setTo(cv::Scalar(250));            // 0.05 m: too near
-  depth.row(2).setTo(cv::Scalar(25000));          // 5 m: too far
-  depth.row(3).setTo(cv::Scalar(500));            // 0.1 m: the bound is kept
-  depth.row(4).setTo(cv::Scalar(20000));          // 4.0 m: kept
+  depth.row(0).setTo(0);                  // no depth
+  depth.row(1).setTo(cv::Scalar(250));    // 0.05 m: too near
+  depth.row(2).setTo(cv::Scalar(25000));  // 5 m: too far
+  depth.row(3).setTo(cv::Scalar(500));    // 0.1 m: the bound is kept
+  depth.row(4).setTo(cv::Scalar(20000));  // 4.0 m: kept
   const BackprojectResult r = backproject(rays, DepthFrame(depth, Pose::Identity()));
   EXPECT_EQ(r.points_in_world.size(), 640u * 477u);
   EXPECT_EQ(r.pixels_no_depth, 640u);

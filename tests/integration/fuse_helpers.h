@@ -44,7 +44,8 @@ inline Eigen::Vector3d vec3(const nlohmann::json& a) {
 
 inline std::vector<GtObject> read_gt_objects(const fs::path& file) {
   std::vector<GtObject> out;
-  for (const auto& o : read_json(file)["objects"]) {
+  const nlohmann::json doc = read_json(file);
+  for (const auto& o : doc.at("objects")) {
     GtObject g;
     g.id = o["id"].get<int>();
     g.cls = o["class"].get<std::string>();
@@ -61,7 +62,8 @@ inline std::vector<GtObject> read_gt_objects(const fs::path& file) {
 
 inline std::vector<FusedObject> read_fused_objects(const fs::path& file) {
   std::vector<FusedObject> out;
-  for (const auto& o : read_json(file)["objects"]) {
+  const nlohmann::json doc = read_json(file);
+  for (const auto& o : doc.at("objects")) {
     FusedObject f;
     f.id = o["id"].get<int>();
     f.cls = o["class"].get<std::string>();

@@ -9,15 +9,15 @@ namespace objmap::test {
 namespace {
 
 // One scene and one fuse run per configuration, shared by the tests of this file.
-struct Run {
+struct SceneRun {
   std::unique_ptr<TempDir> dir;
   fs::path scene, out;
   RunResult synth, fuse;
 };
 
-Run make_run(const std::vector<std::string>& synth_args,
+SceneRun make_run(const std::vector<std::string>& synth_args,
              const std::vector<std::string>& fuse_args) {
-  Run r;
+  SceneRun r;
   r.dir = std::make_unique<TempDir>();
   r.scene = r.dir->path() / "scene";
   r.out = r.dir->path() / "run";
@@ -38,13 +38,13 @@ Run make_run(const std::vector<std::string>& synth_args,
   return r;
 }
 
-const Run& default_run() {
-  static Run run = make_run({"--seed", "3"}, {});
+const SceneRun& default_run() {
+  static SceneRun run = make_run({"--seed", "3"}, {});
   return run;
 }
 
 TEST(FuseSynthetic, EveryObjectFoundOnceWithinTolerance) {
-  const Run& r = default_run();
+  const SceneRun& r = default_run();
   ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   const auto gt = read_gt_objects(r.scene / "objects_gt.json");
@@ -60,7 +60,7 @@ TEST(FuseSynthetic, EveryObjectFoundOnceWithinTolerance) {
 }
 
 TEST(FuseSynthetic, OutputsValidateAndReadBack) {
-  const Run& r = default_run();
+  const SceneRun& r = default_run();
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   const auto doc = read_json(r.out / "objects.json");
   const auto errors = validate_json(doc, load_schema("objects.schema.json"));
@@ -83,7 +83,7 @@ TEST(FuseSynthetic, OutputsValidateAndReadBack) {
 }
 
 TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
-  const Run& r = default_run();
+  const SceneRun& r = default_run();
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   TempDir other;
   const auto f = run_objmap({"fuse", "--dataset", r.scene.string(), "--trajectory",
@@ -108,7 +108,7 @@ TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
 }
 
 TEST(FuseSynthetic, ClassConfusionAndIdSwitchesStillGiveRightClasses) {
-  const Run r = make_run({"--seed", "5", "--confusion-rate", "0.2", "--id-switch-rate", "0.2"}, {});
+  const SceneRun r = make_run({"--seed", "5", "--confusion-rate", "0.2", "--id-switch-rate", "0.2"}, {});
   ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   const auto gt = read_gt_objects(r.scene / "objects_gt.json");

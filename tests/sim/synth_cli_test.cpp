@@ -45,9 +45,9 @@ TEST(SynthCli, WritesATumSequenceWithGroundTruth) {
   EXPECT_EQ(files_in(out / "depth", ".png"), 10);
   EXPECT_EQ(files_in(out / "segmentation", ".json"), 10);
   EXPECT_EQ(files_in(out / "segmentation_gt", ".json"), 10);
-  EXPECT_TRUE(fs::exists(out / "rgb" / "1700000000.000000.png"));
-  EXPECT_TRUE(fs::exists(out / "depth" / "1700000000.005000.png"));
-  EXPECT_TRUE(fs::exists(out / "segmentation" / "1700000000.033333.json"));
+  EXPECT_TRUE(fs::exists(out / "rgb" / "1700000000.100000.png"));
+  EXPECT_TRUE(fs::exists(out / "depth" / "1700000000.105000.png"));
+  EXPECT_TRUE(fs::exists(out / "segmentation" / "1700000000.133333.json"));
 
   const auto camera = nlohmann::json::parse(read_text(out / "camera.json"));
   EXPECT_EQ(camera.at("width"), 640);
@@ -66,7 +66,7 @@ TEST(SynthCli, WritesATumSequenceWithGroundTruth) {
   for (const auto& name : objmap::sim::paper_classes()) EXPECT_TRUE(classes.count(name)) << name;
 
   const auto seg =
-      nlohmann::json::parse(read_text(out / "segmentation_gt" / "1700000000.000000.json"));
+      nlohmann::json::parse(read_text(out / "segmentation_gt" / "1700000000.100000.json"));
   EXPECT_GE(seg.at("instances").size(), 6u);
   EXPECT_EQ(seg.at("instances")[0].at("mask").at("size"), nlohmann::json::array({480, 640}));
 }

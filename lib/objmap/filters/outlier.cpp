@@ -67,14 +67,16 @@ OutlierResult remove_outliers(const PointCloud& cloud, const OutlierOptions& opt
     for (auto& th : pool) th.join();
   }
 
-  // 2. Eq 18: m, s over the cloud (in index order, so the sums do not depend on threads), t = m + k·s.
+  // 2. Eq 18: m, s over the cloud (in index order, so the sums do not depend on threads), t = m +
+  // k·s.
   double sum = 0.0, sq_sum = 0.0;
   for (double d : mean_distance) {
     sum += d;
     sq_sum += d * d;
   }
   const double m = sum / static_cast<double>(n);
-  const double variance = (sq_sum - sum * sum / static_cast<double>(n)) / static_cast<double>(n - 1);
+  const double variance =
+      (sq_sum - sum * sum / static_cast<double>(n)) / static_cast<double>(n - 1);
   const double s = std::sqrt(std::max(0.0, variance));
   result.mean_distance = m;
   result.std_distance = s;

@@ -9,10 +9,10 @@ namespace objmap::filters {
 // nearest neighbours; over the cloud their mean m and standard deviation s; a point is kept when
 // d_i <= t = m + k·s. Same rule as PCL's StatisticalOutlierRemoval (sample standard deviation).
 struct OutlierOptions {
-  int neighbours = 20;    // K; the paper's value is not given, 20 is PCL's common choice
+  int neighbours = 20;     // K; the paper's value is not given, 20 is PCL's common choice
   double std_ratio = 1.0;  // k; smaller removes more, and eats object borders (paper §3.3)
-  int threads = 1;        // k-NN queries in parallel; the result is identical for any count
-  void check() const;     // throws InputError naming the bad field
+  int threads = 1;         // k-NN queries in parallel; the result is identical for any count
+  void check() const;      // throws InputError naming the bad field
 };
 
 struct OutlierResult {

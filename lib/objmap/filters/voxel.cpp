@@ -11,7 +11,8 @@
 namespace objmap::filters {
 
 void VoxelFilterOptions::check() const {
-  require(std::isfinite(voxel_m) && voxel_m >= 1e-4 && voxel_m <= 100.0, "VoxelFilterOptions.voxel_m",
+  require(std::isfinite(voxel_m) && voxel_m >= 1e-4 && voxel_m <= 100.0,
+          "VoxelFilterOptions.voxel_m",
           "must be in [0.0001, 100] metres, got " + std::to_string(voxel_m));
 }
 
@@ -46,7 +47,8 @@ VoxelFilterResult voxel_filter(const PointCloud& cloud, const VoxelFilterOptions
   // 2. Output order: sorted by key, so the result does not depend on the input order of voxels.
   std::vector<std::uint32_t> order(keys.size());
   std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
   std::vector<std::uint32_t> rank(keys.size());
   for (std::uint32_t r = 0; r < order.size(); ++r) rank[order[r]] = r;
 

@@ -6,8 +6,8 @@
 #include <string>
 
 #include "objmap/core/error.h"
-#include "objmap/geometry/bounds.h"
 #include "objmap/fusion/palette.h"
+#include "objmap/geometry/bounds.h"
 
 namespace objmap::fusion {
 
@@ -15,7 +15,8 @@ void ObjectMapOptions::check() const {
   auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
   require(std::isfinite(voxel_m) && voxel_m >= 1e-4 && voxel_m <= 100.0, "ObjectMapOptions.voxel_m",
           "must be in [0.0001, 100] metres, got " + std::to_string(voxel_m));
-  require(std::isfinite(distance_gate_m) && distance_gate_m > 0.0, "ObjectMapOptions.distance_gate_m",
+  require(std::isfinite(distance_gate_m) && distance_gate_m > 0.0,
+          "ObjectMapOptions.distance_gate_m",
           "must be > 0, got " + std::to_string(distance_gate_m));
   require(finite_nonneg(weight_id), "ObjectMapOptions.weight_id",
           "must be >= 0, got " + std::to_string(weight_id));
@@ -67,7 +68,8 @@ std::string ObjectMap::voted_class(const Object& o) {
   const std::pair<const std::string, ClassVote>* best = nullptr;
   for (const auto& entry : o.histogram) {
     if (!best || entry.second.score_sum > best->second.score_sum ||
-        (entry.second.score_sum == best->second.score_sum && entry.second.count > best->second.count))
+        (entry.second.score_sum == best->second.score_sum &&
+         entry.second.count > best->second.count))
       best = &entry;
   }
   return best ? best->first : std::string();
@@ -88,7 +90,8 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, const V
   const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.voxels.size());
   const double iou_bound = std::min(na, nb) / std::max(na, nb);
   const bool disjoint = (a_hi.array() < b.lo.array()).any() || (b.hi.array() < a_lo.array()).any();
-  if (!disjoint && partial + o.weight_overlap * iou_bound > std::min(o.match_threshold, o.merge_threshold)) {
+  if (!disjoint &&
+      partial + o.weight_overlap * iou_bound > std::min(o.match_threshold, o.merge_threshold)) {
     const double common = static_cast<double>(common_voxels(a, b.voxels));
     s.overlap = common / (na + nb - common);
   }
@@ -174,29 +177,43 @@ AddResult ObjectMap::add(const Observation& obs) {
 
 std::vector<MergeLink> ObjectMap::merge_pass() {
   std::vector<MergeLink> made;
-  while (true) {
-    Object* into = nullptr;
-    Object* absorbed = nullptr;
-    Scores best;
-    for (std::size_t i = 0; i < objects_.size(); ++i) {
-      const Object& a = *objects_[i];
-      if (!a.alive) continue;
-      const std::string class_a = normalize_class_name(voted_class(a));
-      for (std::size_t j = i + 1; j < objects_.size(); ++j) {
-        const Object& b = *objects_[j];
-        if (!b.alive) continue;
-        if (options_.require_same_class && class_a != normalize_class_name(voted_class(b))) continue;
-        bool same_id = false;
-        for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
-        const Scores s = score(same_id, a.centroid, a.voxels, a.lo, a.hi, b);
-        if (s.score_p > options_.merge_threshold && (!into || s.score_p > best.score_p)) {
-          into = objects_[i].get();
-          absorbed = objects_[j].get();
-          best = s;
-        }
-      }
+  // Scores of every live pair (i < j), computed once; after a merge only the pairs of the grown
+  // object are computed again (those of the absorbed one are dropped).
+  struct Pair {
+    int i, j;
+    Scores s;
+  };
+  auto pair_score = [&](const Object& a, const Object& b, Scores& s) {
+    if (options_.require_same_class &&
+        normalize_class_name(voted_class(a)) != normalize_class_name(voted_class(b)))
+      return false;
+    bool same_id = false;
+    for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
+    s = score(same_id, a.centroid, a.voxels, a.lo, a.hi, b);
+    return s.score_p > options_.merge_threshold;
+  };
+  std::vector<Pair> pairs;  // only pairs above the threshold, in (i, j) order
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    if (!objects_[i]->alive) continue;
+    for (std::size_t j = i + 1; j < objects_.size(); ++j) {
+      if (!objects_[j]->alive) continue;
+      Scores s;
+      if (pair_score(*objects_[i], *objects_[j], s))
+        pairs.push_back({static_cast<int>(i), static_cast<int>(j), s});
     }
-    if (!into) break;
+  }
+  while (true) {
+    // The highest P; ties: the first pair in (i, j) order.
+    const Pair* best_pair = nullptr;
+    for (const Pair& p : pairs)
+      if (!best_pair || p.s.score_p > best_pair->s.score_p ||
+          (p.s.score_p == best_pair->s.score_p &&
+           std::make_pair(p.i, p.j) < std::make_pair(best_pair->i, best_pair->j)))
+        best_pair = &p;
+    if (!best_pair) break;
+    Object* into = objects_[best_pair->i].get();
+    Object* absorbed = objects_[best_pair->j].get();
+    const Scores best = best_pair->s;
 
     // Join `absorbed` into `into` (the lower id).
     MergeLink link{into->id, absorbed->id, best.p_id, best.distance_m, best.overlap, best.score_p};
@@ -225,6 +242,23 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     absorbed->provenance.clear();
     absorbed->merges.clear();
     made.push_back(link);
+
+    // The pairs of `into` change, those of `absorbed` are gone.
+    const int a = into->id, b = absorbed->id;
+    pairs.erase(
+        std::remove_if(pairs.begin(), pairs.end(),
+                       [&](const Pair& p) { return p.i == a || p.j == a || p.i == b || p.j == b; }),
+        pairs.end());
+    for (const auto& other : objects_) {
+      if (!other->alive || other->id == a) continue;
+      const Object& lo = other->id < a ? *other : *into;
+      const Object& hi = other->id < a ? *into : *other;
+      Scores s;
+      if (pair_score(lo, hi, s)) pairs.push_back({lo.id, hi.id, s});
+    }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+      return std::make_pair(x.i, x.j) < std::make_pair(y.i, y.j);
+    });
   }
   return made;
 }

@@ -10,20 +10,20 @@
 #include "objmap/filters/outlier.h"
 #include "objmap/fusion/voxel_map.h"
 
-// The object map (paper §3.2-3.3): each instance observation (its back-projected points) is associated
-// with an existing object or starts a new one; objects keep their points in a voxel set (memory
-// bounded by the object's surface), a score-weighted class vote and the provenance of every
+// The object map (paper §3.2-3.3): each instance observation (its back-projected points) is
+// associated with an existing object or starts a new one; objects keep their points in a voxel set
+// (memory bounded by the object's surface), a score-weighted class vote and the provenance of every
 // observation. A final pass merges objects that the same criteria say are one (ID-switch repair).
 namespace objmap::fusion {
 
 // One instance in one keyframe: what fuse() hands to the object map.
 struct Observation {
-  double timestamp = 0.0;           // rgb timestamp of the keyframe
-  std::optional<int> track_id;      // tracking id, when the segmentation/tracker gave one
-  std::string class_name;           // detector class, e.g. "teddy bear"
-  double score = 1.0;               // detector confidence in [0, 1]
-  PointCloud points_in_world;       // back-projected instance pixels (colours optional)
-  std::optional<int> keyframe_index;  // index of the keyframe, for the pose correction
+  double timestamp = 0.0;               // rgb timestamp of the keyframe
+  std::optional<int> track_id;          // tracking id, when the segmentation/tracker gave one
+  std::string class_name;               // detector class, e.g. "teddy bear"
+  double score = 1.0;                   // detector confidence in [0, 1]
+  PointCloud points_in_world;           // back-projected instance pixels (colours optional)
+  std::optional<int> keyframe_index;    // index of the keyframe, for the pose correction
   std::optional<Vec3> centroid_in_cam;  // the observation's centroid in the camera frame (ditto)
 };
 
@@ -34,21 +34,22 @@ struct Observation {
 //   M (eq 21): |A∩B| / (|A| + |B| − |A∩B|) over the voxel sets of the observation and the object.
 // The defaults are chosen so that the paper's single-criterion rules become the combined rule:
 //   w_m·0.8 = K: overlap above the paper's 0.8 alone is a match (re-seen object, new id);
-//   w_id < K and w_d < K: neither an id alone (id switches, reused ids) nor nearness alone (two objects
+//   w_id < K and w_d < K: neither an id alone (id switches, reused ids) nor nearness alone (two
+//   objects
 //     side by side) is a match;
 //   w_id + w_d·f(gate) = K: the same id and D below the paper's 0.1 m gate is a match;
 //   no id: nearness needs overlap too (D = 0: M > 0.4; D = gate: M > 0.6).
 // Weights sum to 1, so P ∈ [0, 1].
 struct ObjectMapOptions {
-  double voxel_m = 0.01;            // object voxel sets and the overlap M, at the map resolution
-  double distance_gate_m = 0.1;     // the paper's centroid gate (eq 17); f(gate) = 1/2
-  double weight_id = 0.3;           // w_id
-  double weight_distance = 0.2;     // w_d
-  double weight_overlap = 0.5;      // w_m
-  double match_threshold = 0.4;     // K (eq 22): match when P > K
-  double merge_threshold = 0.4;     // K for the final merge pass between two objects
-  int min_observations = 3;         // an object is confirmed after this many observations
-  int min_points = 10;              // observations with fewer points (after depth checks) are ignored
+  double voxel_m = 0.01;         // object voxel sets and the overlap M, at the map resolution
+  double distance_gate_m = 0.1;  // the paper's centroid gate (eq 17); f(gate) = 1/2
+  double weight_id = 0.3;        // w_id
+  double weight_distance = 0.2;  // w_d
+  double weight_overlap = 0.5;   // w_m
+  double match_threshold = 0.4;  // K (eq 22): match when P > K
+  double merge_threshold = 0.4;  // K for the final merge pass between two objects
+  int min_observations = 3;      // an object is confirmed after this many observations
+  int min_points = 10;           // observations with fewer points (after depth checks) are ignored
   bool require_same_class = false;  // only match observations to objects of the voted class
   void check() const;               // throws InputError naming the bad field
 };
@@ -85,16 +86,16 @@ struct ClassVote {
 // One object as exported (objects.json, objects/<id>_<class>.ply).
 struct ObjectRecord {
   int id = -1;
-  std::string class_name;                    // the score-weighted vote
+  std::string class_name;  // the score-weighted vote
   std::map<std::string, ClassVote> class_histogram;
-  double mean_score = 0.0;                   // mean detector score of its observations
-  Vec3 centroid = Vec3::Zero();              // mean of the filtered points: the paper's position
-  Aabb aabb;                                 // of the filtered points
-  Obb obb;                                   // PCA box of the filtered points
-  std::size_t points_raw = 0;                // points of all its observations (before filtering)
-  std::size_t points_voxel = 0;              // after the voxel filter (occupied voxels)
-  std::size_t points_filtered = 0;           // after the outlier filter (eq 18)
-  double outlier_threshold = 0.0;            // t of eq 18 for this object
+  double mean_score = 0.0;          // mean detector score of its observations
+  Vec3 centroid = Vec3::Zero();     // mean of the filtered points: the paper's position
+  Aabb aabb;                        // of the filtered points
+  Obb obb;                          // PCA box of the filtered points
+  std::size_t points_raw = 0;       // points of all its observations (before filtering)
+  std::size_t points_voxel = 0;     // after the voxel filter (occupied voxels)
+  std::size_t points_filtered = 0;  // after the outlier filter (eq 18)
+  double outlier_threshold = 0.0;   // t of eq 18 for this object
   int observations = 0;
   bool confirmed = false;                    // observations >= min_observations
   double first_seen = 0.0, last_seen = 0.0;  // timestamps
@@ -105,14 +106,14 @@ struct ObjectRecord {
 };
 
 struct RecordOptions {
-  bool confirmed_only = true;           // leave out objects with < min_observations
-  bool outlier_filter = true;           // apply eq 18 to each object's voxel cloud
-  filters::OutlierOptions outlier;      // K, k, threads
+  bool confirmed_only = true;       // leave out objects with < min_observations
+  bool outlier_filter = true;       // apply eq 18 to each object's voxel cloud
+  filters::OutlierOptions outlier;  // K, k, threads
 };
 
 // What add() did with an observation.
 struct AddResult {
-  int object_id = -1;      // -1: ignored (fewer than min_points points)
+  int object_id = -1;  // -1: ignored (fewer than min_points points)
   bool created = false;
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
 };
@@ -158,13 +159,14 @@ class ObjectMap {
   static std::string voted_class(const Object& object);
 
   ObjectMapOptions options_;
-  std::vector<std::unique_ptr<Object>> objects_;  // index = id; absorbed objects stay (alive = false)
+  std::vector<std::unique_ptr<Object>>
+      objects_;  // index = id; absorbed objects stay (alive = false)
 };
 
 // The two class-coloured maps: `semantic` = every voxel of the dense map, voxels that belong to a
 // confirmed object painted with the object's class colour (palette.h), the others in their mean
-// colour; `objects_only` = the records' filtered clouds painted with their class colour, by id. A voxel
-// claimed by two objects goes to the one with more observations (then the lower id).
+// colour; `objects_only` = the records' filtered clouds painted with their class colour, by id. A
+// voxel claimed by two objects goes to the one with more observations (then the lower id).
 struct SemanticMaps {
   PointCloud semantic;
   PointCloud objects_only;

@@ -8,23 +8,33 @@
 namespace objmap::fusion {
 
 const std::vector<std::string>& coco80_names() {
-  static const std::vector<std::string> names = {
-      "person",        "bicycle",      "car",           "motorcycle",    "airplane",
-      "bus",           "train",        "truck",         "boat",          "traffic light",
-      "fire hydrant",  "stop sign",    "parking meter", "bench",         "bird",
-      "cat",           "dog",          "horse",         "sheep",         "cow",
-      "elephant",      "bear",         "zebra",         "giraffe",       "backpack",
-      "umbrella",      "handbag",      "tie",           "suitcase",      "frisbee",
-      "skis",          "snowboard",    "sports ball",   "kite",          "baseball bat",
-      "baseball glove", "skateboard",  "surfboard",     "tennis racket", "bottle",
-      "wine glass",    "cup",          "fork",          "knife",         "spoon",
-      "bowl",          "banana",       "apple",         "sandwich",      "orange",
-      "broccoli",      "carrot",       "hot dog",       "pizza",         "donut",
-      "cake",          "chair",        "couch",         "potted plant",  "bed",
-      "dining table",  "toilet",       "tv",            "laptop",        "mouse",
-      "remote",        "keyboard",     "cell phone",    "microwave",     "oven",
-      "toaster",       "sink",         "refrigerator",  "book",          "clock",
-      "vase",          "scissors",     "teddy bear",    "hair drier",    "toothbrush"};
+  static const std::vector<std::string> names = {"person",        "bicycle",      "car",
+                                                 "motorcycle",    "airplane",     "bus",
+                                                 "train",         "truck",        "boat",
+                                                 "traffic light", "fire hydrant", "stop sign",
+                                                 "parking meter", "bench",        "bird",
+                                                 "cat",           "dog",          "horse",
+                                                 "sheep",         "cow",          "elephant",
+                                                 "bear",          "zebra",        "giraffe",
+                                                 "backpack",      "umbrella",     "handbag",
+                                                 "tie",           "suitcase",     "frisbee",
+                                                 "skis",          "snowboard",    "sports ball",
+                                                 "kite",          "baseball bat", "baseball glove",
+                                                 "skateboard",    "surfboard",    "tennis racket",
+                                                 "bottle",        "wine glass",   "cup",
+                                                 "fork",          "knife",        "spoon",
+                                                 "bowl",          "banana",       "apple",
+                                                 "sandwich",      "orange",       "broccoli",
+                                                 "carrot",        "hot dog",      "pizza",
+                                                 "donut",         "cake",         "chair",
+                                                 "couch",         "potted plant", "bed",
+                                                 "dining table",  "toilet",       "tv",
+                                                 "laptop",        "mouse",        "remote",
+                                                 "keyboard",      "cell phone",   "microwave",
+                                                 "oven",          "toaster",      "sink",
+                                                 "refrigerator",  "book",         "clock",
+                                                 "vase",          "scissors",     "teddy bear",
+                                                 "hair drier",    "toothbrush"};
   return names;
 }
 
@@ -48,12 +58,24 @@ Rgb hsv(double h, double s, double v) {
   const double p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
   double r = 0, g = 0, b = 0;
   switch (i) {
-    case 0: r = v, g = t, b = p; break;
-    case 1: r = q, g = v, b = p; break;
-    case 2: r = p, g = v, b = t; break;
-    case 3: r = p, g = q, b = v; break;
-    case 4: r = t, g = p, b = v; break;
-    default: r = v, g = p, b = q; break;
+    case 0:
+      r = v, g = t, b = p;
+      break;
+    case 1:
+      r = q, g = v, b = p;
+      break;
+    case 2:
+      r = p, g = v, b = t;
+      break;
+    case 3:
+      r = p, g = q, b = v;
+      break;
+    case 4:
+      r = t, g = p, b = v;
+      break;
+    default:
+      r = v, g = p, b = q;
+      break;
   }
   auto byte = [](double x) { return static_cast<std::uint8_t>(std::lround(x * 255.0)); };
   return {byte(r), byte(g), byte(b)};

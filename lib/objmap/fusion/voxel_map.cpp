@@ -80,56 +80,94 @@ Vec3 VoxelMap::mean_position(VoxelKey key, const VoxelData& v) const {
 }
 
 // Points of `cloud` whose voxel belongs to `shard`, in input order. Consecutive points of one voxel
-// (neighbouring pixels) are summed locally and written with one hash access. Returns the number of
-// points dropped (not finite or out of range).
+// (neighbouring pixels) are summed locally into a run; the runs of a batch of points are then
+// written to the table with the slot of a later run prefetched, so that the table's cache misses
+// overlap (a random slot of a multi-megabyte table is the cost of the whole insert otherwise). The
+// batch size is fixed, so the sums (and the map) do not depend on anything but the input. Returns
+// the number of points dropped (not finite or out of range).
 std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label) {
+  constexpr std::size_t kBatch = 1024;  // points per batch
+  constexpr std::size_t kAhead = 12;    // runs prefetched ahead
+  struct Run {
+    VoxelKey key;
+    VoxelData sum;
+  };
   Table& table = shards_[shard];
   const bool colour = cloud.has_colors();
   const bool sharded = shards_.size() > 1;
   const std::size_t n = cloud.size();
   std::size_t dropped = 0;
-  VoxelKey run_key = kNoVoxel;
-  bool run_ours = false;
-  VoxelData run;
-  auto flush = [&]() {
-    if (run_key == kNoVoxel || !run_ours) return;
-    VoxelData& v = table[run_key];
-    for (int a = 0; a < 3; ++a) {
-      v.offset_sum[a] += run.offset_sum[a];
-      v.color_sum[a] += run.color_sum[a];
+  std::vector<Run> runs;
+  runs.reserve(kBatch);
+  std::vector<std::int32_t> cell(3 * kBatch);
+  std::vector<float> frac(3 * kBatch);
+  std::vector<std::uint8_t> valid(kBatch);
+  constexpr float lim = static_cast<float>(geometry::kVoxelCoordLimit);
+  for (std::size_t begin = 0; begin < n; begin += kBatch) {
+    const std::size_t end = std::min(n, begin + kBatch);
+    // 1. Voxel coordinates and in-voxel offsets of the batch (a branch-free, vectorisable loop).
+    const std::size_t count = end - begin;
+    for (std::size_t j = 0; j < count; ++j) {
+      const Vec3f& p = cloud.points[begin + j];
+      float sx = p.x() * inv_voxel_m_, sy = p.y() * inv_voxel_m_, sz = p.z() * inv_voxel_m_;
+      const bool ok = sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim;
+      if (!ok) sx = sy = sz = 0.f;  // no float-to-int conversion of NaN or huge values
+      const std::int32_t ix = geometry::fast_floor(sx), iy = geometry::fast_floor(sy),
+                         iz = geometry::fast_floor(sz);
+      cell[3 * j] = ix;
+      cell[3 * j + 1] = iy;
+      cell[3 * j + 2] = iz;
+      frac[3 * j] = sx - static_cast<float>(ix);
+      frac[3 * j + 1] = sy - static_cast<float>(iy);
+      frac[3 * j + 2] = sz - static_cast<float>(iz);
+      valid[j] = ok;
     }
-    v.count += run.count;
-    v.color_count += run.color_count;
-    vote(v, label, static_cast<std::int32_t>(run.count));
-  };
-  Eigen::Vector3i ijk;
-  Eigen::Vector3f offset;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!geometry::voxel_coords(cloud.points[i], inv_voxel_m_, ijk, offset)) {
-      ++dropped;
-      continue;
+    // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels).
+    runs.clear();
+    VoxelKey run_key = kNoVoxel;
+    bool run_ours = false;
+    for (std::size_t j = 0; j < count; ++j) {
+      if (!valid[j]) {
+        ++dropped;
+        continue;
+      }
+      const VoxelKey key = geometry::pack_voxel(cell[3 * j], cell[3 * j + 1], cell[3 * j + 2]);
+      if (key != run_key) {
+        run_key = key;
+        run_ours = !sharded || shard_of(key) == shard;
+        if (run_ours) runs.push_back(Run{key, VoxelData{}});
+      }
+      if (!run_ours) continue;
+      VoxelData& r = runs.back().sum;
+      r.offset_sum[0] += frac[3 * j];
+      r.offset_sum[1] += frac[3 * j + 1];
+      r.offset_sum[2] += frac[3 * j + 2];
+      ++r.count;
+      if (colour) {
+        const Rgb& c = cloud.colors[begin + j];
+        r.color_sum[0] += c.r;
+        r.color_sum[1] += c.g;
+        r.color_sum[2] += c.b;
+        ++r.color_count;
+      }
     }
-    const VoxelKey key = geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z());
-    if (key != run_key) {
-      flush();
-      run_key = key;
-      run_ours = !sharded || shard_of(key) == shard;
-      run = VoxelData{};
-    }
-    if (!run_ours) continue;
-    run.offset_sum[0] += offset.x();
-    run.offset_sum[1] += offset.y();
-    run.offset_sum[2] += offset.z();
-    ++run.count;
-    if (colour) {
-      const Rgb& c = cloud.colors[i];
-      run.color_sum[0] += c.r;
-      run.color_sum[1] += c.g;
-      run.color_sum[2] += c.b;
-      ++run.color_count;
+    // 3. The runs into the table, in order, prefetching ahead.
+    table.reserve(table.size() + runs.size());  // no rehash below: prefetched slots stay valid
+    const std::size_t m = runs.size();
+    for (std::size_t r = 0; r < std::min(m, kAhead); ++r) table.prefetch(runs[r].key);
+    for (std::size_t r = 0; r < m; ++r) {
+      if (r + kAhead < m) table.prefetch(runs[r + kAhead].key);
+      const VoxelData& add = runs[r].sum;
+      VoxelData& v = table[runs[r].key];
+      for (int a = 0; a < 3; ++a) {
+        v.offset_sum[a] += add.offset_sum[a];
+        v.color_sum[a] += add.color_sum[a];
+      }
+      v.count += add.count;
+      v.color_count += add.color_count;
+      vote(v, label, static_cast<std::int32_t>(add.count));
     }
   }
-  flush();
   return dropped;
 }
 
@@ -154,11 +192,21 @@ void VoxelMap::insert(const PointCloud& cloud, std::int32_t label) {
 
 void VoxelMap::merge(const VoxelMap& other) {
   require(other.voxel_m_ == voxel_m_, "VoxelMap::merge",
-          "voxel sizes differ (" + std::to_string(other.voxel_m_) + " vs " + std::to_string(voxel_m_) +
-              "); expected equal");
+          "voxel sizes differ (" + std::to_string(other.voxel_m_) + " vs " +
+              std::to_string(voxel_m_) + "); expected equal");
   // Each voxel of `other` is added once, so the visiting order changes no voxel's value (only the
-  // hash layout, which no export depends on).
-  other.for_each([&](VoxelKey key, const VoxelData& src) {
+  // hash layout, which no export depends on). Slots of a later voxel are prefetched, as in
+  // insert().
+  constexpr std::size_t kAhead = 12;
+  std::vector<std::pair<VoxelKey, const VoxelData*>> todo;
+  todo.reserve(other.size());
+  other.for_each([&](VoxelKey key, const VoxelData& v) { todo.emplace_back(key, &v); });
+  if (shards_.size() == 1) shards_[0].reserve(shards_[0].size() + todo.size());
+  for (std::size_t r = 0; r < todo.size(); ++r) {
+    if (shards_.size() == 1 && r + kAhead < todo.size())
+      shards_[0].prefetch(todo[r + kAhead].first);
+    const VoxelKey key = todo[r].first;
+    const VoxelData& src = *todo[r].second;
     VoxelData& v = shards_[shard_of(key)][key];
     for (int a = 0; a < 3; ++a) {
       v.offset_sum[a] += src.offset_sum[a];
@@ -167,7 +215,7 @@ void VoxelMap::merge(const VoxelMap& other) {
     v.count += src.count;
     v.color_count += src.color_count;
     vote(v, src.label, src.label_votes);
-  });
+  }
   points_inserted_ += other.points_inserted_;
   points_dropped_ += other.points_dropped_;
 }
@@ -194,8 +242,7 @@ std::vector<std::pair<VoxelKey, const VoxelData*>> VoxelMap::sorted_voxels() con
   out.reserve(size());
   for (const Table& t : shards_)
     t.for_each([&](VoxelKey key, const VoxelData& v) { out.emplace_back(key, &v); });
-  std::sort(out.begin(), out.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return out;
 }
 
@@ -224,11 +271,20 @@ PointCloud VoxelMap::to_labelled_cloud(const std::map<std::int32_t, Rgb>& color_
 }
 
 Vec3 VoxelMap::centroid() const {
-  const auto voxels = sorted_voxels();  // sorted: the sum does not depend on the hash layout
-  if (voxels.empty()) return Vec3::Zero();
-  Vec3 sum = Vec3::Zero();
-  for (const auto& [key, v] : voxels) sum += mean_position(key, *v);
-  return sum / static_cast<double>(voxels.size());
+  // Summed in fixed point (0.1 µm) so that the sum is exact and does not depend on the visiting
+  // order (the hash layout); no sort needed.
+  constexpr double kUnit = 1e7;
+  std::int64_t sum[3] = {0, 0, 0};
+  std::size_t n = 0;
+  for_each([&](VoxelKey key, const VoxelData& v) {
+    const Vec3 p = mean_position(key, v);
+    for (int a = 0; a < 3; ++a) sum[a] += std::llround(p[a] * kUnit);
+    ++n;
+  });
+  if (n == 0) return Vec3::Zero();
+  return Vec3(static_cast<double>(sum[0]), static_cast<double>(sum[1]),
+              static_cast<double>(sum[2])) /
+         (kUnit * static_cast<double>(n));
 }
 
 std::size_t common_voxels(const VoxelMap& a, const VoxelMap& b) {

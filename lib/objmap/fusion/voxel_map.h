@@ -8,7 +8,8 @@
 
 // The dense map (paper §3.3): every back-projected point streamed into a voxel hash that keeps, per
 // voxel, the running mean position, mean colour, point count and an optional label (object id).
-// Memory grows with the mapped surface, not with the number of frames; frames are never concatenated.
+// Memory grows with the mapped surface, not with the number of frames; frames are never
+// concatenated.
 namespace objmap::fusion {
 
 using geometry::VoxelKey;
@@ -17,14 +18,14 @@ constexpr std::int32_t kNoLabel = -1;
 
 struct VoxelMapOptions {
   double voxel_m = 0.01;  // voxel edge; 1 cm as the paper's map
-  int threads = 1;        // insert() on this many threads (key-sharded); output identical for any count
-  void check() const;     // throws InputError naming the bad field
+  int threads = 1;  // insert() on this many threads (key-sharded); output identical for any count
+  void check() const;  // throws InputError naming the bad field
 };
 
-// What a voxel keeps. Positions are summed as offsets from the voxel's corner in voxel units (float,
-// each in [0, 1), so the sum keeps its precision); colours and counts as integers.
+// What a voxel keeps. Positions are summed as offsets from the voxel's corner in voxel units
+// (float, each in [0, 1), so the sum keeps its precision); colours and counts as integers.
 struct VoxelData {
-  float offset_sum[3] = {0.f, 0.f, 0.f};  // Σ (point − corner) / voxel_m
+  float offset_sum[3] = {0.f, 0.f, 0.f};   // Σ (point − corner) / voxel_m
   std::uint32_t color_sum[3] = {0, 0, 0};  // Σ r, g, b over the points that had a colour
   std::uint32_t count = 0;                 // points that fell in the voxel
   std::uint32_t color_count = 0;           // of those, points with a colour
@@ -38,12 +39,12 @@ class VoxelMap {
  public:
   explicit VoxelMap(const VoxelMapOptions& options = {});
 
-  // Adds the points (world frame). With `label` != kNoLabel the voxels also vote for that label: the
-  // label of a voxel is the streaming majority (Boyer-Moore) of the labels its points were inserted
-  // with — the true majority whenever one label has more than half of the labelled points, otherwise
-  // the last candidate standing. Each voxel sees its points in input order whatever `threads` is, so
-  // the map (and every export) is identical for any thread count. Points that are not finite or out
-  // of the key range (±10 km at 1 cm) are dropped and counted.
+  // Adds the points (world frame). With `label` != kNoLabel the voxels also vote for that label:
+  // the label of a voxel is the streaming majority (Boyer-Moore) of the labels its points were
+  // inserted with — the true majority whenever one label has more than half of the labelled points,
+  // otherwise the last candidate standing. Each voxel sees its points in input order whatever
+  // `threads` is, so the map (and every export) is identical for any thread count. Points that are
+  // not finite or out of the key range (±10 km at 1 cm) are dropped and counted.
   void insert(const PointCloud& points_in_world, std::int32_t label = kNoLabel);
 
   // Adds every voxel of `other` (same voxel size required): sums, counts; labels vote with the
@@ -54,14 +55,16 @@ class VoxelMap {
   void reserve(std::size_t voxels);
 
   double voxel_m() const { return voxel_m_; }
-  std::size_t size() const;                            // occupied voxels
+  std::size_t size() const;  // occupied voxels
   std::uint64_t points_inserted() const { return points_inserted_; }
   std::uint64_t points_dropped() const { return points_dropped_; }
-  std::size_t memory_bytes() const;                    // hash tables
+  std::size_t memory_bytes() const;  // hash tables
 
   const VoxelData* find(VoxelKey key) const;
   bool contains(VoxelKey key) const { return find(key) != nullptr; }
-  VoxelKey key_of(const Vec3f& point_in_world) const { return geometry::voxel_key(point_in_world, inv_voxel_m_); }
+  VoxelKey key_of(const Vec3f& point_in_world) const {
+    return geometry::voxel_key(point_in_world, inv_voxel_m_);
+  }
   Vec3 mean_position(VoxelKey key, const VoxelData& voxel) const;
   // Voxel-space bounds of the occupied voxels (min/max of ix, iy, iz); false when empty.
   bool key_bounds(Eigen::Vector3i& lo, Eigen::Vector3i& hi) const;

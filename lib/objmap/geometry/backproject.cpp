@@ -108,7 +108,8 @@ BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
   const std::uint32_t raw_min =
       std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::ceil(options.min_depth_m * f)));
   const double raw_max_d = std::floor(options.max_depth_m * f);
-  const std::uint32_t raw_max = raw_max_d >= 65535.0 ? 65535u : static_cast<std::uint32_t>(raw_max_d);
+  const std::uint32_t raw_max =
+      raw_max_d >= 65535.0 ? 65535u : static_cast<std::uint32_t>(raw_max_d);
   const float inv_factor = static_cast<float>(1.0 / f);
 
   // Eq 15: the rigid transform, in float (points are stored as float).

@@ -1,6 +1,6 @@
 #pragma once
-#include <opencv2/core.hpp>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "objmap/core/camera.h"
@@ -8,12 +8,14 @@
 #include "objmap/segmentation/types.h"
 
 // Back-projection of a depth image into the world (paper eqs 11-15):
-//   z = depth / depth_factor,  x = X(u, v) · z,  y = Y(u, v) · z,  point_in_world = world_from_cam · (x, y, z)
-// where (X, Y) are the undistorted normalised coordinates of pixel (u, v), computed once per camera in
-// a RayTable so that the per-pixel work is two multiplications and one rigid transform.
+//   z = depth / depth_factor,  x = X(u, v) · z,  y = Y(u, v) · z,  point_in_world = world_from_cam
+//   · (x, y, z)
+// where (X, Y) are the undistorted normalised coordinates of pixel (u, v), computed once per camera
+// in a RayTable so that the per-pixel work is two multiplications and one rigid transform.
 namespace objmap::geometry {
 
-// Per-pixel rays of a camera: x/z and y/z of pixel (u, v) at index v * width + u, distortion removed.
+// Per-pixel rays of a camera: x/z and y/z of pixel (u, v) at index v * width + u, distortion
+// removed.
 struct RayTable {
   int width = 0;
   int height = 0;
@@ -28,17 +30,19 @@ struct RayTable {
 RayTable make_ray_table(const Camera& camera);
 
 struct BackprojectOptions {
-  double min_depth_m = 0.1;   // pixels nearer than this are dropped (the paper uses 0.01; a config value)
-  double max_depth_m = 4.0;   // pixels farther than this are dropped (Kinect depth is poor beyond ~4 m)
-  int stride = 1;             // use every stride-th pixel in u and v (1 = every pixel)
+  double min_depth_m =
+      0.1;  // pixels nearer than this are dropped (the paper uses 0.01; a config value)
+  double max_depth_m =
+      4.0;         // pixels farther than this are dropped (Kinect depth is poor beyond ~4 m)
+  int stride = 1;  // use every stride-th pixel in u and v (1 = every pixel)
   bool pixel_indices = false;  // also return v * width + u of each point
-  void check() const;         // throws InputError naming the bad field
+  void check() const;          // throws InputError naming the bad field
 };
 
-// What to back-project: a CV_16UC1 depth image (value = depth_m · depth_factor, 0 = no depth), its pose,
-// and optionally the CV_8UC3 BGR image of the same size (colours), an instance mask (only pixels with
-// mask value != 0) and a region of interest (only pixels inside; e.g. a detection box, or the mask's
-// bounding box to skip the rest of the image).
+// What to back-project: a CV_16UC1 depth image (value = depth_m · depth_factor, 0 = no depth), its
+// pose, and optionally the CV_8UC3 BGR image of the same size (colours), an instance mask (only
+// pixels with mask value != 0) and a region of interest (only pixels inside; e.g. a detection box,
+// or the mask's bounding box to skip the rest of the image).
 struct DepthFrame {
   DepthFrame() = default;
   DepthFrame(const cv::Mat& depth_image, const Pose& world_from_cam_pose,
@@ -50,7 +54,7 @@ struct DepthFrame {
         mask(instance_mask),
         roi(region) {}
 
-  const cv::Mat* depth = nullptr;            // required, CV_16UC1, size of the ray table
+  const cv::Mat* depth = nullptr;  // required, CV_16UC1, size of the ray table
   Pose world_from_cam = Pose::Identity();
   const cv::Mat* bgr = nullptr;              // optional, CV_8UC3, same size
   const segmentation::Mask* mask = nullptr;  // optional, same size

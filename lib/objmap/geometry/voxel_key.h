@@ -38,11 +38,12 @@ inline std::int32_t fast_floor(float x) {
 }
 
 // Voxel coordinates of `point` scaled by 1 / voxel size (`inv_voxel_m`) and the point's position
-// inside its voxel in voxel units, each in [0, 1). False when the point is not finite or outside the
-// key range.
+// inside its voxel in voxel units, each in [0, 1). False when the point is not finite or outside
+// the key range.
 inline bool voxel_coords(const Vec3f& point, float inv_voxel_m, Eigen::Vector3i& ijk,
                          Eigen::Vector3f& offset) {
-  const float sx = point.x() * inv_voxel_m, sy = point.y() * inv_voxel_m, sz = point.z() * inv_voxel_m;
+  const float sx = point.x() * inv_voxel_m, sy = point.y() * inv_voxel_m,
+              sz = point.z() * inv_voxel_m;
   constexpr float lim = static_cast<float>(kVoxelCoordLimit);
   // Written so that NaN fails the test.
   if (!(sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim)) return false;
@@ -55,9 +56,11 @@ inline bool voxel_coords(const Vec3f& point, float inv_voxel_m, Eigen::Vector3i&
 // The key of the voxel holding `point` (metres) for 1 / voxel size `inv_voxel_m`, or kNoVoxel when
 // the point is not finite or outside the key range.
 inline VoxelKey voxel_key(const Vec3f& point, float inv_voxel_m) {
-  const float sx = point.x() * inv_voxel_m, sy = point.y() * inv_voxel_m, sz = point.z() * inv_voxel_m;
+  const float sx = point.x() * inv_voxel_m, sy = point.y() * inv_voxel_m,
+              sz = point.z() * inv_voxel_m;
   constexpr float lim = static_cast<float>(kVoxelCoordLimit);
-  if (!(sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim)) return kNoVoxel;
+  if (!(sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim))
+    return kNoVoxel;
   return pack_voxel(fast_floor(sx), fast_floor(sy), fast_floor(sz));
 }
 
@@ -141,6 +144,11 @@ class VoxelHashTable {
     return const_cast<Value*>(static_cast<const VoxelHashTable*>(this)->find(key));
   }
   bool contains(VoxelKey key) const { return find(key) != nullptr; }
+
+  // Hint: `key`'s home slot will be needed soon (hides the cache miss of a large table).
+  void prefetch(VoxelKey key) const {
+    if (!slots_.empty()) __builtin_prefetch(&slots_[index(key)], 1);
+  }
 
   // f(key, value) for every entry, in slot order.
   template <typename F>

@@ -79,7 +79,8 @@ std::string normalise_type(const std::string& t) {
 double read_binary(const char* p, const std::string& type) {
   std::uint64_t bits = 0;
   const int n = type_size(type);
-  for (int b = 0; b < n; ++b) bits |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[b])) << (8 * b);
+  for (int b = 0; b < n; ++b)
+    bits |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[b])) << (8 * b);
   if (type == "float") {
     const std::uint32_t b32 = static_cast<std::uint32_t>(bits);
     float f;
@@ -111,7 +112,8 @@ PointCloud read_ply(const fs::path& path) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     return true;
   };
-  if (!next_line() || line != "ply") throw InputError(where + ":1", "not a PLY file; expected 'ply'");
+  if (!next_line() || line != "ply")
+    throw InputError(where + ":1", "not a PLY file; expected 'ply'");
 
   std::string format;
   std::size_t vertices = 0;
@@ -128,7 +130,8 @@ PointCloud read_ply(const fs::path& path) {
     if (word == "format") {
       ls >> format;
       if (format != "binary_little_endian" && format != "ascii")
-        throw InputError(at, "format '" + format + "' not supported; expected binary_little_endian or ascii");
+        throw InputError(
+            at, "format '" + format + "' not supported; expected binary_little_endian or ascii");
     } else if (word == "element") {
       std::string name;
       std::size_t count = 0;
@@ -180,15 +183,14 @@ PointCloud read_ply(const fs::path& path) {
   PointCloud cloud;
   cloud.points.resize(vertices);
   if (colour) cloud.colors.resize(vertices);
-  auto to_byte = [](double v) {
-    return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v);
-  };
+  auto to_byte = [](double v) { return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v); };
   if (format == "binary_little_endian") {
     std::vector<char> body(vertices * stride);
     f.read(body.data(), static_cast<std::streamsize>(body.size()));
     if (static_cast<std::size_t>(f.gcount()) != body.size())
-      throw InputError(where, "file ends after " + std::to_string(f.gcount() / (stride ? stride : 1)) +
-                                  " of " + std::to_string(vertices) + " vertices (truncated)");
+      throw InputError(where, "file ends after " +
+                                  std::to_string(f.gcount() / (stride ? stride : 1)) + " of " +
+                                  std::to_string(vertices) + " vertices (truncated)");
     for (std::size_t i = 0; i < vertices; ++i) {
       const char* row = body.data() + i * stride;
       auto value = [&](int k) { return read_binary(row + offset[k], props[k].type); };
@@ -207,7 +209,8 @@ PointCloud read_ply(const fs::path& path) {
       if (!ls)
         throw InputError(where + ":" + std::to_string(line_no),
                          "expected " + std::to_string(props.size()) + " numbers per vertex");
-      cloud.points[i] = Vec3f(static_cast<float>(v[ix]), static_cast<float>(v[iy]), static_cast<float>(v[iz]));
+      cloud.points[i] =
+          Vec3f(static_cast<float>(v[ix]), static_cast<float>(v[iy]), static_cast<float>(v[iz]));
       if (colour) cloud.colors[i] = Rgb{to_byte(v[ir]), to_byte(v[ig]), to_byte(v[ib])};
     }
   }

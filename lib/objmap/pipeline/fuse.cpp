@@ -161,6 +161,14 @@ std::string file_safe(const std::string& name) {
   return s.empty() ? "object" : s;
 }
 
+// Where the instances of a keyframe come from: one canonical JSON file per frame (read lazily), or
+// a segmentation read whole (box files, PNG images, the paper's txt layout).
+struct SegmentationSource {
+  std::vector<std::pair<double, fs::path>> files;  // canonical JSON: (timestamp, file), sorted
+  segmentation::Segmentation whole;                // the other formats
+  std::vector<double> stamps;                      // frame timestamps, sorted
+};
+
 // What a worker hands back for one keyframe.
 struct FrameWork {
   fusion::VoxelMap dense;
@@ -319,10 +327,29 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   read.image_width = camera.width;
   read.image_height = camera.height;
   read.default_class = options.default_class;
-  const segmentation::Segmentation seg =
-      segmentation::read_segmentation(options.segmentation, read);
-  result.seg_format = seg.format;
-  require(!seg.frames.empty(), options.segmentation.string(),
+  read.check();
+  // Canonical JSON frames carry full-image masks: they are read by the workers, one keyframe at a
+  // time, so memory does not grow with the length of the sequence. Other formats are read whole.
+  result.seg_format = options.seg_format == "auto"
+                          ? segmentation::detect_format(options.segmentation)
+                          : options.seg_format;
+  SegmentationSource seg_source;
+  if (result.seg_format == "json") {
+    for (const auto& entry : fs::directory_iterator(options.segmentation)) {
+      const fs::path& file = entry.path();
+      double t = 0;
+      if (entry.is_regular_file() && file.extension() == ".json" &&
+          segmentation::parse_timestamp(file.stem().string(), t))
+        seg_source.files.emplace_back(t, file);
+    }
+    std::sort(seg_source.files.begin(), seg_source.files.end());
+    for (const auto& [t, file] : seg_source.files) seg_source.stamps.push_back(t);
+  } else {
+    read.format = result.seg_format;
+    seg_source.whole = segmentation::read_segmentation(options.segmentation, read);
+    for (const auto& frame : seg_source.whole.frames) seg_source.stamps.push_back(frame.timestamp);
+  }
+  require(!seg_source.stamps.empty(), options.segmentation.string(),
           "no segmentation frame; expected one file per rgb frame");
   result.times.push_back({"read inputs", seconds_since(t0)});
 
@@ -334,15 +361,16 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const auto& keyframes = result.keyframes.keyframes;
 
   // Each keyframe's segmentation frame: the one named by its rgb timestamp (within 1 ms).
-  std::vector<const segmentation::FrameSegmentation*> seg_of(keyframes.size(), nullptr);
+  std::vector<std::ptrdiff_t> seg_of(keyframes.size(), -1);
   std::size_t with_seg = 0;
   {
     std::size_t j = 0;
+    const auto& stamps = seg_source.stamps;
     for (std::size_t i = 0; i < keyframes.size(); ++i) {
       const double t = keyframes[i].timestamp;
-      while (j < seg.frames.size() && seg.frames[j].timestamp < t - 1e-3) ++j;
-      if (j < seg.frames.size() && std::abs(seg.frames[j].timestamp - t) <= 1e-3) {
-        seg_of[i] = &seg.frames[j];
+      while (j < stamps.size() && stamps[j] < t - 1e-3) ++j;
+      if (j < stamps.size() && std::abs(stamps[j] - t) <= 1e-3) {
+        seg_of[i] = static_cast<std::ptrdiff_t>(j);
         ++with_seg;
       }
     }
@@ -354,9 +382,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   result.times.push_back({"select keyframes", seconds_since(t0)});
 
   // 3. Back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead; this
-  // thread
-  //    merges their results strictly in keyframe order, so the maps do not depend on the thread
-  //    count.
+  //    thread merges their results strictly in keyframe order, so the maps do not depend on the
+  //    thread count.
   t0 = Clock::now();
   const geometry::RayTable rays = geometry::make_ray_table(camera);
   fusion::VoxelMapOptions dense_options;
@@ -369,8 +396,19 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   std::size_t next = 0;
   auto launch = [&](std::size_t i) {
     return std::async(std::launch::async, [&, i] {
+      // The keyframe's instances: read now (canonical JSON) or taken from the whole segmentation.
+      segmentation::FrameSegmentation lazy;
+      const segmentation::FrameSegmentation* seg_frame = nullptr;
+      if (seg_of[i] >= 0) {
+        if (seg_source.files.empty()) {
+          seg_frame = &seg_source.whole.frames[seg_of[i]];
+        } else {
+          lazy = segmentation::read_frame_json(seg_source.files[seg_of[i]].second, read);
+          seg_frame = &lazy;
+        }
+      }
       return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
-                              keyframes[i], static_cast<int>(i), seg_of[i]);
+                              keyframes[i], static_cast<int>(i), seg_frame);
     });
   };
   auto drain = [&] {
@@ -467,7 +505,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
        {{"path", options.trajectory.string()}, {"checksum", file_checksum(options.trajectory)}}},
       {"segmentation",
        {{"path", options.segmentation.string()},
-        {"format", seg.format},
+        {"format", result.seg_format},
         {"checksum", folder_checksum(options.segmentation)}}},
       {"camera", nlohmann::ordered_json::parse(io::camera_json(camera))},
       {"camera_reason", choice.reason}};

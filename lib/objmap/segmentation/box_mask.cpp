@@ -9,9 +9,6 @@
 #include <vector>
 
 #include "objmap/core/error.h"
-#ifdef BOXMASK_DEBUG
-#include <cstdio>
-#endif
 
 namespace objmap::segmentation {
 
@@ -32,10 +29,10 @@ void require_range(double value, double lo, double hi, const char* field, const 
 constexpr double kPi = 3.14159265358979323846;
 
 // Per-pixel flags of the box-local buffers.
-constexpr std::uint8_t kValid = 1;    // depth within [min_depth_m, max_depth_m]
-constexpr std::uint8_t kSupport = 2;  // on or beyond the support plane
-constexpr std::uint8_t kInMask = 4;   // grown region
-constexpr std::uint8_t kBand = 8;     // valid, not support, within the depth band
+constexpr std::uint8_t kValid = 1;     // depth within [min_depth_m, max_depth_m]
+constexpr std::uint8_t kSupport = 2;   // on or beyond the support plane
+constexpr std::uint8_t kInMask = 4;    // grown region
+constexpr std::uint8_t kBand = 8;      // valid, not support, within the depth band
 constexpr std::uint8_t kChecked = 16;  // refused once by the region growing
 constexpr std::uint8_t kSeed = 32;     // seed candidate: central, at the mode depth
 
@@ -45,9 +42,11 @@ struct Workspace {
   std::vector<std::uint8_t> flags;              // box-local flags
   std::vector<std::uint8_t> scratch, scratch2;  // morphology
   std::vector<std::int32_t> queue;              // region growing
-  std::vector<float> ray_x, ray_y;              // (u − cx)/fx per column, (v − cy)/fy per row
-  std::vector<float> weight_u, weight_v;        // centre weights per column / row
-  std::vector<double> hist, hist3;
+  std::vector<std::int32_t> seed_queue;
+  std::vector<std::pair<std::int32_t, double>> components;  // seed components: start, weight
+  std::vector<float> ray_x, ray_y;        // (u − cx)/fx per column, (v − cy)/fy per row
+  std::vector<float> weight_u, weight_v;  // centre weights per column / row
+  std::vector<double> hist, hist_z;       // depth histogram: weight, weighted depth sum
   std::vector<Eigen::Vector3f> samples;
   std::vector<std::uint8_t> sample_inlier;
 };
@@ -139,65 +138,52 @@ Plane fit_plane(const std::vector<Eigen::Vector3f>& pts, float inlier_m, int ite
 }
 
 // The object's depth: the nearest peak of the centre-weighted histogram (3-bin sums) holding at
-// least `min_share` of the largest peak, over the valid pixels without `exclude` flags. Returns the
-// weighted mean depth of the pixels in that peak's three bins, or 0 when there is none.
+// least `min_share` of the largest peak, over the valid pixels without `exclude` flags (`skip` > 0:
+// the next such peaks, farther away). Returns the weighted mean depth of the pixels in that peak's
+// three bins, or 0 when there is none.
 double near_mode(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin_m,
-                 double min_share, std::uint8_t exclude) {
-  auto& hist = ws.hist;
-  auto& hist3 = ws.hist3;
+                 double min_share, std::uint8_t exclude, int skip = 0) {
+  auto& hist = ws.hist;      // centre weight per bin
+  auto& hist_z = ws.hist_z;  // centre-weighted depth sum per bin
   hist.assign(static_cast<std::size_t>(bins), 0.0);
-  hist3.assign(static_cast<std::size_t>(bins), 0.0);
+  hist_z.assign(static_cast<std::size_t>(bins), 0.0);
   const float inv_bin = static_cast<float>(1.0 / bin_m);
   bool any = false;
   for (int y = 0; y < bh; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * bw;
-    const double wv = ws.weight_v[y];
+    const float wv = ws.weight_v[y];
     for (int x = 0; x < bw; ++x) {
       const std::uint8_t f = ws.flags[row + x];
       if (!(f & kValid) || (f & exclude)) continue;
-      const int b = std::min(bins - 1, static_cast<int>((ws.z_m[row + x] - z_lo) * inv_bin));
-      hist[b] += wv * ws.weight_u[x];
+      const float z = ws.z_m[row + x];
+      const int b = std::min(bins - 1, static_cast<int>((z - z_lo) * inv_bin));
+      const float w = wv * ws.weight_u[x];
+      hist[b] += w;
+      hist_z[b] += w * z;
       any = true;
     }
   }
   if (!any) return 0.0;
-  for (int b = 0; b < bins; ++b) {
-    hist3[b] = hist[b] + (b > 0 ? hist[b - 1] : 0.0) + (b + 1 < bins ? hist[b + 1] : 0.0);
-  }
+  const auto sum3 = [&](const std::vector<double>& h, int b) {
+    return h[b] + (b > 0 ? h[b - 1] : 0.0) + (b + 1 < bins ? h[b + 1] : 0.0);
+  };
   double largest = 0;
-  for (int b = 0; b < bins; ++b) largest = std::max(largest, hist3[b]);
-  int chosen = -1;
+  for (int b = 0; b < bins; ++b) largest = std::max(largest, sum3(hist, b));
   for (int b = 0; b < bins; ++b) {  // nearest first
-    const double left = b > 0 ? hist3[b - 1] : -1.0;
-    const double right = b + 1 < bins ? hist3[b + 1] : -1.0;
-    if (hist3[b] >= left && hist3[b] > right && hist3[b] >= min_share * largest && hist3[b] > 0) {
-      chosen = b;
-      break;
+    const double here = sum3(hist, b);
+    const double left = b > 0 ? sum3(hist, b - 1) : -1.0;
+    const double right = b + 1 < bins ? sum3(hist, b + 1) : -1.0;
+    if (here >= left && here > right && here >= min_share * largest && here > 0) {
+      if (skip-- > 0) continue;
+      return sum3(hist_z, b) / here;  // mean depth of the peak's three bins
     }
   }
-  if (chosen < 0) return 0.0;
-  // Mean depth of the peak's three bins (centre-weighted).
-  const float lo = z_lo + static_cast<float>((chosen - 1) * bin_m);
-  const float hi = z_lo + static_cast<float>((chosen + 2) * bin_m);
-  double sum_w = 0, sum_wz = 0;
-  for (int y = 0; y < bh; ++y) {
-    const std::size_t row = static_cast<std::size_t>(y) * bw;
-    const double wv = ws.weight_v[y];
-    for (int x = 0; x < bw; ++x) {
-      const std::uint8_t f = ws.flags[row + x];
-      const float z = ws.z_m[row + x];
-      if (!(f & kValid) || (f & exclude) || z < lo || z >= hi) continue;
-      const double w = wv * ws.weight_u[x];
-      sum_w += w;
-      sum_wz += w * z;
-    }
-  }
-  return sum_w > 0 ? sum_wz / sum_w : 0.0;
+  return 0.0;
 }
 
-// Separable square dilation (grow = true) or erosion of `bits` (0/1) in place, radius r. Outside the
-// box counts as the neutral element (the border is neither grown into nor eroded from). Inner loops
-// run along rows so that they vectorise.
+// Separable square dilation (grow = true) or erosion of `bits` (0/1) in place, radius r. Outside
+// the box counts as the neutral element (the border is neither grown into nor eroded from). Inner
+// loops run along rows so that they vectorise.
 void morph(std::vector<std::uint8_t>& bits, std::vector<std::uint8_t>& tmp, int bw, int bh, int r,
            bool grow) {
   tmp = bits;
@@ -240,6 +226,8 @@ void BoxMaskOptions::check() const {
           "gives more than 100000 histogram bins over [min_depth_m, max_depth_m]");
   require_range(center_sigma_fraction, 1e-3, 1e3, "center_sigma_fraction", "must be > 0");
   require_range(near_mode_min_share, 0.0, 1.0, "near_mode_min_share", "must be in [0, 1]");
+  require_range(seed_component_min_share, 0.0, 1.0, "seed_component_min_share",
+                "must be in [0, 1]");
   require_range(seed_tolerance_bins, 0.5, 100.0, "seed_tolerance_bins", "must be in [0.5, 100]");
   require(
       std::isfinite(seed_center_fraction) && seed_center_fraction > 0 && seed_center_fraction <= 1,
@@ -273,13 +261,17 @@ void BoxMaskOptions::check() const {
                 "must be in [0, 90] degrees");
   require(support_max_planes >= 1 && support_max_planes <= 10, "BoxMaskOptions.support_max_planes",
           "must be in [1, 10], got " + std::to_string(support_max_planes));
-  require_range(support_min_object_height_m, 0.0, 10.0, "support_min_object_height_m",
-                "must be >= 0");
+  require_range(support_min_above_share, 0.0, 1.0, "support_min_above_share", "must be in [0, 1]");
+  require_range(support_max_beyond_share, 0.0, 1.0, "support_max_beyond_share",
+                "must be in [0, 1]");
   require(close_radius_px >= 0 && close_radius_px <= 50, "BoxMaskOptions.close_radius_px",
           "must be in [0, 50], got " + std::to_string(close_radius_px));
   require(min_pixels >= 0, "BoxMaskOptions.min_pixels",
           "must be >= 0, got " + std::to_string(min_pixels));
   require_range(min_box_fraction, 0.0, 1.0, "min_box_fraction", "must be in [0, 1]");
+  require(depth_candidates >= 1 && depth_candidates <= 10, "BoxMaskOptions.depth_candidates",
+          "must be in [1, 10], got " + std::to_string(depth_candidates));
+  require_range(max_border_leak, 0.0, 1.0, "max_border_leak", "must be in [0, 1]");
 }
 
 const char* to_string(BoxMaskStatus status) {
@@ -390,11 +382,11 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
   }
   const int bins = std::max(1, static_cast<int>((z_hi - z_lo) / options.bin_m) + 1);
 
-  // 2–3. Support plane and the object's depth. Planes are fitted to the box's bottom rows and the
-  // rows just below it; a plane is accepted when it is well supported, leaves a fair share of the box
-  // in front of it, and the object found there (the near mode without the plane's pixels) stands on
-  // the camera's side of it. A rejected plane (an occluder's or the object's own face) takes its
-  // samples with it and the next plane is tried.
+  // 2–3. The object's depth and the support plane. Planes are fitted to the box's bottom rows and
+  // the rows just below it; a plane is accepted when it is well supported, leaves a fair share of
+  // the box, and the object found without it (mode0) stands on it, on the camera's side. A rejected
+  // plane (an occluder's or the object's own face) gives up its samples and the next one is tried.
+  // With a plane, the object's depth is taken again without the plane's pixels.
   const float tol = static_cast<float>(options.seed_tolerance_bins * options.bin_m);
   const float thr = static_cast<float>(options.support_inlier_m);
   struct Window {
@@ -433,12 +425,13 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
       }
     }
     for (int attempt = 0; attempt < options.support_max_planes && !have_plane; ++attempt) {
-      const Plane plane = fit_plane(ws.samples, thr, options.support_ransac_iterations,
-                                    ws.sample_inlier);
-      const double needed = std::max<double>(
-          options.support_min_inliers, options.support_min_inlier_share * ws.samples.size());
+      const Plane plane =
+          fit_plane(ws.samples, thr, options.support_ransac_iterations, ws.sample_inlier);
+      const double needed = std::max<double>(options.support_min_inliers,
+                                             options.support_min_inlier_share * ws.samples.size());
       if (!plane.valid || static_cast<double>(plane.inliers) < needed) break;
-      // Set aside the box pixels on the plane or beyond it (the object stands on the camera's side).
+      // Set aside the box pixels on the plane or beyond it (the object stands on the camera's
+      // side).
       std::size_t removed = 0;
       for (int y = 0; y < bh; ++y) {
         const std::size_t row = static_cast<std::size_t>(y) * bw;
@@ -460,10 +453,8 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
       // (mode0's central pixels) must stand on the camera's side of it: an occluder's face or the
       // object's own face has the object behind it or on it.
       bool ok = removed * 10 <= result.valid_pixels * 9;
-      double height_m = 0;
       if (ok) {
-        std::size_t on_plane = 0, count = 0;
-        double sum = 0;
+        std::size_t above = 0, beyond = 0, count = 0;
         for (int pass = 0; pass < 2 && count == 0; ++pass) {
           const Window win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
           for (int y = win.y0; y < win.y1; ++y) {
@@ -472,29 +463,22 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
             for (int x = win.x0; x < win.x1; ++x) {
               const float z = ws.z_m[row + x];
               if (!(ws.flags[row + x] & kValid) || std::abs(z - mode0) > tol) continue;
-              sum += z * (plane.n.x() * ws.ray_x[u0 + x] + plane.n.y() * ry + plane.n.z()) +
-                     plane.d;
-              on_plane += (ws.flags[row + x] & kSupport) ? 1 : 0;
+              const float dist =
+                  z * (plane.n.x() * ws.ray_x[u0 + x] + plane.n.y() * ry + plane.n.z()) + plane.d;
+              above += dist > thr;
+              beyond += dist < -thr;
               ++count;
             }
           }
         }
-        height_m = count ? sum / count : 0.0;
-        ok = count > 0 && on_plane * 5 <= count &&
-             height_m >= options.support_min_object_height_m;
+        ok = count > 0 && static_cast<double>(above) >= options.support_min_above_share * count &&
+             static_cast<double>(beyond) <= options.support_max_beyond_share * count;
         if (ok) {
           mode = near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share,
                            kSupport);
           ok = mode > 0;
         }
       }
-#ifdef BOXMASK_DEBUG
-      fprintf(stderr,
-              "plane %d samples %zu inliers %zu removed %zu of %zu n %.2f %.2f %.2f d %.3f mode "
-              "%.3f height %.3f ok %d\n",
-              attempt, ws.samples.size(), plane.inliers, removed, result.valid_pixels,
-              plane.n.x(), plane.n.y(), plane.n.z(), plane.d, mode, height_m, ok);
-#endif
       if (ok) {
         have_plane = true;
         result.support_plane_removed = true;
@@ -505,7 +489,8 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
         // Drop this plane's samples and try the next one.
         std::size_t kept = 0;
         for (std::size_t i = 0; i < ws.samples.size(); ++i) {
-          if (std::abs(plane.n.dot(ws.samples[i]) + plane.d) > thr) ws.samples[kept++] = ws.samples[i];
+          if (std::abs(plane.n.dot(ws.samples[i]) + plane.d) > thr)
+            ws.samples[kept++] = ws.samples[i];
         }
         ws.samples.resize(kept);
       }
@@ -515,114 +500,15 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     }
   }
   if (!have_plane) mode = mode0;
-  result.mode_depth_m = mode;
 
-  // Depth band from the box's metric size at the mode depth.
-  const double metric_size = std::max(box.w * mode / camera.fx, box.h * mode / camera.fy);
-  const double band = std::clamp(options.band_size_factor * metric_size, options.band_min_m,
-                                 std::max(options.band_min_m, options.band_max_m));
-  result.band_half_width_m = band;
-  const float band_lo = static_cast<float>(mode - band * options.band_near_fraction);
-  const float band_hi = static_cast<float>(mode + band);
-  for (std::size_t i = 0; i < area; ++i) {
-    const std::uint8_t f = ws.flags[i];
-    if ((f & kValid) && !(f & kSupport) && ws.z_m[i] >= band_lo && ws.z_m[i] <= band_hi) {
-      ws.flags[i] |= kBand;
-    }
-  }
-
-  // 4. Seeds: central pixels at the mode depth (the whole box when the centre has none), and of
-  // those only the smooth-connected component with the most centre weight: an occluder's surface
-  // that crosses the mode depth elsewhere in the centre is not seeded.
-  const float slope_per_m = static_cast<float>(
-      std::tan(options.smooth_max_slope_deg * kPi / 180) * 2 / (camera.fx + camera.fy));
+  // 4. Region growing from the object's depth (a function of the candidate depth: see below).
+  const float slope_per_m = static_cast<float>(std::tan(options.smooth_max_slope_deg * kPi / 180) *
+                                               2 / (camera.fx + camera.fy));
   const float noise_per_m2 = static_cast<float>(options.smooth_noise_m_per_m2);
   const auto step_at = [&](float z) { return z * (slope_per_m + noise_per_m2 * z); };
   const int n_neigh = options.connectivity;
   static constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
   static constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
-  ws.queue.clear();
-  ws.queue.reserve(area);
-  std::size_t candidates = 0;
-  Window win{};
-  for (int pass = 0; pass < 2 && candidates == 0; ++pass) {
-    win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
-    for (int y = win.y0; y < win.y1; ++y) {
-      for (int x = win.x0; x < win.x1; ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * bw + x;
-        if ((ws.flags[i] & kBand) && std::abs(ws.z_m[i] - static_cast<float>(mode)) <= tol) {
-          ws.flags[i] |= kSeed;
-          ++candidates;
-        }
-      }
-    }
-  }
-  {
-    // Components of the candidates (flag kInMask marks "visited" meanwhile).
-    double best_weight = -1;
-    std::int32_t best_start = -1;
-    for (int y = win.y0; y < win.y1; ++y) {
-      for (int x = win.x0; x < win.x1; ++x) {
-        const std::int32_t start = y * bw + x;
-        if (!(ws.flags[start] & kSeed) || (ws.flags[start] & kInMask)) continue;
-        ws.queue.clear();
-        ws.queue.push_back(start);
-        ws.flags[start] |= kInMask;
-        double weight = 0;
-        for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-          const std::int32_t i = ws.queue[head];
-          const int xi = i % bw, yi = i / bw;
-          weight += static_cast<double>(ws.weight_u[xi]) * ws.weight_v[yi];
-          const float z = ws.z_m[i];
-          const float step = step_at(z);
-          for (int k = 0; k < n_neigh; ++k) {
-            const int xx = xi + kDx[k], yy = yi + kDy[k];
-            if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
-            const std::int32_t j = yy * bw + xx;
-            const std::uint8_t f = ws.flags[j];
-            if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
-            ws.flags[j] = f | kInMask;
-            ws.queue.push_back(j);
-          }
-        }
-        if (weight > best_weight) {
-          best_weight = weight;
-          best_start = start;
-        }
-      }
-    }
-    for (int y = win.y0; y < win.y1; ++y) {
-      for (int x = win.x0; x < win.x1; ++x) {
-        ws.flags[static_cast<std::size_t>(y) * bw + x] &= static_cast<std::uint8_t>(~kInMask);
-      }
-    }
-    // Seed the best component again; the growing below takes it from there.
-    ws.queue.clear();
-    if (best_start >= 0) {
-      ws.queue.push_back(best_start);
-      ws.flags[best_start] |= kInMask;
-    }
-    std::size_t seeds = 0;
-    for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-      const std::int32_t i = ws.queue[head];
-      ++seeds;
-      const int xi = i % bw, yi = i / bw;
-      const float z = ws.z_m[i];
-      const float step = step_at(z);
-      for (int k = 0; k < n_neigh; ++k) {
-        const int xx = xi + kDx[k], yy = yi + kDy[k];
-        if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
-        const std::int32_t j = yy * bw + xx;
-        const std::uint8_t f = ws.flags[j];
-        if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
-        ws.flags[j] = f | kInMask;
-        ws.queue.push_back(j);
-      }
-    }
-    result.seed_pixels = seeds;
-  }
-
-  // Region growing across smooth depth inside the band.
   // Support pixels may be taken back (see below) when they lie on the plane, not beyond it, and
   // their normal (3D central differences over ±2 px) is off the plane's by the reclaim angle.
   const bool reclaim = have_plane && options.support_reclaim_angle_deg < 90.0;
@@ -646,36 +532,188 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     if (!(ws.flags[l] & ws.flags[r] & ws.flags[u] & ws.flags[d] & kValid)) return false;
     if (std::abs(ws.z_m[l] + ws.z_m[r] - 2 * z) > tol) return false;
     if (std::abs(ws.z_m[u] + ws.z_m[d] - 2 * z) > tol) return false;
-    const Eigen::Vector3f n = (point(x + k, y) - point(x - k, y)).cross(point(x, y + k) - point(x, y - k));
+    const Eigen::Vector3f n =
+        (point(x + k, y) - point(x - k, y)).cross(point(x, y + k) - point(x, y - k));
     const float len = n.norm();
     return len > 0 && std::abs(n.dot(plane_n)) < max_cos * len;
   };
-  for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-    const std::int32_t i = ws.queue[head];
-    const int x = i % bw, y = i / bw;
-    const float z = ws.z_m[i];
-    const float step = step_at(z);
-    for (int k = 0; k < n_neigh; ++k) {
-      const int xx = x + kDx[k], yy = y + kDy[k];
-      if (xx < 0 || yy < 0 || xx >= bw || yy >= bh) continue;
-      const std::int32_t j = yy * bw + xx;
-      const std::uint8_t f = ws.flags[j];
-      if ((f & kInMask) || !(f & kValid) || std::abs(ws.z_m[j] - z) > step) continue;
-      if (!(f & kBand)) {
-        // A pixel within the plane's inlier distance joins when its surface is not the plane's:
-        // the object's lowest rows, not the table.
-        if (!reclaim || (f & kChecked) || !(f & kSupport) || ws.z_m[j] < band_lo ||
-            ws.z_m[j] > band_hi || !off_plane(xx, yy)) {
-          ws.flags[j] = f | kChecked;
-          continue;
+  // Does the surface at box pixel i continue smoothly to image pixel (u, v) outside the box?
+  const auto continues = [&](std::size_t i, int u, int v) {
+    const float z_out = depth_at(u, v);
+    if (z_out <= 0 || std::abs(z_out - ws.z_m[i]) > step_at(ws.z_m[i])) return false;
+    if (!have_plane) return true;
+    const Eigen::Vector3f p(ws.ray_x[u] * z_out, ws.ray_y[v] * z_out, z_out);
+    return plane_n.dot(p) + plane_d >= thr;  // the table outside the box does not count
+  };
+
+  struct Grown {
+    std::size_t pixels = 0, seeds = 0, touching = 0, continuing = 0;
+    double band = 0;
+    // Share of the region's pixels on the box border whose surface goes on outside the box.
+    double leak() const { return touching ? static_cast<double>(continuing) / touching : 0.0; }
+  };
+  float band_lo = 0, band_hi = 0;
+  const auto grow = [&](double mode_m) {
+    Grown g;
+    constexpr std::uint8_t kPerMode = kBand | kInMask | kChecked | kSeed;
+    // Depth band from the box's metric size at the mode depth.
+    const double metric_size = std::max(box.w * mode_m / camera.fx, box.h * mode_m / camera.fy);
+    g.band = std::clamp(options.band_size_factor * metric_size, options.band_min_m,
+                        std::max(options.band_min_m, options.band_max_m));
+    band_lo = static_cast<float>(mode_m - g.band * options.band_near_fraction);
+    band_hi = static_cast<float>(mode_m + g.band);
+    for (std::size_t i = 0; i < area; ++i) {
+      std::uint8_t f = ws.flags[i] & static_cast<std::uint8_t>(~kPerMode);
+      if ((f & kValid) && !(f & kSupport) && ws.z_m[i] >= band_lo && ws.z_m[i] <= band_hi) {
+        f |= kBand;
+      }
+      ws.flags[i] = f;
+    }
+    // Seeds: central pixels at the mode depth (the whole box when the centre has none), and of
+    // those only the smooth-connected component with the most centre weight: an occluder's
+    // surface that crosses the mode depth elsewhere in the centre is not seeded.
+    ws.queue.clear();
+    std::size_t candidates = 0;
+    Window win{};
+    for (int pass = 0; pass < 2 && candidates == 0; ++pass) {
+      win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
+      for (int y = win.y0; y < win.y1; ++y) {
+        for (int x = win.x0; x < win.x1; ++x) {
+          const std::size_t i = static_cast<std::size_t>(y) * bw + x;
+          if ((ws.flags[i] & kBand) && std::abs(ws.z_m[i] - static_cast<float>(mode_m)) <= tol) {
+            ws.flags[i] |= kSeed;
+            ++candidates;
+          }
         }
       }
-      ws.flags[j] = f | kInMask;
-      ws.queue.push_back(j);
     }
-  }
+    // Flood one component of the seed candidates from `start`; returns its centre weight.
+    const auto flood_seeds = [&](std::int32_t start) {
+      ws.queue.clear();
+      ws.queue.push_back(start);
+      ws.flags[start] |= kInMask;
+      double weight = 0;
+      for (std::size_t head = 0; head < ws.queue.size(); ++head) {
+        const std::int32_t i = ws.queue[head];
+        const int xi = i % bw, yi = i / bw;
+        weight += static_cast<double>(ws.weight_u[xi]) * ws.weight_v[yi];
+        const float z = ws.z_m[i];
+        const float step = step_at(z);
+        for (int k = 0; k < n_neigh; ++k) {
+          const int xx = xi + kDx[k], yy = yi + kDy[k];
+          if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
+          const std::int32_t j = yy * bw + xx;
+          const std::uint8_t f = ws.flags[j];
+          if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
+          ws.flags[j] = f | kInMask;
+          ws.queue.push_back(j);
+        }
+      }
+      return weight;
+    };
+    // Components of the candidates and their centre weights (kInMask marks "visited" meanwhile).
+    auto& starts = ws.components;
+    starts.clear();
+    double best_weight = 0;
+    for (int y = win.y0; y < win.y1; ++y) {
+      for (int x = win.x0; x < win.x1; ++x) {
+        const std::int32_t start = y * bw + x;
+        if (!(ws.flags[start] & kSeed) || (ws.flags[start] & kInMask)) continue;
+        const double weight = flood_seeds(start);
+        starts.emplace_back(start, weight);
+        best_weight = std::max(best_weight, weight);
+      }
+    }
+    for (int y = win.y0; y < win.y1; ++y) {
+      for (int x = win.x0; x < win.x1; ++x) {
+        ws.flags[static_cast<std::size_t>(y) * bw + x] &= static_cast<std::uint8_t>(~kInMask);
+      }
+    }
+    // The seeds: the components holding at least seed_component_min_share of the best one's
+    // weight (an object cut in two by a thin occluder keeps both halves; specks do not count).
+    ws.seed_queue.clear();
+    for (const auto& [start, weight] : starts) {
+      if (weight < options.seed_component_min_share * best_weight) continue;
+      flood_seeds(start);
+      ws.seed_queue.insert(ws.seed_queue.end(), ws.queue.begin(), ws.queue.end());
+    }
+    ws.queue.swap(ws.seed_queue);
+    g.seeds = ws.queue.size();
 
-  // 5. Closing, restricted to pixels that may belong to the object (no depth, or in the band).
+    // Region growing across smooth depth inside the band.
+    for (std::size_t head = 0; head < ws.queue.size(); ++head) {
+      const std::int32_t i = ws.queue[head];
+      const int x = i % bw, y = i / bw;
+      const float z = ws.z_m[i];
+      const float step = step_at(z);
+      for (int k = 0; k < n_neigh; ++k) {
+        const int xx = x + kDx[k], yy = y + kDy[k];
+        if (xx < 0 || yy < 0 || xx >= bw || yy >= bh) continue;
+        const std::int32_t j = yy * bw + xx;
+        const std::uint8_t f = ws.flags[j];
+        if ((f & kInMask) || !(f & kValid) || std::abs(ws.z_m[j] - z) > step) continue;
+        if (!(f & kBand)) {
+          // A pixel within the plane's inlier distance joins when its surface is not the plane's:
+          // the object's lowest rows, not the table.
+          if (!reclaim || (f & kChecked) || !(f & kSupport) || ws.z_m[j] < band_lo ||
+              ws.z_m[j] > band_hi || !off_plane(xx, yy)) {
+            ws.flags[j] = f | kChecked;
+            continue;
+          }
+        }
+        ws.flags[j] = f | kInMask;
+        ws.queue.push_back(j);
+      }
+    }
+    g.pixels = ws.queue.size();
+
+    // Border leak: the region's pixels on each box side that lies inside the image, and those whose
+    // surface continues just outside (an occluder or background cut by the box goes on; the object
+    // of a fitting box ends at it).
+    const auto border = [&](int x, int y, int u, int v) {
+      const std::size_t i = static_cast<std::size_t>(y) * bw + x;
+      if (!(ws.flags[i] & kInMask)) return;
+      ++g.touching;
+      g.continuing += continues(i, u, v) ? 1 : 0;
+    };
+    for (int y = 0; y < bh; ++y) {
+      if (u0 > 0) border(0, y, u0 - 1, v0 + y);
+      if (u1 < width) border(bw - 1, y, u1, v0 + y);
+    }
+    for (int x = 0; x < bw; ++x) {
+      if (v0 > 0) border(x, 0, u0 + x, v0 - 1);
+      if (v1 < height) border(x, bh - 1, u0 + x, v1);
+    }
+    return g;
+  };
+
+  // 5. Occluders: the nearest candidate depth whose region stays inside the box wins; an occluder
+  // in front of the object (a table edge, a monitor's side) runs on beyond the box and gives way to
+  // the next candidate farther away. When every candidate leaks, the nearest is kept.
+  const std::uint8_t exclude = have_plane ? kSupport : 0;
+  Grown grown = grow(mode);
+  if (grown.leak() > options.max_border_leak) {
+    const double first_mode = mode;
+    bool found = false;
+    for (int k = 1; k < options.depth_candidates && !found; ++k) {
+      const double next =
+          near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share, exclude, k);
+      if (next <= 0) break;
+      const Grown g = grow(next);
+      if (g.pixels > 0 && g.leak() <= options.max_border_leak) {
+        grown = g;
+        mode = next;
+        found = true;
+      }
+    }
+    if (!found && options.depth_candidates > 1) grown = grow(first_mode);
+  }
+  result.mode_depth_m = mode;
+  result.band_half_width_m = grown.band;
+  result.seed_pixels = grown.seeds;
+  result.border_leak = grown.leak();
+
+  // 6. Closing, restricted to pixels that may belong to the object (no depth, or in the band).
   auto& bits = ws.scratch;
   bits.resize(area);
   for (std::size_t i = 0; i < area; ++i) bits[i] = (ws.flags[i] & kInMask) ? 1 : 0;

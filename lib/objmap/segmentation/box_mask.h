@@ -10,23 +10,29 @@
 // depth surface, without the background behind the object and without the table/floor it stands on.
 //
 //   1. valid depths inside the (clipped) box;
-//   2. the supporting surface: a plane fitted (deterministic RANSAC) to the box's bottom rows and
-//   the
-//      rows just below the box; its inliers inside the box are set aside (they would also bridge
-//      the object to the table during region growing);
-//   3. the object's depth: a histogram of the remaining depths, weighted toward the box centre; the
-//      NEAREST peak holding a good share of the largest peak wins (the object is in front of what
-//      is behind it). The plane is kept only when that depth lies on the camera's side of it (a
-//      plane fitted to the object's own front face lies behind the rest of the object and is
-//      dropped);
-//   4. seeds = central pixels at that depth; region growing inside the box across smooth depth
-//      (|Δz| below a step proportional to z) within a depth band around the mode sized from the
-//      box's metric size;
-//   5. optional morphological closing; a mask below the minimum area is returned empty.
+//   2. the object's depth: a histogram of the depths, weighted toward the box centre; the NEAREST
+//      peak holding a good share of the largest peak wins (the object is in front of what is behind
+//      it);
+//   3. the supporting surface: a plane fitted (deterministic RANSAC) to the box's bottom rows and
+//      the rows just below the box. It is accepted when well supported and when the object of step
+//      2 stands on it (its central pixels above the plane, not on it: the object's own face; not
+//      behind it: an occluder's face); otherwise its samples are dropped and the next plane is
+//      tried. Box pixels on or beyond the accepted plane are set aside (they would bridge object
+//      and table) and the object's depth is taken again without them;
+//   4. seeds: the central pixels at that depth, the smooth-connected components of them with a
+//      good share of the heaviest one's centre weight; region growing (4-connected) across smooth
+//      depth (|Δz| below the depth change of a steep surface at that z, plus sensor noise) within
+//      a depth band around the mode sized from the box's metric size. Plane pixels whose local
+//      normal is off the plane's (the object's lowest centimetre) are taken back while growing;
+//   5. occluders: when the region runs on beyond the box on most of its border pixels (an
+//      occluder or background cut by the box), the next histogram peak farther away is tried;
+//   6. a 3×3 morphological closing; a mask below the minimum area is returned empty.
 //
-// Cost: O(box area) with buffers reused per thread (no allocation per pixel); about 0.1–1 ms for a
-// typical detection box (see docs). Pixel rays use the pinhole model (fx, fy, cx, cy); lens
-// distortion is neglected, which only bends the support plane slightly near the image border.
+// Cost: O(box area) with buffers reused per thread (no allocation per pixel, a full-image mask per
+// call): 0.7–0.9 ms CPU for a 152×133 box, 1–2 ms for the 170×190 YCB boxes, measured on the
+// shared 2-core build machine (see docs/_parts/boxmask.md). Pixel rays use the pinhole model (fx,
+// fy, cx, cy); lens distortion is neglected, which only bends the support plane slightly near the
+// image border.
 namespace objmap::segmentation {
 
 struct BoxMaskOptions {
@@ -51,14 +57,18 @@ struct BoxMaskOptions {
   // box (this fraction of its width and height). When the centre has none, the whole box is used.
   double seed_tolerance_bins = 1.5;
   double seed_center_fraction = 0.5;
+  // The seed pixels form smooth-connected components; those with at least this share of the
+  // centre weight of the heaviest one seed the growing (an object cut in two by a thin occluder
+  // keeps both halves; a few pixels of another surface crossing the mode depth do not count).
+  double seed_component_min_share = 0.6;
 
   // Region growing: neighbours p, q join when |z_p − z_q| ≤ step(z_p) = tan(smooth_max_slope_deg) ·
-  // z/f + smooth_noise_m_per_m2 · z², f = (fx + fy)/2. The first term is the depth change per pixel of
-  // a surface slanted by that angle (its footprint z/f grows with z); steeper "surfaces" are depth
-  // edges, including the ramps of mixed pixels that a registered Kinect/Xtion depth image draws
-  // between an occluder and what is behind it. The second term is the sensor's depth quantisation
-  // (Kinect v1: ~3 mm at 1 m, growing with z²; 5 mm leaves room for noise). E.g. fr3 at 1 m: 15.6 mm;
-  // at 2 m: 41 mm.
+  // z/f + smooth_noise_m_per_m2 · z², f = (fx + fy)/2. The first term is the depth change per pixel
+  // of a surface slanted by that angle (its footprint z/f grows with z); steeper "surfaces" are
+  // depth edges, including the ramps of mixed pixels that a registered Kinect/Xtion depth image
+  // draws between an occluder and what is behind it. The second term is the sensor's depth
+  // quantisation (Kinect v1: ~3 mm at 1 m, growing with z²; 5 mm leaves room for noise). E.g. fr3
+  // at 1 m: 15.6 mm; at 2 m: 41 mm.
   double smooth_max_slope_deg = 80.0;
   double smooth_noise_m_per_m2 = 0.005;
   int connectivity = 4;  // 4 or 8; 4 leaks less through single diagonal pixels
@@ -85,13 +95,27 @@ struct BoxMaskOptions {
   // Planes tried in turn: a rejected plane (an occluder's or the object's own face in the bottom
   // rows) gives up its samples and the next one is fitted to the rest.
   int support_max_planes = 3;
-  // The plane is kept only when the object's seeds lie at least this far on the camera's side of
-  // it.
-  double support_min_object_height_m = 0.015;
+  // The plane is kept only when the object found without it (the central pixels at the first near
+  // mode) stands on it: at least this share of them more than support_inlier_m on the camera's side
+  // (a plane fitted to the object's own face has them on it; a flat object such as a keyboard has
+  // the table at the same depth in the centre, hence not more) ...
+  double support_min_above_share = 0.3;
+  // ... and at most this share beyond it (a plane fitted to an occluder's face has the object
+  // behind it).
+  double support_max_beyond_share = 0.2;
   // Pixels within support_inlier_m of the plane are taken back into the mask (while growing) when
   // their surface normal is more than this angle off the plane's normal: the object's lowest
   // centimetre, not the table. 90 = never.
   double support_reclaim_angle_deg = 45.0;
+
+  // Occluders: a region whose surface runs on beyond the box on more than max_border_leak of its
+  // box-border pixels (box sides inside the image; the support plane outside does not count) is an
+  // occluder or background cut by the box, not the object the box was drawn around; the next
+  // histogram peak farther away is tried, up to depth_candidates in all. When all leak, the
+  // nearest is kept. A fitting box ends where the object ends (little leak); a box cut through the
+  // object leaks for every candidate and keeps the nearest.
+  int depth_candidates = 3;
+  double max_border_leak = 0.5;
 
   // Clean-up: morphological closing with a (2r+1)² square inside the box, restricted to valid depth
   // within the band (fills one-pixel cracks of noisy depth); 0 = none.
@@ -127,7 +151,8 @@ struct BoxMaskResult {
   std::size_t support_inliers = 0;         // plane inliers among the plane samples (0 = no plane)
   std::size_t support_pixels_removed = 0;  // box pixels set aside as plane inliers
   Eigen::Vector4d support_plane_in_cam = Eigen::Vector4d::Zero();  // n·X + d = 0, |n| = 1, d > 0
-  double band_half_width_m = 0;                                    // the depth band around the mode
+  double band_half_width_m = 0;  // far half-width of the band (near: × band_near_fraction)
+  double border_leak = 0;        // share of the region's box-border pixels that go on outside
 };
 
 // depth: CV_16UC1, metres = value / camera.depth_factor, 0 = no depth. camera: fx, fy, cx, cy for

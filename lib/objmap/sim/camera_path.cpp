@@ -1,10 +1,12 @@
 #include "objmap/sim/camera_path.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "objmap/core/error.h"
 #include "objmap/sim/random.h"
+#include "objmap/sim/text.h"
 
 namespace objmap::sim {
 
@@ -16,26 +18,26 @@ bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
 
 void CameraPathOptions::check() const {
   require(std::isfinite(radius_m) && radius_m > 0.0, "CameraPathOptions.radius_m",
-          "must be > 0, got " + std::to_string(radius_m));
+          "must be > 0, got " + num(radius_m));
   require(std::isfinite(height_m) && std::isfinite(look_at_height_m) &&
-              std::isfinite(start_angle_deg) && std::isfinite(sweep_deg) &&
+              std::isfinite(start_angle_deg) && std::isfinite(speed_deg_per_s) &&
               orbit_center_world.allFinite(),
           "CameraPathOptions", "heights, angles and the orbit centre must be finite");
   require(finite_nonneg(jitter_translation_m), "CameraPathOptions.jitter_translation_m",
-          "must be >= 0, got " + std::to_string(jitter_translation_m));
+          "must be >= 0, got " + num(jitter_translation_m));
   require(finite_nonneg(jitter_rotation_deg), "CameraPathOptions.jitter_rotation_deg",
-          "must be >= 0, got " + std::to_string(jitter_rotation_deg));
+          "must be >= 0, got " + num(jitter_rotation_deg));
 }
 
 void DriftOptions::check() const {
   require(finite_nonneg(translation_fraction), "--drift",
-          "translation drift fraction must be >= 0, got " + std::to_string(translation_fraction));
+          "translation drift fraction must be >= 0, got " + num(translation_fraction));
   require(finite_nonneg(yaw_deg_per_m), "--yaw-drift",
-          "yaw drift must be >= 0 deg/m, got " + std::to_string(yaw_deg_per_m));
+          "yaw drift must be >= 0 deg/m, got " + num(yaw_deg_per_m));
   require(std::isfinite(random_walk) && random_walk >= 0.0 && random_walk <= 1.0,
-          "DriftOptions.random_walk", "must be in [0, 1], got " + std::to_string(random_walk));
+          "DriftOptions.random_walk", "must be in [0, 1], got " + num(random_walk));
   require(finite_nonneg(white_noise_m), "DriftOptions.white_noise_m",
-          "must be >= 0, got " + std::to_string(white_noise_m));
+          "must be >= 0, got " + num(white_noise_m));
 }
 
 Pose look_at(const Vec3& eye, const Vec3& target) {
@@ -76,10 +78,8 @@ Trajectory make_camera_path(const CameraPathOptions& o, const std::vector<double
   Trajectory path;
   path.source = "synthetic";
   const double t0 = timestamps.empty() ? 0.0 : timestamps.front();
-  const double t1 = timestamps.empty() ? 0.0 : timestamps.back();
   for (double ts : timestamps) {
-    const double s = t1 > t0 ? (ts - t0) / (t1 - t0) : 0.0;
-    const double azimuth = (o.start_angle_deg + s * o.sweep_deg) * kDeg;
+    const double azimuth = (o.start_angle_deg + (ts - t0) * o.speed_deg_per_s) * kDeg;
     const Vec3 eye = o.orbit_center_world +
                      Vec3(o.radius_m * std::cos(azimuth), o.radius_m * std::sin(azimuth), 0.0);
     Vec3 eye_world(eye.x(), eye.y(), o.height_m);
@@ -130,12 +130,31 @@ Trajectory add_drift(const Trajectory& gt, const DriftOptions& o, std::uint64_t 
     error[i] = error[i - 1] + step * direction;
     yaw[i] = yaw[i - 1] + step * yaw_rate;
   }
-  // Scale the accumulated translation error to the requested fraction of the path length.
+  // Scale the accumulated translation error so that the end point, including the displacement
+  // that the yaw drift causes, is off by the requested fraction of the path length: solve
+  // |a + s b| = target for s >= 0 (a: yaw-only displacement at the end, b: translation error).
   const double length = path_length_m(gt);
-  const double end = error.back().norm();
-  const double scale = end > 0.0 ? o.translation_fraction * length / end : 0.0;
-
+  const double target = o.translation_fraction * length;
   const Vec3 pivot = gt.poses.front().world_from_cam.translation();
+  const Vec3 p_end = gt.poses.back().world_from_cam.translation();
+  auto yaw_displacement = [&] {
+    return Vec3(Eigen::AngleAxisd(yaw.back(), Vec3::UnitZ()).matrix() * (p_end - pivot) + pivot -
+                p_end);
+  };
+  Vec3 a = yaw_displacement();
+  if (a.norm() > 0.7 * target) {  // the yaw's share is capped at 70% of the end error
+    const double shrink = a.norm() > 0.0 ? 0.7 * target / a.norm() : 0.0;
+    for (double& y : yaw) y *= shrink;
+    a = yaw_displacement();
+  }
+  const Vec3 b = error.back();
+  double scale = 0.0;
+  if (b.squaredNorm() > 0.0 && target > 0.0) {
+    const double qa = b.squaredNorm(), qb = 2.0 * a.dot(b), qc = a.squaredNorm() - target * target;
+    const double disc = qb * qb - 4.0 * qa * qc;
+    if (disc >= 0.0) scale = std::max(0.0, (-qb + std::sqrt(disc)) / (2.0 * qa));
+  }
+
   for (std::size_t i = 0; i < gt.size(); ++i) {
     Pose drift = Pose::Identity();
     drift.linear() = Eigen::AngleAxisd(yaw[i], Vec3::UnitZ()).matrix();

@@ -15,7 +15,7 @@ struct CameraPathOptions {
   double height_m = 1.45;                         // camera height above the floor (z = 0)
   double look_at_height_m = 0.78;                 // the camera looks at the axis at this height
   double start_angle_deg = -90.0;       // azimuth of the first frame (-90: on the -y side)
-  double sweep_deg = 80.0;              // azimuth travelled over the whole sequence
+  double speed_deg_per_s = 20.0;        // azimuth rate: 0.56 m/s at 1.6 m (TUM fr1_desk: ~0.4 m/s)
   double jitter_translation_m = 0.004;  // hand-held shake: std of the position offset per axis
   double jitter_rotation_deg = 0.3;     // hand-held shake: std of the orientation offset per axis
   void check() const;                   // throws InputError naming the bad field
@@ -30,9 +30,11 @@ Trajectory make_camera_path(const CameraPathOptions& options, const std::vector<
                             std::uint64_t seed);
 
 // SLAM-like drift: a random-walk bias in translation and in yaw that grows with the distance
-// travelled. With the defaults the end point is off by ~2% of the path length.
+// travelled. The end point is off by exactly translation_fraction of the path length (before the
+// white noise), the yaw's share included (the yaw drift is scaled down when it alone would move the
+// end point by more than 70% of that).
 struct DriftOptions {
-  double translation_fraction = 0.02;  // |position error| at the end / path length (0 = none)
+  double translation_fraction = 0.02;  // |end position error| / path length (0 = no drift)
   double yaw_deg_per_m = 1.0;          // std of the yaw drift rate, degrees per metre travelled
   double random_walk = 0.5;            // share of the translation drift that wanders (0 = straight)
   double white_noise_m = 0.001;        // per-pose position noise on top (std per axis)

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "objmap/core/error.h"
+#include "objmap/sim/text.h"
 
 namespace objmap::sim {
 
@@ -14,27 +15,27 @@ bool probability(double p) { return std::isfinite(p) && p >= 0.0 && p <= 1.0; }
 
 void DepthNoiseOptions::check() const {
   require(nonneg(sigma_base_m), "--depth-sigma-base",
-          "must be >= 0 metres, got " + std::to_string(sigma_base_m));
+          "must be >= 0 metres, got " + num(sigma_base_m));
   require(nonneg(sigma_quadratic), "--depth-sigma-quadratic",
-          "must be >= 0 per metre, got " + std::to_string(sigma_quadratic));
+          "must be >= 0 per metre, got " + num(sigma_quadratic));
   require(nonneg(sigma_ref_z_m), "DepthNoiseOptions.sigma_ref_z_m",
-          "must be >= 0, got " + std::to_string(sigma_ref_z_m));
+          "must be >= 0, got " + num(sigma_ref_z_m));
   require(nonneg(disparity_step_px), "--disparity-step",
-          "must be >= 0 pixels (0 = no quantisation), got " + std::to_string(disparity_step_px));
+          "must be >= 0 pixels (0 = no quantisation), got " + num(disparity_step_px));
   require(std::isfinite(baseline_m) && baseline_m > 0.0, "DepthNoiseOptions.baseline_m",
-          "must be > 0, got " + std::to_string(baseline_m));
+          "must be > 0, got " + num(baseline_m));
   require(nonneg(min_range_m) && std::isfinite(max_range_m) && max_range_m > min_range_m,
           "--max-range",
-          "range must satisfy 0 <= min < max, got min " + std::to_string(min_range_m) + " max " +
-              std::to_string(max_range_m));
+          "range must satisfy 0 <= min < max, got min " + num(min_range_m) + " max " +
+              num(max_range_m));
   require(nonneg(edge_jump_m), "DepthNoiseOptions.edge_jump_m",
-          "must be >= 0, got " + std::to_string(edge_jump_m));
+          "must be >= 0, got " + num(edge_jump_m));
   require(edge_width_px >= 0 && edge_width_px <= 10, "DepthNoiseOptions.edge_width_px",
           "must be in [0, 10], got " + std::to_string(edge_width_px));
   require(probability(edge_missing_prob), "--edge-missing",
-          "must be a probability in [0, 1], got " + std::to_string(edge_missing_prob));
+          "must be a probability in [0, 1], got " + num(edge_missing_prob));
   require(probability(dropout_prob), "--depth-dropout",
-          "must be a probability in [0, 1], got " + std::to_string(dropout_prob));
+          "must be a probability in [0, 1], got " + num(dropout_prob));
 }
 
 DepthNoiseOptions DepthNoiseOptions::none() {

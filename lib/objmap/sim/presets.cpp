@@ -248,8 +248,8 @@ CameraPathOptions preset_camera_path(const std::string& preset) {
     path.radius_m = 2.3;
     path.height_m = 1.55;
     path.look_at_height_m = 0.75;
-    path.start_angle_deg = -120.0;
-    path.sweep_deg = 60.0;
+    path.start_angle_deg = -115.0;
+    path.speed_deg_per_s = 15.0;  // 0.6 m/s at 2.3 m
   } else if (preset != "tabletop") {
     throw InputError("--preset",
                      "unknown scene preset '" + preset + "'; expected tabletop or office");

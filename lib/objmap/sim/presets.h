@@ -8,7 +8,7 @@
 
 // The built-in scenes. "tabletop": a 5 x 5 m room, one table with a monitor, keyboard, mouse, two
 // cups, a bottle, three books and a teddy bear, and two chairs (12 objects). "office": a 7 x 6 m
-// room, two tables and three chairs, the same classes with more instances (19 objects).
+// room, two tables and three chairs, the same classes with more instances (22 objects).
 namespace objmap::sim {
 
 // The eight COCO classes of the paper, spelled as the detector spells them.

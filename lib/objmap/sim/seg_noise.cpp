@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "objmap/core/error.h"
+#include "objmap/sim/text.h"
 
 namespace objmap::sim {
 
@@ -24,18 +25,19 @@ void SegNoiseOptions::check() const {
   require(boundary_px >= 0 && boundary_px <= 20, "--mask-boundary",
           "must be in [0, 20] pixels, got " + std::to_string(boundary_px));
   require(probability(miss_prob), "--miss-rate",
-          "must be a probability in [0, 1], got " + std::to_string(miss_prob));
+          "must be a probability in [0, 1], got " + num(miss_prob));
   require(std::isfinite(false_positives_per_frame) && false_positives_per_frame >= 0.0 &&
               false_positives_per_frame <= 20.0,
           "--false-positives",
-          "must be in [0, 20] per frame, got " + std::to_string(false_positives_per_frame));
+          "must be in [0, 20] per frame, got " + num(false_positives_per_frame));
   for (const auto& c : confusions)
-    require(probability(c.probability) && !c.from.empty() && !c.to.empty(), "--confusion",
-            "'" + c.from + "' -> '" + c.to + "' needs two class names and a probability in [0, 1]");
+    require(probability(c.probability) && !c.from.empty() && !c.to.empty(), "--confusion-rate",
+            "'" + c.from + "' -> '" + c.to + "' has probability " + num(c.probability) +
+                "; expected two class names and a probability in [0, 1]");
   require(probability(id_switch_prob), "--id-switch-rate",
-          "must be a probability in [0, 1], got " + std::to_string(id_switch_prob));
+          "must be a probability in [0, 1], got " + num(id_switch_prob));
   require(probability(id_reuse_prob), "--id-reuse",
-          "must be a probability in [0, 1], got " + std::to_string(id_reuse_prob));
+          "must be a probability in [0, 1], got " + num(id_reuse_prob));
   require(std::isfinite(score_min) && std::isfinite(score_max) && 0.0 <= score_min &&
               score_min <= score_max && score_max <= 1.0,
           "SegNoiseOptions.score_min", "scores must satisfy 0 <= score_min <= score_max <= 1");

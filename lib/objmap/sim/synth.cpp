@@ -8,6 +8,7 @@
 #include "objmap/sim/presets.h"
 #include "objmap/sim/random.h"
 #include "objmap/sim/render.h"
+#include "objmap/sim/text.h"
 
 namespace objmap::sim {
 
@@ -22,17 +23,16 @@ void SynthOptions::check() const {
   require(frames >= 1 && frames <= 100000, "--frames",
           "must be in [1, 100000], got " + std::to_string(frames));
   require(std::isfinite(frame_rate_hz) && frame_rate_hz > 0.0 && frame_rate_hz <= 1000.0,
-          "SynthOptions.frame_rate_hz",
-          "must be in (0, 1000], got " + std::to_string(frame_rate_hz));
+          "SynthOptions.frame_rate_hz", "must be in (0, 1000], got " + num(frame_rate_hz));
   require(std::isfinite(start_time_s) && start_time_s >= 0.0 && start_time_s < 1e10,
-          "SynthOptions.start_time_s", "must be in [0, 1e10), got " + std::to_string(start_time_s));
+          "SynthOptions.start_time_s", "must be in [0, 1e10), got " + num(start_time_s));
   require(std::isfinite(depth_time_offset_s) && std::abs(depth_time_offset_s) < 0.5 / frame_rate_hz,
           "--depth-offset",
-          "must be shorter than half a frame period, got " + std::to_string(depth_time_offset_s));
+          "must be shorter than half a frame period, got " + num(depth_time_offset_s));
   require(std::isfinite(resolution_scale) && resolution_scale >= 0.05 && resolution_scale <= 4.0,
-          "--scale", "must be in [0.05, 4], got " + std::to_string(resolution_scale));
+          "--scale", "must be in [0.05, 4], got " + num(resolution_scale));
   require(std::isfinite(rgb_noise_sigma) && rgb_noise_sigma >= 0.0 && rgb_noise_sigma <= 50.0,
-          "--rgb-noise", "must be in [0, 50] grey levels, got " + std::to_string(rgb_noise_sigma));
+          "--rgb-noise", "must be in [0, 50] grey levels, got " + num(rgb_noise_sigma));
   require(threads >= 0 && threads <= 256, "--threads",
           "must be in [0, 256] (0 = all cores), got " + std::to_string(threads));
   depth_noise.check();
@@ -84,13 +84,13 @@ segmentation::Segmentation SynthSequence::segmentation_gt() const {
   return s;
 }
 
-SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progress) {
+SynthSequence prepare_sequence(const SynthOptions& options) {
   options.check();
   SynthSequence seq;
   seq.options = options;
   seq.camera = synthetic_camera(options.resolution_scale);
 
-  // 1. The scene and the camera path (ground truth), then the drifting estimate.
+  // The scene and the camera path (ground truth), then the drifting estimate.
   seq.scene = make_scene(options.preset, options.seed);
   const CameraPathOptions path =
       options.use_preset_path ? preset_camera_path(options.preset) : options.path;
@@ -100,36 +100,52 @@ SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progr
   seq.groundtruth = make_camera_path(path, timestamps, options.seed);
   seq.groundtruth.source = "synthetic ground truth";
   seq.estimated = add_drift(seq.groundtruth, options.drift, options.seed);
+  return seq;
+}
 
-  // 2. Render each frame and apply the sensor noise. Frames are independent (each has its own
-  // random stream), so they are spread over the threads without changing the result.
+SynthFrame render_synth_frame(const SynthSequence& seq, int index) {
+  const SynthOptions& options = seq.options;
+  SynthFrame f;
+  f.index = index;
+  f.timestamp = seq.groundtruth.poses.at(index).timestamp;
+  f.depth_timestamp = round_us(f.timestamp + options.depth_time_offset_s);
+  RenderedFrame r =
+      render_frame(seq.scene, seq.camera, seq.groundtruth.poses[index].world_from_cam, 1);
+  // Each frame has its own random stream: frames can be made in any order, on any thread.
+  Rng rng(derive_seed(options.seed, static_cast<std::uint64_t>(index), 0xF7A3E));
+  const cv::Mat noisy = apply_depth_noise(r.depth_m, seq.camera, options.depth_noise, rng);
+  f.depth = depth_to_u16(noisy, seq.camera.depth_factor);
+  if (options.rgb_noise_sigma > 0.0) {
+    for (int v = 0; v < r.rgb.rows; ++v) {
+      auto* row = r.rgb.ptr<std::uint8_t>(v);
+      for (int k = 0; k < r.rgb.cols * 3; ++k) {
+        const double value = row[k] + options.rgb_noise_sigma * rng.fast_normal();
+        row[k] = static_cast<std::uint8_t>(std::clamp(value + 0.5, 0.0, 255.0));
+      }
+    }
+  }
+  f.rgb = r.rgb;
+  f.depth_exact_m = r.depth_m;
+  f.labels = r.labels;
+  f.segmentation_gt =
+      exact_segmentation(r.labels, seq.scene, f.timestamp, options.seg_noise.min_area_px);
+  return f;
+}
+
+SegmentationNoise make_segmentation_noise(const SynthOptions& options) {
+  return SegmentationNoise(options.seg_noise, derive_seed(options.seed, 0, 0x5E9));
+}
+
+SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progress) {
+  // 1. Scene, ground-truth path and estimate.
+  SynthSequence seq = prepare_sequence(options);
+
+  // 2. Render each frame and apply the sensor noise, spread over the threads.
   seq.frames.resize(options.frames);
   std::mutex progress_mutex;
   std::size_t done = 0;
   parallel_for(seq.frames.size(), options.threads, [&](std::size_t i) {
-    SynthFrame& f = seq.frames[i];
-    f.index = static_cast<int>(i);
-    f.timestamp = timestamps[i];
-    f.depth_timestamp = round_us(f.timestamp + options.depth_time_offset_s);
-    RenderedFrame r =
-        render_frame(seq.scene, seq.camera, seq.groundtruth.poses[i].world_from_cam, 1);
-    Rng rng(derive_seed(options.seed, i, 0xF7A3E));
-    const cv::Mat noisy = apply_depth_noise(r.depth_m, seq.camera, options.depth_noise, rng);
-    f.depth = depth_to_u16(noisy, seq.camera.depth_factor);
-    if (options.rgb_noise_sigma > 0.0) {
-      for (int v = 0; v < r.rgb.rows; ++v) {
-        auto* row = r.rgb.ptr<std::uint8_t>(v);
-        for (int k = 0; k < r.rgb.cols * 3; ++k) {
-          const double value = row[k] + options.rgb_noise_sigma * rng.fast_normal();
-          row[k] = static_cast<std::uint8_t>(std::clamp(value + 0.5, 0.0, 255.0));
-        }
-      }
-    }
-    f.rgb = r.rgb;
-    f.depth_exact_m = r.depth_m;
-    f.labels = r.labels;
-    f.segmentation_gt =
-        exact_segmentation(r.labels, seq.scene, f.timestamp, options.seg_noise.min_area_px);
+    seq.frames[i] = render_synth_frame(seq, static_cast<int>(i));
     if (progress) {
       std::lock_guard<std::mutex> lock(progress_mutex);
       progress(++done, seq.frames.size());
@@ -137,7 +153,7 @@ SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progr
   });
 
   // 3. The detector + tracker output, in time order (track IDs carry from frame to frame).
-  SegmentationNoise noise(options.seg_noise, derive_seed(options.seed, 0, 0x5E9));
+  SegmentationNoise noise = make_segmentation_noise(options);
   for (auto& f : seq.frames)
     f.segmentation = noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height);
   seq.seg_stats = noise.stats();

@@ -24,7 +24,7 @@ struct SynthOptions {
   std::uint64_t seed = 1;           // everything random derives from it
   int frames = 90;                  // 3 s at 30 Hz
   double frame_rate_hz = 30.0;
-  double start_time_s = 1700000000.0;  // timestamp of the first rgb frame
+  double start_time_s = 1700000000.1;  // timestamp of the first rgb frame
   double depth_time_offset_s = 0.005;  // depth timestamps = rgb + this (exercises association)
   // Image size as a fraction of 640x480 (intrinsics scaled with it); tests use 0.25-0.5.
   double resolution_scale = 1.0;
@@ -74,7 +74,17 @@ struct SynthSequence {
 // Progress callback: frames rendered so far and the total (called from worker threads, serialised).
 using SynthProgress = std::function<void(std::size_t done, std::size_t total)>;
 
+// The whole sequence in memory (~10 MB per 640x480 frame: use write_synthetic_sequence for long
+// ones). Deterministic for given options, whatever options.threads.
 SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progress = {});
+
+// The pieces synthesize() is made of, for streaming (writer.h):
+// everything but the frames (camera, scene, trajectories; `frames` empty);
+SynthSequence prepare_sequence(const SynthOptions& options);
+// one frame (without the noisy segmentation, which is made in time order by the next);
+SynthFrame render_synth_frame(const SynthSequence& prepared, int index);
+// the stateful segmentation noise seeded as synthesize() seeds it.
+SegmentationNoise make_segmentation_noise(const SynthOptions& options);
 
 // t0 + i / rate rounded to the microsecond.
 double frame_timestamp(double start_time_s, double frame_rate_hz, int index);

@@ -1,5 +1,7 @@
 #include "objmap/sim/writer.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -17,7 +19,7 @@
 namespace objmap::sim {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
+using json = nlohmann::ordered_json;  // keys in the order written
 
 namespace {
 
@@ -135,29 +137,41 @@ std::string synth_json(const SynthSequence& s) {
   return doc.dump(2) + "\n";
 }
 
-void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
-  io::StagingDir staging(out);
-  const fs::path dir = staging.path();
-  std::error_code ec;
-  fs::create_directories(dir / "rgb", ec);
-  fs::create_directories(dir / "depth", ec);
-  if (ec) throw InputError(dir.string(), "cannot create folders: " + ec.message());
+namespace {
 
-  // Images (the expensive part) in parallel; each frame writes its own two files.
-  parallel_for(s.frames.size(), threads, [&](std::size_t i) {
-    const SynthFrame& f = s.frames[i];
+void make_folders(const fs::path& dir) {
+  std::error_code ec;
+  for (const char* sub : {"rgb", "depth", "segmentation", "segmentation_gt"}) {
+    fs::create_directories(dir / sub, ec);
+    if (ec) throw InputError((dir / sub).string(), "cannot create the folder: " + ec.message());
+  }
+}
+
+// The files of a batch of frames: images on the threads, segmentation files in order.
+void write_frames(const fs::path& dir, const std::vector<const SynthFrame*>& frames, int threads) {
+  parallel_for(frames.size(), threads, [&](std::size_t i) {
+    const SynthFrame& f = *frames[i];
     write_png(dir / "rgb" / (timestamp_name(f.timestamp) + ".png"), f.rgb);
     write_png(dir / "depth" / (timestamp_name(f.depth_timestamp) + ".png"), f.depth);
   });
+  for (const SynthFrame* f : frames) {
+    const std::string name = segmentation::frame_file_name(f->timestamp);
+    segmentation::write_frame_json(dir / "segmentation" / name, f->segmentation);
+    segmentation::write_frame_json(dir / "segmentation_gt" / name, f->segmentation_gt);
+  }
+}
 
+// Everything but the frames: lists, camera, trajectories, objects, synth.json.
+void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
   const std::string what = describe(s.options);
   std::ostringstream rgb_txt, depth_txt;
   rgb_txt << "# color images\n# file: '" << what << "'\n# timestamp filename\n";
   depth_txt << "# depth maps\n# file: '" << what << "'\n# timestamp filename\n";
-  for (const auto& f : s.frames) {
-    rgb_txt << timestamp_name(f.timestamp) << " rgb/" << timestamp_name(f.timestamp) << ".png\n";
-    depth_txt << timestamp_name(f.depth_timestamp) << " depth/" << timestamp_name(f.depth_timestamp)
-              << ".png\n";
+  for (const auto& pose : s.groundtruth.poses) {
+    const double t = pose.timestamp;
+    const double td = std::round((t + s.options.depth_time_offset_s) * 1e6) / 1e6;
+    rgb_txt << timestamp_name(t) << " rgb/" << timestamp_name(t) << ".png\n";
+    depth_txt << timestamp_name(td) << " depth/" << timestamp_name(td) << ".png\n";
   }
   write_text(dir / "rgb.txt", rgb_txt.str());
   write_text(dir / "depth.txt", depth_txt.str());
@@ -165,15 +179,53 @@ void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
   io::write_camera_json(dir / "camera.json", s.camera);
   io::write_trajectory(dir / "groundtruth.txt", s.groundtruth,
                        "ground truth trajectory (world_from_cam) of " + what);
-  io::write_trajectory(dir / "estimated.txt", s.estimated,
-                       "SLAM-like estimate with drift (" +
-                           std::to_string(s.options.drift.translation_fraction * 100.0) +
-                           "% of the path length) of " + what);
+  char drift[64];
+  std::snprintf(drift, sizeof drift, "%g%%", s.options.drift.translation_fraction * 100.0);
+  io::write_trajectory(
+      dir / "estimated.txt", s.estimated,
+      "SLAM-like estimate with drift (" + std::string(drift) + " of the path length) of " + what);
   write_text(dir / "objects_gt.json", objects_gt_json(s.scene));
   write_text(dir / "synth.json", synth_json(s));
-  segmentation::write_segmentation(dir / "segmentation", s.segmentation());
-  segmentation::write_segmentation(dir / "segmentation_gt", s.segmentation_gt());
+}
+
+}  // namespace
+
+void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
+  io::StagingDir staging(out);
+  make_folders(staging.path());
+  std::vector<const SynthFrame*> frames;
+  for (const auto& f : s.frames) frames.push_back(&f);
+  write_frames(staging.path(), frames, threads);
+  write_sequence_files(staging.path(), s);
   staging.commit();
+}
+
+SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& options,
+                                       const SynthProgress& progress) {
+  SynthSequence seq = prepare_sequence(options);
+  io::StagingDir staging(out);
+  make_folders(staging.path());
+  SegmentationNoise noise = make_segmentation_noise(options);
+  const std::size_t total = seq.groundtruth.size();
+  const std::size_t batch = 4 * static_cast<std::size_t>(resolve_threads(options.threads));
+  for (std::size_t start = 0; start < total; start += batch) {
+    const std::size_t n = std::min(batch, total - start);
+    std::vector<SynthFrame> frames(n);
+    parallel_for(n, options.threads, [&](std::size_t i) {
+      frames[i] = render_synth_frame(seq, static_cast<int>(start + i));
+    });
+    std::vector<const SynthFrame*> pointers;
+    for (auto& f : frames) {  // in time order: track IDs carry over
+      f.segmentation = noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height);
+      pointers.push_back(&f);
+    }
+    write_frames(staging.path(), pointers, options.threads);
+    if (progress) progress(start + n, total);
+  }
+  seq.seg_stats = noise.stats();
+  write_sequence_files(staging.path(), seq);
+  staging.commit();
+  return seq;
 }
 
 }  // namespace objmap::sim

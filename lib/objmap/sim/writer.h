@@ -20,6 +20,13 @@ void write_sequence(const std::filesystem::path& out, const SynthSequence& seque
 // parent cannot be created. Call it before the expensive synthesis.
 void check_output_dir(const std::filesystem::path& out);
 
+// Renders and writes batch by batch (memory stays at a few frames whatever the length), giving
+// the same files as write_sequence(out, synthesize(options)). Returns the sequence without its
+// frames (scene, camera, trajectories, segmentation error counts). `progress` gets frames done.
+SynthSequence write_synthetic_sequence(const std::filesystem::path& out,
+                                       const SynthOptions& options,
+                                       const SynthProgress& progress = {});
+
 // objects_gt.json text (schemas/objects_gt.schema.json): id, class, centroid, obb per object.
 std::string objects_gt_json(const Scene& scene);
 
