@@ -8,22 +8,20 @@
 namespace objmap::test {
 namespace {
 
-// One scene and one fuse run per configuration, shared by the tests of this file.
+// One scene and one fuse run per configuration, made once and shared by the test processes.
 struct SceneRun {
-  std::unique_ptr<TempDir> dir;
   fs::path scene, out;
   RunResult synth, fuse;
 };
 
-SceneRun make_run(const std::vector<std::string>& synth_args,
-             const std::vector<std::string>& fuse_args) {
+SceneRun make_run(const std::string& key, const std::vector<std::string>& synth_args,
+                  const std::vector<std::string>& fuse_args) {
   SceneRun r;
-  r.dir = std::make_unique<TempDir>();
-  r.scene = r.dir->path() / "scene";
-  r.out = r.dir->path() / "run";
-  std::vector<std::string> s{"synth", "--out", r.scene.string()};
+  std::vector<std::string> s{"synth", "--out", "{OUT}"};
   s.insert(s.end(), synth_args.begin(), synth_args.end());
-  r.synth = run_objmap(s);
+  r.scene = cached_output(key + "-scene", s, &r.synth);
+  if (!fs::exists(r.scene)) return r;
+  r.synth.exit_code = 0;
   std::vector<std::string> f{"fuse",
                              "--dataset",
                              r.scene.string(),
@@ -32,14 +30,15 @@ SceneRun make_run(const std::vector<std::string>& synth_args,
                              "--segmentation",
                              (r.scene / "segmentation").string(),
                              "--out",
-                             r.out.string()};
+                             "{OUT}"};
   f.insert(f.end(), fuse_args.begin(), fuse_args.end());
-  if (r.synth.exit_code == 0) r.fuse = run_objmap(f);
+  r.out = cached_output(key + "-fuse", f, &r.fuse);
+  if (fs::exists(r.out)) r.fuse.exit_code = 0;
   return r;
 }
 
 const SceneRun& default_run() {
-  static SceneRun run = make_run({"--seed", "3"}, {});
+  static SceneRun run = make_run("seed3", {"--seed", "3"}, {});
   return run;
 }
 
@@ -108,7 +107,8 @@ TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
 }
 
 TEST(FuseSynthetic, ClassConfusionAndIdSwitchesStillGiveRightClasses) {
-  const SceneRun r = make_run({"--seed", "5", "--confusion-rate", "0.2", "--id-switch-rate", "0.2"}, {});
+  const SceneRun r = make_run(
+      "seed5-confusion", {"--seed", "5", "--confusion-rate", "0.2", "--id-switch-rate", "0.2"}, {});
   ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   const auto gt = read_gt_objects(r.scene / "objects_gt.json");

@@ -41,6 +41,26 @@ TempDir::~TempDir() {
   fs::remove_all(path_, ec);
 }
 
+fs::path cached_output(const std::string& key, const std::vector<std::string>& args,
+                       RunResult* result) {
+  const fs::path root = fs::path(OBJMAP_TEST_CACHE_DIR);
+  const auto stamp = std::to_string(fs::last_write_time(OBJMAP_BINARY).time_since_epoch().count());
+  const fs::path dir = root / stamp / key;
+  if (fs::exists(dir)) return dir;
+  std::error_code ec;
+  if (fs::exists(root))
+    for (const auto& e : fs::directory_iterator(root))
+      if (e.path().filename() != stamp) fs::remove_all(e.path(), ec);
+  fs::create_directories(dir.parent_path());
+  std::vector<std::string> filled = args;
+  for (auto& a : filled)
+    if (a == "{OUT}") a = dir.string();
+  RunResult r = run_objmap(filled);
+  if (result) *result = r;
+  if (r.exit_code != 0) fs::remove_all(dir, ec);
+  return dir;
+}
+
 std::string read_text(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::stringstream ss;

@@ -41,6 +41,14 @@ struct RunResult {
 // Runs the built objmap binary with `args` (no shell interpretation of the arguments).
 RunResult run_objmap(const std::vector<std::string>& args);
 
+// The output folder of `objmap <args>` where the argument "{OUT}" stands for the folder, made once
+// and kept under <build>/test-cache/<stamp of the objmap binary>/<key> (a rebuilt binary starts a
+// new cache), so that several test processes share one synthetic scene or one fuse run. Tests that
+// use it carry the CTest RESOURCE_LOCK "objmap_cache". On failure the folder is absent and `result`
+// (when given) says why.
+fs::path cached_output(const std::string& key, const std::vector<std::string>& args,
+                       RunResult* result = nullptr);
+
 std::string read_text(const fs::path& file);
 void write_text(const fs::path& file, const std::string& text);
 // Copies a folder recursively (to make malformed copies of real data).

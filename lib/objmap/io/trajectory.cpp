@@ -17,10 +17,12 @@ namespace {
 
 constexpr const char* kLayout = "timestamp tx ty tz qx qy qz qw";
 
-// Shortest decimal text that reads back to the same double (C++17 to_chars).
+// Shortest fixed-notation text that reads back to the same double (C++17 to_chars): never
+// scientific, so TUM tools read "1700000000" rather than "1.7e+09".
 void append_number(std::string& out, double value) {
   char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  const auto result =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed);
   out.append(buffer, result.ptr);
 }
 
