@@ -1,0 +1,87 @@
+// Every JSON that objmap writes validates against its schema in schemas/.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "support/schema_check.h"
+#include "support/test_support.h"
+
+namespace objmap::test {
+namespace {
+
+nlohmann::json load(const fs::path& file) {
+  std::ifstream in(file);
+  return nlohmann::json::parse(in);
+}
+
+void expect_valid(const fs::path& file, const std::string& schema) {
+  ASSERT_TRUE(fs::exists(file)) << file;
+  const auto errors = validate_json(load(file), load_schema(schema));
+  EXPECT_TRUE(errors.empty()) << file << " vs " << schema << ": " << errors.front();
+}
+
+fs::path scene() {
+  RunResult r;
+  const fs::path dir = cached_output("seed3-scene", {"synth", "--out", "{OUT}", "--seed", "3"}, &r);
+  EXPECT_TRUE(fs::exists(dir)) << r.err;
+  return dir;
+}
+
+TEST(Schemas, TheValidatorRejectsWhatItShould) {
+  const auto schema = load_schema("camera.schema.json");
+  EXPECT_FALSE(validate_json(nlohmann::json::parse(R"({"fx":1})"), schema).empty());
+  EXPECT_FALSE(validate_json(nlohmann::json::parse(R"([1,2])"), schema).empty());
+}
+
+TEST(Schemas, SynthOutputs) {
+  const fs::path s = scene();
+  expect_valid(s / "objects_gt.json", "objects_gt.schema.json");
+  expect_valid(s / "camera.json", "camera.schema.json");
+  expect_valid(s / "synth.json", "synth.schema.json");
+  int checked = 0;
+  for (const auto& e : fs::directory_iterator(s / "segmentation")) {
+    if (checked == 3) break;
+    expect_valid(e.path(), "segmentation.schema.json");
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
+}
+
+TEST(Schemas, FuseOutputsAndConfig) {
+  const fs::path s = scene();
+  RunResult r;
+  const fs::path run = cached_output(
+      "seed3-fuse",
+      {"fuse", "--dataset", s.string(), "--trajectory", (s / "groundtruth.txt").string(),
+       "--segmentation", (s / "segmentation").string(), "--out", "{OUT}"},
+      &r);
+  ASSERT_TRUE(fs::exists(run)) << r.err;
+  expect_valid(run / "objects.json", "objects.schema.json");
+  expect_valid(run / "run.json", "run.schema.json");
+  const auto options = load(run / "run.json")["options"];
+  const auto errors = validate_json(options, load_schema("fuse_config.schema.json"));
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  expect_valid(fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "examples" / "fuse_config.json",
+               "fuse_config.schema.json");
+}
+
+TEST(Schemas, EvalOutputs) {
+  const fs::path s = scene();
+  TempDir dir;
+  auto r = run_objmap({"eval", "ate", "--gt", (s / "groundtruth.txt").string(), "--est",
+                       (s / "estimated.txt").string(), "--json", (dir / "ate.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  expect_valid(dir / "ate.json", "eval_ate.schema.json");
+  r = run_objmap({"eval", "rpe", "--gt", (s / "groundtruth.txt").string(), "--est",
+                  (s / "estimated.txt").string(), "--json", (dir / "rpe.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  expect_valid(dir / "rpe.json", "eval_rpe.schema.json");
+}
+
+TEST(Schemas, RealCameraFile) {
+  OBJMAP_DATA_OR_SKIP(data, "ycbv_0000_10f/camera.json");
+  expect_valid(data, "camera.schema.json");
+}
+
+}  // namespace
+}  // namespace objmap::test
