@@ -16,6 +16,8 @@ void VoxelMapOptions::check() const {
           "must be in [0.0001, 100] metres, got " + std::to_string(voxel_m));
   require(threads >= 1 && threads <= 64, "VoxelMapOptions.threads",
           "must be in [1, 64], got " + std::to_string(threads));
+  require(shards >= 0 && shards <= 4096, "VoxelMapOptions.shards",
+          "must be in [0, 4096] (0 = threads), got " + std::to_string(shards));
 }
 
 Rgb VoxelData::mean_color() const {
@@ -47,7 +49,8 @@ VoxelMap::VoxelMap(const VoxelMapOptions& options) {
   options.check();
   voxel_m_ = options.voxel_m;
   inv_voxel_m_ = static_cast<float>(1.0 / options.voxel_m);
-  shards_.resize(static_cast<std::size_t>(options.threads));
+  threads_ = static_cast<std::size_t>(options.threads);
+  shards_.resize(static_cast<std::size_t>(options.shards > 0 ? options.shards : options.threads));
 }
 
 std::size_t VoxelMap::shard_of(VoxelKey key) const {
@@ -92,9 +95,12 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
     VoxelKey key;
     VoxelData sum;
   };
-  Table& table = shards_[shard];
+  const bool all = shard == kAllShards;
   const bool colour = cloud.has_colors();
-  const bool sharded = shards_.size() > 1;
+  const bool sharded = !all && shards_.size() > 1;
+  std::vector<std::size_t> per_shard(all ? shards_.size() : 0);
+  std::vector<std::uint32_t> run_shard;
+  if (all) run_shard.reserve(kBatch);
   const std::size_t n = cloud.size();
   std::size_t dropped = 0;
   std::vector<Run> runs;
@@ -124,6 +130,7 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
     }
     // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels).
     runs.clear();
+    run_shard.clear();
     VoxelKey run_key = kNoVoxel;
     bool run_ours = false;
     for (std::size_t j = 0; j < count; ++j) {
@@ -136,6 +143,7 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
         run_key = key;
         run_ours = !sharded || shard_of(key) == shard;
         if (run_ours) runs.push_back(Run{key, VoxelData{}});
+        if (all) run_shard.push_back(static_cast<std::uint32_t>(shard_of(key)));
       }
       if (!run_ours) continue;
       VoxelData& r = runs.back().sum;
@@ -151,14 +159,23 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
         ++r.color_count;
       }
     }
-    // 3. The runs into the table, in order, prefetching ahead.
-    table.reserve(table.size() + runs.size());  // no rehash below: prefetched slots stay valid
+    // 3. The runs into the table(s), in order, prefetching ahead. No rehash below: prefetched
+    //    slots stay valid.
     const std::size_t m = runs.size();
-    for (std::size_t r = 0; r < std::min(m, kAhead); ++r) table.prefetch(runs[r].key);
+    auto table_of = [&](std::size_t r) -> Table& { return shards_[all ? run_shard[r] : shard]; };
+    if (all) {
+      std::fill(per_shard.begin(), per_shard.end(), 0);
+      for (std::size_t r = 0; r < m; ++r) ++per_shard[run_shard[r]];
+      for (std::size_t t = 0; t < shards_.size(); ++t)
+        if (per_shard[t]) shards_[t].reserve(shards_[t].size() + per_shard[t]);
+    } else {
+      shards_[shard].reserve(shards_[shard].size() + m);
+    }
+    for (std::size_t r = 0; r < std::min(m, kAhead); ++r) table_of(r).prefetch(runs[r].key);
     for (std::size_t r = 0; r < m; ++r) {
-      if (r + kAhead < m) table.prefetch(runs[r + kAhead].key);
+      if (r + kAhead < m) table_of(r + kAhead).prefetch(runs[r + kAhead].key);
       const VoxelData& add = runs[r].sum;
-      VoxelData& v = table[runs[r].key];
+      VoxelData& v = table_of(r)[runs[r].key];
       for (int a = 0; a < 3; ++a) {
         v.offset_sum[a] += add.offset_sum[a];
         v.color_sum[a] += add.color_sum[a];
@@ -174,48 +191,78 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
 void VoxelMap::insert(const PointCloud& cloud, std::int32_t label) {
   const std::size_t n = cloud.size();
   if (n == 0) return;
-  const std::size_t threads = shards_.size();
-  // Every shard scans all points and adds those of its voxels (shards in parallel).
+  const std::size_t shards = shards_.size();
+  const std::size_t threads = std::min(threads_, shards);
   std::size_t dropped = 0;
-  if (threads == 1 || n < 4096) {
-    for (std::size_t s = 0; s < threads; ++s) dropped = insert_shard(s, cloud, label);
-  } else {
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < threads; ++t)
-      pool.emplace_back([&, t] { insert_shard(t, cloud, label); });
+  if (shards == 1) {
     dropped = insert_shard(0, cloud, label);
+  } else if (threads == 1 || n < 4096) {
+    dropped = insert_shard(kAllShards, cloud, label);  // one pass routing runs to their shard
+  } else {
+    // Every thread scans all points and adds those of its shards (shards in parallel).
+    auto work = [&](std::size_t t) {
+      std::size_t d = 0;
+      for (std::size_t s = t; s < shards; s += threads) d = insert_shard(s, cloud, label);
+      return d;
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < threads; ++t) pool.emplace_back([&, t] { work(t); });
+    dropped = work(0);
     for (auto& th : pool) th.join();
   }
   points_inserted_ += n - dropped;
   points_dropped_ += dropped;
 }
 
+void VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
+  VoxelData& v = table[key];
+  for (int a = 0; a < 3; ++a) {
+    v.offset_sum[a] += src.offset_sum[a];
+    v.color_sum[a] += src.color_sum[a];
+  }
+  v.count += src.count;
+  v.color_count += src.color_count;
+  vote(v, src.label, src.label_votes);
+}
+
 void VoxelMap::merge(const VoxelMap& other) {
   require(other.voxel_m_ == voxel_m_, "VoxelMap::merge",
           "voxel sizes differ (" + std::to_string(other.voxel_m_) + " vs " +
               std::to_string(voxel_m_) + "); expected equal");
-  // Each voxel of `other` is added once, so the visiting order changes no voxel's value (only the
-  // hash layout, which no export depends on). Slots of a later voxel are prefetched, as in
-  // insert().
-  constexpr std::size_t kAhead = 12;
-  std::vector<std::pair<VoxelKey, const VoxelData*>> todo;
-  todo.reserve(other.size());
-  other.for_each([&](VoxelKey key, const VoxelData& v) { todo.emplace_back(key, &v); });
-  if (shards_.size() == 1) shards_[0].reserve(shards_[0].size() + todo.size());
-  for (std::size_t r = 0; r < todo.size(); ++r) {
-    if (shards_.size() == 1 && r + kAhead < todo.size())
-      shards_[0].prefetch(todo[r + kAhead].first);
-    const VoxelKey key = todo[r].first;
-    const VoxelData& src = *todo[r].second;
-    VoxelData& v = shards_[shard_of(key)][key];
-    for (int a = 0; a < 3; ++a) {
-      v.offset_sum[a] += src.offset_sum[a];
-      v.color_sum[a] += src.color_sum[a];
-    }
-    v.count += src.count;
-    v.color_count += src.color_count;
-    vote(v, src.label, src.label_votes);
+  if (other.shards_.size() == shards_.size()) {
+    for (std::size_t s = 0; s < shards_.size(); ++s) merge_shard(other, s);
+    merge_counts(other);
+    return;
   }
+  // Each voxel of `other` is added once, so the visiting order changes no voxel's value (only the
+  // hash layout, which no export depends on).
+  other.for_each(
+      [&](VoxelKey key, const VoxelData& v) { add_voxel(shards_[shard_of(key)], key, v); });
+  merge_counts(other);
+}
+
+void VoxelMap::merge_shard(const VoxelMap& other, std::size_t shard) {
+  require(other.voxel_m_ == voxel_m_ && other.shards_.size() == shards_.size() &&
+              shard < shards_.size(),
+          "VoxelMap::merge_shard",
+          "maps differ in voxel size or shard count, or no shard " + std::to_string(shard) +
+              "; expected equal maps and a shard below " + std::to_string(shards_.size()));
+  // The slot of a later voxel is prefetched, so that the cache misses of a large table overlap.
+  constexpr std::size_t kAhead = 12;
+  const Table& src = other.shards_[shard];
+  Table& dst = shards_[shard];
+  std::vector<std::pair<VoxelKey, const VoxelData*>> todo;
+  todo.reserve(src.size());
+  src.for_each([&](VoxelKey key, const VoxelData& v) { todo.emplace_back(key, &v); });
+  dst.reserve(dst.size() + todo.size());  // no rehash below: prefetched slots stay valid
+  for (std::size_t r = 0; r < std::min(todo.size(), kAhead); ++r) dst.prefetch(todo[r].first);
+  for (std::size_t r = 0; r < todo.size(); ++r) {
+    if (r + kAhead < todo.size()) dst.prefetch(todo[r + kAhead].first);
+    add_voxel(dst, todo[r].first, *todo[r].second);
+  }
+}
+
+void VoxelMap::merge_counts(const VoxelMap& other) {
   points_inserted_ += other.points_inserted_;
   points_dropped_ += other.points_dropped_;
 }

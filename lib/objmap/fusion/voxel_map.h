@@ -19,6 +19,8 @@ constexpr std::int32_t kNoLabel = -1;
 struct VoxelMapOptions {
   double voxel_m = 0.01;  // voxel edge; 1 cm as the paper's map
   int threads = 1;  // insert() on this many threads (key-sharded); output identical for any count
+  int shards = 0;   // hash tables the voxels are split into by key hash; 0 = `threads`. Maps with
+                    // the same shard count can be merged shard by shard (merge_shard) in parallel
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -50,6 +52,15 @@ class VoxelMap {
   // Adds every voxel of `other` (same voxel size required): sums, counts; labels vote with the
   // other voxel's label and votes. Used to join two objects.
   void merge(const VoxelMap& other);
+
+  // merge() restricted to shard `shard` of both maps (same voxel size and shard count required):
+  // merges of different shards may run concurrently. Point counters are not touched (see
+  // merge_counts). Each voxel of `other` is added once, so the result equals merge() of the same
+  // maps in the same order.
+  void merge_shard(const VoxelMap& other, std::size_t shard);
+  // Adds `other`'s points_inserted and points_dropped (the part of merge() merge_shard leaves out).
+  void merge_counts(const VoxelMap& other);
+  std::size_t shard_count() const { return shards_.size(); }
 
   // Room for this many voxels without rehashing (e.g. a per-frame map: ~1/4 of the pixels).
   void reserve(std::size_t voxels);
@@ -91,10 +102,14 @@ class VoxelMap {
  private:
   using Table = geometry::VoxelHashTable<VoxelData>;
   std::size_t shard_of(VoxelKey key) const;
+  // kAllShards: one pass that fills every shard (single-threaded insert of a sharded map).
+  static constexpr std::size_t kAllShards = ~std::size_t{0};
   std::size_t insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label);
+  void add_voxel(Table& table, VoxelKey key, const VoxelData& src);
 
   double voxel_m_;
   float inv_voxel_m_;
+  std::size_t threads_ = 1;
   std::vector<Table> shards_;
   std::uint64_t points_inserted_ = 0;
   std::uint64_t points_dropped_ = 0;

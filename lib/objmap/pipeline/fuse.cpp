@@ -4,9 +4,11 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <deque>
 #include <fstream>
 #include <future>
+#include <mutex>
 #include <nlohmann/json.hpp>
 
 #include "objmap/core/error.h"
@@ -169,24 +171,81 @@ struct SegmentationSource {
   std::vector<double> stamps;                      // frame timestamps, sorted
 };
 
-// What a worker hands back for one keyframe.
+// Hash shards of the dense map. The workers merge their keyframe's voxels into the dense map shard
+// by shard, each shard strictly in keyframe order, so two workers merge different shards at once
+// and every voxel sums its frames in the same order whatever the thread count.
+constexpr int kDenseShards = 16;
+
+// Who may merge into which shard of the dense map: shard s takes keyframe next[s] only.
+class ShardedMergeOrder {
+ public:
+  explicit ShardedMergeOrder(std::size_t shards) : next_(shards, 0) {}
+
+  // Merges keyframe `index` into every shard with merge(shard), in any order of the shards, each
+  // shard once every earlier keyframe has been merged into it. Returns false (nothing more merged)
+  // when the run failed.
+  template <typename F>
+  bool merge_in_order(std::size_t index, F&& merge) {
+    const std::size_t n = next_.size();
+    std::vector<bool> done(n, false);
+    std::size_t left = n;
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (left > 0) {
+      std::size_t ready = n;
+      for (std::size_t k = 0; k < n && ready == n; ++k) {
+        const std::size_t s = (index * 5 + k) % n;  // neighbouring frames start on other shards
+        if (!done[s] && next_[s] == index) ready = s;
+      }
+      if (failed_) return false;
+      if (ready == n) {
+        cv_.wait(lock);
+        continue;
+      }
+      lock.unlock();
+      try {
+        merge(ready);
+      } catch (...) {
+        fail();
+        throw;
+      }
+      lock.lock();
+      done[ready] = true;
+      --left;
+      ++next_[ready];
+      cv_.notify_all();
+    }
+    return true;
+  }
+  // Releases every waiting worker (a keyframe failed; the run is abandoned).
+  void fail() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    failed_ = true;
+    cv_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::vector<std::size_t> next_;
+  bool failed_ = false;
+};
+
+// What a worker hands back for one keyframe (its dense voxels are already in the dense map).
 struct FrameWork {
-  fusion::VoxelMap dense;
   std::vector<fusion::Observation> observations;
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0;
-  explicit FrameWork(const fusion::VoxelMapOptions& o) : dense(o) {}
 };
 
-// Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so the
-// main thread merges voxels, not pixels), and each instance's pixels into an observation.
+// Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so that
+// voxels are merged, not pixels) merged into `dense` in keyframe order, and each instance's pixels
+// into an observation.
 FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
                            const geometry::RayTable& rays, const io::FramePair& frame,
                            const Keyframe& keyframe, int keyframe_index,
-                           const segmentation::FrameSegmentation* seg) {
-  fusion::VoxelMapOptions map_options;
-  map_options.voxel_m = options.map_voxel_m;
-  FrameWork work(map_options);
+                           const segmentation::FrameSegmentation* seg, fusion::VoxelMap& dense,
+                           ShardedMergeOrder& order) {
+  FrameWork work;
 
   // 1. The images (checked: size, type).
   const cv::Mat bgr = io::read_rgb(frame.rgb_file, camera.width, camera.height);
@@ -196,9 +255,20 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   geometry::BackprojectOptions dense_options = options.depth;
   dense_options.stride = options.dense_stride;
   const geometry::DepthFrame dense_frame(depth, keyframe.world_from_cam, &bgr);
-  const auto dense = geometry::backproject(rays, dense_frame, dense_options);
-  work.dense_points = dense.points_in_world.size();
-  work.dense.insert(dense.points_in_world);
+  {
+    fusion::VoxelMapOptions map_options;
+    map_options.voxel_m = options.map_voxel_m;
+    map_options.shards = kDenseShards;
+    fusion::VoxelMap frame_map(map_options);
+    {
+      const auto points = geometry::backproject(rays, dense_frame, dense_options);
+      work.dense_points = points.points_in_world.size();
+      frame_map.reserve(points.points_in_world.size() / 4);
+      frame_map.insert(points.points_in_world);
+    }
+    order.merge_in_order(static_cast<std::size_t>(keyframe_index),
+                         [&](std::size_t shard) { dense.merge_shard(frame_map, shard); });
+  }
 
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
   if (!seg) return work;
@@ -388,7 +458,9 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const geometry::RayTable rays = geometry::make_ray_table(camera);
   fusion::VoxelMapOptions dense_options;
   dense_options.voxel_m = options.map_voxel_m;
+  dense_options.shards = kDenseShards;
   fusion::VoxelMap dense(dense_options);
+  ShardedMergeOrder merge_order(kDenseShards);
   fusion::ObjectMap objects(options.objects);
 
   const std::size_t window = static_cast<std::size_t>(std::max(1, options.threads));
@@ -407,8 +479,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
           seg_frame = &lazy;
         }
       }
-      return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
-                              keyframes[i], static_cast<int>(i), seg_frame);
+      try {
+        return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
+                                keyframes[i], static_cast<int>(i), seg_frame, dense, merge_order);
+      } catch (...) {
+        merge_order.fail();  // later keyframes must not wait for this one's merge
+        throw;
+      }
     });
   };
   auto drain = [&] {
@@ -421,7 +498,6 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
         pending.push_back(launch(next++));
       FrameWork work = pending.front().get();
       pending.pop_front();
-      dense.merge(work.dense);
       result.dense_points_raw += work.dense_points;
       result.instances_seen += work.instances;
       result.instances_skipped_score += work.skipped_score;
@@ -460,16 +536,22 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 5. The maps and the run folder, written under a temporary name and renamed when complete.
   t0 = Clock::now();
-  const PointCloud dense_cloud = dense.to_cloud();
-  result.dense_points_map = dense_cloud.size();
-  const fusion::SemanticMaps maps = fusion::make_semantic_maps(dense, result.objects);
-
+  // One big buffer at a time: the dense cloud is written and freed before the semantic maps are
+  // made, and the dense voxel map is freed before they are written.
   io::StagingDir staging(options.out);
   const fs::path dir = staging.path();
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();
-  io::write_ply(dir / "map_dense.ply", dense_cloud, ply);
+  {
+    const PointCloud dense_cloud = dense.to_cloud();
+    result.dense_points_map = dense_cloud.size();
+    io::write_ply(dir / "map_dense.ply", dense_cloud, ply);
+  }
+  fusion::SemanticMaps maps = fusion::make_semantic_maps(dense, result.objects);
+  dense = fusion::VoxelMap(dense_options);
   io::write_ply(dir / "map_semantic.ply", maps.semantic, ply);
+  const std::size_t semantic_points = maps.semantic.size();
+  maps.semantic = PointCloud();
   io::write_ply(dir / "map_objects.ply", maps.objects_only, ply);
   fs::create_directories(dir / "objects");
   ordered_json objects_json = ordered_json::array();
@@ -532,7 +614,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       {"objects_raw", result.object_points_raw},
       {"objects_voxel_filtered", result.object_points_voxel},
       {"objects_outlier_filtered", result.object_points_filtered},
-      {"semantic_map", maps.semantic.size()},
+      {"semantic_map", semantic_points},
       {"objects_map", maps.objects_only.size()},
       {"reduction_objects_voxel", reduction(result.object_points_raw, result.object_points_voxel)},
       {"reduction_objects_total",

@@ -10,6 +10,19 @@
 
 namespace objmap::sim {
 
+namespace {
+// round(c * 255) clamped to [0, 255], rounding halves away from zero (as std::lround) without the
+// library call: for |x| < 2^52, x - trunc(x) is exact.
+inline std::uint8_t to8(double c) {
+  const double x = c * 255.0;
+  if (!(x > 0.0)) return 0;  // also NaN
+  if (x >= 255.0) return 255;
+  int r = static_cast<int>(x);
+  if (x - r >= 0.5) ++r;
+  return static_cast<std::uint8_t>(r);
+}
+}  // namespace
+
 RenderedFrame render_frame(const Scene& scene, const Camera& camera, const Pose& world_from_cam,
                            int threads) {
   camera.check("synthetic camera");
@@ -25,15 +38,27 @@ RenderedFrame render_frame(const Scene& scene, const Camera& camera, const Pose&
   const Vec3 fill = Vec3(-0.5, -0.7, 0.4).normalized();  // a weak second light from the other side
 
   // Screen-space culling: the pixel rectangle of each object's box (projected corners; the whole
-  // image when a corner is behind the camera, e.g. the room around it).
+  // image when a corner is behind the camera, e.g. the room around it). Everything that does not
+  // depend on the pixel is computed here once per frame: the camera centre in each part's frame and
+  // the bounding-sphere terms (the same expressions as intersect_part() and cast_ray(), so the
+  // results are bit-identical).
+  struct PreparedPart {
+    const Part* part;
+    Eigen::Matrix3d part_from_world_r;
+    Vec3 origin_in_part;
+  };
   struct Candidate {
     const SceneObject* object;
     int u0, u1, v0, v1;
+    Vec3 origin_from_center;  // camera centre - bounding sphere centre
+    double c;                 // |origin_from_center|^2 - radius^2
+    std::vector<PreparedPart> parts;
   };
   std::vector<Candidate> candidates;
   const Pose cam_from_world = world_from_cam.inverse();
+  const Vec3 origin = world_from_cam.translation();
   auto add = [&](const SceneObject& o) {
-    Candidate c{&o, 0, camera.width - 1, 0, camera.height - 1};
+    Candidate c{&o, 0, camera.width - 1, 0, camera.height - 1, Vec3::Zero(), 0.0, {}};
     double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
     bool behind = false;
     for (int k = 0; k < 8 && !behind; ++k) {
@@ -57,10 +82,24 @@ RenderedFrame render_frame(const Scene& scene, const Camera& camera, const Pose&
       c.v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 1);
       c.v1 = std::min(camera.height - 1, static_cast<int>(std::ceil(vmax)) + 1);
     }
-    candidates.push_back(c);
+    c.origin_from_center = origin - o.bound_center;
+    c.c = c.origin_from_center.squaredNorm() - o.bound_radius * o.bound_radius;
+    for (std::size_t i = 0; i < o.parts.size(); ++i) {
+      PreparedPart p{&o.parts[i], o.world_from_part[i].linear().transpose(), Vec3::Zero()};
+      p.origin_in_part = p.part_from_world_r * (origin - o.world_from_part[i].translation());
+      c.parts.push_back(p);
+    }
+    candidates.push_back(std::move(c));
   };
   for (const auto& o : scene.structure) add(o);
   for (const auto& o : scene.objects) add(o);
+
+  // Ray directions with z = 1 in the camera frame (the ray parameter t is the depth z): x depends
+  // on the column only, y on the row only (no distortion).
+  std::vector<double> x_of_u(camera.width), y_of_v(camera.height);
+  for (int u = 0; u < camera.width; ++u) x_of_u[u] = camera.unproject(u, 0, 1.0).x();
+  for (int v = 0; v < camera.height; ++v) y_of_v[v] = camera.unproject(0, v, 1.0).y();
+  constexpr double kTMin = 1e-6;  // as cast_ray()
 
   parallel_for(static_cast<std::size_t>(camera.height), threads, [&](std::size_t row) {
     const int v = static_cast<int>(row);
@@ -70,31 +109,38 @@ RenderedFrame render_frame(const Scene& scene, const Camera& camera, const Pose&
     std::vector<const Candidate*> row_candidates;
     for (const auto& c : candidates)
       if (v >= c.v0 && v <= c.v1) row_candidates.push_back(&c);
-    std::vector<const SceneObject*> pixel_objects;
-    pixel_objects.reserve(row_candidates.size());
     for (int u = 0; u < camera.width; ++u) {
-      pixel_objects.clear();
-      for (const Candidate* c : row_candidates)
-        if (u >= c->u0 && u <= c->u1) pixel_objects.push_back(c->object);
-      // Direction with z = 1 in the camera frame: the ray parameter t is the depth z.
-      const Vec3 direction_in_cam = camera.unproject(u, v, 1.0);
-      Ray ray;
-      ray.origin = world_from_cam.translation();
-      ray.direction = world_from_cam_r * direction_in_cam;
-      const SurfaceHit hit = cast_ray(pixel_objects, ray);
+      const Vec3 direction_in_cam(x_of_u[u], y_of_v[v], 1.0);
+      const Vec3 direction = world_from_cam_r * direction_in_cam;
+      // Nearest hit, objects in scene order, bounding sphere first (as cast_ray()).
+      SurfaceHit hit;
+      const double a = direction.squaredNorm();
+      for (const Candidate* c : row_candidates) {
+        if (u < c->u0 || u > c->u1) continue;
+        const double b = c->origin_from_center.dot(direction);
+        const double disc = b * b - a * c->c;
+        if (disc < 0.0) continue;
+        const double s = std::sqrt(disc);
+        if ((-b + s) / a <= kTMin || (-b - s) / a >= hit.t) continue;
+        for (std::size_t i = 0; i < c->parts.size(); ++i) {
+          const PreparedPart& p = c->parts[i];
+          const Vec3 d = p.part_from_world_r * direction;
+          if (intersect_part_local(*p.part, p.origin_in_part, d, kTMin, &hit)) {
+            hit.object = c->object;
+            hit.part = static_cast<int>(i);
+          }
+        }
+      }
       if (!hit.hit()) continue;
       const Part& part = hit.object->parts[hit.part];
       const Eigen::Matrix3d& world_from_part_r = hit.object->world_from_part[hit.part].linear();
       Vec3 normal = world_from_part_r * hit.normal_in_part;
-      if (normal.dot(ray.direction) > 0.0) normal = -normal;  // seen from inside (room walls)
+      if (normal.dot(direction) > 0.0) normal = -normal;  // seen from inside (room walls)
       const double shade = scene.ambient +
                            (1.0 - scene.ambient) * std::max(0.0, normal.dot(light)) +
                            0.2 * std::max(0.0, normal.dot(fill));
       const Eigen::Vector3d colour =
           albedo(material_at(part, hit.normal_in_part), hit.point_in_part) * shade;
-      auto to8 = [](double c) {
-        return static_cast<std::uint8_t>(std::clamp(std::lround(c * 255.0), 0L, 255L));
-      };
       rgb[u] = cv::Vec3b(to8(colour.z()), to8(colour.y()), to8(colour.x()));
       depth[u] = static_cast<float>(hit.t);
       label[u] = static_cast<std::uint16_t>(hit.object->id);

@@ -112,6 +112,11 @@ bool intersect_part(const Part& part, const Pose& world_from_part, const Ray& ra
   const Eigen::Matrix3d part_from_world_r = world_from_part.linear().transpose();
   const Vec3 o = part_from_world_r * (ray.origin - world_from_part.translation());
   const Vec3 d = part_from_world_r * ray.direction;
+  return intersect_part_local(part, o, d, t_min, hit);
+}
+
+bool intersect_part_local(const Part& part, const Vec3& o, const Vec3& d, double t_min,
+                          SurfaceHit* hit) {
   const Vec3& h = part.half_extent;
   double best = hit->t;
   Vec3 normal = Vec3::UnitZ();

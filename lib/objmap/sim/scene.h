@@ -97,6 +97,10 @@ struct SurfaceHit {
 // Nearest intersection with t in (t_min, hit->t); updates `hit` and returns true when closer.
 bool intersect_part(const Part& part, const Pose& world_from_part, const Ray& ray, double t_min,
                     SurfaceHit* hit);
+// The same with the ray already in the part's frame (origin `o`, direction `d`); the renderer
+// transforms the camera centre once per frame and calls this.
+bool intersect_part_local(const Part& part, const Vec3& o, const Vec3& d, double t_min,
+                          SurfaceHit* hit);
 bool intersect_object(const SceneObject& object, const Ray& ray, double t_min, SurfaceHit* hit);
 // Nearest hit among the structure and the objects (t > t_min).
 SurfaceHit cast_ray(const Scene& scene, const Ray& ray, double t_min = 1e-6);

@@ -29,13 +29,13 @@ const Permutation& permutation() {
   return table;
 }
 
-double lattice(std::int64_t x, std::int64_t y, std::int64_t z, std::uint32_t seed) {
-  const auto& t = permutation();
-  // The seed shifts the lattice so that different materials get different patterns.
-  const int a = t.p[(x + seed) & 255];
-  const int b = t.p[(a + y + (seed >> 8)) & 255];
-  const int c = t.p[(b + z + (seed >> 16)) & 255];
-  return t.value[t.p[c + ((seed >> 24) & 255)]];
+// floor() without the library call (the build targets baseline x86-64, which has no rounding
+// instruction): exact for |x| < 2^52. It gives +0 for -0, which changes nothing below (the fraction
+// only scales differences of lattice values).
+inline double floor_fast(double x) {
+  if (!(std::abs(x) < 4503599627370496.0)) return std::floor(x);
+  const double t = static_cast<double>(static_cast<std::int64_t>(x));
+  return t > x ? t - 1.0 : t;
 }
 
 double smooth(double t) { return t * t * (3.0 - 2.0 * t); }
@@ -45,14 +45,24 @@ Eigen::Vector3d to_vec(const Rgb& c) { return Eigen::Vector3d(c.r, c.g, c.b) / 2
 }  // namespace
 
 double value_noise(const Vec3& p, std::uint32_t seed) {
-  const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
+  const double fx = floor_fast(p.x()), fy = floor_fast(p.y()), fz = floor_fast(p.z());
   const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy),
              iz = static_cast<std::int64_t>(fz);
   const double tx = smooth(p.x() - fx), ty = smooth(p.y() - fy), tz = smooth(p.z() - fz);
+  // Lattice hash of the 8 corners (Perlin-style: x, then y, then z, then the seed's top byte),
+  // sharing the x and xy levels between corners. The seed shifts the lattice so that different
+  // materials get different patterns.
+  const auto& t = permutation();
+  const std::int64_t sx = ix + seed, sy = iy + (seed >> 8), sz = iz + (seed >> 16);
+  const int sw = static_cast<int>((seed >> 24) & 255);
   double c[2][2][2];
-  for (int a = 0; a < 2; ++a)
-    for (int b = 0; b < 2; ++b)
-      for (int d = 0; d < 2; ++d) c[a][b][d] = lattice(ix + a, iy + b, iz + d, seed);
+  for (int a = 0; a < 2; ++a) {
+    const int ha = t.p[(sx + a) & 255];
+    for (int b = 0; b < 2; ++b) {
+      const int hb = t.p[(ha + sy + b) & 255];
+      for (int d = 0; d < 2; ++d) c[a][b][d] = t.value[t.p[t.p[(hb + sz + d) & 255] + sw]];
+    }
+  }
   auto lerp = [](double u, double v, double t) { return u + (v - u) * t; };
   const double x00 = lerp(c[0][0][0], c[1][0][0], tx), x10 = lerp(c[0][1][0], c[1][1][0], tx);
   const double x01 = lerp(c[0][0][1], c[1][0][1], tx), x11 = lerp(c[0][1][1], c[1][1][1], tx);

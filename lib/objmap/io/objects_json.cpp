@@ -1,0 +1,78 @@
+#include "objmap/io/objects_json.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "objmap/core/error.h"
+
+namespace objmap::io {
+
+namespace {
+
+using nlohmann::json;
+
+const json& field(const json& j, const std::string& key, const std::string& where) {
+  if (!j.is_object() || !j.contains(key))
+    throw InputError(where, "missing field '" + key + "'; expected an objmap objects.json");
+  return j[key];
+}
+
+double number(const json& j, const std::string& key, const std::string& where) {
+  const json& v = field(j, key, where);
+  if (!v.is_number()) throw InputError(where + "." + key, "expected a number, got " + v.dump());
+  return v.get<double>();
+}
+
+Vec3 vec3(const json& j, const std::string& key, const std::string& where) {
+  const json& v = field(j, key, where);
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+    throw InputError(where + "." + key, "expected [x, y, z], got " + v.dump());
+  return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+}
+
+}  // namespace
+
+std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "cannot open; expected RUN/objects.json of objmap fuse");
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
+  }
+  const json& objects = field(doc, "objects", file.string());
+  if (!objects.is_array()) throw InputError(file.string() + ": objects", "expected an array");
+  std::vector<MappedObject> out;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const json& o = objects[i];
+    const std::string where = file.string() + ": objects[" + std::to_string(i) + "]";
+    MappedObject m;
+    m.id = static_cast<int>(number(o, "id", where));
+    const json& cls = field(o, "class", where);
+    if (!cls.is_string()) throw InputError(where + ".class", "expected a string");
+    m.class_name = cls.get<std::string>();
+    m.score = number(o, "score", where);
+    m.centroid = vec3(o, "centroid", where);
+    const json& aabb = field(o, "aabb", where);
+    m.aabb.min = vec3(aabb, "min", where + ".aabb");
+    m.aabb.max = vec3(aabb, "max", where + ".aabb");
+    const json& obb = field(o, "obb", where);
+    m.obb.center = vec3(obb, "center", where + ".obb");
+    m.obb.half_extent = vec3(obb, "half_extent", where + ".obb");
+    const json& rot = field(obb, "rotation", where + ".obb");
+    if (!rot.is_array() || rot.size() != 9)
+      throw InputError(where + ".obb.rotation", "expected 9 numbers (row-major)");
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) m.obb.rotation(r, c) = rot[3 * r + c].get<double>();
+    m.points = static_cast<std::size_t>(
+        number(field(o, "points", where), "outlier_filtered", where + ".points"));
+    m.observations = static_cast<int>(number(o, "observation_count", where));
+    const json& ply = field(o, "ply", where);
+    if (ply.is_string()) m.ply = ply.get<std::string>();
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+}  // namespace objmap::io

@@ -1,0 +1,28 @@
+#pragma once
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+// Reading the object database that `objmap fuse` writes (RUN/objects.json,
+// schemas/objects.schema.json): what evaluation and reports need of each object.
+namespace objmap::io {
+
+struct MappedObject {
+  int id = -1;
+  std::string class_name;
+  double score = 0.0;
+  Vec3 centroid = Vec3::Zero();  // the paper's position: mean of the filtered points
+  Aabb aabb;
+  Obb obb;
+  std::size_t points = 0;  // filtered points (its PLY)
+  int observations = 0;
+  std::string ply;  // relative to the run folder
+};
+
+// Throws InputError "<file>: <field>: ..." for malformed JSON, a missing field or a wrong type.
+std::vector<MappedObject> read_objects_json(const std::filesystem::path& file);
+
+}  // namespace objmap::io

@@ -1,0 +1,40 @@
+#pragma once
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+// An orthographic top view of a map (e.g. map_semantic.ply) with the objects drawn on it: what a
+// person looks at first to judge an object map.
+namespace objmap::report {
+
+struct TopViewOptions {
+  int up_axis = 2;         // the world axis that points up (TUM and objmap synth: z = 2)
+  double pixel_m = 0.005;  // metres per pixel (5 mm), made coarser when the map is larger than...
+  int max_size_px = 1600;  // ... this many pixels on its longer side
+  int margin_px = 24;      // blank border around the map
+  double clip_percent = 0.5;  // the extent ignores this % of points on each side (stray points)
+  bool draw_objects = true;   // object footprints (OBB seen from above) with "id class" labels
+  void check() const;         // throws InputError naming the bad field
+};
+
+struct TopViewObject {
+  int id = -1;
+  std::string label;  // e.g. "7 cup"
+  Obb obb;
+  Rgb color;
+};
+
+struct TopView {
+  cv::Mat image;  // CV_8UC3 BGR
+  double pixel_m = 0.0;
+  // World coordinates (the two horizontal axes) of the image's top-left pixel centre.
+  double origin_a = 0.0, origin_b = 0.0;
+};
+
+// Each pixel shows the highest point above it (z-buffer along up_axis); empty pixels are white.
+TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
+                        const TopViewOptions& options = {});
+
+}  // namespace objmap::report
