@@ -1,6 +1,7 @@
 #include "objmap/fusion/object_map.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <string>
@@ -18,6 +19,18 @@ void ObjectMapOptions::check() const {
   require(std::isfinite(distance_gate_m) && distance_gate_m > 0.0,
           "ObjectMapOptions.distance_gate_m",
           "must be > 0, got " + std::to_string(distance_gate_m));
+  require(std::isfinite(gate_radius_factor) && gate_radius_factor >= 0.0,
+          "ObjectMapOptions.gate_radius_factor",
+          "must be >= 0, got " + std::to_string(gate_radius_factor));
+  require(overlap_measure == OverlapMeasure::kIou ||
+              overlap_measure == OverlapMeasure::kContainment,
+          "ObjectMapOptions.overlap_measure", "must be kIou or kContainment");
+  require(overlap_tolerance_voxels == 0 || overlap_tolerance_voxels == 1,
+          "ObjectMapOptions.overlap_tolerance_voxels",
+          "must be 0 or 1, got " + std::to_string(overlap_tolerance_voxels));
+  require(std::isfinite(merge_min_overlap) && merge_min_overlap >= 0.0 && merge_min_overlap <= 1.0,
+          "ObjectMapOptions.merge_min_overlap",
+          "must be in [0, 1], got " + std::to_string(merge_min_overlap));
   require(finite_nonneg(weight_id), "ObjectMapOptions.weight_id",
           "must be >= 0, got " + std::to_string(weight_id));
   require(finite_nonneg(weight_distance), "ObjectMapOptions.weight_distance",
@@ -36,6 +49,37 @@ void ObjectMapOptions::check() const {
           "must be >= 1, got " + std::to_string(min_points));
 }
 
+const char* to_string(OverlapMeasure measure) {
+  return measure == OverlapMeasure::kIou ? "iou" : "containment";
+}
+
+OverlapMeasure parse_overlap_measure(const std::string& text, const std::string& where) {
+  if (text == "iou") return OverlapMeasure::kIou;
+  if (text == "containment") return OverlapMeasure::kContainment;
+  throw InputError(where, "unknown overlap measure '" + text + "'; expected iou or containment");
+}
+
+namespace {
+
+// Packed-key offsets of the 27 voxels of a 3×3×3 neighbourhood (the packed fields never wrap inside
+// the key range, so adding the offset moves each coordinate by -1, 0 or +1).
+const std::array<VoxelKey, 27>& neighbourhood_offsets() {
+  static const std::array<VoxelKey, 27> offsets = [] {
+    std::array<VoxelKey, 27> o{};
+    int n = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz)
+          o[n++] = static_cast<VoxelKey>(static_cast<std::int64_t>(dx) * (std::int64_t{1} << 42) +
+                                         static_cast<std::int64_t>(dy) * (std::int64_t{1} << 21) +
+                                         static_cast<std::int64_t>(dz));
+    return o;
+  }();
+  return offsets;
+}
+
+}  // namespace
+
 struct ObjectMap::Object {
   int id = -1;
   bool alive = true;
@@ -43,6 +87,10 @@ struct ObjectMap::Object {
   VoxelMap voxels;
   Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();  // voxel bounds
   Vec3 centroid = Vec3::Zero();                                                // voxel-weighted
+  double radius = 0.0;  // RMS distance of the voxels' mean positions from the centroid
+  // Every voxel within one voxel (3×3×3) of an occupied voxel: the tolerant overlap test is one
+  // lookup per voxel of the other set.
+  geometry::VoxelHashTable<std::uint8_t> near;
   std::map<std::string, ClassVote> histogram;
   double score_sum = 0.0;
   int observations = 0;
@@ -52,9 +100,21 @@ struct ObjectMap::Object {
   std::vector<MergeLink> merges;
 
   explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
+  // Marks the neighbourhoods of `keys` (voxels new to this object) in `near`.
+  void dilate(const std::vector<VoxelKey>& keys) {
+    const auto& offsets = neighbourhood_offsets();
+    near.reserve(near.size() + keys.size() * 4);
+    for (VoxelKey k : keys)
+      for (VoxelKey off : offsets) near[k + off] = 1;
+  }
   void refresh() {
     voxels.key_bounds(lo, hi);
     centroid = voxels.centroid();
+    double sq = 0.0;
+    voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+      sq += (voxels.mean_position(key, v) - centroid).squaredNorm();
+    });
+    radius = voxels.size() > 0 ? std::sqrt(sq / static_cast<double>(voxels.size())) : 0.0;
   }
 };
 
@@ -75,25 +135,37 @@ std::string ObjectMap::voted_class(const Object& o) {
   return best ? best->first : std::string();
 }
 
-ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, const VoxelMap& a,
-                                   const Eigen::Vector3i& a_lo, const Eigen::Vector3i& a_hi,
-                                   const Object& b) const {
+ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double radius_a,
+                                   const VoxelMap& a, const Eigen::Vector3i& a_lo,
+                                   const Eigen::Vector3i& a_hi, const Object& b,
+                                   double threshold) const {
   const ObjectMapOptions& o = options_;
   Scores s;
   s.p_id = same_id ? 1.0 : 0.0;
-  // Eq 17: centroid distance, mapped to [0, 1] (1/2 at the gate).
+  // Eq 17: centroid distance, mapped to [0, 1] (1/2 at the size-scaled gate G).
   s.distance_m = (centroid_a - b.centroid).norm();
-  const double f = std::max(0.0, 1.0 - s.distance_m / (2.0 * o.distance_gate_m));
+  const double gate =
+      std::max(o.distance_gate_m, o.gate_radius_factor * std::max(radius_a, b.radius));
+  const double f = std::max(0.0, 1.0 - s.distance_m / (2.0 * gate));
   const double partial = o.weight_id * s.p_id + o.weight_distance * f;
-  // Eq 21 only when it can change the decision: IoU <= min(|A|,|B|)/max(|A|,|B|), and 0 for
-  // disjoint voxel bounds.
+  // Eq 21 only when it can change the decision: M <= 1 (IoU <= min(|A|,|B|)/max(|A|,|B|)), and 0
+  // for voxel bounds further apart than the tolerance.
   const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.voxels.size());
-  const double iou_bound = std::min(na, nb) / std::max(na, nb);
-  const bool disjoint = (a_hi.array() < b.lo.array()).any() || (b.hi.array() < a_lo.array()).any();
-  if (!disjoint &&
-      partial + o.weight_overlap * iou_bound > std::min(o.match_threshold, o.merge_threshold)) {
-    const double common = static_cast<double>(common_voxels(a, b.voxels));
-    s.overlap = common / (na + nb - common);
+  const bool iou = o.overlap_measure == OverlapMeasure::kIou;
+  const double bound = iou ? std::min(na, nb) / std::max(na, nb) : 1.0;
+  const int t = o.overlap_tolerance_voxels;
+  const bool disjoint = ((a_hi.array() + t) < b.lo.array()).any() ||
+                        ((b.hi.array() + t) < a_lo.array()).any();
+  if (!disjoint && na > 0 && partial + o.weight_overlap * bound > threshold) {
+    double common = 0.0;
+    if (t == 0) {
+      common = static_cast<double>(common_voxels(a, b.voxels));
+    } else {
+      std::size_t n = 0;
+      a.for_each([&](VoxelKey key, const VoxelData&) { n += b.near.contains(key); });
+      common = static_cast<double>(n);
+    }
+    s.overlap = iou ? common / std::max(na, na + nb - common) : common / na;
   }
   // Eq 22.
   s.score_p = partial + o.weight_overlap * s.overlap;
@@ -120,7 +192,8 @@ AddResult ObjectMap::add(const Observation& obs) {
         normalize_class_name(voted_class(*object)) != normalize_class_name(obs.class_name))
       continue;
     const bool same_id = obs.track_id && object->track_ids.count(*obs.track_id) > 0;
-    const Scores s = score(same_id, obs_centroid, obs_voxels, lo, hi, *object);
+    const Scores s =
+        score(same_id, obs_centroid, 0.0, obs_voxels, lo, hi, *object, options_.match_threshold);
     if (s.score_p > options_.match_threshold && (!best || s.score_p > best_scores.score_p)) {
       best = object.get();
       best_scores = s;
@@ -138,7 +211,13 @@ AddResult ObjectMap::add(const Observation& obs) {
 
   // 4. Fuse: points into the voxel set, class vote, track ids, provenance.
   Object& o = *best;
-  o.voxels.insert(obs.points_in_world);
+  std::vector<VoxelKey> new_keys;
+  new_keys.reserve(obs_voxels.size());
+  obs_voxels.for_each([&](VoxelKey key, const VoxelData&) {
+    if (!o.voxels.contains(key)) new_keys.push_back(key);
+  });
+  o.voxels.merge(obs_voxels);
+  o.dilate(new_keys);
   o.refresh();
   ClassVote& vote = o.histogram[obs.class_name];
   vote.score_sum += obs.score;
@@ -184,13 +263,19 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     Scores s;
   };
   auto pair_score = [&](const Object& a, const Object& b, Scores& s) {
-    if (options_.require_same_class &&
+    if ((options_.require_same_class || options_.merge_require_same_class) &&
         normalize_class_name(voted_class(a)) != normalize_class_name(voted_class(b)))
       return false;
     bool same_id = false;
     for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
-    s = score(same_id, a.centroid, a.voxels, a.lo, a.hi, b);
-    return s.score_p > options_.merge_threshold;
+    // M: the smaller object against the larger (containment: the share of the smaller on the
+    // larger).
+    const bool a_small = a.voxels.size() <= b.voxels.size();
+    const Object& small = a_small ? a : b;
+    const Object& large = a_small ? b : a;
+    s = score(same_id, small.centroid, small.radius, small.voxels, small.lo, small.hi, large,
+              options_.merge_threshold);
+    return s.score_p > options_.merge_threshold && s.overlap >= options_.merge_min_overlap;
   };
   std::vector<Pair> pairs;  // only pairs above the threshold, in (i, j) order
   for (std::size_t i = 0; i < objects_.size(); ++i) {
@@ -217,7 +302,12 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
 
     // Join `absorbed` into `into` (the lower id).
     MergeLink link{into->id, absorbed->id, best.p_id, best.distance_m, best.overlap, best.score_p};
+    std::vector<VoxelKey> new_keys;
+    absorbed->voxels.for_each([&](VoxelKey key, const VoxelData&) {
+      if (!into->voxels.contains(key)) new_keys.push_back(key);
+    });
     into->voxels.merge(absorbed->voxels);
+    into->dilate(new_keys);
     into->refresh();
     for (const auto& [name, vote] : absorbed->histogram) {
       into->histogram[name].score_sum += vote.score_sum;
@@ -239,6 +329,7 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     absorbed->alive = false;
     absorbed->absorbed_into = into->id;
     absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
+    absorbed->near.clear();
     absorbed->provenance.clear();
     absorbed->merges.clear();
     made.push_back(link);

@@ -27,27 +27,59 @@ struct Observation {
   std::optional<Vec3> centroid_in_cam;  // the observation's centroid in the camera frame (ditto)
 };
 
+// How M (eq 21) compares two voxel sets A (the observation, or the smaller object in the merge
+// pass) and B (the object).
+enum class OverlapMeasure {
+  // The paper's IoU |A∩B| / |A∪B|. Between one partial view and an object fused from many views it
+  // is bounded by |A|/|B| (a view of a cabinet shows ~half of it: M ≤ 0.5 even when every point
+  // of the view lies on the object), so well-fused objects stop matching their own new views.
+  kIou,
+  // |A∩B| / |A| with |A| ≤ |B| (A = the observation in add(); the smaller object in merge_pass()):
+  // the share of A that lies on B. 1 for any partial view of the object, whatever the object's
+  // size; small for a neighbour (only A's boundary touches it). The default: it measured best
+  // (docs/_parts/assoc.md).
+  kContainment,
+};
+const char* to_string(OverlapMeasure measure);
+// "iou" or "containment"; throws InputError(where, ...) otherwise.
+OverlapMeasure parse_overlap_measure(const std::string& text, const std::string& where);
+
 // Association score (eq 22): P = w_id·P_ID + w_d·f(D) + w_m·M, a match when P > K.
 //   P_ID ∈ {0, 1}: the observation's track id is one of the object's track ids.
 //   D (eq 17): distance between the observation's and the object's centroids (voxel-weighted).
-//   f(D) = max(0, 1 − D / (2·gate)): 1 at D = 0, 1/2 at the paper's gate, 0 at twice the gate.
-//   M (eq 21): |A∩B| / (|A| + |B| − |A∩B|) over the voxel sets of the observation and the object.
+//   f(D) = max(0, 1 − D / (2·G)): 1 at D = 0, 1/2 at the gate G, 0 at twice the gate, where
+//     G = max(distance_gate_m, gate_radius_factor × r) and r is the object's RMS radius (of its
+//     voxels about its centroid; the larger of the two objects in the merge pass): partial views of
+//     a large object (a chair, a cabinet) have centroids tens of cm apart, so a fixed 0.1 m gate
+//     splits them; for a small object (r < 0.2 m) G is the paper's gate.
+//   M (eq 21): overlap_measure of the voxel sets. With overlap_tolerance_voxels = 1 a voxel of A
+//     counts as shared when B has a voxel in its 3×3×3 neighbourhood (depth noise of ±1–2 cm at
+//     2–3 m moves a re-observed surface by a voxel or two, so exact 1 cm coincidence is fragile).
 // The defaults are chosen so that the paper's single-criterion rules become the combined rule:
 //   w_m·0.8 = K: overlap above the paper's 0.8 alone is a match (re-seen object, new id);
 //   w_id < K and w_d < K: neither an id alone (id switches, reused ids) nor nearness alone (two
-//   objects
-//     side by side) is a match;
-//   w_id + w_d·f(gate) = K: the same id and D below the paper's 0.1 m gate is a match;
-//   no id: nearness needs overlap too (D = 0: M > 0.4; D = gate: M > 0.6).
+//     objects side by side) is a match;
+//   w_id + w_d·f(G) = K: the same id and D below the gate is a match;
+//   no id: nearness needs overlap too (D = 0: M > 0.4; D = G: M > 0.6).
 // Weights sum to 1, so P ∈ [0, 1].
+// The merge pass (ID-switch repair) uses the same P between two objects, but by default only for
+// objects of the same voted class (merge_require_same_class) and with the containment of the
+// smaller object in the larger at least merge_min_overlap: fragments of one object (one view
+// contained in the whole) join, two distinct objects side by side (two cups 5 cm apart, stacked
+// books, a mouse by a keyboard) share only their touching boundary and stay two.
 struct ObjectMapOptions {
   double voxel_m = 0.01;         // object voxel sets and the overlap M, at the map resolution
   double distance_gate_m = 0.1;  // the paper's centroid gate (eq 17); f(gate) = 1/2
+  double gate_radius_factor = 0.5;  // G = max(distance_gate_m, this × object RMS radius); 0: fixed
+  OverlapMeasure overlap_measure = OverlapMeasure::kContainment;  // M of eq 21 (see above)
+  int overlap_tolerance_voxels = 1;  // 0: exact voxel coincidence; 1: 3×3×3 neighbourhood
   double weight_id = 0.3;        // w_id
   double weight_distance = 0.2;  // w_d
   double weight_overlap = 0.5;   // w_m
   double match_threshold = 0.4;  // K (eq 22): match when P > K
   double merge_threshold = 0.4;  // K for the final merge pass between two objects
+  bool merge_require_same_class = true;  // the merge pass joins only objects of one voted class
+  double merge_min_overlap = 0.5;  // ... and only when M (containment of the smaller) >= this
   int min_observations = 3;      // an object is confirmed after this many observations
   int min_points = 10;           // observations with fewer points (after depth checks) are ignored
   bool require_same_class = false;  // only match observations to objects of the voted class
@@ -154,8 +186,10 @@ class ObjectMap {
   struct Scores {
     double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
   };
-  Scores score(bool same_id, const Vec3& centroid_a, const VoxelMap& a, const Eigen::Vector3i& a_lo,
-               const Eigen::Vector3i& a_hi, const Object& b) const;
+  // A = a voxel set with its centroid, RMS radius and voxel bounds; B = an object.
+  Scores score(bool same_id, const Vec3& centroid_a, double radius_a, const VoxelMap& a,
+               const Eigen::Vector3i& a_lo, const Eigen::Vector3i& a_hi, const Object& b,
+               double threshold) const;
   static std::string voted_class(const Object& object);
 
   ObjectMapOptions options_;
