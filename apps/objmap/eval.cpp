@@ -4,6 +4,7 @@
 // setup_eval_<name> in kEvalSubcommands.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -13,8 +14,10 @@
 #include "objmap/eval/ate.h"
 #include "objmap/eval/format.h"
 #include "objmap/eval/json.h"
+#include "objmap/eval/objects.h"
 #include "objmap/eval/rpe.h"
 #include "objmap/io/atomic.h"
+#include "objmap/io/objects_json.h"
 #include "objmap/io/trajectory.h"
 
 namespace objmap::app {
@@ -162,11 +165,87 @@ void setup_eval_rpe(CLI::App& eval_app) {
   });
 }
 
+// ---- objmap eval objects
+// --------------------------------------------------------------------------
+
+struct EvalObjectsArgs {
+  std::string map_file;             // RUN/objects.json
+  std::string gt_objects_file;      // objects_gt.json or a cuboid list; or
+  std::string reference_file;       // RUN_GT/objects.json
+  std::string gt_class = "object";  // class of cuboid-list objects (they carry none)
+  std::string run_dir;              // empty: the folder of --map, if it has run.json
+  std::string json_file;            // empty: not written
+  eval::ObjectEvalOptions options;
+};
+
+void run_eval_objects(const EvalObjectsArgs& args) {
+  if (args.gt_objects_file.empty() == args.reference_file.empty())
+    throw CLI::ValidationError("eval objects",
+                               "give one of --gt-objects F or --reference RUN_GT/objects.json");
+  args.options.check();
+  eval::ObjectEvalReport report;
+  report.options = args.options;
+  report.map_source = args.map_file;
+  const std::vector<io::MappedObject> map = io::read_objects_json(args.map_file);
+  std::vector<eval::ReferenceObject> reference;
+  if (!args.gt_objects_file.empty()) {
+    report.mode = "ground_truth";
+    report.reference_source = args.gt_objects_file;
+    reference = eval::read_objects_gt(args.gt_objects_file, args.gt_class);
+  } else {
+    report.mode = "reference";
+    report.reference_source = args.reference_file;
+    reference = eval::to_reference(io::read_objects_json(args.reference_file));
+  }
+  // Table 6: --run RUN, else the folder of --map when it holds run.json.
+  namespace fs = std::filesystem;
+  if (!args.run_dir.empty()) {
+    report.points = eval::read_point_counts(fs::path(args.run_dir) / "run.json");
+  } else {
+    const fs::path beside = fs::path(args.map_file).parent_path() / "run.json";
+    if (fs::exists(beside)) report.points = eval::read_point_counts(beside);
+  }
+  report.result = eval::evaluate_objects(map, reference, args.options);
+  if (!args.json_file.empty())
+    io::write_file_atomic(args.json_file, eval::objects_eval_json(report));
+  std::cout << eval::objects_eval_text(report);
+}
+
+void setup_eval_objects(CLI::App& eval_app) {
+  auto args = std::make_shared<EvalObjectsArgs>();
+  CLI::App* cmd = eval_app.add_subcommand(
+      "objects",
+      "Object map against ground-truth objects or a reference map (paper Tables 3-6): counts per "
+      "class, centroid errors of objects matched one-to-one by class, precision/recall, 3D IoU, "
+      "point reduction");
+  cmd->add_option("--map", args->map_file, "The evaluated map: RUN/objects.json of objmap fuse")
+      ->required();
+  CLI::Option* gt = cmd->add_option(
+      "--gt-objects", args->gt_objects_file,
+      "Ground-truth objects: objects_gt.json (objmap synth) or a cuboid list "
+      "\"x y z yaw half_x half_y half_z\" per line (e.g. fr3_cabinet objects_gt.txt)");
+  CLI::Option* ref = cmd->add_option(
+      "--reference", args->reference_file,
+      "Reference map: RUN_GT/objects.json fused with the ground-truth trajectory (the paper's "
+      "protocol of Tables 4-5)");
+  gt->excludes(ref);
+  cmd->add_option("--gt-class", args->gt_class,
+                  "Class of the objects of a cuboid list (they carry none)")
+      ->capture_default_str();
+  cmd->add_option("--gate", args->options.gate_m,
+                  "Largest centroid distance of a matched pair, metres")
+      ->capture_default_str();
+  cmd->add_option("--run", args->run_dir,
+                  "Run folder whose run.json gives Table 6 (default: the folder of --map)");
+  cmd->add_option("--json", args->json_file, "Write the result as JSON here");
+  cmd->callback([args] { run_eval_objects(*args); });
+}
+
 // ---- the group
 // ------------------------------------------------------------------------------------
 
 // The subcommands of `objmap eval`, in --help order.
-const SetupFn kEvalSubcommands[] = {setup_eval_ate, setup_eval_rpe};
+const SetupFn kEvalSubcommands[] = {setup_eval_ate, setup_eval_rpe, setup_eval_objects};
 
 void setup_eval(CLI::App& app) {
   CLI::App* eval_app = app.add_subcommand(

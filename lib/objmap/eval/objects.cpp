@@ -1,0 +1,719 @@
+#include "objmap/eval/objects.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "objmap/core/error.h"
+#include "objmap/eval/format.h"
+#include "objmap/io/text_lines.h"
+
+namespace objmap::eval {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+// ---- assignment
+// ---------------------------------------------------------------------------------
+
+std::vector<int> hungarian_assign(const Eigen::MatrixXd& cost) {
+  const int rows = static_cast<int>(cost.rows()), cols = static_cast<int>(cost.cols());
+  std::vector<int> row_to_col(rows, -1);
+  if (rows == 0 || cols == 0) return row_to_col;
+  // Work on n <= m (transpose otherwise).
+  const bool transposed = rows > cols;
+  const Eigen::MatrixXd c = transposed ? Eigen::MatrixXd(cost.transpose()) : cost;
+  const int n = static_cast<int>(c.rows()), m = static_cast<int>(c.cols());
+
+  // Forbidden pairs get a cost BIG larger than any sum of n allowed costs (after shifting them to
+  // >= 0), so that the optimum first has the fewest forbidden pairs, then the least total cost.
+  double min_allowed = kInf, max_allowed = -kInf;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j)
+      if (std::isfinite(c(i, j))) {
+        min_allowed = std::min(min_allowed, c(i, j));
+        max_allowed = std::max(max_allowed, c(i, j));
+      }
+  if (!std::isfinite(min_allowed)) return row_to_col;  // nothing allowed
+  const double big = (max_allowed - min_allowed + 1.0) * (n + 1);
+  const auto a = [&](int i, int j) {  // 1-based
+    const double v = c(i - 1, j - 1);
+    return std::isfinite(v) ? v - min_allowed : big;
+  };
+
+  // Kuhn–Munkres with row/column potentials u, v (the shortest augmenting path form, O(n² m)):
+  // rows are added one at a time; p[j] is the row matched to column j (0: none).
+  std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0);
+  std::vector<int> p(m + 1, 0), way(m + 1, 0);
+  for (int i = 1; i <= n; ++i) {
+    p[0] = i;
+    int j0 = 0;
+    std::vector<double> minv(m + 1, kInf);
+    std::vector<char> used(m + 1, 0);
+    do {
+      used[j0] = 1;
+      const int i0 = p[j0];
+      double delta = kInf;
+      int j1 = 0;
+      for (int j = 1; j <= m; ++j) {
+        if (used[j]) continue;
+        const double cur = a(i0, j) - u[i0] - v[j];
+        if (cur < minv[j]) {
+          minv[j] = cur;
+          way[j] = j0;
+        }
+        if (minv[j] < delta) {
+          delta = minv[j];
+          j1 = j;
+        }
+      }
+      for (int j = 0; j <= m; ++j) {
+        if (used[j]) {
+          u[p[j]] += delta;
+          v[j] -= delta;
+        } else {
+          minv[j] -= delta;
+        }
+      }
+      j0 = j1;
+    } while (p[j0] != 0);
+    do {  // augment along the path
+      const int j1 = way[j0];
+      p[j0] = p[j1];
+      j0 = j1;
+    } while (j0 != 0);
+  }
+
+  for (int j = 1; j <= m; ++j) {
+    if (p[j] == 0) continue;
+    const int i = p[j] - 1, col = j - 1;
+    if (!std::isfinite(c(i, col))) continue;  // a forbidden pair: unassigned
+    if (transposed)
+      row_to_col[col] = i;
+    else
+      row_to_col[i] = col;
+  }
+  return row_to_col;
+}
+
+// ---- oriented boxes
+// -----------------------------------------------------------------------------
+
+namespace {
+
+using Polygon = std::vector<Vec3>;  // a convex planar polygon, vertices in cyclic order
+
+// The six faces of a box, each as 4 corners in cyclic order.
+std::vector<Polygon> box_faces(const Obb& box) {
+  std::vector<Polygon> faces;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int j = (axis + 1) % 3, k = (axis + 2) % 3;
+    for (const double side : {-1.0, 1.0}) {
+      Polygon face;
+      const double sj[4] = {-1, 1, 1, -1}, sk[4] = {-1, -1, 1, 1};
+      for (int corner = 0; corner < 4; ++corner) {
+        Vec3 local = Vec3::Zero();
+        local[axis] = side * box.half_extent[axis];
+        local[j] = sj[corner] * box.half_extent[j];
+        local[k] = sk[corner] * box.half_extent[k];
+        face.push_back(box.center + box.rotation * local);
+      }
+      faces.push_back(face);
+    }
+  }
+  return faces;
+}
+
+// Keeps the part of the convex polyhedron `faces` where normal·x <= offset; closes the cut with a
+// cap polygon. `eps` is the distance under which a point counts as on the plane.
+std::vector<Polygon> clip_polyhedron(const std::vector<Polygon>& faces, const Vec3& normal,
+                                     double offset, double eps) {
+  std::vector<Polygon> out;
+  std::vector<Vec3> cap;
+  bool face_in_plane = false;
+  for (const Polygon& face : faces) {
+    Polygon kept;
+    const std::size_t k = face.size();
+    for (std::size_t i = 0; i < k; ++i) {
+      const Vec3& cur = face[i];
+      const Vec3& next = face[(i + 1) % k];
+      const double dc = normal.dot(cur) - offset, dn = normal.dot(next) - offset;
+      if (dc <= eps) {
+        kept.push_back(cur);
+        if (dc >= -eps) cap.push_back(cur);
+      }
+      if ((dc < -eps && dn > eps) || (dc > eps && dn < -eps)) {
+        const Vec3 p = cur + (dc / (dc - dn)) * (next - cur);
+        kept.push_back(p);
+        cap.push_back(p);
+      }
+    }
+    if (kept.size() < 3) continue;
+    // A face lying in the plane already closes the cut: no cap then.
+    bool in_plane = true;
+    for (const Vec3& p : kept) in_plane = in_plane && std::abs(normal.dot(p) - offset) <= eps;
+    face_in_plane = face_in_plane || in_plane;
+    out.push_back(std::move(kept));
+  }
+  if (face_in_plane) return out;
+  // The cap: the distinct points on the plane, in angular order around their mean.
+  std::vector<Vec3> unique;
+  for (const Vec3& p : cap) {
+    bool seen = false;
+    for (const Vec3& q : unique) seen = seen || (p - q).norm() <= 10 * eps;
+    if (!seen) unique.push_back(p);
+  }
+  if (unique.size() >= 3) {
+    Vec3 mean = Vec3::Zero();
+    for (const Vec3& p : unique) mean += p;
+    mean /= static_cast<double>(unique.size());
+    const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+    std::vector<std::pair<double, Vec3>> by_angle;
+    for (const Vec3& p : unique)
+      by_angle.push_back({std::atan2(e2.dot(p - mean), e1.dot(p - mean)), p});
+    std::sort(by_angle.begin(), by_angle.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    Polygon polygon;
+    for (const auto& entry : by_angle) polygon.push_back(entry.second);
+    out.push_back(std::move(polygon));
+  }
+  return out;
+}
+
+// Volume of a convex polyhedron given by its face polygons: pyramids from an interior point.
+double polyhedron_volume(const std::vector<Polygon>& faces) {
+  Vec3 inside = Vec3::Zero();
+  std::size_t count = 0;
+  for (const Polygon& face : faces)
+    for (const Vec3& p : face) {
+      inside += p;
+      ++count;
+    }
+  if (count == 0) return 0.0;
+  inside /= static_cast<double>(count);
+  double volume = 0.0;
+  for (const Polygon& face : faces) {
+    Vec3 area2 = Vec3::Zero();  // twice the vector area
+    for (std::size_t i = 1; i + 1 < face.size(); ++i)
+      area2 += (face[i] - face[0]).cross(face[i + 1] - face[0]);
+    volume += std::abs(area2.dot(face[0] - inside)) / 6.0;
+  }
+  return volume;
+}
+
+}  // namespace
+
+double obb_volume(const Obb& box) {
+  return 8.0 * std::max(0.0, box.half_extent.x()) * std::max(0.0, box.half_extent.y()) *
+         std::max(0.0, box.half_extent.z());
+}
+
+double obb_intersection_volume(const Obb& a, const Obb& b) {
+  if (obb_volume(a) <= 0.0 || obb_volume(b) <= 0.0) return 0.0;
+  // Bounding spheres apart: no overlap.
+  if ((a.center - b.center).norm() > a.half_extent.norm() + b.half_extent.norm()) return 0.0;
+  const double scale =
+      1.0 + a.center.norm() + b.center.norm() + a.half_extent.norm() + b.half_extent.norm();
+  const double eps = 1e-12 * scale;
+  std::vector<Polygon> faces = box_faces(a);
+  for (int axis = 0; axis < 3 && !faces.empty(); ++axis)
+    for (const double side : {-1.0, 1.0}) {
+      // Half-space of b: side · axis_b · (x − c_b) <= h_b[axis].
+      const Vec3 normal = side * b.rotation.col(axis);
+      const double offset = normal.dot(b.center) + b.half_extent[axis];
+      faces = clip_polyhedron(faces, normal, offset, eps);
+      if (faces.size() < 4) return 0.0;  // nothing with volume left
+    }
+  return std::min(polyhedron_volume(faces), std::min(obb_volume(a), obb_volume(b)));
+}
+
+double obb_iou(const Obb& a, const Obb& b) {
+  const double inter = obb_intersection_volume(a, b);
+  const double uni = obb_volume(a) + obb_volume(b) - inter;
+  if (uni <= 0.0) return 0.0;
+  return std::clamp(inter / uni, 0.0, 1.0);
+}
+
+// ---- ground-truth objects
+// -----------------------------------------------------------------------
+
+namespace {
+
+using nlohmann::json;
+
+const json& gt_field(const json& j, const std::string& key, const std::string& where) {
+  if (!j.is_object() || !j.contains(key))
+    throw InputError(where, "missing field '" + key +
+                                "'; expected objects_gt.json (schemas/objects_gt.schema.json)");
+  return j[key];
+}
+
+std::vector<double> gt_numbers(const json& j, const std::string& key, std::size_t n,
+                               const std::string& where) {
+  const json& v = gt_field(j, key, where);
+  bool ok = v.is_array() && v.size() == n;
+  for (std::size_t i = 0; ok && i < n; ++i) ok = v[i].is_number();
+  if (!ok)
+    throw InputError(where + "." + key,
+                     "expected an array of " + std::to_string(n) + " numbers, got " + v.dump());
+  std::vector<double> out;
+  for (std::size_t i = 0; i < n; ++i) out.push_back(v[i].get<double>());
+  return out;
+}
+
+std::vector<ReferenceObject> read_objects_gt_json(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
+  }
+  const json& objects = gt_field(doc, "objects", file.string());
+  if (!objects.is_array()) throw InputError(file.string() + ": objects", "expected an array");
+  std::vector<ReferenceObject> out;
+  std::set<int> ids;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const json& o = objects[i];
+    const std::string where = file.string() + ": objects[" + std::to_string(i) + "]";
+    ReferenceObject r;
+    const json& id = gt_field(o, "id", where);
+    if (!id.is_number_integer())
+      throw InputError(where + ".id", "expected an integer, got " + id.dump());
+    r.id = id.get<int>();
+    if (!ids.insert(r.id).second)
+      throw InputError(where + ".id",
+                       "id " + std::to_string(r.id) + " appears twice; expected unique ids");
+    const json& cls = gt_field(o, "class", where);
+    if (!cls.is_string() || cls.get<std::string>().empty())
+      throw InputError(where + ".class", "expected a non-empty string, got " + cls.dump());
+    r.class_name = cls.get<std::string>();
+    const auto c = gt_numbers(o, "centroid", 3, where);
+    r.centroid = {c[0], c[1], c[2]};
+    const json& obb = gt_field(o, "obb", where);
+    const auto center = gt_numbers(obb, "center", 3, where + ".obb");
+    const auto rotation = gt_numbers(obb, "rotation", 9, where + ".obb");
+    const auto half = gt_numbers(obb, "half_extent", 3, where + ".obb");
+    r.obb.center = {center[0], center[1], center[2]};
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) r.obb.rotation(row, col) = rotation[3 * row + col];
+    r.obb.half_extent = {half[0], half[1], half[2]};
+    if (r.obb.half_extent.minCoeff() < 0)
+      throw InputError(where + ".obb.half_extent", "negative half extent; expected >= 0");
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path& file,
+                                                     const std::string& default_class) {
+  io::LineReader in(file);
+  std::vector<ReferenceObject> out;
+  while (in.next()) {
+    in.expect_fields(7, "x y z yaw half_x half_y half_z (metres, radians)");
+    ReferenceObject r;
+    r.id = static_cast<int>(out.size()) + 1;
+    r.class_name = default_class;
+    r.obb.center = {in.number(0, "x"), in.number(1, "y"), in.number(2, "z")};
+    const double yaw = in.number(3, "yaw");
+    r.obb.rotation = Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix();
+    r.obb.half_extent = {in.number(4, "half_x"), in.number(5, "half_y"), in.number(6, "half_z")};
+    if (r.obb.half_extent.minCoeff() < 0)
+      throw InputError(in.where(), "negative half extent; expected half sizes >= 0");
+    r.centroid = r.obb.center;
+    out.push_back(std::move(r));
+  }
+  if (out.empty())
+    throw InputError(file.string(),
+                     "no cuboid; expected lines \"x y z yaw half_x half_y half_z\" or "
+                     "objects_gt.json");
+  return out;
+}
+
+}  // namespace
+
+std::vector<ReferenceObject> read_objects_gt(const std::filesystem::path& file,
+                                             const std::string& default_class) {
+  std::ifstream in(file);
+  if (!in)
+    throw InputError(file.string(),
+                     "cannot open; expected objects_gt.json (objmap synth) or a cuboid list "
+                     "\"x y z yaw half_x half_y half_z\"");
+  require(!default_class.empty(), "--gt-class", "must not be empty");
+  // Detect by content: JSON starts with '{' (after blanks); anything else is the cuboid text.
+  char first = 0;
+  while (in.get(first) && std::isspace(static_cast<unsigned char>(first))) {
+  }
+  in.close();
+  if (first == '{') return read_objects_gt_json(file);
+  return read_objects_gt_cuboids(file, default_class);
+}
+
+std::vector<ReferenceObject> to_reference(const std::vector<io::MappedObject>& objects) {
+  std::vector<ReferenceObject> out;
+  for (const io::MappedObject& o : objects) out.push_back({o.id, o.class_name, o.centroid, o.obb});
+  return out;
+}
+
+// ---- the evaluation
+// -----------------------------------------------------------------------------
+
+void ObjectEvalOptions::check() const {
+  require(std::isfinite(gate_m) && gate_m > 0, "ObjectEvalOptions.gate_m",
+          "must be > 0 metres, got " + number_text(gate_m));
+  for (const double t : thresholds_m)
+    require(std::isfinite(t) && t > 0, "ObjectEvalOptions.thresholds_m",
+            "must be > 0 metres, got " + number_text(t));
+}
+
+namespace {
+
+struct ClassMembers {
+  std::vector<std::size_t> map, reference;  // indices into the inputs
+};
+
+// Pairs (map index, reference index) of the one-to-one assignment within `gate_m`.
+std::vector<std::pair<std::size_t, std::size_t>> assign_class(
+    const ClassMembers& members, const std::vector<io::MappedObject>& map,
+    const std::vector<ReferenceObject>& reference, double gate_m) {
+  Eigen::MatrixXd cost(members.map.size(), members.reference.size());
+  for (std::size_t i = 0; i < members.map.size(); ++i)
+    for (std::size_t j = 0; j < members.reference.size(); ++j) {
+      const double d =
+          (map[members.map[i]].centroid - reference[members.reference[j]].centroid).norm();
+      cost(i, j) = d <= gate_m ? d : kInf;
+    }
+  const std::vector<int> row_to_col = hungarian_assign(cost);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t i = 0; i < row_to_col.size(); ++i)
+    if (row_to_col[i] >= 0) pairs.push_back({members.map[i], members.reference[row_to_col[i]]});
+  return pairs;
+}
+
+ErrorRow error_row(const std::string& name, std::size_t mapped, std::size_t reference,
+                   const std::vector<const ObjectMatch*>& matches) {
+  ErrorRow row;
+  row.class_name = name;
+  row.mapped = mapped;
+  row.reference = reference;
+  row.matched = matches.size();
+  std::vector<double> distances, ious;
+  for (const ObjectMatch* m : matches) {
+    distances.push_back(m->distance_m);
+    ious.push_back(m->iou);
+    row.mean_abs_xyz_m += m->error_xyz_m.cwiseAbs();
+  }
+  if (!matches.empty()) row.mean_abs_xyz_m /= static_cast<double>(matches.size());
+  row.distance_m = compute_stats(distances);
+  row.iou = compute_stats(ious);
+  return row;
+}
+
+}  // namespace
+
+ObjectEvalResult evaluate_objects(const std::vector<io::MappedObject>& map,
+                                  const std::vector<ReferenceObject>& reference,
+                                  const ObjectEvalOptions& options) {
+  options.check();
+  std::map<std::string, ClassMembers> classes;  // sorted by name
+  for (std::size_t i = 0; i < map.size(); ++i) classes[map[i].class_name].map.push_back(i);
+  for (std::size_t j = 0; j < reference.size(); ++j)
+    classes[reference[j].class_name].reference.push_back(j);
+
+  ObjectEvalResult result;
+  // Table 3.
+  const auto count_row = [](const std::string& name, std::size_t mapped, std::size_t ref) {
+    CountRow row{name, mapped, ref, std::nullopt};
+    if (ref > 0)
+      row.error = std::abs(static_cast<double>(mapped) - static_cast<double>(ref)) /
+                  static_cast<double>(ref);
+    return row;
+  };
+  for (const auto& [name, members] : classes)
+    result.counts.push_back(count_row(name, members.map.size(), members.reference.size()));
+  result.counts.push_back(count_row("overall", map.size(), reference.size()));
+
+  // Matches within the gate.
+  std::vector<char> map_matched(map.size(), 0), ref_matched(reference.size(), 0);
+  for (const auto& [name, members] : classes)
+    for (const auto& [i, j] : assign_class(members, map, reference, options.gate_m)) {
+      ObjectMatch m;
+      m.map_id = map[i].id;
+      m.reference_id = reference[j].id;
+      m.class_name = name;
+      m.error_xyz_m = map[i].centroid - reference[j].centroid;
+      m.distance_m = m.error_xyz_m.norm();
+      m.iou = obb_iou(map[i].obb, reference[j].obb);
+      result.matches.push_back(m);
+      map_matched[i] = ref_matched[j] = 1;
+    }
+  std::sort(result.matches.begin(), result.matches.end(),
+            [](const ObjectMatch& a, const ObjectMatch& b) {
+              return std::tie(a.reference_id, a.map_id) < std::tie(b.reference_id, b.map_id);
+            });
+  for (std::size_t i = 0; i < map.size(); ++i)
+    if (!map_matched[i]) result.unmatched_map_ids.push_back(map[i].id);
+  for (std::size_t j = 0; j < reference.size(); ++j)
+    if (!ref_matched[j]) result.unmatched_reference_ids.push_back(reference[j].id);
+  std::sort(result.unmatched_map_ids.begin(), result.unmatched_map_ids.end());
+  std::sort(result.unmatched_reference_ids.begin(), result.unmatched_reference_ids.end());
+
+  // Tables 4–5.
+  std::vector<const ObjectMatch*> all;
+  for (const auto& [name, members] : classes) {
+    std::vector<const ObjectMatch*> of_class;
+    for (const ObjectMatch& m : result.matches)
+      if (m.class_name == name) of_class.push_back(&m);
+    result.errors.push_back(
+        error_row(name, members.map.size(), members.reference.size(), of_class));
+  }
+  for (const ObjectMatch& m : result.matches) all.push_back(&m);
+  result.errors.push_back(error_row("overall", map.size(), reference.size(), all));
+
+  // Precision / recall, each threshold with its own assignment.
+  for (const double threshold : options.thresholds_m) {
+    PrecisionRecall pr;
+    pr.threshold_m = threshold;
+    for (const auto& [name, members] : classes)
+      pr.matched += assign_class(members, map, reference, threshold).size();
+    if (!map.empty()) pr.precision = static_cast<double>(pr.matched) / map.size();
+    if (!reference.empty()) pr.recall = static_cast<double>(pr.matched) / reference.size();
+    result.precision_recall.push_back(pr);
+  }
+  return result;
+}
+
+// ---- Table 6
+// ------------------------------------------------------------------------------------
+
+double PointCounts::reduction() const {
+  return dense_map > 0 ? 1.0 - objects_map / dense_map : 0.0;
+}
+
+PointCounts read_point_counts(const std::filesystem::path& run_json) {
+  std::ifstream in(run_json);
+  if (!in) throw InputError(run_json.string(), "cannot open; expected RUN/run.json of objmap fuse");
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(run_json.string(), std::string("malformed JSON: ") + e.what());
+  }
+  if (!doc.is_object() || !doc.contains("points") || !doc["points"].is_object())
+    throw InputError(run_json.string(),
+                     "missing object 'points'; expected run.json of objmap fuse "
+                     "(schemas/run.schema.json)");
+  const json& points = doc["points"];
+  PointCounts counts;
+  counts.source = run_json.string();
+  const auto get = [&](const char* key, double& value) {
+    if (!points.contains(key) || !points[key].is_number() || points[key].get<double>() < 0)
+      throw InputError(run_json.string() + ": points." + key,
+                       "missing or not a number >= 0; expected a point count");
+    value = points[key].get<double>();
+  };
+  get("dense_back_projected", counts.dense_back_projected);
+  get("dense_map", counts.dense_map);
+  get("objects_raw", counts.objects_raw);
+  get("objects_voxel_filtered", counts.objects_voxel_filtered);
+  get("objects_outlier_filtered", counts.objects_outlier_filtered);
+  get("semantic_map", counts.semantic_map);
+  get("objects_map", counts.objects_map);
+  return counts;
+}
+
+// ---- output
+// -------------------------------------------------------------------------------------
+
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json stats_json(const ErrorStats& s) {
+  ordered_json out;
+  out["count"] = s.count;
+  out["rmse"] = s.rmse;
+  out["mean"] = s.mean;
+  out["median"] = s.median;
+  out["std"] = s.stddev;
+  out["min"] = s.min;
+  out["max"] = s.max;
+  return out;
+}
+
+ordered_json vec3_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
+
+}  // namespace
+
+std::string objects_eval_json(const ObjectEvalReport& report) {
+  const ObjectEvalResult& r = report.result;
+  ordered_json out;
+  out["mode"] = report.mode;
+  out["map"] = report.map_source;
+  out["reference"] = report.reference_source;
+  out["gate_m"] = report.options.gate_m;
+  out["unit"] = "m";
+
+  ordered_json counts = ordered_json::array();
+  for (const CountRow& row : r.counts) {
+    ordered_json c;
+    c["class"] = row.class_name;
+    c["reference"] = row.reference;
+    c["mapped"] = row.mapped;
+    c["error"] = row.error ? ordered_json(*row.error) : ordered_json(nullptr);
+    counts.push_back(c);
+  }
+  out["counts"] = counts;
+
+  ordered_json errors = ordered_json::array();
+  for (const ErrorRow& row : r.errors) {
+    ordered_json e;
+    e["class"] = row.class_name;
+    e["reference"] = row.reference;
+    e["mapped"] = row.mapped;
+    e["matched"] = row.matched;
+    e["distance_m"] = stats_json(row.distance_m);
+    e["mean_abs_xyz_m"] = vec3_json(row.mean_abs_xyz_m);
+    e["iou"] = stats_json(row.iou);
+    errors.push_back(e);
+  }
+  out["centroid_error"] = errors;
+
+  ordered_json pr = ordered_json::array();
+  for (const PrecisionRecall& p : r.precision_recall) {
+    ordered_json e;
+    e["threshold_m"] = p.threshold_m;
+    e["matched"] = p.matched;
+    e["precision"] = p.precision;
+    e["recall"] = p.recall;
+    pr.push_back(e);
+  }
+  out["precision_recall"] = pr;
+
+  ordered_json matches = ordered_json::array();
+  for (const ObjectMatch& m : r.matches) {
+    ordered_json e;
+    e["map_id"] = m.map_id;
+    e["reference_id"] = m.reference_id;
+    e["class"] = m.class_name;
+    e["distance_m"] = m.distance_m;
+    e["error_xyz_m"] = vec3_json(m.error_xyz_m);
+    e["iou"] = m.iou;
+    matches.push_back(e);
+  }
+  out["matches"] = matches;
+  out["unmatched_map_ids"] = r.unmatched_map_ids;
+  out["unmatched_reference_ids"] = r.unmatched_reference_ids;
+
+  if (report.points) {
+    const PointCounts& p = *report.points;
+    ordered_json points;
+    points["run"] = p.source;
+    points["dense_back_projected"] = p.dense_back_projected;
+    points["dense_map"] = p.dense_map;
+    points["objects_raw"] = p.objects_raw;
+    points["objects_voxel_filtered"] = p.objects_voxel_filtered;
+    points["objects_outlier_filtered"] = p.objects_outlier_filtered;
+    points["semantic_map"] = p.semantic_map;
+    points["objects_map"] = p.objects_map;
+    points["reduction"] = p.reduction();
+    out["points"] = points;
+  }
+  return out.dump(2) + "\n";
+}
+
+namespace {
+
+std::string line(const char* format, ...) __attribute__((format(printf, 1, 2)));
+std::string line(const char* format, ...) {
+  char buffer[512];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(buffer, sizeof(buffer), format, args);
+  va_end(args);
+  return std::string(buffer) + "\n";
+}
+
+std::string percent(double ratio) { return fixed_text(100.0 * ratio, 1) + "%"; }
+
+}  // namespace
+
+std::string objects_eval_text(const ObjectEvalReport& report) {
+  const ObjectEvalResult& r = report.result;
+  const bool gt = report.mode == "ground_truth";
+  const char* ref_label = gt ? "ground truth" : "reference";
+  std::string out;
+  out += "Objects  " + report.map_source + "\n";
+  out += std::string("  vs     ") + report.reference_source +
+         (gt ? " (ground-truth objects)\n" : " (reference map, ground-truth trajectory)\n");
+  out += "  one-to-one by class (Hungarian on centroid distance), gate " +
+         number_text(report.options.gate_m) + " m\n\n";
+
+  out += "Table 3: number of objects\n";
+  out += line("  %-16s %12s %8s %8s", "class", ref_label, "mapped", "error");
+  for (const CountRow& row : r.counts) {
+    if (row.class_name == "overall") out += "  " + std::string(46, '-') + "\n";
+    out += line("  %-16s %12zu %8zu %8s", row.class_name.c_str(), row.reference, row.mapped,
+                row.error ? percent(*row.error).c_str() : "-");
+  }
+
+  out += "\nTables 4-5: centroid error of the matched objects [m], oriented-box IoU\n";
+  out += line("  %-16s %7s %9s %9s %9s %8s %8s %8s %6s", "class", "matched", "mean", "median",
+              "max", "|dx|", "|dy|", "|dz|", "IoU");
+  for (const ErrorRow& row : r.errors) {
+    if (row.class_name == "overall") out += "  " + std::string(94, '-') + "\n";
+    const std::string matched = std::to_string(row.matched) + "/" + std::to_string(row.reference);
+    if (row.matched == 0) {
+      out += line("  %-16s %7s %9s %9s %9s %8s %8s %8s %6s", row.class_name.c_str(),
+                  matched.c_str(), "-", "-", "-", "-", "-", "-", "-");
+      continue;
+    }
+    out +=
+        line("  %-16s %7s %9.4f %9.4f %9.4f %8.4f %8.4f %8.4f %6.3f", row.class_name.c_str(),
+             matched.c_str(), row.distance_m.mean, row.distance_m.median, row.distance_m.max,
+             row.mean_abs_xyz_m.x(), row.mean_abs_xyz_m.y(), row.mean_abs_xyz_m.z(), row.iou.mean);
+  }
+
+  out += "\nPrecision / recall (one-to-one by class within the distance)\n";
+  out += line("  %-10s %8s %10s %8s", "within", "matched", "precision", "recall");
+  for (const PrecisionRecall& p : r.precision_recall)
+    out += line("  %-10s %8zu %10.3f %8.3f", (fixed_text(p.threshold_m, 2) + " m").c_str(),
+                p.matched, p.precision, p.recall);
+
+  const auto ids = [](const std::vector<int>& v) {
+    std::string s;
+    for (const int id : v) s += (s.empty() ? "" : " ") + std::to_string(id);
+    return s.empty() ? std::string("none") : s;
+  };
+  out += "\nUnmatched (gate " + number_text(report.options.gate_m) + " m): map ids " +
+         ids(r.unmatched_map_ids) + "; " + ref_label + " ids " + ids(r.unmatched_reference_ids) +
+         "\n";
+
+  if (report.points) {
+    const PointCounts& p = *report.points;
+    out += "\nTable 6: points (" + p.source + ")\n";
+    out += line("  %-34s %12.0f", "dense map", p.dense_map);
+    out += line("  %-34s %12.0f", "objects-only map", p.objects_map);
+    out += line("  %-34s %12s", "reduction", percent(p.reduction()).c_str());
+    out += line("  %-34s %12.0f", "dense points back-projected", p.dense_back_projected);
+    out += line("  %-34s %12.0f", "object points raw", p.objects_raw);
+    out += line("  %-34s %12.0f", "object points voxel-filtered", p.objects_voxel_filtered);
+    out += line("  %-34s %12.0f", "object points outlier-filtered", p.objects_outlier_filtered);
+  }
+  return out;
+}
+
+}  // namespace objmap::eval

@@ -1,0 +1,521 @@
+// objmap eval objects: Hungarian assignment, oriented-box IoU, ground-truth readers, the tables on
+// hand-made files with known errors, bad input, and the CLI end to end on a small synthetic scene.
+#include "objmap/eval/objects.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <random>
+
+#include "objmap/core/error.h"
+#include "support/schema_check.h"
+#include "support/test_support.h"
+
+namespace objmap::eval {
+namespace {
+
+using objmap::test::read_text;
+using objmap::test::run_objmap;
+using objmap::test::TempDir;
+using objmap::test::write_text;
+namespace fs = std::filesystem;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPi = 3.14159265358979323846;
+
+bool has(const std::string& text, const std::string& what) {
+  return text.find(what) != std::string::npos;
+}
+
+double assignment_cost(const Eigen::MatrixXd& cost, const std::vector<int>& row_to_col) {
+  double total = 0;
+  for (std::size_t i = 0; i < row_to_col.size(); ++i)
+    if (row_to_col[i] >= 0) total += cost(i, row_to_col[i]);
+  return total;
+}
+
+// ---- Hungarian
+// ----------------------------------------------------------------------------------
+
+TEST(Hungarian, BeatsGreedyOnTwoByTwo) {
+  // Greedy takes (0,0) = 1 first and is left with (1,1) = 100: 101. Optimum: 2 + 2 = 4.
+  Eigen::MatrixXd cost(2, 2);
+  cost << 1, 2, 2, 100;
+  EXPECT_EQ(hungarian_assign(cost), (std::vector<int>{1, 0}));
+}
+
+TEST(Hungarian, ThreeByThreeKnownOptimum) {
+  Eigen::MatrixXd cost(3, 3);
+  cost << 4, 1, 3,  //
+      2, 0, 5,      //
+      3, 2, 2;
+  // Optimal: row0→1 (1), row1→0 (2), row2→2 (2) = 5; greedy takes (1,1) = 0 first → 0 + 3 + 3 = 6.
+  const std::vector<int> a = hungarian_assign(cost);
+  EXPECT_EQ(a, (std::vector<int>{1, 0, 2}));
+  EXPECT_DOUBLE_EQ(assignment_cost(cost, a), 5.0);
+}
+
+TEST(Hungarian, RectangularBothWays) {
+  Eigen::MatrixXd wide(2, 3);
+  wide << 5, 1, 9,  //
+      1, 2, 9;
+  EXPECT_EQ(hungarian_assign(wide), (std::vector<int>{1, 0}));
+  const Eigen::MatrixXd tall = wide.transpose();
+  EXPECT_EQ(hungarian_assign(tall), (std::vector<int>{1, 0, -1}));
+}
+
+TEST(Hungarian, ForbiddenPairsMaximiseTheMatchedCountFirst) {
+  // Gate case: a–1 0.05, a–2 0.10, b–1 0.08, b–2 forbidden (over the gate). Greedy (and plain
+  // min-cost) takes a–1 and leaves b alone; the optimum matches both: a–2, b–1.
+  Eigen::MatrixXd cost(2, 2);
+  cost << 0.05, 0.10, 0.08, kInf;
+  EXPECT_EQ(hungarian_assign(cost), (std::vector<int>{1, 0}));
+  // All forbidden, empty.
+  Eigen::MatrixXd none(2, 2);
+  none << kInf, kInf, kInf, kInf;
+  EXPECT_EQ(hungarian_assign(none), (std::vector<int>{-1, -1}));
+  EXPECT_TRUE(hungarian_assign(Eigen::MatrixXd(0, 3)).empty());
+  EXPECT_EQ(hungarian_assign(Eigen::MatrixXd(2, 0)), (std::vector<int>{-1, -1}));
+}
+
+TEST(Hungarian, MatchesBruteForceOnRandomMatrices) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, 10.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 1 + trial % 6;
+    Eigen::MatrixXd cost(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) cost(i, j) = uniform(rng);
+    std::vector<int> perm(n);
+    std::iota(perm.begin(), perm.end(), 0);
+    double best = kInf;
+    do best = std::min(best, assignment_cost(cost, perm));
+    while (std::next_permutation(perm.begin(), perm.end()));
+    const std::vector<int> a = hungarian_assign(cost);
+    std::vector<int> sorted = a;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<int> expected(n);
+    std::iota(expected.begin(), expected.end(), 0);
+    ASSERT_EQ(sorted, expected) << "not a permutation, trial " << trial;
+    EXPECT_NEAR(assignment_cost(cost, a), best, 1e-9) << "trial " << trial;
+  }
+}
+
+// ---- oriented-box IoU
+// ---------------------------------------------------------------------------
+
+Obb box(const Vec3& center, const Vec3& half, double yaw = 0.0) {
+  Obb b;
+  b.center = center;
+  b.half_extent = half;
+  b.rotation = Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix();
+  return b;
+}
+
+TEST(ObbIou, KnownValues) {
+  const Obb unit = box({0.5, 0.5, 0.5}, {0.5, 0.5, 0.5});
+  EXPECT_NEAR(obb_iou(unit, unit), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(obb_iou(unit, box({3, 0, 0}, {0.5, 0.5, 0.5})), 0.0);
+  // Disjoint but within the bounding spheres: touching along x after a 45° turn would overlap; this
+  // pair is 1.2 m apart on x with half sizes 0.5: no overlap.
+  EXPECT_NEAR(obb_iou(unit, box({1.7, 0.5, 0.5}, {0.5, 0.5, 0.5}, 0.3)), 0.0, 1e-12);
+  // Axis-aligned half overlap: intersection 0.5, union 1.5.
+  EXPECT_NEAR(obb_iou(unit, box({1.0, 0.5, 0.5}, {0.5, 0.5, 0.5})), 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(obb_intersection_volume(unit, box({1.0, 0.5, 0.5}, {0.5, 0.5, 0.5})), 0.5, 1e-12);
+  // A cube turned 45° about z against itself: the cross-section is a regular octagon of area
+  // 2(√2 − 1); IoU = 2(√2 − 1) / (2 − 2(√2 − 1)) = 1/√2.
+  const Obb turned = box({0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, kPi / 4);
+  EXPECT_NEAR(obb_intersection_volume(unit, turned), 2 * (std::sqrt(2.0) - 1), 1e-12);
+  EXPECT_NEAR(obb_iou(unit, turned), 1 / std::sqrt(2.0), 1e-12);
+  // Nested: a box inside another, IoU = volume ratio.
+  EXPECT_NEAR(obb_iou(box({0, 0, 0}, {1, 1, 1}), box({0.1, 0, 0}, {0.5, 0.5, 0.5}, 0.7)), 1.0 / 8,
+              1e-12);
+  // Degenerate (flat) box: no volume, IoU 0.
+  EXPECT_DOUBLE_EQ(obb_iou(unit, box({0.5, 0.5, 0.5}, {0.5, 0.5, 0.0})), 0.0);
+}
+
+TEST(ObbIou, SameOrientationIsTheProductOfTheOverlaps) {
+  // Boxes with one common (random) rotation: the intersection is a box whose sides are the
+  // overlaps along each axis; includes coplanar faces, touching and nested boxes.
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> step(-4, 4);
+  const Eigen::Matrix3d r = Eigen::Quaterniond(0.3, -0.5, 0.2, 0.7).normalized().toRotationMatrix();
+  for (int trial = 0; trial < 300; ++trial) {
+    Vec3 lo_a, hi_a, lo_b, hi_b;  // in the boxes' own frame, on a 0.1 grid: many coplanar faces
+    for (int k = 0; k < 3; ++k) {
+      lo_a[k] = 0.1 * step(rng);
+      hi_a[k] = lo_a[k] + 0.1 * (1 + std::abs(step(rng)));
+      lo_b[k] = 0.1 * step(rng);
+      hi_b[k] = lo_b[k] + 0.1 * (1 + std::abs(step(rng)));
+    }
+    const auto make = [&](const Vec3& lo, const Vec3& hi) {
+      Obb b;
+      b.rotation = r;
+      b.center = Vec3(0.3, -0.2, 1.0) + r * (0.5 * (lo + hi));
+      b.half_extent = 0.5 * (hi - lo);
+      return b;
+    };
+    double expected = 1.0;
+    for (int k = 0; k < 3; ++k)
+      expected *= std::max(0.0, std::min(hi_a[k], hi_b[k]) - std::max(lo_a[k], lo_b[k]));
+    EXPECT_NEAR(obb_intersection_volume(make(lo_a, hi_a), make(lo_b, hi_b)), expected, 1e-9)
+        << "trial " << trial;
+  }
+}
+
+TEST(ObbIou, AgreesWithMonteCarloOnGeneralBoxes) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 4; ++trial) {
+    Obb a, b;
+    a.center = Vec3(u(rng), u(rng), u(rng)) * 0.2;
+    b.center = Vec3(u(rng), u(rng), u(rng)) * 0.2;
+    a.half_extent = Vec3(0.3 + 0.2 * u(rng), 0.3 + 0.2 * u(rng), 0.3 + 0.2 * u(rng));
+    b.half_extent = Vec3(0.3 + 0.2 * u(rng), 0.3 + 0.2 * u(rng), 0.3 + 0.2 * u(rng));
+    a.rotation = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+    b.rotation = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+    // Sample box a uniformly; the share inside b is intersection / volume(a).
+    const int n = 200000;
+    int inside = 0;
+    for (int k = 0; k < n; ++k) {
+      const Vec3 local(u(rng) * a.half_extent.x(), u(rng) * a.half_extent.y(),
+                       u(rng) * a.half_extent.z());
+      inside += b.contains(a.center + a.rotation * local) ? 1 : 0;
+    }
+    const double sampled = obb_volume(a) * inside / n;
+    const double exact = obb_intersection_volume(a, b);
+    EXPECT_NEAR(exact, sampled, 0.01 * obb_volume(a)) << "trial " << trial;
+    EXPECT_NEAR(exact, obb_intersection_volume(b, a), 1e-12) << "symmetric";
+  }
+}
+
+// ---- ground-truth readers
+// -----------------------------------------------------------------------
+
+TEST(ObjectsGt, ReadsTheFr3CabinetCuboid) {
+  OBJMAP_DATA_OR_SKIP(dir, "tum/fr3_cabinet_58kf");
+  const auto objects = read_objects_gt(dir / "objects_gt.txt");
+  ASSERT_EQ(objects.size(), 1u);
+  const ReferenceObject& o = objects[0];
+  EXPECT_EQ(o.id, 1);
+  EXPECT_EQ(o.class_name, "object");
+  EXPECT_TRUE(o.centroid.isApprox(Vec3(-1.52988, 0.456476, 0.281575)));
+  EXPECT_TRUE(o.obb.center.isApprox(o.centroid));
+  EXPECT_TRUE(o.obb.half_extent.isApprox(Vec3(0.396318, 0.222742, 0.272709)));
+  EXPECT_NEAR(o.obb.rotation(0, 0), std::cos(3.10232), 1e-12);
+  EXPECT_NEAR(o.obb.rotation(1, 0), std::sin(3.10232), 1e-12);
+  EXPECT_NEAR(o.obb.rotation(2, 2), 1.0, 1e-12);
+  EXPECT_EQ(read_objects_gt(dir / "objects_gt.txt", "cabinet")[0].class_name, "cabinet");
+}
+
+TEST(ObjectsGt, ReadsJsonAndRejectsBadFiles) {
+  TempDir tmp;
+  write_text(tmp / "gt.json",
+             R"(  {"objects":[{"id":3,"class":"cup","centroid":[1,2,3],
+                 "obb":{"center":[1,2,3.5],"rotation":[0,-1,0, 1,0,0, 0,0,1],
+                        "half_extent":[0.1,0.2,0.3]}}]})");
+  const auto objects = read_objects_gt(tmp / "gt.json");
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].id, 3);
+  EXPECT_EQ(objects[0].class_name, "cup");
+  EXPECT_TRUE(objects[0].centroid.isApprox(Vec3(1, 2, 3)));
+  EXPECT_DOUBLE_EQ(objects[0].obb.rotation(0, 1), -1.0);  // row-major
+  EXPECT_DOUBLE_EQ(objects[0].obb.rotation(1, 0), 1.0);
+
+  const auto message = [&](const std::string& name, const std::string& text) -> std::string {
+    write_text(tmp / name, text);
+    try {
+      read_objects_gt(tmp / name);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_TRUE(has(message("a.json", "{\"objects\": [}"), "a.json: malformed JSON"));
+  EXPECT_TRUE(has(message("b.json", R"({"objects":[{"id":1,"class":"cup","centroid":[1,2]}]})"),
+                  "b.json: objects[0].centroid: expected an array of 3 numbers"));
+  EXPECT_TRUE(has(message("c.json", R"({"objects":[{"id":1,"class":"cup","centroid":[1,2,3]}]})"),
+                  "missing field 'obb'"));
+  EXPECT_TRUE(has(message("d.txt", "# cuboid\n1 2 3 0.5 0.1 0.2\n"),
+                  "d.txt:2: 6 fields; expected 7: x y z yaw half_x half_y half_z"));
+  EXPECT_TRUE(has(message("e.txt", "1 2 3 0.5 0.1 0.2 abc\n"), "e.txt:1"));
+  EXPECT_TRUE(has(message("f.txt", "# nothing\n"), "f.txt: no cuboid"));
+  EXPECT_TRUE(has(message("g.txt", "1 2 3 0 0.1 -0.2 0.3\n"), "g.txt:1: negative half extent"));
+  try {
+    read_objects_gt(tmp / "missing.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_TRUE(has(e.what(), "missing.json: cannot open")) << e.what();
+  }
+}
+
+// ---- the tables on hand-made maps
+// ---------------------------------------------------------------
+
+io::MappedObject mapped(int id, const std::string& cls, const Vec3& c, const Vec3& half) {
+  io::MappedObject o;
+  o.id = id;
+  o.class_name = cls;
+  o.centroid = c;
+  o.obb.center = c;
+  o.obb.half_extent = half;
+  return o;
+}
+
+ReferenceObject ref(int id, const std::string& cls, const Vec3& c, const Vec3& half) {
+  ReferenceObject o;
+  o.id = id;
+  o.class_name = cls;
+  o.centroid = c;
+  o.obb.center = c;
+  o.obb.half_extent = half;
+  return o;
+}
+
+TEST(EvaluateObjects, KnownCountsErrorsAndPrecisionRecall) {
+  const Vec3 h(0.05, 0.05, 0.05);
+  // Ground truth: cups 1 (0,0,0), 2 (0.2,0,0); chair 3 (1,1,0); book 4 (5,5,5).
+  const std::vector<ReferenceObject> gt = {
+      ref(1, "cup", {0, 0, 0}, h), ref(2, "cup", {0.2, 0, 0}, h), ref(3, "chair", {1, 1, 0}, h),
+      ref(4, "book", {5, 5, 5}, h)};
+  // Map: cup 10 at 0.06 from gt 1 and 0.14 from gt 2, cup 11 at 0.08 from gt 1 (gt 2 is
+  // 0.2154 away): greedy would pair 10–1 and then 11–2; Hungarian pairs 10–2 (0.14), 11–1 (0.08).
+  // Chair 12 0.2 m off on z (within the gate); chair 13 far away; a "tv" 14 with no gt.
+  const std::vector<io::MappedObject> map = {
+      mapped(10, "cup", {0.06, 0, 0}, h), mapped(11, "cup", {0, 0.08, 0}, h),
+      mapped(12, "chair", {1, 1, 0.2}, h), mapped(13, "chair", {3, 3, 3}, h),
+      mapped(14, "tv", {0, 0, 1}, h)};
+  const ObjectEvalResult r = evaluate_objects(map, gt, ObjectEvalOptions{});
+
+  // Table 3: book 1 vs 0, chair 1 vs 2, cup 2 vs 2, tv 0 vs 1; overall 4 vs 5.
+  ASSERT_EQ(r.counts.size(), 5u);
+  EXPECT_EQ(r.counts[0].class_name, "book");
+  EXPECT_EQ(r.counts[0].mapped, 0u);
+  EXPECT_DOUBLE_EQ(*r.counts[0].error, 1.0);
+  EXPECT_EQ(r.counts[1].class_name, "chair");
+  EXPECT_EQ(r.counts[1].mapped, 2u);
+  EXPECT_DOUBLE_EQ(*r.counts[1].error, 1.0);
+  EXPECT_EQ(r.counts[2].class_name, "cup");
+  EXPECT_DOUBLE_EQ(*r.counts[2].error, 0.0);
+  EXPECT_EQ(r.counts[3].class_name, "tv");
+  EXPECT_FALSE(r.counts[3].error.has_value());
+  EXPECT_EQ(r.counts[4].class_name, "overall");
+  EXPECT_EQ(r.counts[4].reference, 4u);
+  EXPECT_EQ(r.counts[4].mapped, 5u);
+  EXPECT_DOUBLE_EQ(*r.counts[4].error, 0.25);
+
+  // Matches (sorted by reference id): 11–1, 10–2, 12–3.
+  ASSERT_EQ(r.matches.size(), 3u);
+  EXPECT_EQ(r.matches[0].map_id, 11);
+  EXPECT_EQ(r.matches[0].reference_id, 1);
+  EXPECT_NEAR(r.matches[0].distance_m, 0.08, 1e-12);
+  EXPECT_EQ(r.matches[1].map_id, 10);
+  EXPECT_EQ(r.matches[1].reference_id, 2);
+  EXPECT_NEAR(r.matches[1].distance_m, 0.14, 1e-12);
+  EXPECT_TRUE(r.matches[1].error_xyz_m.isApprox(Vec3(-0.14, 0, 0)));
+  EXPECT_EQ(r.matches[2].map_id, 12);
+  EXPECT_NEAR(r.matches[2].distance_m, 0.2, 1e-12);
+  // IoU of two 10 cm cubes 0.08 apart on y: intersection 0.02·0.1·0.1, union 2·0.1³ − that:
+  // (0.1 − 0.08) / (0.1 + 0.08) = 1/9.
+  EXPECT_NEAR(r.matches[0].iou, 1.0 / 9.0, 1e-12);
+  EXPECT_DOUBLE_EQ(r.matches[2].iou, 0.0);  // 0.2 m apart, 0.1 m cubes
+  EXPECT_EQ(r.unmatched_map_ids, (std::vector<int>{13, 14}));
+  EXPECT_EQ(r.unmatched_reference_ids, (std::vector<int>{4}));
+
+  // Tables 4–5: cup mean (0.08 + 0.14) / 2 = 0.11; chair 0.2; overall (0.08 + 0.14 + 0.2) / 3.
+  ASSERT_EQ(r.errors.size(), 5u);
+  EXPECT_EQ(r.errors[2].class_name, "cup");
+  EXPECT_EQ(r.errors[2].matched, 2u);
+  EXPECT_NEAR(r.errors[2].distance_m.mean, 0.11, 1e-12);
+  EXPECT_NEAR(r.errors[2].distance_m.max, 0.14, 1e-12);
+  EXPECT_TRUE(r.errors[2].mean_abs_xyz_m.isApprox(Vec3(0.07, 0.04, 0)));
+  EXPECT_EQ(r.errors[1].class_name, "chair");
+  EXPECT_NEAR(r.errors[1].distance_m.mean, 0.2, 1e-12);
+  EXPECT_EQ(r.errors[0].matched, 0u);
+  EXPECT_EQ(r.errors[4].class_name, "overall");
+  EXPECT_EQ(r.errors[4].matched, 3u);
+  EXPECT_NEAR(r.errors[4].distance_m.mean, 0.14, 1e-12);
+  EXPECT_NEAR(r.errors[4].distance_m.median, 0.14, 1e-12);
+
+  // Precision / recall: within 0.10 m only one cup pair can match (both map cups are within
+  // 0.10 of gt 1 only) → 1; within 0.25 m: both cups and the chair → 3. 5 mapped, 4 true.
+  ASSERT_EQ(r.precision_recall.size(), 2u);
+  EXPECT_EQ(r.precision_recall[0].matched, 1u);
+  EXPECT_DOUBLE_EQ(r.precision_recall[0].precision, 0.2);
+  EXPECT_DOUBLE_EQ(r.precision_recall[0].recall, 0.25);
+  EXPECT_EQ(r.precision_recall[1].matched, 3u);
+  EXPECT_DOUBLE_EQ(r.precision_recall[1].precision, 0.6);
+  EXPECT_DOUBLE_EQ(r.precision_recall[1].recall, 0.75);
+
+  // A smaller gate drops the chair pair.
+  ObjectEvalOptions tight;
+  tight.gate_m = 0.15;
+  EXPECT_EQ(evaluate_objects(map, gt, tight).matches.size(), 2u);
+  tight.gate_m = 0;
+  EXPECT_THROW(evaluate_objects(map, gt, tight), InputError);
+}
+
+TEST(EvaluateObjects, EmptyInputsGiveZeros) {
+  const ObjectEvalResult r = evaluate_objects({}, {}, ObjectEvalOptions{});
+  ASSERT_EQ(r.counts.size(), 1u);
+  EXPECT_FALSE(r.counts[0].error.has_value());
+  EXPECT_EQ(r.errors[0].matched, 0u);
+  EXPECT_DOUBLE_EQ(r.precision_recall[0].recall, 0.0);
+}
+
+// ---- files and the CLI
+// ---------------------------------------------------------------------------
+
+// An objects.json of objmap fuse with the fields the reader needs.
+std::string objects_json(const std::vector<io::MappedObject>& objects) {
+  nlohmann::json doc;
+  doc["schema_version"] = 1;
+  doc["objects"] = nlohmann::json::array();
+  for (const auto& o : objects) {
+    nlohmann::json j;
+    j["id"] = o.id;
+    j["class"] = o.class_name;
+    j["score"] = 0.9;
+    j["centroid"] = {o.centroid.x(), o.centroid.y(), o.centroid.z()};
+    j["aabb"] = {{"min", {0, 0, 0}}, {"max", {0, 0, 0}}};
+    j["obb"] = {
+        {"center", {o.obb.center.x(), o.obb.center.y(), o.obb.center.z()}},
+        {"rotation", {1, 0, 0, 0, 1, 0, 0, 0, 1}},
+        {"half_extent", {o.obb.half_extent.x(), o.obb.half_extent.y(), o.obb.half_extent.z()}}};
+    j["points"] = {{"raw", 100}, {"voxel_filtered", 50}, {"outlier_filtered", 40}};
+    j["observation_count"] = 3;
+    j["ply"] = "objects/x.ply";
+    doc["objects"].push_back(j);
+  }
+  return doc.dump();
+}
+
+const char* kRunJson = R"({"points":{"dense_back_projected":1000,"dense_map":400,"objects_raw":300,
+  "objects_voxel_filtered":120,"objects_outlier_filtered":100,"semantic_map":400,"objects_map":100}})";
+
+TEST(EvalObjectsCli, HandMadeFilesGiveTheExactNumbers) {
+  TempDir tmp;
+  const Vec3 h(0.05, 0.05, 0.05);
+  fs::create_directories(tmp / "est");
+  fs::create_directories(tmp / "gt");
+  write_text(tmp / "est/objects.json",
+             objects_json({mapped(1, "cup", {0.03, 0, 0}, h), mapped(2, "cup", {1, 0, 0}, h),
+                           mapped(3, "teddy bear", {0, 2, 0.09}, h)}));
+  write_text(tmp / "est/run.json", kRunJson);
+  write_text(
+      tmp / "gt/objects.json",
+      objects_json({mapped(5, "cup", {0, 0, 0}, h), mapped(6, "cup", {1, 0.04, 0}, h),
+                    mapped(7, "teddy bear", {0, 2, 0}, h), mapped(8, "book", {4, 4, 4}, h)}));
+  const auto r =
+      run_objmap({"eval", "objects", "--map", (tmp / "est/objects.json").string(), "--reference",
+                  (tmp / "gt/objects.json").string(), "--json", (tmp / "out.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "Table 3")) << r.out;
+  EXPECT_TRUE(has(r.out, "overall")) << r.out;
+  EXPECT_TRUE(has(r.out, "25.0%")) << r.out;  // 3 mapped vs 4
+  EXPECT_TRUE(has(r.out, "75.0%")) << r.out;  // Table 6: 1 − 100/400
+  const auto json = nlohmann::json::parse(read_text(tmp / "out.json"));
+  EXPECT_TRUE(
+      objmap::test::validate_json(json, objmap::test::load_schema("eval_objects.schema.json"))
+          .empty());
+  EXPECT_EQ(json.at("mode"), "reference");
+  const auto& overall = json.at("centroid_error").back();
+  EXPECT_EQ(overall.at("class"), "overall");
+  EXPECT_EQ(overall.at("matched"), 3);
+  EXPECT_NEAR(overall.at("distance_m").at("mean").get<double>(), (0.03 + 0.04 + 0.09) / 3, 1e-12);
+  EXPECT_NEAR(json.at("counts").back().at("error").get<double>(), 0.25, 1e-12);
+  EXPECT_TRUE(json.at("counts").front().at("error").is_number());  // book: 0 vs 1 → 100%
+  EXPECT_EQ(json.at("points").at("dense_map"), 400);
+  EXPECT_NEAR(json.at("points").at("reduction").get<double>(), 0.75, 1e-12);
+  EXPECT_EQ(json.at("unmatched_reference_ids"), nlohmann::json::array({8}));
+  // Precision at 0.10 m: the three pairs are within 0.1 → 3/3, recall 3/4.
+  EXPECT_DOUBLE_EQ(json.at("precision_recall")[0].at("precision").get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(json.at("precision_recall")[0].at("recall").get<double>(), 0.75);
+}
+
+TEST(EvalObjectsCli, BadInputIsExitTwoWithOneLine) {
+  TempDir tmp;
+  write_text(tmp / "objects.json", objects_json({}));
+  write_text(tmp / "bad.json", "{\"objects\": [");
+  const std::string map = (tmp / "objects.json").string();
+  const auto one_line = [](const std::string& err) {
+    return std::count(err.begin(), err.end(), '\n') == 1;
+  };
+  auto r = run_objmap({"eval", "objects", "--map", map});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err)) << r.err;
+  EXPECT_TRUE(has(r.err, "--gt-objects")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", (tmp / "missing.json").string(), "--reference", map});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "missing.json: cannot open")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--reference", (tmp / "bad.json").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "bad.json: malformed JSON")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--gt-objects", (tmp / "bad.json").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "bad.json: malformed JSON")) << r.err;
+  r = run_objmap(
+      {"eval", "objects", "--map", map, "--reference", map, "--run", (tmp / "norun").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "run.json: cannot open")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--gate", "-1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "gate")) << r.err;
+}
+
+// objmap synth (20 frames) → fuse with the true and the drifting trajectory → eval objects, both
+// protocols. Structure and sanity only: the association is being tuned.
+TEST(EvalObjectsCli, SynthFuseEvalEndToEnd) {
+  objmap::test::RunResult failure;
+  const fs::path scene = objmap::test::cached_output(
+      "evalobj_synth20", {"synth", "--out", "{OUT}", "--frames", "20"}, &failure);
+  ASSERT_FALSE(scene.empty()) << failure.err;
+  const auto fuse = [&](const std::string& key, const std::string& trajectory) {
+    const fs::path run = objmap::test::cached_output(
+        key,
+        {"fuse", "--dataset", scene.string(), "--trajectory", (scene / trajectory).string(),
+         "--segmentation", (scene / "segmentation").string(), "--out", "{OUT}"},
+        &failure);
+    EXPECT_FALSE(run.empty()) << failure.err;
+    return run;
+  };
+  const fs::path run_gt = fuse("evalobj_fuse_gt", "groundtruth.txt");
+  const fs::path run_est = fuse("evalobj_fuse_est", "estimated.txt");
+  ASSERT_FALSE(run_gt.empty() || run_est.empty());
+  TempDir tmp;
+  const nlohmann::json schema = objmap::test::load_schema("eval_objects.schema.json");
+  for (const bool with_gt : {false, true}) {
+    const auto r = run_objmap(
+        {"eval", "objects", "--map", (run_est / "objects.json").string(),
+         with_gt ? "--gt-objects" : "--reference",
+         with_gt ? (scene / "objects_gt.json").string() : (run_gt / "objects.json").string(),
+         "--json", (tmp / "e.json").string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "Table 6")) << r.out;
+    const auto json = nlohmann::json::parse(read_text(tmp / "e.json"));
+    const auto problems = objmap::test::validate_json(json, schema);
+    EXPECT_TRUE(problems.empty()) << problems.front();
+    EXPECT_EQ(json.at("mode"), with_gt ? "ground_truth" : "reference");
+    EXPECT_GT(json.at("precision_recall")[1].at("recall").get<double>(), 0.0);
+    const auto& overall = json.at("centroid_error").back();
+    EXPECT_GT(overall.at("matched").get<int>(), 0);
+    const double mean = overall.at("distance_m").at("mean").get<double>();
+    EXPECT_TRUE(std::isfinite(mean) && mean >= 0 && mean <= 0.3) << mean;
+    for (const auto& m : json.at("matches")) {
+      EXPECT_LE(m.at("distance_m").get<double>(), 0.3);
+      EXPECT_GE(m.at("iou").get<double>(), 0.0);
+      EXPECT_LE(m.at("iou").get<double>(), 1.0);
+    }
+    EXPECT_GT(json.at("points").at("reduction").get<double>(), 0.0);
+    if (with_gt) {
+      EXPECT_EQ(json.at("counts").back().at("reference"), 12);  // tabletop: 12 objects
+    }
+  }
+}
+
+}  // namespace
+}  // namespace objmap::eval
