@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# make bench: runs the benchmark programs that exist so far and prints their figures.
+# make bench: runs the benchmark programs that exist so far and prints their figures (bench_fuse:
+# the whole `objmap fuse` on fr1_rpy_every4 vs. decoding its PNGs, peak RSS, vs. Open3D).
 set -euo pipefail
 objmap=${1:-build/bin/objmap}
 data=${2:-../shared/data}

@@ -22,6 +22,9 @@
 
 namespace objmap::app {
 
+// apps/objmap/eval_tracks.cpp: `objmap eval tracks` (CLEAR-MOT and IDF1).
+void setup_eval_tracks(CLI::App& eval_app);
+
 namespace {
 
 // One row "  rmse    0.013473" per statistic; `columns` are printed side by side.
@@ -245,7 +248,8 @@ void setup_eval_objects(CLI::App& eval_app) {
 // ------------------------------------------------------------------------------------
 
 // The subcommands of `objmap eval`, in --help order.
-const SetupFn kEvalSubcommands[] = {setup_eval_ate, setup_eval_rpe, setup_eval_objects};
+const SetupFn kEvalSubcommands[] = {setup_eval_ate, setup_eval_rpe, setup_eval_objects,
+                                    setup_eval_tracks};
 
 void setup_eval(CLI::App& app) {
   CLI::App* eval_app = app.add_subcommand(

@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <string>
+
+#include "objmap/core/error.h"
+
 #include "objmap/fusion/palette.h"
 
 namespace objmap::fusion {
@@ -100,6 +105,51 @@ TEST(VoxelMap, MergeAddsVoxelsAndCommonCountsOverlap) {
   EXPECT_EQ(a.size(), 15u);
   EXPECT_EQ(a.find(geometry::pack_voxel(7, 0, 0))->count, 2u);
   EXPECT_EQ(a.points_inserted(), 20u);
+}
+
+TEST(VoxelMap, ShardedMapsMergeShardByShardLikeOneMap) {
+  // 16 shards filled in one pass, merged shard by shard (in a scrambled shard order) into a sharded
+  // map: the same voxels, sums and sorted export as one unsharded map fed the same frames.
+  VoxelMapOptions sharded{0.01, 1, 16}, plain{0.01, 1};
+  VoxelMap one(plain), many(sharded);
+  for (int f = 0; f < 3; ++f) {
+    const PointCloud c = frame(f);
+    VoxelMap frame_one(plain), frame_many(sharded);
+    frame_one.insert(c);
+    frame_many.insert(c);
+    EXPECT_EQ(frame_one.size(), frame_many.size());
+    one.merge(frame_one);
+    for (std::size_t k = 0; k < 16; ++k) many.merge_shard(frame_many, (k * 7 + f) % 16);
+    many.merge_counts(frame_many);
+  }
+  EXPECT_EQ(many.shard_count(), 16u);
+  EXPECT_EQ(one.size(), many.size());
+  EXPECT_EQ(one.points_inserted(), many.points_inserted());
+  EXPECT_EQ(many.points_inserted(), 600000u);
+  const auto a = one.sorted_voxels(), b = many.sorted_voxels();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].first, b[i].first);
+    EXPECT_EQ(a[i].second->count, b[i].second->count);
+    EXPECT_EQ(a[i].second->offset_sum[0], b[i].second->offset_sum[0]);
+    EXPECT_EQ(a[i].second->color_sum[2], b[i].second->color_sum[2]);
+  }
+  EXPECT_TRUE(std::is_sorted(b.begin(), b.end(),
+                             [](const auto& x, const auto& y) { return x.first < y.first; }));
+  // Sorting on two threads gives the same list.
+  VoxelMap two_threads({0.01, 2, 16});
+  two_threads.merge(many);
+  const auto c = two_threads.sorted_voxels();
+  ASSERT_EQ(c.size(), b.size());
+  for (std::size_t i = 0; i < c.size(); ++i) ASSERT_EQ(c[i].first, b[i].first);
+  // A map of another shard count is refused by merge_shard, and the error names it.
+  VoxelMap four({0.01, 1, 4});
+  try {
+    many.merge_shard(four, 0);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard count"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Palette, CocoNamesAndFixedColours) {

@@ -129,5 +129,22 @@ TEST(Backproject, RejectsMismatchedImagesAndBadOptions) {
   }
 }
 
+TEST(MaskBounds, EdgesOddWidthAndEmpty) {
+  // Width 13: one 8-byte word and a 5-byte tail per row; pixels on the first and last column.
+  segmentation::Mask mask;
+  mask.width = 13;
+  mask.height = 7;
+  mask.data.assign(13 * 7, 0);
+  EXPECT_TRUE(mask_bounds(mask).empty());
+  mask.data[2 * 13 + 12] = 255;  // (12, 2): in the tail
+  EXPECT_EQ(mask_bounds(mask), cv::Rect(12, 2, 1, 1));
+  mask.data[5 * 13 + 0] = 1;  // (0, 5)
+  mask.data[5 * 13 + 7] = 1;  // (7, 5): last byte of the word
+  EXPECT_EQ(mask_bounds(mask), cv::Rect(0, 2, 13, 4));
+  mask.data.assign(13 * 7, 0);
+  mask.data[6 * 13 + 8] = 1;  // (8, 6): first byte of the tail, last row
+  EXPECT_EQ(mask_bounds(mask), cv::Rect(8, 6, 1, 1));
+}
+
 }  // namespace
 }  // namespace objmap::geometry

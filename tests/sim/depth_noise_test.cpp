@@ -1,10 +1,12 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
 #include "objmap/core/error.h"
 #include "objmap/sim/depth_noise.h"
+#include "objmap/sim/random.h"
 #include "objmap/sim/synth.h"
 
 namespace objmap::sim {
@@ -124,6 +126,48 @@ TEST(DepthNoise, RenderedFrameLosesDepthAtObjectSilhouettes) {
   ASSERT_GT(edge, 200);
   EXPECT_NEAR(static_cast<double>(edge_missing) / edge, options.depth_noise.edge_missing_prob, 0.1);
   EXPECT_LT(static_cast<double>(flat_missing) / flat, 0.01);
+}
+
+// The definition depth_edges() implements with separable window minima and maxima: a neighbour in
+// the window with a surface where the pixel has none (or the reverse), or a depth jump.
+cv::Mat brute_force_edges(const cv::Mat& depth_m, const DepthNoiseOptions& o) {
+  cv::Mat edges(depth_m.size(), CV_8UC1, cv::Scalar::all(0));
+  const int w = o.edge_width_px;
+  for (int v = 0; v < depth_m.rows; ++v)
+    for (int u = 0; u < depth_m.cols; ++u) {
+      const float z = depth_m.at<float>(v, u);
+      for (int vv = std::max(0, v - w); vv <= std::min(depth_m.rows - 1, v + w); ++vv)
+        for (int uu = std::max(0, u - w); uu <= std::min(depth_m.cols - 1, u + w); ++uu) {
+          const float zn = depth_m.at<float>(vv, uu);
+          if ((zn <= 0.0f) != (z <= 0.0f) || std::abs(zn - z) > o.edge_jump_m)
+            edges.at<std::uint8_t>(v, u) = 1;
+        }
+    }
+  return edges;
+}
+
+TEST(DepthNoise, EdgesMatchTheirDefinitionExactly) {
+  // Steps just above and below the jump threshold, holes, negative values, image borders.
+  cv::Mat depth(37, 53, CV_32FC1);
+  Rng rng(7);
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) {
+      const double r = rng.uniform();
+      depth.at<float>(v, u) = r < 0.08  ? 0.0f
+                              : r < 0.1 ? -0.5f
+                              : r < 0.4
+                                  ? static_cast<float>(1.0 + 0.049 * rng.uniform())
+                                  : static_cast<float>(1.0 + 0.1 * (u / 10) + 0.0501 * (v / 9));
+    }
+  for (int w : {0, 1, 2, 3}) {
+    DepthNoiseOptions o;
+    o.edge_width_px = w;
+    const cv::Mat fast = depth_edges(depth, o), slow = brute_force_edges(depth, o);
+    EXPECT_EQ(cv::countNonZero(fast != slow), 0) << "edge width " << w;
+    if (w > 0) {
+      EXPECT_GT(cv::countNonZero(slow), 100);
+    }
+  }
 }
 
 TEST(DepthNoise, BadOptionsNameTheKnob) {

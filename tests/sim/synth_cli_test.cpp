@@ -34,17 +34,17 @@ int lines(const std::string& text) {
 TEST(SynthCli, WritesATumSequenceWithGroundTruth) {
   TempDir tmp;
   const fs::path out = tmp / "seq";
-  const RunResult r = run_objmap({"synth", "--out", out.string(), "--frames", "10"});
+  const RunResult r = run_objmap({"synth", "--out", out.string(), "--frames", "4"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(data_rows(out / "rgb.txt"), 10);
-  EXPECT_EQ(data_rows(out / "depth.txt"), 10);
-  EXPECT_EQ(data_rows(out / "groundtruth.txt"), 10);
-  EXPECT_EQ(data_rows(out / "estimated.txt"), 10);
+  EXPECT_EQ(data_rows(out / "rgb.txt"), 4);
+  EXPECT_EQ(data_rows(out / "depth.txt"), 4);
+  EXPECT_EQ(data_rows(out / "groundtruth.txt"), 4);
+  EXPECT_EQ(data_rows(out / "estimated.txt"), 4);
   EXPECT_NE(read_text(out / "rgb.txt").find("# file: 'synthetic"), std::string::npos);
-  EXPECT_EQ(files_in(out / "rgb", ".png"), 10);
-  EXPECT_EQ(files_in(out / "depth", ".png"), 10);
-  EXPECT_EQ(files_in(out / "segmentation", ".json"), 10);
-  EXPECT_EQ(files_in(out / "segmentation_gt", ".json"), 10);
+  EXPECT_EQ(files_in(out / "rgb", ".png"), 4);
+  EXPECT_EQ(files_in(out / "depth", ".png"), 4);
+  EXPECT_EQ(files_in(out / "segmentation", ".json"), 4);
+  EXPECT_EQ(files_in(out / "segmentation_gt", ".json"), 4);
   EXPECT_TRUE(fs::exists(out / "rgb" / "1700000000.100000.png"));
   EXPECT_TRUE(fs::exists(out / "depth" / "1700000000.105000.png"));
   EXPECT_TRUE(fs::exists(out / "segmentation" / "1700000000.133333.json"));

@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "objmap/core/error.h"
 #include "objmap/sim/synth.h"
 #include "objmap/sim/writer.h"
@@ -133,12 +135,14 @@ TEST(Synth, CameraKeepsTheTableInView) {
 
 TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
   SynthOptions o = small(4, 2);
-  o.frames = 11;  // more than one batch of 4 x threads
+  o.frames =
+      11;  // on 2 threads: frames finish out of order, the noise must still see them in order
   o.resolution_scale = 0.15;
   o.seg_noise.min_area_px = 5;
-  o.seg_noise.id_switch_prob = 0.2;  // track IDs must carry across batches identically
+  o.seg_noise.id_switch_prob = 0.2;  // track IDs must carry over from frame to frame identically
   test::TempDir tmp;
-  write_sequence(tmp / "memory", synthesize(o), 1);
+  const SynthSequence memory = synthesize(o);
+  write_sequence(tmp / "memory", memory, 1);
   const SynthSequence streamed = write_synthetic_sequence(tmp / "streamed", o);
   EXPECT_TRUE(streamed.frames.empty());
   EXPECT_GT(streamed.seg_stats.id_switches, 0);
@@ -150,6 +154,19 @@ TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
     ++compared;
   }
   EXPECT_EQ(compared, 11 * 4 + 7);  // rgb, depth, 2 segmentations per frame + 7 files
+  // The PNGs (png.h's encoder) read back as the images in memory.
+  for (const auto& f : memory.frames) {
+    const cv::Mat rgb =
+        cv::imread((tmp / "streamed" / "rgb" / (timestamp_name(f.timestamp) + ".png")).string(),
+                   cv::IMREAD_UNCHANGED);
+    const cv::Mat depth = cv::imread(
+        (tmp / "streamed" / "depth" / (timestamp_name(f.depth_timestamp) + ".png")).string(),
+        cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(rgb.type(), CV_8UC3);
+    ASSERT_EQ(depth.type(), CV_16UC1);
+    EXPECT_EQ(cv::norm(rgb, f.rgb, cv::NORM_INF), 0.0) << f.index;
+    EXPECT_EQ(cv::norm(depth, f.depth, cv::NORM_INF), 0.0) << f.index;
+  }
 }
 
 TEST(Synth, BadOptionsNameTheOption) {

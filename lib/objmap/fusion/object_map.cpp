@@ -22,15 +22,19 @@ void ObjectMapOptions::check() const {
   require(std::isfinite(gate_radius_factor) && gate_radius_factor >= 0.0,
           "ObjectMapOptions.gate_radius_factor",
           "must be >= 0, got " + std::to_string(gate_radius_factor));
-  require(overlap_measure == OverlapMeasure::kIou ||
-              overlap_measure == OverlapMeasure::kContainment,
-          "ObjectMapOptions.overlap_measure", "must be kIou or kContainment");
+  require(
+      overlap_measure == OverlapMeasure::kIou || overlap_measure == OverlapMeasure::kContainment,
+      "ObjectMapOptions.overlap_measure", "must be kIou or kContainment");
   require(overlap_tolerance_voxels == 0 || overlap_tolerance_voxels == 1,
           "ObjectMapOptions.overlap_tolerance_voxels",
           "must be 0 or 1, got " + std::to_string(overlap_tolerance_voxels));
   require(std::isfinite(merge_min_overlap) && merge_min_overlap >= 0.0 && merge_min_overlap <= 1.0,
           "ObjectMapOptions.merge_min_overlap",
           "must be in [0, 1], got " + std::to_string(merge_min_overlap));
+  require(std::isfinite(merge_max_shared_frames) && merge_max_shared_frames >= 0.0 &&
+              merge_max_shared_frames <= 1.0,
+          "ObjectMapOptions.merge_max_shared_frames",
+          "must be in [0, 1], got " + std::to_string(merge_max_shared_frames));
   require(finite_nonneg(weight_id), "ObjectMapOptions.weight_id",
           "must be >= 0, got " + std::to_string(weight_id));
   require(finite_nonneg(weight_distance), "ObjectMapOptions.weight_distance",
@@ -78,6 +82,27 @@ const std::array<VoxelKey, 27>& neighbourhood_offsets() {
   return offsets;
 }
 
+// Centre of [q-quantile, (1 − q)-quantile] of the points along each axis (0 when empty).
+Vec3 percentile_box_centre(const PointCloud& cloud, double q) {
+  Vec3 centre = Vec3::Zero();
+  if (cloud.empty()) return centre;
+  const std::size_t n = cloud.size();
+  const auto rank = [&](double f) {
+    return std::min(n - 1, static_cast<std::size_t>(std::llround(f * static_cast<double>(n - 1))));
+  };
+  q = std::clamp(q, 0.0, 0.5);
+  const std::size_t lo = rank(q), hi = rank(1.0 - q);
+  std::vector<float> v(n);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::size_t i = 0; i < n; ++i) v[i] = cloud.points[i][axis];
+    std::nth_element(v.begin(), v.begin() + lo, v.end());
+    const double a = v[lo];
+    std::nth_element(v.begin(), v.begin() + hi, v.end());
+    centre[axis] = 0.5 * (a + static_cast<double>(v[hi]));
+  }
+  return centre;
+}
+
 }  // namespace
 
 struct ObjectMap::Object {
@@ -88,9 +113,16 @@ struct ObjectMap::Object {
   Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();  // voxel bounds
   Vec3 centroid = Vec3::Zero();                                                // voxel-weighted
   double radius = 0.0;  // RMS distance of the voxels' mean positions from the centroid
-  // Every voxel within one voxel (3×3×3) of an occupied voxel: the tolerant overlap test is one
-  // lookup per voxel of the other set.
+  // Every voxel within one voxel (3×3×3) of an occupied voxel (the tolerant overlap test is one
+  // lookup per voxel of the other set); the value is, for an occupied voxel, the number of
+  // observations that had it (saturating at 255), 0 for a neighbour only.
   geometry::VoxelHashTable<std::uint8_t> near;
+  std::vector<double> frames;  // timestamps of its observations, ascending, unique
+  bool has_frame(double t) const { return std::binary_search(frames.begin(), frames.end(), t); }
+  void add_frame(double t) {
+    auto it = std::lower_bound(frames.begin(), frames.end(), t);
+    if (it == frames.end() || *it != t) frames.insert(it, t);
+  }
   std::map<std::string, ClassVote> histogram;
   double score_sum = 0.0;
   int observations = 0;
@@ -105,16 +137,29 @@ struct ObjectMap::Object {
     const auto& offsets = neighbourhood_offsets();
     near.reserve(near.size() + keys.size() * 4);
     for (VoxelKey k : keys)
-      for (VoxelKey off : offsets) near[k + off] = 1;
+      for (VoxelKey off : offsets) near[k + off];  // inserted as 0 when absent
   }
+  // Bounds, voxel-weighted centroid and RMS radius in one pass over the voxels.
   void refresh() {
-    voxels.key_bounds(lo, hi);
-    centroid = voxels.centroid();
+    Vec3 sum = Vec3::Zero();
     double sq = 0.0;
+    bool any = false;
     voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-      sq += (voxels.mean_position(key, v) - centroid).squaredNorm();
+      const Eigen::Vector3i ijk = geometry::unpack_voxel(key);
+      if (!any) {
+        lo = hi = ijk;
+        any = true;
+      } else {
+        lo = lo.cwiseMin(ijk);
+        hi = hi.cwiseMax(ijk);
+      }
+      const Vec3 p = voxels.mean_position(key, v);
+      sum += p;
+      sq += p.squaredNorm();
     });
-    radius = voxels.size() > 0 ? std::sqrt(sq / static_cast<double>(voxels.size())) : 0.0;
+    const double n = static_cast<double>(voxels.size());
+    centroid = n > 0 ? Vec3(sum / n) : Vec3::Zero();
+    radius = n > 0 ? std::sqrt(std::max(0.0, sq / n - centroid.squaredNorm())) : 0.0;
   }
 };
 
@@ -154,8 +199,8 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
   const bool iou = o.overlap_measure == OverlapMeasure::kIou;
   const double bound = iou ? std::min(na, nb) / std::max(na, nb) : 1.0;
   const int t = o.overlap_tolerance_voxels;
-  const bool disjoint = ((a_hi.array() + t) < b.lo.array()).any() ||
-                        ((b.hi.array() + t) < a_lo.array()).any();
+  const bool disjoint =
+      ((a_hi.array() + t) < b.lo.array()).any() || ((b.hi.array() + t) < a_lo.array()).any();
   if (!disjoint && na > 0 && partial + o.weight_overlap * bound > threshold) {
     double common = 0.0;
     if (t == 0) {
@@ -188,12 +233,17 @@ AddResult ObjectMap::add(const Observation& obs) {
   Scores best_scores;
   for (auto& object : objects_) {
     if (!object->alive) continue;
+    if (options_.one_observation_per_frame && object->has_frame(obs.timestamp)) continue;
     if (options_.require_same_class &&
         normalize_class_name(voted_class(*object)) != normalize_class_name(obs.class_name))
       continue;
     const bool same_id = obs.track_id && object->track_ids.count(*obs.track_id) > 0;
-    const Scores s =
-        score(same_id, obs_centroid, 0.0, obs_voxels, lo, hi, *object, options_.match_threshold);
+    // P <= w_id·P_ID + w_d + w_m: no need to score an object that cannot beat the best so far.
+    const double ceiling = options_.weight_id * (same_id ? 1.0 : 0.0) + options_.weight_distance +
+                           options_.weight_overlap;
+    if (best && ceiling <= best_scores.score_p) continue;
+    const Scores s = score(same_id, obs_centroid, 0.0, obs_voxels, lo, hi, *object,
+                           best ? best_scores.score_p : options_.match_threshold);
     if (s.score_p > options_.match_threshold && (!best || s.score_p > best_scores.score_p)) {
       best = object.get();
       best_scores = s;
@@ -211,13 +261,19 @@ AddResult ObjectMap::add(const Observation& obs) {
 
   // 4. Fuse: points into the voxel set, class vote, track ids, provenance.
   Object& o = *best;
+  // Observation counts per voxel; a voxel with none so far is new to the object (its
+  // neighbourhood joins `near`).
   std::vector<VoxelKey> new_keys;
   new_keys.reserve(obs_voxels.size());
+  o.near.reserve(o.near.size() + obs_voxels.size());
   obs_voxels.for_each([&](VoxelKey key, const VoxelData&) {
-    if (!o.voxels.contains(key)) new_keys.push_back(key);
+    std::uint8_t& hits = o.near[key];
+    if (hits == 0) new_keys.push_back(key);
+    if (hits < 255) ++hits;
   });
   o.voxels.merge(obs_voxels);
   o.dilate(new_keys);
+  o.add_frame(obs.timestamp);
   o.refresh();
   ClassVote& vote = o.histogram[obs.class_name];
   vote.score_sum += obs.score;
@@ -266,6 +322,10 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     if ((options_.require_same_class || options_.merge_require_same_class) &&
         normalize_class_name(voted_class(a)) != normalize_class_name(voted_class(b)))
       return false;
+    std::size_t shared = 0;
+    for (double t : a.frames) shared += b.has_frame(t);
+    const double nfr = static_cast<double>(std::min(a.frames.size(), b.frames.size()));
+    if (static_cast<double>(shared) > options_.merge_max_shared_frames * nfr) return false;
     bool same_id = false;
     for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
     // M: the smaller object against the larger (containment: the share of the smaller on the
@@ -308,6 +368,12 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     });
     into->voxels.merge(absorbed->voxels);
     into->dilate(new_keys);
+    absorbed->near.for_each([&](VoxelKey key, std::uint8_t hits) {
+      if (hits == 0) return;
+      std::uint8_t& h = into->near[key];
+      h = static_cast<std::uint8_t>(std::min(255, h + hits));
+    });
+    for (double t : absorbed->frames) into->add_frame(t);
     into->refresh();
     for (const auto& [name, vote] : absorbed->histogram) {
       into->histogram[name].score_sum += vote.score_sum;
@@ -330,6 +396,7 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     absorbed->absorbed_into = into->id;
     absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
     absorbed->near.clear();
+    absorbed->frames.clear();
     absorbed->provenance.clear();
     absorbed->merges.clear();
     made.push_back(link);
@@ -399,7 +466,21 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     r.merges = o.merges;
     r.points_raw = o.voxels.points_inserted();
     // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
-    PointCloud voxel_cloud = o.voxels.to_cloud();
+    PointCloud voxel_cloud;
+    if (options.min_voxel_support > 0.0) {
+      // Only voxels seen in enough of the object's observations (see RecordOptions).
+      const double need =
+          std::min(255.0, std::max(1.0, options.min_voxel_support * o.observations));
+      const auto voxels = o.voxels.sorted_voxels();
+      voxel_cloud.reserve(voxels.size());
+      for (const auto& [key, v] : voxels) {
+        const std::uint8_t* hits = o.near.find(key);
+        if (hits && *hits >= need)
+          voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
+      }
+    } else {
+      voxel_cloud = o.voxels.to_cloud();
+    }
     r.points_voxel = voxel_cloud.size();
     if (options.outlier_filter) {
       // Eq 18 on the voxel cloud.
@@ -411,6 +492,7 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     }
     r.points_filtered = r.cloud.size();
     r.centroid = geometry::centroid(r.cloud);
+    r.position = percentile_box_centre(r.cloud, options.position_percentile);
     r.aabb = geometry::compute_aabb(r.cloud);
     r.obb = geometry::compute_obb(r.cloud);
     out.push_back(std::move(r));

@@ -68,20 +68,27 @@ OverlapMeasure parse_overlap_measure(const std::string& text, const std::string&
 // contained in the whole) join, two distinct objects side by side (two cups 5 cm apart, stacked
 // books, a mouse by a keyboard) share only their touching boundary and stay two.
 struct ObjectMapOptions {
-  double voxel_m = 0.01;         // object voxel sets and the overlap M, at the map resolution
-  double distance_gate_m = 0.1;  // the paper's centroid gate (eq 17); f(gate) = 1/2
+  double voxel_m = 0.01;            // object voxel sets and the overlap M, at the map resolution
+  double distance_gate_m = 0.1;     // the paper's centroid gate (eq 17); f(gate) = 1/2
   double gate_radius_factor = 0.5;  // G = max(distance_gate_m, this × object RMS radius); 0: fixed
   OverlapMeasure overlap_measure = OverlapMeasure::kContainment;  // M of eq 21 (see above)
-  int overlap_tolerance_voxels = 1;  // 0: exact voxel coincidence; 1: 3×3×3 neighbourhood
-  double weight_id = 0.3;        // w_id
-  double weight_distance = 0.2;  // w_d
-  double weight_overlap = 0.5;   // w_m
-  double match_threshold = 0.4;  // K (eq 22): match when P > K
-  double merge_threshold = 0.4;  // K for the final merge pass between two objects
+  int overlap_tolerance_voxels = 1;      // 0: exact voxel coincidence; 1: 3×3×3 neighbourhood
+  double weight_id = 0.3;                // w_id
+  double weight_distance = 0.2;          // w_d
+  double weight_overlap = 0.5;           // w_m
+  double match_threshold = 0.4;          // K (eq 22): match when P > K
+  double merge_threshold = 0.4;          // K for the final merge pass between two objects
   bool merge_require_same_class = true;  // the merge pass joins only objects of one voted class
-  double merge_min_overlap = 0.5;  // ... and only when M (containment of the smaller) >= this
-  int min_observations = 3;      // an object is confirmed after this many observations
-  int min_points = 10;           // observations with fewer points (after depth checks) are ignored
+  double merge_min_overlap = 0.5;        // ... and only when M (containment of the smaller) >= this
+  // Two instances of one keyframe are two objects: an object takes at most one observation per
+  // timestamp (add() skips objects that already have one), and the merge pass never joins two
+  // objects that were both observed in more than this share of the smaller one's keyframes (e.g.
+  // two books stacked, seen together in every frame; a fragment of an ID switch is seen in other
+  // keyframes than its object). 1: no such rule.
+  bool one_observation_per_frame = true;
+  double merge_max_shared_frames = 0.1;
+  int min_observations = 3;  // an object is confirmed after this many observations
+  int min_points = 10;       // observations with fewer points (after depth checks) are ignored
   bool require_same_class = false;  // only match observations to objects of the voted class
   void check() const;               // throws InputError naming the bad field
 };
@@ -120,12 +127,17 @@ struct ObjectRecord {
   int id = -1;
   std::string class_name;  // the score-weighted vote
   std::map<std::string, ClassVote> class_histogram;
-  double mean_score = 0.0;          // mean detector score of its observations
-  Vec3 centroid = Vec3::Zero();     // mean of the filtered points: the paper's position
+  double mean_score = 0.0;       // mean detector score of its observations
+  Vec3 centroid = Vec3::Zero();  // mean of the filtered points: the paper's position
+  // Centre of the box spanned by the 5th and 95th percentiles of the filtered points along each
+  // world axis: the estimate of the object's (solid) centre. The point mean is biased toward the
+  // seen side (only the surface facing the camera is fused); the extent is not, as long as the
+  // views cover the object's outline; the percentiles ignore the last stray points.
+  Vec3 position = Vec3::Zero();
   Aabb aabb;                        // of the filtered points
   Obb obb;                          // PCA box of the filtered points
   std::size_t points_raw = 0;       // points of all its observations (before filtering)
-  std::size_t points_voxel = 0;     // after the voxel filter (occupied voxels)
+  std::size_t points_voxel = 0;     // after the voxel filter and min_voxel_support (voxels kept)
   std::size_t points_filtered = 0;  // after the outlier filter (eq 18)
   double outlier_threshold = 0.0;   // t of eq 18 for this object
   int observations = 0;
@@ -138,8 +150,15 @@ struct ObjectRecord {
 };
 
 struct RecordOptions {
-  bool confirmed_only = true;       // leave out objects with < min_observations
-  bool outlier_filter = true;       // apply eq 18 to each object's voxel cloud
+  double position_percentile = 0.05;  // ObjectRecord::position: centre of [q, 1 − q] per axis
+  bool confirmed_only = true;         // leave out objects with < min_observations
+  bool outlier_filter = true;         // apply eq 18 to each object's voxel cloud
+  // Before eq 18: keep only voxels that were in at least max(1, this × observations) of the
+  // object's observations. A voxel of the object's surface is in every view that sees it; a voxel
+  // of the background that a mask boundary bled onto (dilated masks, box masks) is in one or two
+  // views only, yet such voxels accumulate into dense strips (floor, wall) that eq 18 keeps.
+  // 0: keep every voxel (the paper).
+  double min_voxel_support = 0.1;
   filters::OutlierOptions outlier;  // K, k, threads
 };
 

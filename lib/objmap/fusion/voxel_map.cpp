@@ -53,8 +53,16 @@ VoxelMap::VoxelMap(const VoxelMapOptions& options) {
   shards_.resize(static_cast<std::size_t>(options.shards > 0 ? options.shards : options.threads));
 }
 
+// By the voxel's x index (no second hash of the key): a frame spans many x slices, so its voxels
+// spread over the shards.
 std::size_t VoxelMap::shard_of(VoxelKey key) const {
-  return shards_.size() == 1 ? 0 : geometry::mix_voxel_key(key) % shards_.size();
+  return shards_.size() == 1 ? 0 : static_cast<std::size_t>(key >> 42) % shards_.size();
+}
+
+void VoxelMap::reset() {
+  for (Table& t : shards_) t.reset();
+  points_inserted_ = 0;
+  points_dropped_ = 0;
 }
 
 void VoxelMap::reserve(std::size_t voxels) {
@@ -285,11 +293,44 @@ bool VoxelMap::key_bounds(Eigen::Vector3i& lo, Eigen::Vector3i& hi) const {
 }
 
 std::vector<std::pair<VoxelKey, const VoxelData*>> VoxelMap::sorted_voxels() const {
-  std::vector<std::pair<VoxelKey, const VoxelData*>> out;
+  using Entry = std::pair<VoxelKey, const VoxelData*>;
+  const auto by_key = [](const Entry& a, const Entry& b) { return a.first < b.first; };
+  std::vector<Entry> out;
   out.reserve(size());
+  if (shards_.size() == 1) {
+    shards_[0].for_each([&](VoxelKey key, const VoxelData& v) { out.emplace_back(key, &v); });
+    std::sort(out.begin(), out.end(), by_key);
+    return out;
+  }
+  // Bucketed by x slice (counting sort on the x key), then each slice sorted on its own, `threads`
+  // at a time: no second copy of the list.
+  std::uint64_t lo = ~std::uint64_t{0}, hi = 0;
   for (const Table& t : shards_)
-    t.for_each([&](VoxelKey key, const VoxelData& v) { out.emplace_back(key, &v); });
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    t.for_each([&](VoxelKey key, const VoxelData&) {
+      lo = std::min<std::uint64_t>(lo, key >> 42);
+      hi = std::max<std::uint64_t>(hi, key >> 42);
+    });
+  const std::size_t n = size();
+  if (n == 0) return out;
+  std::vector<std::size_t> start(hi - lo + 2, 0);
+  for (const Table& t : shards_)
+    t.for_each([&](VoxelKey key, const VoxelData&) { ++start[(key >> 42) - lo + 1]; });
+  for (std::size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+  out.resize(n);
+  std::vector<std::size_t> at(start.begin(), start.end() - 1);
+  for (const Table& t : shards_)
+    t.for_each([&](VoxelKey key, const VoxelData& v) { out[at[(key >> 42) - lo]++] = {key, &v}; });
+  const std::size_t slices = start.size() - 1;
+  auto sort_slices = [&](std::size_t t, std::size_t step) {
+    for (std::size_t i = t; i < slices; i += step)
+      std::sort(out.begin() + static_cast<std::ptrdiff_t>(start[i]),
+                out.begin() + static_cast<std::ptrdiff_t>(start[i + 1]), by_key);
+  };
+  const std::size_t threads = std::min(threads_, slices);
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(sort_slices, t, threads);
+  sort_slices(0, threads);
+  for (auto& th : pool) th.join();
   return out;
 }
 

@@ -62,6 +62,9 @@ class VoxelMap {
   void merge_counts(const VoxelMap& other);
   std::size_t shard_count() const { return shards_.size(); }
 
+  // Removes every voxel and zeroes the counters, keeping the tables' memory for reuse.
+  void reset();
+
   // Room for this many voxels without rehashing (e.g. a per-frame map: ~1/4 of the pixels).
   void reserve(std::size_t voxels);
 

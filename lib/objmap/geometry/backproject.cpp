@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "objmap/core/error.h"
@@ -39,16 +40,28 @@ void BackprojectOptions::check() const {
 }
 
 cv::Rect mask_bounds(const segmentation::Mask& mask) {
+  // Rows are tested 8 bytes at a time (most of a box mask's image is zero); the first and last
+  // non-zero pixel are then searched from the row's ends.
   int u0 = mask.width, v0 = mask.height, u1 = -1, v1 = -1;
+  const std::size_t w = static_cast<std::size_t>(mask.width);
   for (int v = 0; v < mask.height; ++v) {
-    const std::uint8_t* row = mask.data.data() + static_cast<std::size_t>(v) * mask.width;
-    for (int u = 0; u < mask.width; ++u) {
-      if (!row[u]) continue;
-      u0 = std::min(u0, u);
-      u1 = std::max(u1, u);
-      v0 = std::min(v0, v);
-      v1 = std::max(v1, v);
+    const std::uint8_t* row = mask.data.data() + static_cast<std::size_t>(v) * w;
+    std::uint64_t any = 0;
+    std::size_t u = 0;
+    for (; u + 8 <= w; u += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, row + u, 8);
+      any |= word;
     }
+    for (; u < w; ++u) any |= row[u];
+    if (!any) continue;
+    int first = 0, last = mask.width - 1;
+    while (!row[first]) ++first;
+    while (!row[last]) --last;
+    u0 = std::min(u0, first);
+    u1 = std::max(u1, last);
+    v0 = std::min(v0, v);
+    v1 = std::max(v1, v);
   }
   if (u1 < 0) return {};
   return {u0, v0, u1 - u0 + 1, v1 - v0 + 1};

@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -103,6 +104,12 @@ class VoxelHashTable {
     std::size_t cap = 16;
     while (cap * 5 < expected * 8) cap *= 2;
     if (cap > slots_.size()) rehash(cap);
+  }
+
+  // Empties the table and keeps its slots (no allocation when refilled to the same size).
+  void reset() {
+    std::fill(slots_.begin(), slots_.end(), Slot{});
+    size_ = 0;
   }
 
   void clear() {

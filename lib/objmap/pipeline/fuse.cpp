@@ -8,10 +8,13 @@
 #include <deque>
 #include <fstream>
 #include <future>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "objmap/core/error.h"
+#include "objmap/fusion/palette.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/camera_io.h"
@@ -230,6 +233,30 @@ class ShardedMergeOrder {
   bool failed_ = false;
 };
 
+// Per-frame voxel maps for reuse: a map's tables stay allocated from one keyframe to the next (no
+// fresh, page-faulting megabytes per keyframe). At most one map per worker in flight.
+class FrameMapPool {
+ public:
+  explicit FrameMapPool(const fusion::VoxelMapOptions& options) : options_(options) {}
+  std::unique_ptr<fusion::VoxelMap> take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (free_.empty()) return std::make_unique<fusion::VoxelMap>(options_);
+    auto map = std::move(free_.back());
+    free_.pop_back();
+    return map;
+  }
+  void give_back(std::unique_ptr<fusion::VoxelMap> map) {
+    map->reset();
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(std::move(map));
+  }
+
+ private:
+  fusion::VoxelMapOptions options_;
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<fusion::VoxelMap>> free_;
+};
+
 // What a worker hands back for one keyframe (its dense voxels are already in the dense map).
 struct FrameWork {
   std::vector<fusion::Observation> observations;
@@ -244,7 +271,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
                            const geometry::RayTable& rays, const io::FramePair& frame,
                            const Keyframe& keyframe, int keyframe_index,
                            const segmentation::FrameSegmentation* seg, fusion::VoxelMap& dense,
-                           ShardedMergeOrder& order) {
+                           ShardedMergeOrder& order, FrameMapPool& pool) {
   FrameWork work;
 
   // 1. The images (checked: size, type).
@@ -256,18 +283,16 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   dense_options.stride = options.dense_stride;
   const geometry::DepthFrame dense_frame(depth, keyframe.world_from_cam, &bgr);
   {
-    fusion::VoxelMapOptions map_options;
-    map_options.voxel_m = options.map_voxel_m;
-    map_options.shards = kDenseShards;
-    fusion::VoxelMap frame_map(map_options);
+    std::unique_ptr<fusion::VoxelMap> frame_map = pool.take();
     {
       const auto points = geometry::backproject(rays, dense_frame, dense_options);
       work.dense_points = points.points_in_world.size();
-      frame_map.reserve(points.points_in_world.size() / 4);
-      frame_map.insert(points.points_in_world);
+      frame_map->reserve(points.points_in_world.size() / 8);  // ~1 voxel per 4-15 points here
+      frame_map->insert(points.points_in_world);
     }
     order.merge_in_order(static_cast<std::size_t>(keyframe_index),
-                         [&](std::size_t shard) { dense.merge_shard(frame_map, shard); });
+                         [&](std::size_t shard) { dense.merge_shard(*frame_map, shard); });
+    pool.give_back(std::move(frame_map));
   }
 
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
@@ -312,6 +337,69 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     work.observations.push_back(std::move(obs));
   }
   return work;
+}
+
+// The three map clouds of the run folder. `dense` and the semantic colours come from one pass over
+// the sorted voxels of the dense map, split over `threads` threads; the semantic map (the dense
+// points with `semantic_colors`) is that of fusion::make_semantic_maps: a voxel holding a point of
+// a confirmed object takes that object's class colour (the object with more observations, then the
+// lower id, when several), the others keep their mean colour.
+struct MapClouds {
+  PointCloud dense, objects_only;
+  std::vector<Rgb> semantic_colors;
+};
+MapClouds map_clouds(const fusion::VoxelMap& dense,
+                     const std::vector<fusion::ObjectRecord>& records, int threads) {
+  MapClouds out;
+  geometry::VoxelHashTable<std::uint32_t> owner;  // record index + 1 per voxel
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const fusion::ObjectRecord& r = records[i];
+    if (!r.confirmed) continue;
+    for (const Vec3f& p : r.cloud.points) {
+      const fusion::VoxelKey key = dense.key_of(p);
+      if (key == geometry::kNoVoxel) continue;
+      std::uint32_t& slot = owner[key];
+      if (slot != 0) {
+        const fusion::ObjectRecord& other = records[slot - 1];
+        const bool better = r.observations > other.observations ||
+                            (r.observations == other.observations && r.id < other.id);
+        if (!better) continue;
+      }
+      slot = static_cast<std::uint32_t>(i + 1);
+    }
+  }
+  std::vector<Rgb> record_color(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i)
+    record_color[i] = fusion::class_color(records[i].class_name);
+
+  const auto voxels = dense.sorted_voxels();
+  const std::size_t n = voxels.size();
+  out.dense.points.resize(n);
+  out.dense.colors.resize(n);
+  out.semantic_colors.resize(n);
+  auto fill = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto& [key, v] = voxels[i];
+      const Vec3f p = dense.mean_position(key, *v).cast<float>();
+      const Rgb c = v->mean_color();
+      const std::uint32_t* slot = owner.empty() ? nullptr : owner.find(key);
+      out.dense.points[i] = p;
+      out.dense.colors[i] = c;
+      out.semantic_colors[i] = slot ? record_color[*slot - 1] : c;
+    }
+  };
+  const std::size_t t_count = static_cast<std::size_t>(std::max(1, threads));
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < t_count; ++t)
+    pool.emplace_back(fill, n * t / t_count, n * (t + 1) / t_count);
+  fill(0, n / t_count);
+  for (auto& th : pool) th.join();
+
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (!records[i].confirmed) continue;
+    for (const Vec3f& p : records[i].cloud.points) out.objects_only.push_back(p, record_color[i]);
+  }
+  return out;
 }
 
 ordered_json vec_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
@@ -458,9 +546,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const geometry::RayTable rays = geometry::make_ray_table(camera);
   fusion::VoxelMapOptions dense_options;
   dense_options.voxel_m = options.map_voxel_m;
+  dense_options.threads = options.threads;  // for sorting on export; voxels come via merge_shard
   dense_options.shards = kDenseShards;
   fusion::VoxelMap dense(dense_options);
   ShardedMergeOrder merge_order(kDenseShards);
+  fusion::VoxelMapOptions frame_map_options = dense_options;
+  frame_map_options.threads = 1;
+  FrameMapPool frame_maps(frame_map_options);
   fusion::ObjectMap objects(options.objects);
 
   const std::size_t window = static_cast<std::size_t>(std::max(1, options.threads));
@@ -468,20 +560,22 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   std::size_t next = 0;
   auto launch = [&](std::size_t i) {
     return std::async(std::launch::async, [&, i] {
-      // The keyframe's instances: read now (canonical JSON) or taken from the whole segmentation.
-      segmentation::FrameSegmentation lazy;
-      const segmentation::FrameSegmentation* seg_frame = nullptr;
-      if (seg_of[i] >= 0) {
-        if (seg_source.files.empty()) {
-          seg_frame = &seg_source.whole.frames[seg_of[i]];
-        } else {
-          lazy = segmentation::read_frame_json(seg_source.files[seg_of[i]].second, read);
-          seg_frame = &lazy;
-        }
-      }
       try {
+        // The keyframe's instances: read now (canonical JSON) or taken from the whole
+        // segmentation.
+        segmentation::FrameSegmentation lazy;
+        const segmentation::FrameSegmentation* seg_frame = nullptr;
+        if (seg_of[i] >= 0) {
+          if (seg_source.files.empty()) {
+            seg_frame = &seg_source.whole.frames[seg_of[i]];
+          } else {
+            lazy = segmentation::read_frame_json(seg_source.files[seg_of[i]].second, read);
+            seg_frame = &lazy;
+          }
+        }
         return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
-                                keyframes[i], static_cast<int>(i), seg_frame, dense, merge_order);
+                                keyframes[i], static_cast<int>(i), seg_frame, dense, merge_order,
+                                frame_maps);
       } catch (...) {
         merge_order.fail();  // later keyframes must not wait for this one's merge
         throw;
@@ -536,23 +630,23 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 5. The maps and the run folder, written under a temporary name and renamed when complete.
   t0 = Clock::now();
-  // One big buffer at a time: the dense cloud is written and freed before the semantic maps are
-  // made, and the dense voxel map is freed before they are written.
+  // The dense voxel map is freed once its clouds are made, each cloud once written.
   io::StagingDir staging(options.out);
   const fs::path dir = staging.path();
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();
-  {
-    const PointCloud dense_cloud = dense.to_cloud();
-    result.dense_points_map = dense_cloud.size();
-    io::write_ply(dir / "map_dense.ply", dense_cloud, ply);
-  }
-  fusion::SemanticMaps maps = fusion::make_semantic_maps(dense, result.objects);
-  dense = fusion::VoxelMap(dense_options);
-  io::write_ply(dir / "map_semantic.ply", maps.semantic, ply);
-  const std::size_t semantic_points = maps.semantic.size();
-  maps.semantic = PointCloud();
-  io::write_ply(dir / "map_objects.ply", maps.objects_only, ply);
+  MapClouds clouds = map_clouds(dense, result.objects, options.threads);
+  dense = fusion::VoxelMap(dense_options);  // its memory is no longer needed
+  result.dense_points_map = clouds.dense.size();
+  const std::size_t semantic_points = clouds.dense.size();
+  const std::size_t objects_points = clouds.objects_only.size();
+  io::write_ply(dir / "map_dense.ply", clouds.dense, ply);
+  clouds.dense.colors.swap(clouds.semantic_colors);  // the same points, semantic colours
+  clouds.semantic_colors = std::vector<Rgb>();
+  io::write_ply(dir / "map_semantic.ply", clouds.dense, ply);
+  clouds.dense = PointCloud();
+  io::write_ply(dir / "map_objects.ply", clouds.objects_only, ply);
+  clouds.objects_only = PointCloud();
   fs::create_directories(dir / "objects");
   ordered_json objects_json = ordered_json::array();
   for (const auto& r : result.objects) {
@@ -615,7 +709,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       {"objects_voxel_filtered", result.object_points_voxel},
       {"objects_outlier_filtered", result.object_points_filtered},
       {"semantic_map", semantic_points},
-      {"objects_map", maps.objects_only.size()},
+      {"objects_map", objects_points},
       {"reduction_objects_voxel", reduction(result.object_points_raw, result.object_points_voxel)},
       {"reduction_objects_total",
        reduction(result.object_points_raw, result.object_points_filtered)},

@@ -1,6 +1,8 @@
 #include "objmap/sim/depth_noise.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "objmap/core/error.h"
@@ -11,6 +13,14 @@ namespace objmap::sim {
 namespace {
 bool nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
 bool probability(double p) { return std::isfinite(p) && p >= 0.0 && p <= 1.0; }
+
+// std::round (halves away from zero) without the library call, for x >= 0: x - trunc(x) is exact
+// for x < 2^52. Larger values, negative values and NaN go to std::round.
+inline double round_nonneg(double x) {
+  if (!(x >= 0.0 && x < 4503599627370496.0)) return std::round(x);
+  const double t = static_cast<double>(static_cast<std::int64_t>(x));
+  return t + static_cast<double>(x - t >= 0.5);  // no branch: the fraction is random
+}
 }  // namespace
 
 void DepthNoiseOptions::check() const {
@@ -60,26 +70,48 @@ cv::Mat depth_edges(const cv::Mat& depth_m, const DepthNoiseOptions& o) {
   cv::Mat edges(depth_m.size(), CV_8UC1, cv::Scalar::all(0));
   const int w = o.edge_width_px;
   if (w <= 0) return edges;
-  for (int v = 0; v < depth_m.rows; ++v) {
-    for (int u = 0; u < depth_m.cols; ++u) {
-      const float z = depth_m.at<float>(v, u);
-      bool edge = false;
-      for (int dv = -w; dv <= w && !edge; ++dv) {
-        const int vv = v + dv;
-        if (vv < 0 || vv >= depth_m.rows) continue;
-        const float* row = depth_m.ptr<float>(vv);
-        for (int du = -w; du <= w; ++du) {
-          const int uu = u + du;
-          if (uu < 0 || uu >= depth_m.cols) continue;
-          const float zn = row[uu];
-          // A neighbour with no surface counts as a jump (silhouette against nothing).
-          if ((zn <= 0.0f) != (z <= 0.0f) || std::abs(zn - z) > o.edge_jump_m) {
-            edge = true;
-            break;
-          }
-        }
+  // A pixel is an edge when a neighbour within the (2w+1)^2 window (clipped at the border) has a
+  // surface and it has none, or the other way round, or when |z_n - z| > edge_jump_m for a
+  // neighbour. Float subtraction is monotonic, so the largest |z_n - z| is max(z_n) - z or
+  // z - min(z_n): window minimum, maximum and count of empty pixels, each separable.
+  const int rows = depth_m.rows, cols = depth_m.cols;
+  cv::Mat row_min(depth_m.size(), CV_32FC1), row_max(depth_m.size(), CV_32FC1);
+  cv::Mat row_empty(depth_m.size(), CV_32SC1);
+  for (int v = 0; v < rows; ++v) {
+    const float* z = depth_m.ptr<float>(v);
+    float* mn = row_min.ptr<float>(v);
+    float* mx = row_max.ptr<float>(v);
+    int* empty = row_empty.ptr<int>(v);
+    for (int u = 0; u < cols; ++u) {
+      float lo = z[u], hi = z[u];
+      int n = 0;
+      for (int uu = std::max(0, u - w); uu <= std::min(cols - 1, u + w); ++uu) {
+        lo = std::min(lo, z[uu]);
+        hi = std::max(hi, z[uu]);
+        n += z[uu] <= 0.0f ? 1 : 0;
       }
-      edges.at<std::uint8_t>(v, u) = edge ? 1 : 0;
+      mn[u] = lo;
+      mx[u] = hi;
+      empty[u] = n;
+    }
+  }
+  for (int v = 0; v < rows; ++v) {
+    const int v0 = std::max(0, v - w), v1 = std::min(rows - 1, v + w);
+    const int window_rows = v1 - v0 + 1;
+    const float* z = depth_m.ptr<float>(v);
+    auto* out = edges.ptr<std::uint8_t>(v);
+    for (int u = 0; u < cols; ++u) {
+      float lo = z[u], hi = z[u];
+      int n = 0;
+      for (int vv = v0; vv <= v1; ++vv) {
+        lo = std::min(lo, row_min.ptr<float>(vv)[u]);
+        hi = std::max(hi, row_max.ptr<float>(vv)[u]);
+        n += row_empty.ptr<int>(vv)[u];
+      }
+      const int window = window_rows * (std::min(cols - 1, u + w) - std::max(0, u - w) + 1);
+      // When no neighbour differs in having a surface, lo and hi are over pixels of one kind.
+      const bool mixed = z[u] <= 0.0f ? n < window : n > 0;
+      out[u] = mixed || (hi - z[u]) > o.edge_jump_m || (z[u] - lo) > o.edge_jump_m ? 1 : 0;
     }
   }
   return edges;
@@ -109,7 +141,8 @@ cv::Mat apply_depth_noise(const cv::Mat& depth_m, const Camera& camera, const De
       double zn = z + depth_sigma_m(z, o) * gauss;
       if (o.disparity_step_px > 0.0 && zn > 0.0) {
         const double disparity = focal_baseline / zn;
-        const double quantised = std::round(disparity / o.disparity_step_px) * o.disparity_step_px;
+        const double quantised =
+            round_nonneg(disparity / o.disparity_step_px) * o.disparity_step_px;
         zn = quantised > 0.0 ? focal_baseline / quantised : 0.0;
       }
       out[u] = zn > 0.0 ? static_cast<float>(zn) : 0.0f;
@@ -124,7 +157,7 @@ cv::Mat depth_to_u16(const cv::Mat& depth_m, double depth_factor) {
     const float* in = depth_m.ptr<float>(v);
     auto* o = out.ptr<std::uint16_t>(v);
     for (int u = 0; u < depth_m.cols; ++u) {
-      const double d = std::round(static_cast<double>(in[u]) * depth_factor);
+      const double d = round_nonneg(static_cast<double>(in[u]) * depth_factor);
       o[u] =
           (d <= 0.0 || d > 65535.0) ? 0 : static_cast<std::uint16_t>(d);  // out of range: missing
     }

@@ -17,9 +17,8 @@ inline std::uint8_t to8(double c) {
   const double x = c * 255.0;
   if (!(x > 0.0)) return 0;  // also NaN
   if (x >= 255.0) return 255;
-  int r = static_cast<int>(x);
-  if (x - r >= 0.5) ++r;
-  return static_cast<std::uint8_t>(r);
+  const int r = static_cast<int>(x);
+  return static_cast<std::uint8_t>(r + static_cast<int>(x - r >= 0.5));  // no branch
 }
 }  // namespace
 

@@ -91,14 +91,14 @@ Eigen::Vector3d albedo(const Material& m, const Vec3& p) {
       w = 0.0;
       break;
     case Pattern::kChecker: {
-      const auto i = static_cast<std::int64_t>(std::floor(p.x() / s)) +
-                     static_cast<std::int64_t>(std::floor(p.y() / s)) +
-                     static_cast<std::int64_t>(std::floor(p.z() / s));
+      const auto i = static_cast<std::int64_t>(floor_fast(p.x() / s)) +
+                     static_cast<std::int64_t>(floor_fast(p.y() / s)) +
+                     static_cast<std::int64_t>(floor_fast(p.z() / s));
       w = (i & 1) ? 1.0 : 0.0;
       break;
     }
     case Pattern::kStripes:
-      w = (static_cast<std::int64_t>(std::floor(p.z() / s)) & 1) ? 1.0 : 0.0;
+      w = (static_cast<std::int64_t>(floor_fast(p.z() / s)) & 1) ? 1.0 : 0.0;
       break;
     case Pattern::kNoise: {
       const double n = fractal_noise(p / s, m.seed);
@@ -106,8 +106,8 @@ Eigen::Vector3d albedo(const Material& m, const Vec3& p) {
       break;
     }
     case Pattern::kKeys: {
-      const double fx = p.x() / s - std::floor(p.x() / s);
-      const double fy = p.y() / s - std::floor(p.y() / s);
+      const double fx = p.x() / s - floor_fast(p.x() / s);
+      const double fy = p.y() / s - floor_fast(p.y() / s);
       w = (fx > 0.12 && fx < 0.88 && fy > 0.12 && fy < 0.88) ? 1.0 : 0.0;
       break;
     }

@@ -4,10 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <mutex>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
@@ -15,6 +16,7 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/segmentation/write.h"
 #include "objmap/sim/parallel.h"
+#include "objmap/sim/png.h"
 
 namespace objmap::sim {
 
@@ -25,20 +27,23 @@ namespace {
 
 json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
 
-void write_text(const fs::path& file, const std::string& text) {
+void write_bytes(const fs::path& file, const char* data, std::size_t size) {
   std::ofstream out(file, std::ios::binary);
-  out << text;
+  out.write(data, static_cast<std::streamsize>(size));
   out.close();
   if (!out) throw InputError(file.string(), "cannot write the file");
 }
 
+void write_text(const fs::path& file, const std::string& text) {
+  write_bytes(file, text.data(), text.size());
+}
+
+// png.h: Sub filter and zlib level 1 RLE, several times faster than cv::imencode. The byte buffer
+// is kept per thread: a fresh 1 MB buffer per image costs page faults.
 void write_png(const fs::path& file, const cv::Mat& image) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image, bytes,
-                    {cv::IMWRITE_PNG_COMPRESSION, 1, cv::IMWRITE_PNG_STRATEGY,
-                     cv::IMWRITE_PNG_STRATEGY_HUFFMAN_ONLY}))
-    throw InputError(file.string(), "PNG encoding failed");
-  write_text(file, std::string(bytes.begin(), bytes.end()));
+  thread_local std::vector<std::uint8_t> bytes;
+  encode_png(image, &bytes);
+  write_bytes(file, reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 
 std::string describe(const SynthOptions& o) {
@@ -147,18 +152,14 @@ void make_folders(const fs::path& dir) {
   }
 }
 
-// The files of a batch of frames: images on the threads, segmentation files in order.
-void write_frames(const fs::path& dir, const std::vector<const SynthFrame*>& frames, int threads) {
-  parallel_for(frames.size(), threads, [&](std::size_t i) {
-    const SynthFrame& f = *frames[i];
-    write_png(dir / "rgb" / (timestamp_name(f.timestamp) + ".png"), f.rgb);
-    write_png(dir / "depth" / (timestamp_name(f.depth_timestamp) + ".png"), f.depth);
-  });
-  for (const SynthFrame* f : frames) {
-    const std::string name = segmentation::frame_file_name(f->timestamp);
-    segmentation::write_frame_json(dir / "segmentation" / name, f->segmentation);
-    segmentation::write_frame_json(dir / "segmentation_gt" / name, f->segmentation_gt);
-  }
+void write_images(const fs::path& dir, const SynthFrame& f) {
+  write_png(dir / "rgb" / (timestamp_name(f.timestamp) + ".png"), f.rgb);
+  write_png(dir / "depth" / (timestamp_name(f.depth_timestamp) + ".png"), f.depth);
+}
+
+void write_segmentation(const fs::path& dir, const char* sub,
+                        const segmentation::FrameSegmentation& frame) {
+  segmentation::write_frame_json(dir / sub / segmentation::frame_file_name(frame.timestamp), frame);
 }
 
 // Everything but the frames: lists, camera, trajectories, objects, synth.json.
@@ -193,9 +194,12 @@ void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
 void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
   io::StagingDir staging(out);
   make_folders(staging.path());
-  std::vector<const SynthFrame*> frames;
-  for (const auto& f : s.frames) frames.push_back(&f);
-  write_frames(staging.path(), frames, threads);
+  parallel_for(s.frames.size(), threads, [&](std::size_t i) {
+    const SynthFrame& f = s.frames[i];
+    write_images(staging.path(), f);
+    write_segmentation(staging.path(), "segmentation", f.segmentation);
+    write_segmentation(staging.path(), "segmentation_gt", f.segmentation_gt);
+  });
   write_sequence_files(staging.path(), s);
   staging.commit();
 }
@@ -205,25 +209,60 @@ SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& 
   SynthSequence seq = prepare_sequence(options);
   io::StagingDir staging(out);
   make_folders(staging.path());
-  SegmentationNoise noise = make_segmentation_noise(options);
+  const fs::path& dir = staging.path();
   const std::size_t total = seq.groundtruth.size();
-  const std::size_t batch = 4 * static_cast<std::size_t>(resolve_threads(options.threads));
-  for (std::size_t start = 0; start < total; start += batch) {
-    const std::size_t n = std::min(batch, total - start);
-    std::vector<SynthFrame> frames(n);
-    parallel_for(n, options.threads, [&](std::size_t i) {
-      frames[i] = render_synth_frame(seq, static_cast<int>(start + i));
-    });
-    std::vector<const SynthFrame*> pointers;
-    for (auto& f : frames) {  // in time order: track IDs carry over
-      f.segmentation = noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height);
-      pointers.push_back(&f);
+
+  // One pass over the frames on the threads: each frame is rendered, its images and exact
+  // segmentation written and its memory freed; only the exact segmentation waits in `pending`
+  // for the segmentation noise, which must see the frames in time order (track ids carry over).
+  // Whichever thread finds the next frame ready (and the chain free) advances the chain, so the
+  // noise runs alongside the rendering. The files do not depend on the thread count.
+  SegmentationNoise noise = make_segmentation_noise(options);
+  std::vector<std::optional<segmentation::FrameSegmentation>> pending(total);
+  std::mutex pending_mutex;       // guards `pending` and `next_in_chain`
+  std::mutex chain_mutex;         // held by the thread advancing the chain (uses `noise`)
+  std::size_t next_in_chain = 0;  // frames whose noisy segmentation is written
+  auto advance_chain = [&] {
+    for (;;) {
+      std::unique_lock<std::mutex> chain(chain_mutex, std::try_to_lock);
+      if (!chain.owns_lock()) return;  // the owner will see our frame (it re-checks below)
+      for (;;) {
+        std::optional<segmentation::FrameSegmentation> exact;
+        {
+          std::lock_guard<std::mutex> lock(pending_mutex);
+          if (next_in_chain >= total || !pending[next_in_chain]) break;
+          exact = std::move(pending[next_in_chain]);
+          pending[next_in_chain].reset();
+        }
+        write_segmentation(dir, "segmentation",
+                           noise.apply(*exact, seq.camera.width, seq.camera.height));
+        std::size_t done = 0;
+        {
+          std::lock_guard<std::mutex> lock(pending_mutex);
+          done = ++next_in_chain;
+        }
+        if (progress) progress(done, total);
+      }
+      chain.unlock();
+      // A frame may have become ready after our last look and before the unlock, while its
+      // thread failed to take the chain: look again.
+      std::lock_guard<std::mutex> lock(pending_mutex);
+      if (next_in_chain >= total || !pending[next_in_chain]) return;
     }
-    write_frames(staging.path(), pointers, options.threads);
-    if (progress) progress(start + n, total);
-  }
+  };
+  parallel_for(total, options.threads, [&](std::size_t i) {
+    SynthFrame f = render_synth_frame(seq, static_cast<int>(i));
+    write_images(dir, f);
+    write_segmentation(dir, "segmentation_gt", f.segmentation_gt);
+    {
+      std::lock_guard<std::mutex> lock(pending_mutex);
+      pending[i] = std::move(f.segmentation_gt);
+    }
+    advance_chain();
+  });
+  require(next_in_chain == total, out.string(), "internal error: segmentation chain incomplete");
   seq.seg_stats = noise.stats();
-  write_sequence_files(staging.path(), seq);
+  write_sequence_files(dir, seq);
   staging.commit();
   return seq;
 }

@@ -1,0 +1,138 @@
+// objmap track: gives every instance of a segmentation a track id with DeepSORT (Kalman filter,
+// Mahalanobis gate, colour appearance, matching cascade, IoU stage, Hungarian assignment), and
+// writes the tracked segmentation in the canonical format plus tracks.json.
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "command.h"
+#include "objmap/core/error.h"
+#include "objmap/io/atomic.h"
+#include "objmap/io/image.h"
+#include "objmap/segmentation/read.h"
+#include "objmap/segmentation/write.h"
+#include "objmap/track/track_segmentation.h"
+#include "progress.h"
+
+namespace objmap::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TrackCommand {
+  std::string dataset;
+  std::string segmentation;
+  std::string out;
+  std::string seg_format = "auto";
+  bool no_appearance = false;
+  bool same_class = false;
+  bool online_output = false;
+  track::TrackOptions options;
+};
+
+void run_track(TrackCommand& cmd) {
+  track::TrackOptions& o = cmd.options;
+  o.tracker.same_class_only = cmd.same_class;
+  o.label_tentative_history = !cmd.online_output;
+  o.check();
+  require(fs::is_directory(cmd.dataset), cmd.dataset,
+          "no such folder; expected a TUM RGB-D folder with rgb.txt");
+  segmentation::ReadOptions read;
+  read.format = cmd.seg_format;
+  const segmentation::Segmentation input = segmentation::read_segmentation(cmd.segmentation, read);
+  const track::FrameImages images = track::find_frame_images(cmd.dataset, input);
+  // Appearance needs the rgb images; a stream of boxes without images is tracked on motion alone.
+  o.tracker.use_appearance = !cmd.no_appearance && images.has_images;
+
+  std::unique_ptr<ProgressBar> bar;
+  const track::TrackResult result = track::track_segmentation(
+      input, o, [&](std::size_t i) { return io::read_rgb(images.files[i], 0, 0); },
+      [&](std::size_t done, std::size_t total) {
+        if (!bar) bar = std::make_unique<ProgressBar>("track", total);
+        bar->update(done);
+      });
+  if (bar) bar->finish();
+
+  io::StagingDir staging(cmd.out);
+  segmentation::write_segmentation(staging.path(), result.tracked);
+  io::write_file_atomic(staging.path() / "tracks.json", track::tracks_json(result));
+  staging.commit();
+
+  const track::LengthStats len = track::length_stats(result.tracks);
+  std::map<std::string, int> per_class;
+  for (const auto& t : result.tracks) ++per_class[t.class_name];
+  std::printf("wrote         %s (%zu frame files, tracks.json)\n", cmd.out.c_str(),
+              result.tracked.frames.size());
+  std::printf("input         %s: format %s, %zu frames, %zu instances\n", cmd.segmentation.c_str(),
+              input.format.c_str(), result.frames, result.instances);
+  std::printf("appearance    %s\n", result.used_appearance ? "colour histograms of the rgb images"
+                                    : cmd.no_appearance
+                                        ? "off (--no-appearance): motion and IoU only"
+                                        : "off (the dataset has no images): motion and IoU only");
+  std::printf("tracks        %zu confirmed of %zu started (n_init %d, max_age %d)\n",
+              result.tracks.size(), result.tracks_started, o.tracker.n_init, o.tracker.max_age);
+  std::printf("instances     %zu of %zu with a track id (%.1f%%)\n", result.instances_tracked,
+              result.instances,
+              result.instances ? 100.0 * result.instances_tracked / result.instances : 0.0);
+  if (len.count > 0)
+    std::printf("length        mean %.1f, median %zu, min %zu, max %zu frames\n", len.mean,
+                len.median, len.min, len.max);
+  for (const auto& [name, n] : per_class) std::printf("  %-20s %d tracks\n", name.c_str(), n);
+}
+
+void setup_track(CLI::App& app) {
+  auto cmd = std::make_shared<TrackCommand>();
+  track::TrackerOptions& t = cmd->options.tracker;
+  auto* c = app.add_subcommand(
+      "track",
+      "Give the instances of a segmentation track ids with DeepSORT (Kalman filter on the box, "
+      "Mahalanobis gate, colour appearance, matching cascade, IoU matching, Hungarian "
+      "assignment). Writes the canonical segmentation with track_id and tracks.json.");
+  c->add_option("--dataset", cmd->dataset,
+                "TUM RGB-D folder (rgb.txt; rgb images for appearance when present)")
+      ->required();
+  c->add_option("--segmentation", cmd->segmentation,
+                "segmentation folder (any supported format; input track ids are ignored)")
+      ->required();
+  c->add_option("--out", cmd->out, "output segmentation folder (replaced if it exists)")
+      ->required();
+  c->add_option("--seg-format", cmd->seg_format,
+                "auto|json|png|txt-paper|boxes-named|boxes-coco|boxes-xywh")
+      ->capture_default_str();
+  c->add_flag("--no-appearance", cmd->no_appearance,
+              "match on motion (Mahalanobis) and IoU only, even when images exist");
+  c->add_flag("--same-class", cmd->same_class,
+              "a detection only joins a track of its own class (default: any class; the track's "
+              "class is the majority vote)");
+  c->add_flag("--online-output", cmd->online_output,
+              "label only detections made while their track was confirmed (DeepSORT's online "
+              "output); default: a confirmed track's first tentative detections too");
+  c->add_option("--max-age", t.max_age, "frames a lost confirmed track survives")
+      ->capture_default_str();
+  c->add_option("--n-init", t.n_init, "hits to confirm a track")->capture_default_str();
+  c->add_option("--max-cosine-distance", t.max_cosine_distance,
+                "appearance threshold of the matching cascade")
+      ->capture_default_str();
+  c->add_option("--lambda", t.lambda,
+                "weight of the Mahalanobis distance in the cascade cost (DeepSORT eq 5)")
+      ->capture_default_str();
+  c->add_option("--max-iou-distance", t.max_iou_distance, "IoU stage threshold on 1 - IoU")
+      ->capture_default_str();
+  c->add_option("--std-position", t.kalman.std_weight_position,
+                "Kalman position noise std as a fraction of the box height")
+      ->capture_default_str();
+  c->add_option("--std-velocity", t.kalman.std_weight_velocity,
+                "Kalman velocity noise std as a fraction of the box height")
+      ->capture_default_str();
+  c->add_option("--min-score", t.min_score, "detections below this score are not tracked")
+      ->capture_default_str();
+  c->callback([cmd] { run_track(*cmd); });
+}
+
+}  // namespace
+
+OBJMAP_COMMAND(30, "track", setup_track);
+
+}  // namespace objmap::app

@@ -1,0 +1,186 @@
+// The whole `objmap fuse` against the mere decoding of its PNGs, measured in one run (issue
+// targets: fuse ≤ 1.5× decode per keyframe, peak RSS ≤ 500 MB, ≥ 20× faster than Open3D's
+// 214 ms/frame). On $OBJMAP_DATA (default <repo>/../shared/data)/tum/fr1_rpy_every4 with
+// groundtruth.txt and detections_yolofastest:
+//   build-*/bin/bench_fuse [--threads 2] [--repeat 3] [--dataset DIR]
+// Prints: ms per keyframe of the whole fuse (inputs to written run folder), ms per rgb+depth pair
+// to decode the same keyframes' PNGs on 1 and on `threads` threads, the ratios, peak RSS. Each
+// figure is the best of `repeat` rounds. The fuse runs first, so the peak RSS is the fuse's.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "objmap/io/image.h"
+#include "objmap/io/tum_dataset.h"
+#include "objmap/pipeline/fuse.h"
+#include "objmap/version.h"
+
+namespace fs = std::filesystem;
+using namespace objmap;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+constexpr double kOpen3dMsPerFrame = 214.0;  // Open3D 0.16 on this machine (issue text)
+
+fs::path data_dir() {
+  if (const char* env = std::getenv("OBJMAP_DATA")) return env;
+  return fs::path(OBJMAP_SOURCE_DIR) / ".." / "shared" / "data";
+}
+
+// One whole fuse in a child process, so that each run's peak RSS is its own (not that of earlier
+// runs or of this process). Returns false when the child failed.
+struct FuseRun {
+  double seconds = 0.0;
+  double cpu_seconds = 0.0;  // user + system, all threads
+  double peak_rss_mb = 0.0;
+};
+bool fuse_in_child(const pipeline::FuseOptions& options, FuseRun& run) {
+  int fd[2];
+  if (pipe(fd) != 0) return false;
+  const pid_t pid = fork();
+  if (pid < 0) return false;
+  if (pid == 0) {
+    close(fd[0]);
+    int code = 0;
+    try {
+      const double s = pipeline::run_fuse(options).seconds_total;
+      code = write(fd[1], &s, sizeof s) == static_cast<ssize_t>(sizeof s) ? 0 : 1;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_fuse: %s\n", e.what());
+      code = 1;
+    }
+    _exit(code);
+  }
+  close(fd[1]);
+  double s = 0.0;
+  const bool got = read(fd[0], &s, sizeof s) == static_cast<ssize_t>(sizeof s);
+  close(fd[0]);
+  int status = 0;
+  rusage usage{};
+  if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
+      !got)
+    return false;
+  run.seconds = s;
+  run.peak_rss_mb = usage.ru_maxrss / 1024.0;
+  run.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+                    1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  return true;
+}
+
+// Seconds to decode the rgb and depth PNGs of `frames` with `threads` threads (frame i on thread
+// i mod threads), as the fuse workers do.
+double decode_seconds(const std::vector<io::FramePair>& frames, int width, int height,
+                      int threads) {
+  const auto t0 = Clock::now();
+  auto work = [&](int t) {
+    std::size_t bytes = 0;
+    for (std::size_t i = static_cast<std::size_t>(t); i < frames.size(); i += threads) {
+      const cv::Mat bgr = io::read_rgb(frames[i].rgb_file, width, height);
+      const cv::Mat depth = io::read_depth(frames[i].depth_file, width, height);
+      bytes += bgr.total() + depth.total();
+    }
+    return bytes;
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back([&, t] { work(t); });
+  work(0);
+  for (auto& th : pool) th.join();
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int threads = 2, repeat = 3;
+  fs::path dataset = data_dir() / "tum" / "fr1_rpy_every4";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--threads") {
+      threads = std::max(1, std::atoi(argv[i + 1]));
+    } else if (a == "--repeat") {
+      repeat = std::max(1, std::atoi(argv[i + 1]));
+    } else if (a == "--dataset") {
+      dataset = argv[i + 1];
+    } else {
+      std::fprintf(stderr, "usage: bench_fuse [--threads N] [--repeat N] [--dataset DIR]\n");
+      return 2;
+    }
+  }
+  if (!fs::exists(dataset / "groundtruth.txt") || !fs::exists(dataset / "detections_yolofastest")) {
+    std::printf("bench_fuse: skipped, no %s (set OBJMAP_DATA)\n", dataset.string().c_str());
+    return 0;
+  }
+  const fs::path out = fs::temp_directory_path() / ("bench_fuse_" + std::to_string(getpid()));
+
+  try {
+    // 1. The whole fuse, as `objmap fuse --dataset D --trajectory D/groundtruth.txt
+    //    --segmentation D/detections_yolofastest --out OUT --threads N`.
+    pipeline::FuseOptions options;
+    options.dataset = dataset;
+    options.trajectory = dataset / "groundtruth.txt";
+    options.segmentation = dataset / "detections_yolofastest";
+    options.out = out;
+    options.threads = threads;
+    double fuse_s = 1e30, cpu_s = 1e30, rss_mb = 0.0;
+    for (int r = 0; r < repeat; ++r) {
+      FuseRun run;
+      if (!fuse_in_child(options, run)) {
+        std::fprintf(stderr, "bench_fuse: the fuse failed\n");
+        return 1;
+      }
+      fuse_s = std::min(fuse_s, run.seconds);
+      cpu_s = std::min(cpu_s, run.cpu_seconds);
+      rss_mb = std::max(rss_mb, run.peak_rss_mb);
+    }
+    // The keyframes of the runs (once more, in this process, for the list of PNGs).
+    const pipeline::FuseResult result = pipeline::run_fuse(options);
+    fs::remove_all(out);
+    const std::size_t n = result.keyframes.keyframes.size();
+
+    // 2. Decoding the same keyframes' PNGs, nothing else.
+    io::TumOptions tum;
+    tum.max_diff_s = options.max_diff_s;
+    const io::TumDataset data = io::read_tum_dataset(dataset, tum);
+    std::vector<io::FramePair> frames;
+    for (const auto& k : result.keyframes.keyframes) frames.push_back(data.frames[k.frame]);
+    double dec1_s = 1e30, decn_s = 1e30;
+    for (int r = 0; r < repeat; ++r) {
+      dec1_s =
+          std::min(dec1_s, decode_seconds(frames, result.camera.width, result.camera.height, 1));
+      decn_s = std::min(decn_s,
+                        decode_seconds(frames, result.camera.width, result.camera.height, threads));
+    }
+
+    const double fuse_ms = 1000.0 * fuse_s / n, dec1_ms = 1000.0 * dec1_s / n,
+                 decn_ms = 1000.0 * decn_s / n;
+    std::printf("objmap %s, bench_fuse\n", objmap::version());
+    std::printf("dataset              %s (%zu keyframes, ground-truth trajectory)\n",
+                dataset.string().c_str(), n);
+    std::printf("fuse, %d threads      %8.2f ms/keyframe  (%.2f s total, best of %d)\n", threads,
+                fuse_ms, fuse_s, repeat);
+    std::printf(
+        "fuse CPU time        %8.2f ms/keyframe  (user + system, all threads; the process)\n",
+        1000.0 * cpu_s / n);
+    std::printf("decode, 1 thread     %8.2f ms/keyframe  (rgb + depth PNG)\n", dec1_ms);
+    std::printf("decode, %d threads    %8.2f ms/keyframe\n", threads, decn_ms);
+    std::printf("fuse / decode(1)     %8.2f   (target <= 1.5)\n", fuse_ms / dec1_ms);
+    std::printf("fuse / decode(%d)     %8.2f\n", threads, fuse_ms / decn_ms);
+    std::printf("peak RSS             %8.1f MB (target <= 500)\n", rss_mb);
+    std::printf("vs Open3D 214 ms/fr  %8.1fx faster (target >= 20)\n", kOpen3dMsPerFrame / fuse_ms);
+  } catch (const std::exception& e) {
+    fs::remove_all(out);
+    std::fprintf(stderr, "bench_fuse: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

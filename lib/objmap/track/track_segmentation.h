@@ -1,0 +1,87 @@
+#pragma once
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "objmap/segmentation/types.h"
+#include "objmap/track/tracker.h"
+
+// Offline tracking of a whole segmentation (`objmap track`): the frames in time order through the
+// DeepSORT tracker, then track ids written into the instances.
+namespace objmap::track {
+
+struct TrackOptions {
+  TrackerOptions tracker;
+  // Input track ids are ignored (the tracker gives its own); instances of tracks that are never
+  // confirmed keep no track id. Offline, a confirmed track's first n_init - 1 (tentative)
+  // detections are given its id too (true); false: only the detections made while the track was
+  // confirmed, as DeepSORT's online output.
+  bool label_tentative_history = true;
+  void check() const { tracker.check(); }
+};
+
+struct TrackSummary {
+  int id = 0;              // output track id (1, 2, ... in order of confirmation)
+  std::string class_name;  // majority class of its detections
+  std::size_t first_frame = 0, last_frame = 0;  // indices into the segmentation's frames
+  double first_timestamp = 0, last_timestamp = 0;
+  std::size_t length = 0;  // instances labelled with this id
+};
+
+struct TrackResult {
+  segmentation::Segmentation tracked;  // the input with track_id set (or cleared) per instance
+  std::vector<TrackSummary> tracks;    // confirmed tracks, by id
+  std::size_t frames = 0;
+  std::size_t instances = 0;          // all instances
+  std::size_t instances_tracked = 0;  // instances given a track id
+  std::size_t tracks_started = 0;     // tentative tracks created (confirmed or not)
+  bool used_appearance = false;
+};
+
+// The rgb image (CV_8UC3 BGR) of frame `index` of the segmentation; called once per frame, in
+// order, only when options.tracker.use_appearance.
+using FrameImage = std::function<cv::Mat(std::size_t index)>;
+using TrackProgress = std::function<void(std::size_t done, std::size_t total)>;
+
+// Tracks the instances of `input` (frames sorted by timestamp; each frame is one time step).
+// Throws InputError when the segmentation has no frame or no instance at all, and for bad options.
+TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
+                               const FrameImage& image = {}, const TrackProgress& progress = {});
+
+// tracks.json: {"frames":N,"instances":N,"instances_tracked":N,"tracks_started":N,
+// "appearance":bool,"tracks":[{"id","class","first_frame","last_frame","first_timestamp",
+// "last_timestamp","length"}]} (deterministic).
+std::string tracks_json(const TrackResult& result);
+
+// Length statistics of the confirmed tracks (frames labelled per track).
+struct LengthStats {
+  std::size_t count = 0;
+  double mean = 0;
+  std::size_t min = 0, median = 0, max = 0;
+};
+LengthStats length_stats(const std::vector<TrackSummary>& tracks);
+
+// --- Inputs of `objmap track` -------------------------------------------------------------------
+
+// The rgb images of a TUM folder for the frames of a segmentation. A folder whose rgb.txt lists
+// images that are not there (a detection stream without images, such as the fr3_long_office
+// annotations) has none: has_images is false.
+struct FrameImages {
+  bool has_images = false;
+  std::vector<std::filesystem::path> files;  // one per segmentation frame, when has_images
+  std::size_t listed = 0;                    // rows of rgb.txt
+};
+
+// Reads `dataset`/rgb.txt (strict: `timestamp filename` lines, increasing stamps) and finds the
+// image of each frame of `segmentation` (the rgb stamp within max_diff_s). Throws InputError for a
+// missing folder or rgb.txt, a bad line, or (when the images exist) a segmentation frame without
+// an rgb image.
+FrameImages find_frame_images(const std::filesystem::path& dataset,
+                              const segmentation::Segmentation& segmentation,
+                              double max_diff_s = 1e-4);
+
+}  // namespace objmap::track
