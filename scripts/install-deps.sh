@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
-          libgtest-dev libgmock-dev libbenchmark-dev)
+          libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -70,6 +70,9 @@ void setup_synth(CLI::App& app) {
   c->add_option("--out", cmd->out, "output folder (replaced if it exists)")->required();
   c->add_option("--seed", o.seed, "random seed")->capture_default_str();
   c->add_option("--frames", o.frames, "number of frames (30 Hz)")->capture_default_str();
+  c->add_option("--orbit-speed", o.orbit_speed_deg_per_s,
+                "camera azimuth rate around the table, deg/s (0: the preset's, 20 for tabletop)")
+      ->capture_default_str();
   c->add_option("--preset", o.preset, "scene: tabletop (one table) or office (two tables)")
       ->capture_default_str();
   c->add_flag("--noise-free", cmd->noise_free,

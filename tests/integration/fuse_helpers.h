@@ -28,7 +28,8 @@ struct GtObject {
 struct FusedObject {
   int id = 0;
   std::string cls;
-  Eigen::Vector3d centroid;
+  Eigen::Vector3d centroid;  // the paper's position: mean of the points
+  Eigen::Vector3d position;  // objmap's robust position (percentile box centre)
   std::string ply;
   long points = 0;
 };
@@ -68,6 +69,7 @@ inline std::vector<FusedObject> read_fused_objects(const fs::path& file) {
     f.id = o["id"].get<int>();
     f.cls = o["class"].get<std::string>();
     f.centroid = vec3(o["centroid"]);
+    f.position = vec3(o["position"]);
     f.ply = o["ply"].get<std::string>();
     f.points = o["points"]["outlier_filtered"].get<long>();
     out.push_back(f);

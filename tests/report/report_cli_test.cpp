@@ -11,11 +11,11 @@ namespace {
 
 TEST(ReportCli, WritesATopViewAndOneTableRowPerObject) {
   RunResult r;
-  const fs::path scene =
-      cached_output("seed3-scene", {"synth", "--out", "{OUT}", "--seed", "3"}, &r);
+  const fs::path scene = cached_output(
+      "seed3-orbit60-scene", {"synth", "--out", "{OUT}", "--seed", "3", "--orbit-speed", "60"}, &r);
   ASSERT_TRUE(fs::exists(scene)) << r.err;
   const fs::path run = cached_output(
-      "seed3-fuse",
+      "seed3-orbit60-fuse",
       {"fuse", "--dataset", scene.string(), "--trajectory", (scene / "groundtruth.txt").string(),
        "--segmentation", (scene / "segmentation").string(), "--out", "{OUT}"},
       &r);

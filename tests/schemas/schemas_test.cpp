@@ -22,7 +22,8 @@ void expect_valid(const fs::path& file, const std::string& schema) {
 
 fs::path scene() {
   RunResult r;
-  const fs::path dir = cached_output("seed3-scene", {"synth", "--out", "{OUT}", "--seed", "3"}, &r);
+  const fs::path dir = cached_output(
+      "seed3-orbit60-scene", {"synth", "--out", "{OUT}", "--seed", "3", "--orbit-speed", "60"}, &r);
   EXPECT_TRUE(fs::exists(dir)) << r.err;
   return dir;
 }
@@ -51,7 +52,7 @@ TEST(Schemas, FuseOutputsAndConfig) {
   const fs::path s = scene();
   RunResult r;
   const fs::path run = cached_output(
-      "seed3-fuse",
+      "seed3-orbit60-fuse",
       {"fuse", "--dataset", s.string(), "--trajectory", (s / "groundtruth.txt").string(),
        "--segmentation", (s / "segmentation").string(), "--out", "{OUT}"},
       &r);

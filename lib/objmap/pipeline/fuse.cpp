@@ -64,6 +64,23 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        &m.voxel_m},
       {"objects.distance_gate_m", "--distance-gate", "centroid gate D (eq 17), m",
        &m.distance_gate_m},
+      {"objects.overlap_measure", "--overlap",
+       "M of eq 21: containment (shared / the observation's voxels) or iou (the paper)",
+       &o.overlap_measure},
+      {"objects.overlap_tolerance_voxels", "--overlap-tolerance",
+       "a voxel counts as shared when the object has one within this many voxels (0: exact)",
+       &m.overlap_tolerance_voxels},
+      {"objects.gate_radius_factor", "--gate-radius-factor",
+       "the gate grows to this x the object's RMS radius for large objects (0: fixed)",
+       &m.gate_radius_factor},
+      {"objects.one_observation_per_frame", "--one-per-frame",
+       "an object takes at most one instance of a keyframe", &m.one_observation_per_frame},
+      {"objects.merge_min_overlap", "--merge-min-overlap",
+       "merge pass: containment of the smaller object in the larger at least this",
+       &m.merge_min_overlap},
+      {"objects.min_voxel_support", "--min-voxel-support",
+       "an object keeps the voxels seen in at least this share of its observations",
+       &o.min_voxel_support},
       {"objects.weight_id", "--weight-id", "w_id of eq 22", &m.weight_id},
       {"objects.weight_distance", "--weight-distance", "w_d of eq 22", &m.weight_distance},
       {"objects.weight_overlap", "--weight-overlap", "w_m of eq 22", &m.weight_overlap},
@@ -109,6 +126,9 @@ void FuseOptions::check() const {
           "segmentation.min_score", "must be in [0, 1]");
   box_mask.check();
   objects.check();
+  fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
+  require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
+          "objects.min_voxel_support", "must be in [0, 1]");
   outlier.check();
   require(threads >= 1 && threads <= 64, "threads", "must be in [1, 64]");
 }
@@ -414,6 +434,7 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
   o["class_histogram"] = hist;
   o["score"] = r.mean_score;
   o["centroid"] = vec_json(r.centroid);
+  o["position"] = vec_json(r.position);
   o["aabb"] = {{"min", vec_json(r.aabb.min)}, {"max", vec_json(r.aabb.max)}};
   ordered_json rot = ordered_json::array();
   for (int i = 0; i < 3; ++i)
@@ -553,7 +574,10 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   fusion::VoxelMapOptions frame_map_options = dense_options;
   frame_map_options.threads = 1;
   FrameMapPool frame_maps(frame_map_options);
-  fusion::ObjectMap objects(options.objects);
+  fusion::ObjectMapOptions object_options = options.objects;
+  object_options.overlap_measure =
+      fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
+  fusion::ObjectMap objects(object_options);
 
   const std::size_t window = static_cast<std::size_t>(std::max(1, options.threads));
   std::deque<std::future<FrameWork>> pending;
@@ -620,6 +644,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   record_options.outlier_filter = options.outlier_filter;
   record_options.outlier = options.outlier;
   record_options.outlier.threads = options.threads;
+  record_options.min_voxel_support = options.min_voxel_support;
   result.objects = objects.records(record_options);
   for (const auto& r : result.objects) {
     result.object_points_raw += r.points_raw;

@@ -37,11 +37,13 @@ struct FuseOptions {
   int dense_stride = 1;                   // back-project every n-th pixel into the dense map
   double min_instance_score = 0.0;        // instances below this detector score are ignored
   segmentation::BoxMaskOptions box_mask;  // masks for instances that have only a box
-  fusion::ObjectMapOptions objects;       // association (eq 22), confirmation, merge pass
-  bool outlier_filter = true;             // eq 18 on each object's cloud
-  filters::OutlierOptions outlier;        // K = 20, k = 1.0
-  int threads = 2;                        // worker threads; outputs are identical for any count
-  void check() const;                     // throws InputError naming the bad field
+  std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
+  double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
+  fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
+  bool outlier_filter = true;        // eq 18 on each object's cloud
+  filters::OutlierOptions outlier;   // K = 20, k = 1.0
+  int threads = 2;                   // worker threads; outputs are identical for any count
+  void check() const;                // throws InputError naming the bad field
 };
 
 struct StageTime {

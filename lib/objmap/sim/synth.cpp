@@ -39,6 +39,9 @@ void SynthOptions::check() const {
   seg_noise.check();
   drift.check();
   if (!use_preset_path) path.check();
+  require(std::isfinite(orbit_speed_deg_per_s) && orbit_speed_deg_per_s >= 0 &&
+              orbit_speed_deg_per_s <= 360,
+          "--orbit-speed", "must be in [0, 360] degrees per second (0: the preset's)");
 }
 
 void SynthOptions::set_noise_free() {
@@ -92,8 +95,9 @@ SynthSequence prepare_sequence(const SynthOptions& options) {
 
   // The scene and the camera path (ground truth), then the drifting estimate.
   seq.scene = make_scene(options.preset, options.seed);
-  const CameraPathOptions path =
+  CameraPathOptions path =
       options.use_preset_path ? preset_camera_path(options.preset) : options.path;
+  if (options.orbit_speed_deg_per_s > 0) path.speed_deg_per_s = options.orbit_speed_deg_per_s;
   std::vector<double> timestamps;
   for (int i = 0; i < options.frames; ++i)
     timestamps.push_back(frame_timestamp(options.start_time_s, options.frame_rate_hz, i));

@@ -35,6 +35,8 @@ struct SynthOptions {
   // Camera path: the preset's orbit, or `path` as given when use_preset_path is false.
   bool use_preset_path = true;
   CameraPathOptions path;
+  double orbit_speed_deg_per_s = 0.0;  // > 0: the preset's orbit at this azimuth rate (more sides
+                                       // of every object in the same number of frames)
   int threads = 0;  // worker threads (0 = all cores); results do not depend on it
 
   void check() const;  // throws InputError naming the bad option

@@ -102,6 +102,7 @@ std::string synth_json(const SynthSequence& s) {
               {"preset", o.preset},
               {"seed", o.seed},
               {"frames", o.frames},
+              {"orbit_speed_deg_per_s", o.orbit_speed_deg_per_s},
               {"frame_rate_hz", o.frame_rate_hz},
               {"depth_time_offset_s", o.depth_time_offset_s},
               {"resolution_scale", o.resolution_scale},
