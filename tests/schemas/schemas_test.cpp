@@ -79,6 +79,24 @@ TEST(Schemas, EvalOutputs) {
   expect_valid(dir / "rpe.json", "eval_rpe.schema.json");
 }
 
+TEST(Schemas, TrackOutputs) {
+  RunResult r;
+  const fs::path s =
+      cached_output("track-synth60", {"synth", "--out", "{OUT}", "--frames", "60"}, &r);
+  ASSERT_TRUE(fs::exists(s)) << r.err;
+  const fs::path tracked = cached_output("track-synth60-app",
+                                         {"track", "--dataset", s.string(), "--segmentation",
+                                          (s / "segmentation").string(), "--out", "{OUT}"},
+                                         &r);
+  ASSERT_TRUE(fs::exists(tracked)) << r.err;
+  expect_valid(tracked / "tracks.json", "tracks.schema.json");
+  TempDir dir;
+  r = run_objmap({"eval", "tracks", "--gt", (s / "segmentation_gt").string(), "--est",
+                  tracked.string(), "--json", (dir / "t.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  expect_valid(dir / "t.json", "eval_tracks.schema.json");
+}
+
 TEST(Schemas, RealCameraFile) {
   OBJMAP_DATA_OR_SKIP(data, "ycbv_0000_10f/camera.json");
   expect_valid(data, "camera.schema.json");
