@@ -18,8 +18,14 @@ echo "== objmap fuse --dataset $scene --trajectory $scene/groundtruth.txt --segm
 "$objmap" fuse --dataset "$scene" --trajectory "$scene/groundtruth.txt" \
   --segmentation "$scene/segmentation" --out "$run"
 echo
+echo "== objmap eval objects --map $run/objects.json --gt-objects $scene/objects_gt.json"
+"$objmap" eval objects --map "$run/objects.json" --gt-objects "$scene/objects_gt.json"
+echo
+echo "== objmap report --run $run"
+"$objmap" report --run "$run"
+echo
 echo "== objmap eval ate --gt $scene/groundtruth.txt --est $scene/estimated.txt"
 "$objmap" eval ate --gt "$scene/groundtruth.txt" --est "$scene/estimated.txt"
 echo
 echo "The object map is in $run: objects.json, objects/*.ply, map_semantic.ply (open the PLY files"
-echo "in CloudCompare, MeshLab or Open3D). Ground truth of the scene: $scene/objects_gt.json."
+echo "in CloudCompare, MeshLab or Open3D); a top view in $run/report/topview.png."
