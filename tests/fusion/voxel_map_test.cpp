@@ -8,6 +8,7 @@
 #include "objmap/core/error.h"
 
 #include "objmap/fusion/palette.h"
+#include "objmap/segmentation/coco_classes.h"
 
 namespace objmap::fusion {
 namespace {
@@ -153,15 +154,16 @@ TEST(VoxelMap, ShardedMapsMergeShardByShardLikeOneMap) {
 }
 
 TEST(Palette, CocoNamesAndFixedColours) {
-  ASSERT_EQ(coco80_names().size(), 80u);
-  EXPECT_EQ(coco80_names()[77], "teddy bear");
+  const auto& names = segmentation::coco80_names();
+  ASSERT_EQ(names.size(), 80u);
   EXPECT_EQ(class_color("teddy_bear"), class_color("teddy bear"));
-  EXPECT_EQ(class_color("tvmonitor"), class_color("tv"));
+  EXPECT_EQ(class_color("tvmonitor"), class_color("tv monitor"));
+  EXPECT_EQ(class_color("tv monitor"), (Rgb{31, 119, 180}));
   EXPECT_EQ(class_color("person"), (Rgb{220, 20, 60}));
   EXPECT_EQ(class_color("no such class"), (Rgb{128, 128, 128}));
   // All 80 colours are distinct.
   std::set<std::tuple<int, int, int>> seen;
-  for (const auto& n : coco80_names()) {
+  for (const auto& n : names) {
     const Rgb c = class_color(n);
     seen.insert({c.r, c.g, c.b});
   }

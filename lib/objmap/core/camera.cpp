@@ -78,8 +78,9 @@ Camera camera_preset(const std::string& name) {
   } else if (name == "fr3" || name == "freiburg3") {
     c = {"fr3", 640, 480, 535.4, 539.2, 320.1, 247.6, {0, 0, 0, 0, 0}, 5000.0};
   } else {
-    throw InputError("--camera", "unknown preset '" + name +
-                                     "'; expected fr1, fr2, fr3, an ORB-SLAM2 .yaml or a .json file");
+    throw InputError("--camera",
+                     "unknown preset '" + name +
+                         "'; expected fr1, fr2, fr3, an ORB-SLAM2 .yaml or a .json file");
   }
   return c;
 }

@@ -23,7 +23,8 @@ struct Camera {
   // Throws InputError naming the bad field (`where` names the source, e.g. the file).
   void check(const std::string& where = "camera") const;
 
-  // Normalised image coordinates (x/z, y/z) of pixel (u, v), distortion removed (iterative inverse).
+  // Normalised image coordinates (x/z, y/z) of pixel (u, v), distortion removed (iterative
+  // inverse).
   Eigen::Vector2d undistort_pixel(double u, double v) const;
   // point_in_cam for pixel (u, v) at depth `depth_m` (z along the optical axis), eqs 11-15.
   Vec3 unproject(double u, double v, double depth_m) const;

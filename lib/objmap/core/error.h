@@ -4,10 +4,10 @@
 
 namespace objmap {
 
-// The one exception type of the library: bad input (a file, a field, an option). `what()` is the whole
-// line that the user sees: "<where>: <what is wrong>; expected <what was expected>". `where` is a file
-// path, optionally with ":<line>" or a field name; it may be empty for an option of a struct.
-// apps/objmap turns it into exit code 2 and that one line on stderr.
+// The one exception type of the library: bad input (a file, a field, an option). `what()` is the
+// whole line that the user sees: "<where>: <what is wrong>; expected <what was expected>". `where`
+// is a file path, optionally with ":<line>" or a field name; it may be empty for an option of a
+// struct. apps/objmap turns it into exit code 2 and that one line on stderr.
 class InputError : public std::runtime_error {
  public:
   InputError(std::string where, std::string reason);

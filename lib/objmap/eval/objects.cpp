@@ -1,5 +1,7 @@
 #include "objmap/eval/objects.h"
 
+#include "objmap/track/assignment.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
@@ -33,79 +35,25 @@ std::vector<int> hungarian_assign(const Eigen::MatrixXd& cost) {
   const int rows = static_cast<int>(cost.rows()), cols = static_cast<int>(cost.cols());
   std::vector<int> row_to_col(rows, -1);
   if (rows == 0 || cols == 0) return row_to_col;
-  // Work on n <= m (transpose otherwise).
-  const bool transposed = rows > cols;
-  const Eigen::MatrixXd c = transposed ? Eigen::MatrixXd(cost.transpose()) : cost;
-  const int n = static_cast<int>(c.rows()), m = static_cast<int>(c.cols());
-
-  // Forbidden pairs get a cost BIG larger than any sum of n allowed costs (after shifting them to
-  // >= 0), so that the optimum first has the fewest forbidden pairs, then the least total cost.
+  // Forbidden pairs get a cost BIG larger than any sum of min(rows, cols) allowed costs (after
+  // shifting them to >= 0), so that the optimum first has the fewest forbidden pairs, then the
+  // least total cost; the shared Kuhn-Munkres (track/assignment.h) solves that finite problem.
   double min_allowed = kInf, max_allowed = -kInf;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j)
-      if (std::isfinite(c(i, j))) {
-        min_allowed = std::min(min_allowed, c(i, j));
-        max_allowed = std::max(max_allowed, c(i, j));
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j)
+      if (std::isfinite(cost(i, j))) {
+        min_allowed = std::min(min_allowed, cost(i, j));
+        max_allowed = std::max(max_allowed, cost(i, j));
       }
   if (!std::isfinite(min_allowed)) return row_to_col;  // nothing allowed
-  const double big = (max_allowed - min_allowed + 1.0) * (n + 1);
-  const auto a = [&](int i, int j) {  // 1-based
-    const double v = c(i - 1, j - 1);
-    return std::isfinite(v) ? v - min_allowed : big;
-  };
-
-  // Kuhn–Munkres with row/column potentials u, v (the shortest augmenting path form, O(n² m)):
-  // rows are added one at a time; p[j] is the row matched to column j (0: none).
-  std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0);
-  std::vector<int> p(m + 1, 0), way(m + 1, 0);
-  for (int i = 1; i <= n; ++i) {
-    p[0] = i;
-    int j0 = 0;
-    std::vector<double> minv(m + 1, kInf);
-    std::vector<char> used(m + 1, 0);
-    do {
-      used[j0] = 1;
-      const int i0 = p[j0];
-      double delta = kInf;
-      int j1 = 0;
-      for (int j = 1; j <= m; ++j) {
-        if (used[j]) continue;
-        const double cur = a(i0, j) - u[i0] - v[j];
-        if (cur < minv[j]) {
-          minv[j] = cur;
-          way[j] = j0;
-        }
-        if (minv[j] < delta) {
-          delta = minv[j];
-          j1 = j;
-        }
-      }
-      for (int j = 0; j <= m; ++j) {
-        if (used[j]) {
-          u[p[j]] += delta;
-          v[j] -= delta;
-        } else {
-          minv[j] -= delta;
-        }
-      }
-      j0 = j1;
-    } while (p[j0] != 0);
-    do {  // augment along the path
-      const int j1 = way[j0];
-      p[j0] = p[j1];
-      j0 = j1;
-    } while (j0 != 0);
-  }
-
-  for (int j = 1; j <= m; ++j) {
-    if (p[j] == 0) continue;
-    const int i = p[j] - 1, col = j - 1;
-    if (!std::isfinite(c(i, col))) continue;  // a forbidden pair: unassigned
-    if (transposed)
-      row_to_col[col] = i;
-    else
-      row_to_col[i] = col;
-  }
+  const double big = (max_allowed - min_allowed + 1.0) * (std::min(rows, cols) + 1);
+  Eigen::MatrixXd finite(rows, cols);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j)
+      finite(i, j) = std::isfinite(cost(i, j)) ? cost(i, j) - min_allowed : big;
+  const std::vector<int> assigned = track::solve_assignment(finite);
+  for (int i = 0; i < rows; ++i)
+    if (assigned[i] >= 0 && std::isfinite(cost(i, assigned[i]))) row_to_col[i] = assigned[i];
   return row_to_col;
 }
 

@@ -9,6 +9,7 @@
 #include "objmap/core/error.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/geometry/bounds.h"
+#include "objmap/segmentation/coco_classes.h"
 
 namespace objmap::fusion {
 
@@ -234,8 +235,8 @@ AddResult ObjectMap::add(const Observation& obs) {
   for (auto& object : objects_) {
     if (!object->alive) continue;
     if (options_.one_observation_per_frame && object->has_frame(obs.timestamp)) continue;
-    if (options_.require_same_class &&
-        normalize_class_name(voted_class(*object)) != normalize_class_name(obs.class_name))
+    if (options_.require_same_class && segmentation::canonical_class(voted_class(*object)) !=
+                                           segmentation::canonical_class(obs.class_name))
       continue;
     const bool same_id = obs.track_id && object->track_ids.count(*obs.track_id) > 0;
     // P <= w_id·P_ID + w_d + w_m: no need to score an object that cannot beat the best so far.
@@ -320,7 +321,8 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
   };
   auto pair_score = [&](const Object& a, const Object& b, Scores& s) {
     if ((options_.require_same_class || options_.merge_require_same_class) &&
-        normalize_class_name(voted_class(a)) != normalize_class_name(voted_class(b)))
+        segmentation::canonical_class(voted_class(a)) !=
+            segmentation::canonical_class(voted_class(b)))
       return false;
     std::size_t shared = 0;
     for (double t : a.frames) shared += b.has_frame(t);

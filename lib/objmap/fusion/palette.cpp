@@ -5,48 +5,9 @@
 #include <cmath>
 #include <map>
 
+#include "objmap/segmentation/coco_classes.h"
+
 namespace objmap::fusion {
-
-const std::vector<std::string>& coco80_names() {
-  static const std::vector<std::string> names = {"person",        "bicycle",      "car",
-                                                 "motorcycle",    "airplane",     "bus",
-                                                 "train",         "truck",        "boat",
-                                                 "traffic light", "fire hydrant", "stop sign",
-                                                 "parking meter", "bench",        "bird",
-                                                 "cat",           "dog",          "horse",
-                                                 "sheep",         "cow",          "elephant",
-                                                 "bear",          "zebra",        "giraffe",
-                                                 "backpack",      "umbrella",     "handbag",
-                                                 "tie",           "suitcase",     "frisbee",
-                                                 "skis",          "snowboard",    "sports ball",
-                                                 "kite",          "baseball bat", "baseball glove",
-                                                 "skateboard",    "surfboard",    "tennis racket",
-                                                 "bottle",        "wine glass",   "cup",
-                                                 "fork",          "knife",        "spoon",
-                                                 "bowl",          "banana",       "apple",
-                                                 "sandwich",      "orange",       "broccoli",
-                                                 "carrot",        "hot dog",      "pizza",
-                                                 "donut",         "cake",         "chair",
-                                                 "couch",         "potted plant", "bed",
-                                                 "dining table",  "toilet",       "tv",
-                                                 "laptop",        "mouse",        "remote",
-                                                 "keyboard",      "cell phone",   "microwave",
-                                                 "oven",          "toaster",      "sink",
-                                                 "refrigerator",  "book",         "clock",
-                                                 "vase",          "scissors",     "teddy bear",
-                                                 "hair drier",    "toothbrush"};
-  return names;
-}
-
-std::string normalize_class_name(const std::string& class_name) {
-  std::string s = class_name;
-  for (char& c : s) {
-    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (c == '_') c = ' ';
-  }
-  if (s == "tvmonitor" || s == "tv monitor" || s == "monitor") return "tv";
-  return s;
-}
 
 namespace {
 
@@ -84,20 +45,20 @@ Rgb hsv(double h, double s, double v) {
 const std::map<std::string, Rgb>& palette() {
   static const std::map<std::string, Rgb> table = [] {
     std::map<std::string, Rgb> t;
-    const auto& names = coco80_names();
+    const auto& names = segmentation::coco80_names();
     for (std::size_t i = 0; i < names.size(); ++i) {
       const double hue = std::fmod(0.11 + 0.618033988749895 * static_cast<double>(i), 1.0);
       t[names[i]] = hsv(hue, 0.65, 0.9);
     }
     // The eight classes of the desk/office scenes: hand-picked, well separated.
-    t["person"] = {220, 20, 60};      // crimson
-    t["chair"] = {255, 127, 14};      // orange
-    t["tv"] = {31, 119, 180};         // blue
-    t["keyboard"] = {148, 103, 189};  // purple
-    t["mouse"] = {23, 190, 207};      // cyan
-    t["cup"] = {44, 160, 44};         // green
-    t["book"] = {188, 189, 34};       // olive
-    t["teddy bear"] = {140, 86, 75};  // brown
+    t["person"] = {220, 20, 60};       // crimson
+    t["chair"] = {255, 127, 14};       // orange
+    t["tv monitor"] = {31, 119, 180};  // blue
+    t["keyboard"] = {148, 103, 189};   // purple
+    t["mouse"] = {23, 190, 207};       // cyan
+    t["cup"] = {44, 160, 44};          // green
+    t["book"] = {188, 189, 34};        // olive
+    t["teddy bear"] = {140, 86, 75};   // brown
     return t;
   }();
   return table;
@@ -107,7 +68,7 @@ const std::map<std::string, Rgb>& palette() {
 
 Rgb class_color(const std::string& class_name) {
   const auto& t = palette();
-  const auto it = t.find(normalize_class_name(class_name));
+  const auto it = t.find(segmentation::canonical_class(class_name));
   return it == t.end() ? Rgb{128, 128, 128} : it->second;
 }
 
