@@ -4,6 +4,7 @@
 #      drifting estimated trajectory, eval objects against the true objects and (Tables 4-5) against
 #      the ground-truth map, eval ate of the estimate;
 #   2. fr3_cabinet_58kf (if in DATA): fuse, eval objects against the ground-truth cuboid;
+#      fr1_rpy_every4: fuse and the report's top view of the semantic map;
 #   3. the benchmark programs (bench_fuse: the whole fuse on fr1_rpy_every4 vs decoding its PNGs,
 #      peak RSS, vs Open3D; bench_fusion: the stages).
 # Outputs go to out/bench/ (JSON of every eval); the console shows the tables.
@@ -39,6 +40,14 @@ if [ -d "$cab" ]; then
     --segmentation "$cab/boxes_yolov2" --out "$out/fr3_cabinet" 2>/dev/null | sed -n '1,8p'
   "$objmap" eval objects --map "$out/fr3_cabinet/objects.json" --gt-objects "$cab/objects_gt.txt" \
     --json "$out/fr3_cabinet_objects.json" | sed -n '/Tables 4-5/,$p'
+fi
+
+rpy="$data/tum/fr1_rpy_every4"
+if [ -d "$rpy" ]; then
+  echo "== fr1_rpy_every4 (detections_yolofastest, groundtruth.txt): objects and the top view"
+  "$objmap" fuse --dataset "$rpy" --trajectory "$rpy/groundtruth.txt" \
+    --segmentation "$rpy/detections_yolofastest" --out "$out/fr1_rpy_every4" 2>/dev/null
+  "$objmap" report --run "$out/fr1_rpy_every4" --pixel 0.008
 fi
 
 found=0
