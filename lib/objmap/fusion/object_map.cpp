@@ -311,6 +311,19 @@ AddResult ObjectMap::add(const Observation& obs) {
   return result;
 }
 
+namespace {
+// Timestamps (ascending, unique) of the observations of `o` whose class is `canonical`.
+template <typename ObjectT>
+std::vector<double> class_frames(const ObjectT& o, const std::string& canonical) {
+  std::vector<double> t;
+  for (const ObservationLink& l : o.provenance)
+    if (segmentation::canonical_class(l.class_name) == canonical) t.push_back(l.timestamp);
+  std::sort(t.begin(), t.end());
+  t.erase(std::unique(t.begin(), t.end()), t.end());
+  return t;
+}
+}  // namespace
+
 std::vector<MergeLink> ObjectMap::merge_pass() {
   std::vector<MergeLink> made;
   // Scores of every live pair (i < j), computed once; after a merge only the pairs of the grown
@@ -324,8 +337,13 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
         segmentation::canonical_class(voted_class(a)) !=
             segmentation::canonical_class(voted_class(b)))
       return false;
+    // Shared keyframes: those where both objects took an observation labelled with their (common)
+    // voted class. Two books stacked are both "book" in the same frames; a keyboard that the
+    // detector also boxed as "laptop" in some frames is one object seen twice, not two objects.
+    const std::string cls = segmentation::canonical_class(voted_class(a));
+    const std::vector<double> fa = class_frames(a, cls), fb = class_frames(b, cls);
     std::size_t shared = 0;
-    for (double t : a.frames) shared += b.has_frame(t);
+    for (double t : fa) shared += std::binary_search(fb.begin(), fb.end(), t);
     const double nfr = static_cast<double>(std::min(a.frames.size(), b.frames.size()));
     if (static_cast<double>(shared) > options_.merge_max_shared_frames * nfr) return false;
     bool same_id = false;

@@ -86,7 +86,7 @@ struct ObjectMapOptions {
   // two books stacked, seen together in every frame; a fragment of an ID switch is seen in other
   // keyframes than its object). 1: no such rule.
   bool one_observation_per_frame = true;
-  double merge_max_shared_frames = 0.1;
+  double merge_max_shared_frames = 0.3;
   int min_observations = 3;  // an object is confirmed after this many observations
   int min_points = 10;       // observations with fewer points (after depth checks) are ignored
   bool require_same_class = false;  // only match observations to objects of the voted class
