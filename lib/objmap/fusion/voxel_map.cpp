@@ -97,18 +97,11 @@ Vec3 VoxelMap::mean_position(VoxelKey key, const VoxelData& v) const {
 // batch size is fixed, so the sums (and the map) do not depend on anything but the input. Returns
 // the number of points dropped (not finite or out of range).
 std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label) {
-  constexpr std::size_t kBatch = 1024;  // points per batch
-  constexpr std::size_t kAhead = 12;    // runs prefetched ahead
-  struct Run {
-    VoxelKey key;
-    VoxelData sum;
-  };
   const bool all = shard == kAllShards;
   const bool colour = cloud.has_colors();
   const bool sharded = !all && shards_.size() > 1;
-  std::vector<std::size_t> per_shard(all ? shards_.size() : 0);
+  std::vector<std::size_t> per_shard;
   std::vector<std::uint32_t> run_shard;
-  if (all) run_shard.reserve(kBatch);
   const std::size_t n = cloud.size();
   std::size_t dropped = 0;
   std::vector<Run> runs;
@@ -138,7 +131,6 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
     }
     // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels).
     runs.clear();
-    run_shard.clear();
     VoxelKey run_key = kNoVoxel;
     bool run_ours = false;
     for (std::size_t j = 0; j < count; ++j) {
@@ -151,7 +143,6 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
         run_key = key;
         run_ours = !sharded || shard_of(key) == shard;
         if (run_ours) runs.push_back(Run{key, VoxelData{}});
-        if (all) run_shard.push_back(static_cast<std::uint32_t>(shard_of(key)));
       }
       if (!run_ours) continue;
       VoxelData& r = runs.back().sum;
@@ -167,33 +158,45 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
         ++r.color_count;
       }
     }
-    // 3. The runs into the table(s), in order, prefetching ahead. No rehash below: prefetched
-    //    slots stay valid.
-    const std::size_t m = runs.size();
-    auto table_of = [&](std::size_t r) -> Table& { return shards_[all ? run_shard[r] : shard]; };
-    if (all) {
-      std::fill(per_shard.begin(), per_shard.end(), 0);
-      for (std::size_t r = 0; r < m; ++r) ++per_shard[run_shard[r]];
-      for (std::size_t t = 0; t < shards_.size(); ++t)
-        if (per_shard[t]) shards_[t].reserve(shards_[t].size() + per_shard[t]);
-    } else {
-      shards_[shard].reserve(shards_[shard].size() + m);
-    }
-    for (std::size_t r = 0; r < std::min(m, kAhead); ++r) table_of(r).prefetch(runs[r].key);
-    for (std::size_t r = 0; r < m; ++r) {
-      if (r + kAhead < m) table_of(r + kAhead).prefetch(runs[r + kAhead].key);
-      const VoxelData& add = runs[r].sum;
-      VoxelData& v = table_of(r)[runs[r].key];
-      for (int a = 0; a < 3; ++a) {
-        v.offset_sum[a] += add.offset_sum[a];
-        v.color_sum[a] += add.color_sum[a];
-      }
-      v.count += add.count;
-      v.color_count += add.color_count;
-      vote(v, label, static_cast<std::int32_t>(add.count));
-    }
+    // 3. The runs into the table(s), in order, prefetching ahead.
+    write_runs(runs, shard, label, run_shard, per_shard);
   }
   return dropped;
+}
+
+// No rehash below: prefetched slots stay valid.
+void VoxelMap::write_runs(const std::vector<Run>& runs, std::size_t shard, std::int32_t label,
+                          std::vector<std::uint32_t>& run_shard,
+                          std::vector<std::size_t>& per_shard) {
+  constexpr std::size_t kAhead = 12;  // runs prefetched ahead
+  const std::size_t m = runs.size();
+  const bool all = shard == kAllShards;
+  if (all) {
+    run_shard.resize(m);
+    per_shard.assign(shards_.size(), 0);
+    for (std::size_t r = 0; r < m; ++r) {
+      run_shard[r] = static_cast<std::uint32_t>(shard_of(runs[r].key));
+      ++per_shard[run_shard[r]];
+    }
+    for (std::size_t t = 0; t < shards_.size(); ++t)
+      if (per_shard[t]) shards_[t].reserve(shards_[t].size() + per_shard[t]);
+  } else {
+    shards_[shard].reserve(shards_[shard].size() + m);
+  }
+  auto table_of = [&](std::size_t r) -> Table& { return shards_[all ? run_shard[r] : shard]; };
+  for (std::size_t r = 0; r < std::min(m, kAhead); ++r) table_of(r).prefetch(runs[r].key);
+  for (std::size_t r = 0; r < m; ++r) {
+    if (r + kAhead < m) table_of(r + kAhead).prefetch(runs[r + kAhead].key);
+    const VoxelData& add = runs[r].sum;
+    VoxelData& v = table_of(r)[runs[r].key];
+    for (int a = 0; a < 3; ++a) {
+      v.offset_sum[a] += add.offset_sum[a];
+      v.color_sum[a] += add.color_sum[a];
+    }
+    v.count += add.count;
+    v.color_count += add.color_count;
+    vote(v, label, static_cast<std::int32_t>(add.count));
+  }
 }
 
 void VoxelMap::insert(const PointCloud& cloud, std::int32_t label) {
@@ -222,7 +225,7 @@ void VoxelMap::insert(const PointCloud& cloud, std::int32_t label) {
   points_dropped_ += dropped;
 }
 
-void VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
+inline void VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
   VoxelData& v = table[key];
   for (int a = 0; a < 3; ++a) {
     v.offset_sum[a] += src.offset_sum[a];
@@ -334,12 +337,88 @@ std::vector<std::pair<VoxelKey, const VoxelData*>> VoxelMap::sorted_voxels() con
   return out;
 }
 
+VoxelMap::VoxelPoints VoxelMap::sorted_points() const {
+  // sorted_points_impl(false) does not modify the map.
+  return const_cast<VoxelMap*>(this)->sorted_points_impl(false);
+}
+
+VoxelMap::VoxelPoints VoxelMap::take_sorted_points() {
+  VoxelPoints out = sorted_points_impl(true);
+  points_inserted_ = points_dropped_ = 0;
+  return out;
+}
+
+VoxelMap::VoxelPoints VoxelMap::sorted_points_impl(bool release) {
+  VoxelPoints out;
+  const std::size_t n = size();
+  if (n == 0) return out;
+  const std::size_t threads = std::max<std::size_t>(1, std::min(threads_, shards_.size()));
+  auto run = [&](auto&& work) {  // work(t) on threads 0..threads-1, thread t taking shards t + kT
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < threads; ++t) pool.emplace_back([&, t] { work(t); });
+    work(0);
+    for (auto& th : pool) th.join();
+  };
+  // 1. The x range.
+  std::vector<std::uint64_t> lo(threads, ~std::uint64_t{0}), hi(threads, 0);
+  run([&](std::size_t t) {
+    for (std::size_t s = t; s < shards_.size(); s += threads)
+      shards_[s].for_each([&](VoxelKey key, const VoxelData&) {
+        lo[t] = std::min<std::uint64_t>(lo[t], key >> 42);
+        hi[t] = std::max<std::uint64_t>(hi[t], key >> 42);
+      });
+  });
+  const std::uint64_t x0 = *std::min_element(lo.begin(), lo.end());
+  const std::uint64_t x1 = *std::max_element(hi.begin(), hi.end());
+  const std::size_t slices = static_cast<std::size_t>(x1 - x0 + 1);
+  // 2. Voxels per (thread, x slice); each thread's part of each slice starts after the earlier
+  //    threads' parts.
+  std::vector<std::vector<std::size_t>> at(threads, std::vector<std::size_t>(slices, 0));
+  run([&](std::size_t t) {
+    for (std::size_t s = t; s < shards_.size(); s += threads)
+      shards_[s].for_each([&](VoxelKey key, const VoxelData&) { ++at[t][(key >> 42) - x0]; });
+  });
+  std::vector<std::size_t> start(slices + 1, 0);
+  for (std::size_t i = 0; i < slices; ++i) {
+    std::size_t next = start[i];
+    for (std::size_t t = 0; t < threads; ++t) {
+      const std::size_t c = at[t][i];
+      at[t][i] = next;
+      next += c;
+    }
+    start[i + 1] = next;
+  }
+  // 3. Each voxel's point into its slice, then each slice sorted by key.
+  out.resize(n);
+  run([&](std::size_t t) {
+    std::vector<std::size_t>& mine = at[t];
+    for (std::size_t s = t; s < shards_.size(); s += threads) {
+      shards_[s].for_each([&](VoxelKey key, const VoxelData& v) {
+        const Rgb c = v.mean_color();
+        out[mine[(key >> 42) - x0]++] =
+            VoxelPoint{key, mean_position(key, v).cast<float>(), c.r, c.g, c.b};
+      });
+      if (release) shards_[s].clear();  // this shard is read: free its memory
+    }
+  });
+  run([&](std::size_t t) {
+    for (std::size_t i = t; i < slices; i += threads)
+      std::sort(out.begin() + static_cast<std::ptrdiff_t>(start[i]),
+                out.begin() + static_cast<std::ptrdiff_t>(start[i + 1]),
+                [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; });
+  });
+  return out;
+}
+
 PointCloud VoxelMap::to_cloud() const {
   PointCloud cloud;
-  const auto voxels = sorted_voxels();
-  cloud.reserve(voxels.size());
-  for (const auto& [key, v] : voxels)
-    cloud.push_back(mean_position(key, *v).cast<float>(), v->mean_color());
+  const auto voxels = sorted_points();
+  cloud.points.resize(voxels.size());
+  cloud.colors.resize(voxels.size());
+  for (std::size_t i = 0; i < voxels.size(); ++i) {
+    cloud.points[i] = voxels[i].point;
+    cloud.colors[i] = voxels[i].color();
+  }
   return cloud;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "objmap/core/types.h"
@@ -92,6 +94,39 @@ class VoxelMap {
   // Every occupied voxel as (key, data), sorted by key.
   std::vector<std::pair<VoxelKey, const VoxelData*>> sorted_voxels() const;
 
+  // One point per voxel at the voxel's mean position (mean_position, as float) with its mean
+  // colour, sorted by voxel key: what to_cloud() holds, with the keys. Made in sequential passes
+  // over the tables (no random access to the voxels) and sorted by x slice, on `threads` threads.
+  // Left uninitialised by default (see DefaultInitAllocator): a long list is only touched, page by
+  // page, as it is filled.
+  struct VoxelPoint {
+    VoxelKey key;
+    Vec3f point;
+    std::uint8_t r, g, b;
+    Rgb color() const { return Rgb{r, g, b}; }
+  };
+  template <typename T>
+  struct DefaultInitAllocator : std::allocator<T> {
+    template <typename U>
+    struct rebind {
+      using other = DefaultInitAllocator<U>;
+    };
+    using std::allocator<T>::allocator;
+    template <typename U>
+    void construct(U* p) {
+      ::new (static_cast<void*>(p)) U;
+    }
+    template <typename U, typename... Args>
+    void construct(U* p, Args&&... args) {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  };
+  using VoxelPoints = std::vector<VoxelPoint, DefaultInitAllocator<VoxelPoint>>;
+  VoxelPoints sorted_points() const;
+  // sorted_points() that frees each table once read: the map is left empty, and its memory and the
+  // list's are not both held at their full size.
+  VoxelPoints take_sorted_points();
+
   // One point per voxel at the voxel's mean position with its mean colour, sorted by voxel key.
   PointCloud to_cloud() const;
   // Same order; voxels whose label is in `color_of_label` get that colour; the others keep their
@@ -103,11 +138,21 @@ class VoxelMap {
   Vec3 centroid() const;
 
  private:
+  struct Run {  // consecutive points of one voxel, summed
+    VoxelKey key = geometry::kNoVoxel;
+    VoxelData sum;
+  };
+  static constexpr std::size_t kBatch = 1024;  // points per batch of runs (see insert_shard)
   using Table = geometry::VoxelHashTable<VoxelData>;
   std::size_t shard_of(VoxelKey key) const;
+  VoxelPoints sorted_points_impl(bool release);  // release: free each shard once read
   // kAllShards: one pass that fills every shard (single-threaded insert of a sharded map).
   static constexpr std::size_t kAllShards = ~std::size_t{0};
   std::size_t insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label);
+  // Adds a batch's runs (in order) to shard `shard`'s table, or with kAllShards each to its own
+  // (run_shard: scratch), prefetching ahead.
+  void write_runs(const std::vector<Run>& runs, std::size_t shard, std::int32_t label,
+                  std::vector<std::uint32_t>& run_shard, std::vector<std::size_t>& per_shard);
   void add_voxel(Table& table, VoxelKey key, const VoxelData& src);
 
   double voxel_m_;

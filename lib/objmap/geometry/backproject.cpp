@@ -4,12 +4,13 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <thread>
 
 #include "objmap/core/error.h"
 
 namespace objmap::geometry {
 
-RayTable make_ray_table(const Camera& camera) {
+RayTable make_ray_table(const Camera& camera, int threads) {
   camera.check();
   RayTable rays;
   rays.width = camera.width;
@@ -18,15 +19,24 @@ RayTable make_ray_table(const Camera& camera) {
   const std::size_t n = static_cast<std::size_t>(camera.width) * camera.height;
   rays.x_over_z.resize(n);
   rays.y_over_z.resize(n);
-  for (int v = 0; v < camera.height; ++v) {
-    for (int u = 0; u < camera.width; ++u) {
-      // Eqs 12-13 with the distortion removed: the normalised coordinates of the pixel's ray.
-      const Eigen::Vector2d xy = camera.undistort_pixel(u, v);
-      const std::size_t i = static_cast<std::size_t>(v) * camera.width + u;
-      rays.x_over_z[i] = static_cast<float>(xy.x());
-      rays.y_over_z[i] = static_cast<float>(xy.y());
+  // Rows t, t + threads, ... on thread t; each pixel is computed on its own, so the table does not
+  // depend on the thread count.
+  const int t_count = std::max(1, std::min(threads, camera.height));
+  auto rows = [&](int t) {
+    for (int v = t; v < camera.height; v += t_count) {
+      for (int u = 0; u < camera.width; ++u) {
+        // Eqs 12-13 with the distortion removed: the normalised coordinates of the pixel's ray.
+        const Eigen::Vector2d xy = camera.undistort_pixel(u, v);
+        const std::size_t i = static_cast<std::size_t>(v) * camera.width + u;
+        rays.x_over_z[i] = static_cast<float>(xy.x());
+        rays.y_over_z[i] = static_cast<float>(xy.y());
+      }
     }
-  }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < t_count; ++t) pool.emplace_back(rows, t);
+  rows(0);
+  for (auto& th : pool) th.join();
   return rays;
 }
 

@@ -78,6 +78,10 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
       {"objects.merge_min_overlap", "--merge-min-overlap",
        "merge pass: containment of the smaller object in the larger at least this",
        &m.merge_min_overlap},
+      {"objects.merge_max_shared_frames", "--merge-max-shared-frames",
+       "merge pass: never join two objects both labelled their class in more than this share of "
+       "the smaller one's keyframes (stacked books)",
+       &m.merge_max_shared_frames},
       {"objects.min_voxel_support", "--min-voxel-support",
        "an object keeps the voxels seen in at least this share of its observations",
        &o.min_voxel_support},
@@ -359,24 +363,41 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   return work;
 }
 
-// The three map clouds of the run folder. `dense` and the semantic colours come from one pass over
-// the sorted voxels of the dense map, split over `threads` threads; the semantic map (the dense
-// points with `semantic_colors`) is that of fusion::make_semantic_maps: a voxel holding a point of
-// a confirmed object takes that object's class colour (the object with more observations, then the
-// lower id, when several), the others keep their mean colour.
-struct MapClouds {
-  PointCloud dense, objects_only;
-  std::vector<Rgb> semantic_colors;
+// The dense map as a cloud (map_dense.ply): one point per voxel at its mean position with its mean
+// colour, sorted by voxel key, and the keys (for the semantic colours). Frees the map.
+struct DenseCloud {
+  PointCloud cloud;
+  std::vector<fusion::VoxelKey> keys;
 };
-MapClouds map_clouds(const fusion::VoxelMap& dense,
-                     const std::vector<fusion::ObjectRecord>& records, int threads) {
-  MapClouds out;
-  geometry::VoxelHashTable<std::uint32_t> owner;  // record index + 1 per voxel
+DenseCloud take_dense_cloud(fusion::VoxelMap& dense, const fusion::VoxelMapOptions& options) {
+  DenseCloud out;
+  fusion::VoxelMap::VoxelPoints voxels = dense.take_sorted_points();  // frees the map
+  dense = fusion::VoxelMap(options);
+  const std::size_t n = voxels.size();
+  out.cloud.points.resize(n);
+  out.cloud.colors.resize(n);
+  out.keys.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out.cloud.points[i] = voxels[i].point;
+    out.cloud.colors[i] = voxels[i].color();
+    out.keys[i] = voxels[i].key;
+  }
+  return out;
+}
+
+// The semantic colours of the dense points (map_semantic.ply), as fusion::make_semantic_maps: a
+// voxel holding a point of a confirmed object takes that object's class colour (the object with
+// more observations, then the lower id, when several), the others keep their mean colour.
+std::vector<Rgb> semantic_colors(const DenseCloud& dense, double voxel_m,
+                                 const std::vector<fusion::ObjectRecord>& records,
+                                 const std::vector<Rgb>& record_color) {
+  const float inv_voxel_m = static_cast<float>(1.0 / voxel_m);  // as VoxelMap::key_of
+  geometry::VoxelHashTable<std::uint32_t> owner;                // record index + 1 per voxel
   for (std::size_t i = 0; i < records.size(); ++i) {
     const fusion::ObjectRecord& r = records[i];
     if (!r.confirmed) continue;
     for (const Vec3f& p : r.cloud.points) {
-      const fusion::VoxelKey key = dense.key_of(p);
+      const fusion::VoxelKey key = geometry::voxel_key(p, inv_voxel_m);
       if (key == geometry::kNoVoxel) continue;
       std::uint32_t& slot = owner[key];
       if (slot != 0) {
@@ -388,38 +409,13 @@ MapClouds map_clouds(const fusion::VoxelMap& dense,
       slot = static_cast<std::uint32_t>(i + 1);
     }
   }
-  std::vector<Rgb> record_color(records.size());
-  for (std::size_t i = 0; i < records.size(); ++i)
-    record_color[i] = fusion::class_color(records[i].class_name);
-
-  const auto voxels = dense.sorted_voxels();
-  const std::size_t n = voxels.size();
-  out.dense.points.resize(n);
-  out.dense.colors.resize(n);
-  out.semantic_colors.resize(n);
-  auto fill = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const auto& [key, v] = voxels[i];
-      const Vec3f p = dense.mean_position(key, *v).cast<float>();
-      const Rgb c = v->mean_color();
-      const std::uint32_t* slot = owner.empty() ? nullptr : owner.find(key);
-      out.dense.points[i] = p;
-      out.dense.colors[i] = c;
-      out.semantic_colors[i] = slot ? record_color[*slot - 1] : c;
-    }
-  };
-  const std::size_t t_count = static_cast<std::size_t>(std::max(1, threads));
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < t_count; ++t)
-    pool.emplace_back(fill, n * t / t_count, n * (t + 1) / t_count);
-  fill(0, n / t_count);
-  for (auto& th : pool) th.join();
-
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    if (!records[i].confirmed) continue;
-    for (const Vec3f& p : records[i].cloud.points) out.objects_only.push_back(p, record_color[i]);
+  std::vector<Rgb> colors = dense.cloud.colors;
+  if (owner.empty()) return colors;
+  for (std::size_t i = 0; i < colors.size(); ++i) {
+    const std::uint32_t* slot = owner.find(dense.keys[i]);
+    if (slot) colors[i] = record_color[*slot - 1];
   }
-  return out;
+  return colors;
 }
 
 ordered_json vec_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
@@ -564,7 +560,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   //    thread merges their results strictly in keyframe order, so the maps do not depend on the
   //    thread count.
   t0 = Clock::now();
-  const geometry::RayTable rays = geometry::make_ray_table(camera);
+  const geometry::RayTable rays = geometry::make_ray_table(camera, options.threads);
   fusion::VoxelMapOptions dense_options;
   dense_options.voxel_m = options.map_voxel_m;
   dense_options.threads = options.threads;  // for sorting on export; voxels come via merge_shard
@@ -635,6 +631,22 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   }
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
 
+  // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
+  //      map's cloud is made and map_dense.ply written on a second thread meanwhile the objects
+  //      are merged and filtered (they do not depend on each other).
+  io::StagingDir staging(options.out);
+  const fs::path dir = staging.path();
+  io::PlyWriteOptions ply;
+  ply.comment = std::string("objmap ") + objmap::version();
+  auto t_dense = Clock::now();
+  double dense_seconds = 0.0;
+  std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
+    DenseCloud cloud = take_dense_cloud(dense, dense_options);
+    io::write_ply(dir / "map_dense.ply", cloud.cloud, ply);
+    dense_seconds = seconds_since(t_dense);
+    return cloud;
+  });
+
   // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
   t0 = Clock::now();
   result.merges = objects.merge_pass();
@@ -653,25 +665,34 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   }
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  // 5. The maps and the run folder, written under a temporary name and renamed when complete.
+  // 5. The maps: the semantic map (the dense points with the objects' colours) on a second
+  //    thread, the objects meanwhile.
   t0 = Clock::now();
-  // The dense voxel map is freed once its clouds are made, each cloud once written.
-  io::StagingDir staging(options.out);
-  const fs::path dir = staging.path();
-  io::PlyWriteOptions ply;
-  ply.comment = std::string("objmap ") + objmap::version();
-  MapClouds clouds = map_clouds(dense, result.objects, options.threads);
-  dense = fusion::VoxelMap(dense_options);  // its memory is no longer needed
-  result.dense_points_map = clouds.dense.size();
-  const std::size_t semantic_points = clouds.dense.size();
-  const std::size_t objects_points = clouds.objects_only.size();
-  io::write_ply(dir / "map_dense.ply", clouds.dense, ply);
-  clouds.dense.colors.swap(clouds.semantic_colors);  // the same points, semantic colours
-  clouds.semantic_colors = std::vector<Rgb>();
-  io::write_ply(dir / "map_semantic.ply", clouds.dense, ply);
-  clouds.dense = PointCloud();
-  io::write_ply(dir / "map_objects.ply", clouds.objects_only, ply);
-  clouds.objects_only = PointCloud();
+  DenseCloud dense_cloud = dense_future.get();
+  result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
+  result.dense_points_map = dense_cloud.cloud.size();
+  const std::size_t semantic_points = dense_cloud.cloud.size();
+  std::vector<Rgb> record_color(result.objects.size());
+  for (std::size_t i = 0; i < result.objects.size(); ++i)
+    record_color[i] = fusion::class_color(result.objects[i].class_name);
+  std::future<void> semantic_future = std::async(std::launch::async, [&] {
+    std::vector<Rgb> colors =
+        semantic_colors(dense_cloud, options.map_voxel_m, result.objects, record_color);
+    dense_cloud.keys = std::vector<fusion::VoxelKey>();
+    dense_cloud.cloud.colors.swap(colors);
+    colors = std::vector<Rgb>();
+    io::write_ply(dir / "map_semantic.ply", dense_cloud.cloud, ply);
+    dense_cloud.cloud = PointCloud();
+  });
+  PointCloud objects_only;
+  for (std::size_t i = 0; i < result.objects.size(); ++i) {
+    if (!result.objects[i].confirmed) continue;
+    for (const Vec3f& p : result.objects[i].cloud.points)
+      objects_only.push_back(p, record_color[i]);
+  }
+  const std::size_t objects_points = objects_only.size();
+  io::write_ply(dir / "map_objects.ply", objects_only, ply);
+  objects_only = PointCloud();
   fs::create_directories(dir / "objects");
   ordered_json objects_json = ordered_json::array();
   for (const auto& r : result.objects) {
@@ -680,6 +701,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     io::write_ply(dir / name, r.cloud, ply);
     objects_json.push_back(object_json(r, name));
   }
+  semantic_future.get();
   ordered_json doc;
   doc["schema_version"] = 1;
   doc["generator"] = std::string("objmap ") + objmap::version();
