@@ -4,6 +4,7 @@
 
 #include "command.h"
 #include "config_flags.h"
+#include "objmap/pipeline/correct.h"
 #include "objmap/pipeline/fuse.h"
 #include "progress.h"
 
@@ -72,15 +73,42 @@ void setup_fuse(CLI::App& app) {
   cmd->add_option("--config", *config,
                   "JSON file with any of the options below (keys as in run.json 'options'); flags "
                   "given on the command line win");
+  auto correct = std::make_shared<bool>(false);
+  auto correct_method = std::make_shared<std::string>("graph");
+  cmd->add_flag("--correct-poses", *correct,
+                "fuse, correct the keyframe poses with the objects (objmap correct), fuse again: "
+                "OUT also gets trajectory_corrected.txt and correction.json");
+  cmd->add_option("--correct-method", *correct_method, "with --correct-poses: graph or paper")
+      ->check(CLI::IsMember({"graph", "paper"}))
+      ->capture_default_str();
   auto flags = std::make_shared<ConfigFlags>(
       cmd, [](pipeline::FuseOptions& o) { return pipeline::fuse_config_fields(o); }, *options);
-  cmd->callback([options, config, flags] {
+  cmd->callback([options, config, flags, correct, correct_method] {
     flags->apply_config(*config, *options);
     std::unique_ptr<ProgressBar> bar;
-    const auto result = pipeline::run_fuse(*options, [&](std::size_t done, std::size_t total) {
-      if (!bar) bar = std::make_unique<ProgressBar>("fuse", total, "keyframes");
+    std::size_t last = 0;
+    const auto progress = [&](std::size_t done, std::size_t total) {
+      if (!bar || done < last) {  // a new pass (--correct-poses fuses twice)
+        if (bar) bar->finish();
+        bar = std::make_unique<ProgressBar>("fuse", total, "keyframes");
+      }
+      last = done;
       bar->update(done);
-    });
+    };
+    if (*correct) {
+      pipeline::CorrectOptions co;
+      co.correction.method = *correct_method;
+      co.threads = options->threads;
+      const auto corrected = pipeline::run_fuse_and_correct(*options, co, progress);
+      if (bar) bar->finish();
+      if (corrected.refused_map) print_summary(*options, corrected.fuse);
+      std::printf("correction  %s: %s\n", corrected.correction.method.c_str(),
+                  corrected.reason.c_str());
+      std::printf("written     %s/{trajectory_corrected.txt, correction.json}\n",
+                  options->out.c_str());
+      return;
+    }
+    const auto result = pipeline::run_fuse(*options, progress);
     if (bar) bar->finish();
     print_summary(*options, result);
   });

@@ -1,0 +1,96 @@
+// objmap correct: object-constrained pose correction of a fuse run, then the map fused again.
+#include <cstdio>
+#include <memory>
+
+#include "command.h"
+#include "objmap/pipeline/correct.h"
+#include "progress.h"
+
+namespace objmap::app {
+namespace {
+
+void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
+  auto& c = o.correction;
+  cmd->add_option("--method", c.method,
+                  "graph: one pose graph over keyframes (odometry from the trajectory) and object "
+                  "landmarks; paper: eq 20 per keyframe (Horn/Umeyama + robust refinement)")
+      ->check(CLI::IsMember({"graph", "paper"}))
+      ->capture_default_str();
+  cmd->add_option("--view-model", o.view_model,
+                  "visible: compare an observed centroid with the centroid of the object model's "
+                  "part visible from the keyframe; centroid: with the whole model's (the paper)")
+      ->check(CLI::IsMember({"visible", "centroid"}))
+      ->capture_default_str();
+  cmd->add_option("--min-pairs", c.min_pairs, "matched objects needed to correct a keyframe")
+      ->capture_default_str();
+  cmd->add_option("--observation-sigma", c.observation_sigma_m,
+                  "floor of an object's centroid noise, metres (each object's own noise is "
+                  "estimated from its observations)")
+      ->capture_default_str();
+  cmd->add_option("--odometry-sigma-fraction", c.odometry_sigma_fraction,
+                  "graph: std of a relative pose, share of the step length")
+      ->capture_default_str();
+  cmd->add_option("--ray-sigma-factor", c.ray_sigma_factor,
+                  "graph: an observed centroid's std along the viewing ray, times the lateral std")
+      ->capture_default_str();
+  cmd->add_option("--max-translation", c.max_translation_m,
+                  "a larger correction of any keyframe refuses the result, metres")
+      ->capture_default_str();
+  cmd->add_option("--max-rotation", c.max_rotation_deg,
+                  "a larger correction of any keyframe refuses the result, degrees")
+      ->capture_default_str();
+  cmd->add_option("--held-out-improvement", c.min_held_out_improvement,
+                  "corrections fitted to half of the objects must lower the other half's "
+                  "residual RMS by this share, else refused (negative: a worsening allowed)")
+      ->capture_default_str();
+  cmd->add_option("--reweight-rounds", c.reweight_rounds,
+                  "re-estimate each object's noise from the solution and solve again")
+      ->capture_default_str();
+  cmd->add_option("--min-improvement", c.min_improvement,
+                  "the observation residual RMS must drop by this share, else refused")
+      ->capture_default_str();
+}
+
+void print_summary(const pipeline::CorrectOptions& o, const pipeline::CorrectResult& r) {
+  const auto& c = r.correction;
+  std::printf("method      %s (view model %s)\n", c.method.c_str(), o.view_model.c_str());
+  std::printf("problem     %zu keyframes, %zu objects, %zu observations\n", c.keyframes.size(),
+              r.landmarks, r.observations);
+  std::printf("residual    %.4f -> %.4f m (observation RMS)\n", c.residual_before_m,
+              c.residual_after_m);
+  std::printf("largest     %.4f m, %.3f deg\n", c.max_translation_m, c.max_rotation_deg);
+  std::printf("result      %s\n", r.reason.c_str());
+  std::printf("time        %.2f s correction, %.2f s total\n", r.seconds_correct, r.seconds_total);
+  std::printf("written     %s/{trajectory_corrected.txt, correction.json, objects.json, ...}\n",
+              o.out.c_str());
+}
+
+void setup_correct(CLI::App& app) {
+  auto options = std::make_shared<pipeline::CorrectOptions>();
+  auto* cmd = app.add_subcommand(
+      "correct",
+      "Correct the keyframe poses of a fuse run with its objects as landmarks (paper 3.4, eq 20; "
+      "default: a pose graph), then fuse again. Writes OUT as a run folder plus "
+      "OUT/trajectory_corrected.txt and OUT/correction.json; the input trajectory is never "
+      "written. A refused correction keeps the input poses and says why.");
+  cmd->add_option("--run", options->run, "fuse run folder (run.json, objects.json, objects/)")
+      ->required();
+  cmd->add_option("--out", options->out, "output run folder (replaced when complete)")->required();
+  add_correction_flags(cmd, *options);
+  cmd->add_option("--threads", options->threads, "threads of the re-fuse")->capture_default_str();
+  cmd->callback([options] {
+    std::unique_ptr<ProgressBar> bar;
+    const auto result = pipeline::run_correct(*options, [&](std::size_t done, std::size_t total) {
+      if (!bar) bar = std::make_unique<ProgressBar>("re-fuse", total, "keyframes");
+      bar->update(done);
+    });
+    if (bar) bar->finish();
+    print_summary(*options, result);
+  });
+}
+
+}  // namespace
+
+OBJMAP_COMMAND(50, "correct", setup_correct);
+
+}  // namespace objmap::app

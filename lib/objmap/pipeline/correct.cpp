@@ -1,0 +1,450 @@
+#include "objmap/pipeline/correct.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "objmap/core/error.h"
+#include "objmap/io/atomic.h"
+#include "objmap/io/camera_io.h"
+#include "objmap/io/ply.h"
+#include "objmap/io/trajectory.h"
+#include "objmap/pipeline/config.h"
+#include "objmap/version.h"
+
+namespace objmap::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using ordered_json = nlohmann::ordered_json;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+json read_json_file(const fs::path& file) {
+  std::ifstream in(file);
+  require(static_cast<bool>(in), file.string(), "cannot be read; expected a file of a fuse run");
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
+  }
+}
+
+// A field of a JSON document, with a message naming the file and the field when it is missing or
+// of the wrong type.
+template <typename T>
+T field(const json& node, const std::string& key, const fs::path& file, const std::string& where) {
+  const std::string name = where.empty() ? key : where + "." + key;
+  require(node.is_object() && node.contains(key), file.string() + ": " + name,
+          "missing; expected the field that objmap fuse writes");
+  try {
+    return node.at(key).get<T>();
+  } catch (const json::exception&) {
+    throw InputError(file.string() + ": " + name, "has the wrong type");
+  }
+}
+
+Vec3 vec3(const json& a, const fs::path& file, const std::string& where) {
+  require(a.is_array() && a.size() == 3 && a[0].is_number() && a[1].is_number() && a[2].is_number(),
+          file.string() + ": " + where, "expected an array of 3 numbers");
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+
+Camera camera_from_run(const json& run, const fs::path& file) {
+  const json cam = field<json>(field<json>(run, "inputs", file, ""), "camera", file, "inputs");
+  Camera c;
+  c.name = field<std::string>(cam, "name", file, "inputs.camera");
+  c.width = field<int>(cam, "width", file, "inputs.camera");
+  c.height = field<int>(cam, "height", file, "inputs.camera");
+  c.fx = field<double>(cam, "fx", file, "inputs.camera");
+  c.fy = field<double>(cam, "fy", file, "inputs.camera");
+  c.cx = field<double>(cam, "cx", file, "inputs.camera");
+  c.cy = field<double>(cam, "cy", file, "inputs.camera");
+  c.distortion = field<std::array<double, 5>>(cam, "distortion", file, "inputs.camera");
+  c.depth_factor = field<double>(cam, "depth_factor", file, "inputs.camera");
+  c.check(file.string() + ": inputs.camera");
+  return c;
+}
+
+std::string input_path(const json& run, const fs::path& file, const std::string& which) {
+  const json inputs = field<json>(run, "inputs", file, "");
+  return field<std::string>(field<json>(inputs, which, file, "inputs"), "path", file,
+                            "inputs." + which);
+}
+
+// Copies a run folder's files (not its sub-folders' sub-folders; a run has objects/ only).
+void copy_run(const fs::path& from, const fs::path& to) {
+  for (const auto& entry : fs::recursive_directory_iterator(from)) {
+    const fs::path rel = fs::relative(entry.path(), from);
+    if (entry.is_directory())
+      fs::create_directories(to / rel);
+    else
+      fs::copy_file(entry.path(), to / rel, fs::copy_options::overwrite_existing);
+  }
+}
+
+// A temporary folder beside `out`, removed with the object.
+class ScratchDir {
+ public:
+  ScratchDir(const fs::path& out, const std::string& tag) {
+    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    path_ = parent / (out.filename().string() + "." + tag + "-tmp-" + std::to_string(::getpid()));
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+    fs::create_directories(path_, ec);
+    require(!ec, path_.string(), "cannot create a temporary folder: " + ec.message());
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string correction_json(const CorrectOptions& options, const CorrectResult& result,
+                            const RunProblem& rp, const std::string& input_trajectory) {
+  const pose::CorrectionResult& c = result.correction;
+  const pose::CorrectionOptions& o = options.correction;
+  ordered_json doc;
+  doc["schema_version"] = 1;
+  doc["generator"] = std::string("objmap ") + objmap::version();
+  doc["command"] = "correct";
+  doc["run"] = options.run.string();
+  doc["input_trajectory"] = input_trajectory;
+  doc["output_trajectory"] = "trajectory_corrected.txt";
+  doc["method"] = o.method;
+  doc["view_model"] = options.view_model;
+  doc["accepted"] = result.accepted;
+  doc["reason"] = result.reason;
+  doc["options"] = {{"min_pairs", o.min_pairs},
+                    {"min_spread_m", o.min_spread_m},
+                    {"observation_sigma_m", o.observation_sigma_m},
+                    {"robust_sigmas", o.robust_sigmas},
+                    {"odometry_sigma_m", o.odometry_sigma_m},
+                    {"odometry_sigma_fraction", o.odometry_sigma_fraction},
+                    {"odometry_sigma_deg", o.odometry_sigma_deg},
+                    {"odometry_sigma_deg_per_deg", o.odometry_sigma_deg_per_deg},
+                    {"odometry_sigma_deg_per_m", o.odometry_sigma_deg_per_m},
+                    {"max_translation_m", o.max_translation_m},
+                    {"max_rotation_deg", o.max_rotation_deg},
+                    {"min_improvement", o.min_improvement},
+                    {"min_held_out_improvement", o.min_held_out_improvement},
+                    {"reweight_rounds", o.reweight_rounds},
+                    {"paper_prior", o.paper_prior},
+                    {"paper_prior_fraction", o.paper_prior_fraction},
+                    {"max_iterations", o.max_iterations},
+                    {"check_map", options.check_map}};
+  doc["counts"] = {{"keyframes", c.keyframes.size()},
+                   {"keyframes_corrected", result.accepted ? c.corrected_keyframes : 0},
+                   {"landmarks", result.landmarks},
+                   {"observations", result.observations},
+                   {"observations_without_view", result.observations_without_view}};
+  doc["consistency"] = {{"observation_rms_before_m", c.residual_before_m},
+                        {"held_out_rms_before_m", c.held_out_before_m},
+                        {"held_out_rms_after_m", c.held_out_after_m},
+                        {"observation_rms_after_m", c.residual_after_m},
+                        {"odometry_rms_sigmas", c.odometry_rms_sigmas},
+                        {"map_scatter_before_m", result.map_rms_before_m},
+                        {"map_scatter_after_m", result.map_rms_after_m}};
+  doc["max_correction"] = {{"translation_m", c.max_translation_m},
+                           {"rotation_deg", c.max_rotation_deg}};
+  doc["solver"] = {{"iterations", c.iterations}, {"seconds", c.seconds}};
+  doc["seconds"] = {{"correct", result.seconds_correct}, {"total", result.seconds_total}};
+  ordered_json kfs = ordered_json::array();
+  for (const auto& k : c.keyframes) {
+    ordered_json e;
+    e["index"] = k.index;
+    e["timestamp"] = k.timestamp;
+    e["objects"] = rp.keyframe_objects[k.index];
+    e["matched"] = k.matched;
+    e["spread_m"] = k.spread_m;
+    e["corrected"] = result.accepted && k.corrected;
+    e["reason"] = k.reason;
+    e["residual_before_m"] = k.residual_before_m;
+    e["residual_after_m"] = k.residual_after_m;
+    e["translation_m"] = k.translation_m;
+    e["rotation_deg"] = k.rotation_deg;
+    const Pose& p = c.proposed[k.index];
+    const Eigen::Quaterniond q = io::quaternion_of(p);
+    e["proposed_world_from_cam"] = {
+        p.translation().x(), p.translation().y(), p.translation().z(), q.x(), q.y(), q.z(), q.w()};
+    kfs.push_back(e);
+  }
+  doc["keyframes"] = kfs;
+  // Per observation: which object from which keyframe, its partial-view bias and residuals.
+  std::vector<Vec3> mean(rp.problem.landmarks.size(), Vec3::Zero());
+  std::vector<int> count(rp.problem.landmarks.size(), 0);
+  for (const auto& ob : rp.problem.observations) {
+    mean[ob.landmark] +=
+        rp.problem.keyframes[ob.keyframe].world_from_cam * ob.centroid_in_cam - ob.bias_in_world;
+    ++count[ob.landmark];
+  }
+  ordered_json obs = ordered_json::array();
+  for (const auto& ob : rp.problem.observations) {
+    const Vec3 m = mean[ob.landmark] / count[ob.landmark];
+    const Vec3 before =
+        rp.problem.keyframes[ob.keyframe].world_from_cam * ob.centroid_in_cam - ob.bias_in_world;
+    const Vec3 after = c.proposed[ob.keyframe] * ob.centroid_in_cam - ob.bias_in_world;
+    obs.push_back({{"object", rp.object_ids[ob.landmark]},
+                   {"keyframe", ob.keyframe},
+                   {"bias_m", ob.bias_in_world.norm()},
+                   {"residual_before_m", (before - m).norm()},
+                   {"residual_after_m", (after - c.landmarks_in_world[ob.landmark]).norm()}});
+  }
+  doc["observations"] = obs;
+  return doc.dump(2) + "\n";
+}
+
+// The fuse options of a run (its run.json "options"), with the run's inputs.
+FuseOptions fuse_options_of(const fs::path& run_dir, const json& run, const fs::path& scratch) {
+  const fs::path file = run_dir / "run.json";
+  FuseOptions fo;
+  const fs::path options_file = scratch / "fuse_options.json";
+  io::write_file_atomic(options_file, field<json>(run, "options", file, "").dump(2));
+  apply_config_file(options_file, fuse_config_fields(fo));
+  fo.dataset = input_path(run, file, "dataset");
+  fo.segmentation = input_path(run, file, "segmentation");
+  fo.seg_format = field<std::string>(
+      field<json>(field<json>(run, "inputs", file, ""), "segmentation", file, "inputs"), "format",
+      file, "inputs.segmentation");
+  const fs::path camera_file = scratch / "camera.json";
+  io::write_camera_json(camera_file, camera_from_run(run, file));
+  fo.camera = camera_file.string();
+  return fo;
+}
+
+}  // namespace
+
+void CorrectOptions::check() const {
+  require(!run.empty(), "CorrectOptions.run", "empty; expected a fuse run folder");
+  require(!out.empty(), "CorrectOptions.out", "empty; expected an output folder");
+  require(view_model == "visible" || view_model == "centroid", "CorrectOptions.view_model",
+          "'" + view_model + "' is not a view model; expected visible or centroid");
+  require(threads >= 1, "CorrectOptions.threads", "must be >= 1");
+  visibility.check();
+  correction.check();
+}
+
+RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
+                            const std::string& view_model,
+                            const pose::VisibilityOptions& visibility) {
+  const fs::path run_file = run / "run.json";
+  const fs::path objects_file = run / "objects.json";
+  const json run_doc = read_json_file(run_file);
+  const Camera camera = camera_from_run(run_doc, run_file);
+  double max_diff_s = 0.02;
+  if (run_doc.contains("options") && run_doc["options"].contains("max_diff_s"))
+    max_diff_s = field<double>(run_doc["options"], "max_diff_s", run_file, "options");
+  const json doc = read_json_file(objects_file);
+  const json objects = field<json>(doc, "objects", objects_file, "");
+  require(objects.is_array(), objects_file.string() + ": objects", "expected an array");
+
+  RunProblem rp;
+  std::vector<PointCloud> models;
+  // Keyframe index (of the run) -> timestamp.
+  std::map<int, double> keyframe_time;
+  struct RawObservation {
+    int keyframe;
+    std::size_t landmark;
+    Vec3 centroid_in_cam;
+  };
+  std::vector<RawObservation> raw;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const json& o = objects[i];
+    const std::string where = "objects[" + std::to_string(i) + "]";
+    const int id = field<int>(o, "id", objects_file, where);
+    const std::string ply = field<std::string>(o, "ply", objects_file, where);
+    PointCloud model = io::read_ply(run / ply);
+    pose::Landmark landmark;
+    landmark.id = id;
+    if (model.empty()) {
+      landmark.position_in_world = vec3(o.at("centroid"), objects_file, where + ".centroid");
+    } else {
+      Vec3 sum = Vec3::Zero();
+      for (const Vec3f& p : model.points) sum += p.cast<double>();
+      landmark.position_in_world = sum / static_cast<double>(model.size());
+    }
+    const json obs = field<json>(o, "observations", objects_file, where);
+    require(obs.is_array(), objects_file.string() + ": " + where + ".observations",
+            "expected an array");
+    std::size_t used = 0;
+    for (std::size_t k = 0; k < obs.size(); ++k) {
+      const std::string w = where + ".observations[" + std::to_string(k) + "]";
+      const json& e = obs[k];
+      if (!e.contains("keyframe") || e["keyframe"].is_null() || !e.contains("centroid_in_cam") ||
+          e["centroid_in_cam"].is_null())
+        continue;
+      const int kf = field<int>(e, "keyframe", objects_file, w);
+      const double t = field<double>(e, "timestamp", objects_file, w);
+      keyframe_time.emplace(kf, t);
+      raw.push_back({kf, rp.problem.landmarks.size(),
+                     vec3(e["centroid_in_cam"], objects_file, w + ".centroid_in_cam")});
+      ++used;
+    }
+    if (used == 0) continue;
+    rp.problem.landmarks.push_back(landmark);
+    rp.object_ids.push_back(id);
+    models.push_back(std::move(model));
+  }
+  // Keyframes in the run's order, their poses from `trajectory` as fuse looked them up.
+  io::PoseLookupOptions lookup;
+  lookup.max_diff_s = max_diff_s;
+  lookup.interpolate = true;
+  std::map<int, std::size_t> keyframe_slot;
+  for (const auto& [kf, t] : keyframe_time) {
+    const auto pose = io::lookup_pose(trajectory, t, lookup);
+    require(pose.has_value(), trajectory.source,
+            "no pose within " + std::to_string(max_diff_s) + " s of keyframe " +
+                std::to_string(kf) + " (t = " + std::to_string(t) + ") of " +
+                objects_file.string() + "; expected the trajectory the run was fused with");
+    keyframe_slot[kf] = rp.problem.keyframes.size();
+    rp.problem.keyframes.push_back({t, *pose});
+  }
+  rp.keyframe_objects.resize(rp.problem.keyframes.size());
+  for (const RawObservation& r : raw) {
+    pose::Observation o;
+    o.keyframe = keyframe_slot.at(r.keyframe);
+    o.landmark = r.landmark;
+    o.centroid_in_cam = r.centroid_in_cam;
+    rp.problem.observations.push_back(o);
+    rp.keyframe_objects[o.keyframe].push_back(rp.object_ids[r.landmark]);
+  }
+  // The partial-view bias of each observation: render every model from the keyframe's pose.
+  if (view_model == "visible") {
+    std::vector<const PointCloud*> model_ptrs;
+    for (const auto& m : models) model_ptrs.push_back(&m);
+    std::vector<std::vector<std::size_t>> of_keyframe(rp.problem.keyframes.size());
+    for (std::size_t i = 0; i < rp.problem.observations.size(); ++i)
+      of_keyframe[rp.problem.observations[i].keyframe].push_back(i);
+    for (std::size_t k = 0; k < rp.problem.keyframes.size(); ++k) {
+      if (of_keyframe[k].empty()) continue;
+      const auto visible = pose::visible_centroids(
+          model_ptrs, rp.problem.keyframes[k].world_from_cam, camera, visibility);
+      for (std::size_t i : of_keyframe[k]) {
+        pose::Observation& o = rp.problem.observations[i];
+        if (visible[o.landmark])
+          o.bias_in_world =
+              *visible[o.landmark] - rp.problem.landmarks[o.landmark].position_in_world;
+        else
+          ++rp.observations_without_view;
+      }
+    }
+  }
+  return rp;
+}
+
+CorrectResult run_correct(const CorrectOptions& options, const FuseProgress& progress) {
+  options.check();
+  const auto t_start = Clock::now();
+  CorrectResult result;
+  const fs::path run_file = options.run / "run.json";
+  const json run_doc = read_json_file(run_file);
+  const std::string trajectory_path = input_path(run_doc, run_file, "trajectory");
+  const Trajectory trajectory = io::read_trajectory(trajectory_path);
+
+  // 1. The problem: keyframes, object landmarks, observations (with their partial-view bias).
+  const RunProblem rp =
+      problem_from_run(options.run, trajectory, options.view_model, options.visibility);
+  result.landmarks = rp.problem.landmarks.size();
+  result.observations = rp.problem.observations.size();
+  result.observations_without_view = rp.observations_without_view;
+
+  // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage.
+  result.correction = pose::correct_poses(rp.problem, options.correction);
+  result.accepted = result.correction.accepted;
+  result.reason = result.correction.reason;
+  {
+    std::vector<Pose> poses;
+    for (const auto& k : rp.problem.keyframes) poses.push_back(k.world_from_cam);
+    result.map_rms_before_m = pose::median_scatter_m(rp.problem, poses);
+  }
+  result.seconds_correct = seconds_since(t_start);
+
+  ScratchDir scratch(options.out, "correct");
+  Trajectory corrected = trajectory;
+  if (result.accepted) {
+    // 3. Every pose of the trajectory, corrections interpolated between keyframes.
+    corrected =
+        pose::apply_corrections(trajectory, rp.problem.keyframes, result.correction.world_from_cam);
+    const fs::path corrected_tmp = scratch.path() / "trajectory_corrected.txt";
+    io::write_trajectory(
+        corrected_tmp, corrected,
+        "corrected by objmap correct (" + options.correction.method + ") from " + trajectory_path);
+    // 4. Fuse again with the corrected trajectory.
+    FuseOptions fo = fuse_options_of(options.run, run_doc, scratch.path());
+    fo.trajectory = corrected_tmp;
+    fo.out = options.out;
+    fo.threads = options.threads;
+    result.fuse = run_fuse(fo, progress);
+    result.refused_map = true;
+    // 5. The re-fused map's own consistency must not get worse.
+    if (options.check_map) {
+      const RunProblem again =
+          problem_from_run(options.out, corrected, options.view_model, options.visibility);
+      std::vector<Pose> poses;
+      for (const auto& k : again.problem.keyframes) poses.push_back(k.world_from_cam);
+      result.map_rms_after_m = pose::median_scatter_m(again.problem, poses);
+      if (result.map_rms_after_m > result.map_rms_before_m) {
+        result.accepted = false;
+        char buffer[200];
+        std::snprintf(buffer, sizeof buffer,
+                      "refused: the re-fused map is less consistent (median object scatter %.4f -> "
+                      "%.4f m)",
+                      result.map_rms_before_m, result.map_rms_after_m);
+        result.reason = buffer;
+      }
+    }
+  }
+  if (!result.accepted) {
+    // Refused: OUT is the input run, the trajectory unchanged.
+    corrected = trajectory;
+    io::StagingDir staging(options.out);
+    copy_run(options.run, staging.path());
+    staging.commit();
+  }
+  // 6. OUT/trajectory_corrected.txt, OUT/correction.json; run.json names the trajectory used.
+  const fs::path trajectory_out = options.out / "trajectory_corrected.txt";
+  io::write_trajectory(trajectory_out, corrected,
+                       std::string(result.accepted ? "corrected" : "not corrected (refused)") +
+                           " by objmap correct (" + options.correction.method + ") from " +
+                           trajectory_path);
+  if (result.accepted) {
+    const fs::path out_run = options.out / "run.json";
+    ordered_json doc = ordered_json::parse(read_json_file(out_run).dump());
+    doc["inputs"]["trajectory"]["path"] = trajectory_out.string();
+    io::write_file_atomic(out_run, doc.dump(2) + "\n");
+  }
+  result.seconds_total = seconds_since(t_start);
+  io::write_file_atomic(options.out / "correction.json",
+                        correction_json(options, result, rp, trajectory_path));
+  return result;
+}
+
+CorrectResult run_fuse_and_correct(const FuseOptions& fuse, const CorrectOptions& correct,
+                                   const FuseProgress& progress) {
+  fuse.check();
+  ScratchDir first(fuse.out, "first-fuse");
+  FuseOptions fo = fuse;
+  fo.out = first.path() / "run";
+  run_fuse(fo, progress);
+  CorrectOptions co = correct;
+  co.run = fo.out;
+  co.out = fuse.out;
+  return run_correct(co, progress);
+}
+
+}  // namespace objmap::pipeline

@@ -1,0 +1,70 @@
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "objmap/pipeline/fuse.h"
+#include "objmap/pose/correct.h"
+#include "objmap/pose/visible.h"
+
+// `objmap correct`: object-constrained pose correction of a finished fuse run (paper §3.4,
+// eqs 19-20; "graph" goes beyond the paper). Reads RUN/run.json (inputs and fuse options),
+// RUN/objects.json (objects and their per-keyframe observations) and RUN/objects/*.ply (the object
+// models), corrects the keyframe poses of the run's trajectory, spreads the corrections to every
+// pose of it, fuses the map again with the corrected trajectory and writes OUT as a complete run
+// folder plus OUT/trajectory_corrected.txt and OUT/correction.json (schemas/correction.json).
+// The input trajectory is never written. A refused correction still writes OUT: the input poses
+// as trajectory_corrected.txt, the input run's map, and the reason in correction.json.
+namespace objmap::pipeline {
+
+struct CorrectOptions {
+  std::filesystem::path run;  // a fuse run folder (run.json, objects.json, objects/)
+  std::filesystem::path out;  // output run folder (replaced when complete)
+  // How an observed centroid is compared with its object: "visible" (default) with the centroid of
+  // the part of the object model visible from the keyframe (partial-view bias removed), or
+  // "centroid" with the whole model's centroid (the paper).
+  std::string view_model = "visible";
+  pose::VisibilityOptions visibility;  // z-buffer rendering of the models
+  pose::CorrectionOptions correction;  // method (graph | paper), evidence, noise, bounds
+  // After the re-fuse, the map's own consistency (median object scatter of the new run) must not
+  // exceed the input run's, else the whole result is refused.
+  bool check_map = true;
+  int threads = 2;     // for the re-fuse
+  void check() const;  // throws InputError naming the bad field
+};
+
+struct CorrectResult {
+  pose::CorrectionResult correction;
+  std::size_t landmarks = 0, observations = 0;
+  std::size_t observations_without_view = 0;  // visible part too small: bias 0
+  bool accepted = false;  // the final verdict (correction and the re-fused map's check)
+  std::string reason;
+  double map_rms_before_m = 0.0;  // median object scatter of the input run (median_scatter_m)
+  double map_rms_after_m = 0.0;   // ... of the re-fused run (0 when not re-fused)
+  bool refused_map = false;       // the map was fused again
+  FuseResult fuse;                // the re-fuse (empty when refused before it)
+  double seconds_correct = 0.0, seconds_total = 0.0;
+};
+
+// The problem a run poses: keyframes (timestamps of the observations, poses of `trajectory`),
+// landmarks (confirmed objects seen by >= 1 keyframe, at their models' centroids), observations
+// (centroid_in_cam, bias from the visible part when view_model is "visible").
+struct RunProblem {
+  pose::Problem problem;
+  std::vector<int> object_ids;                     // per landmark
+  std::vector<std::vector<int>> keyframe_objects;  // per keyframe, the object ids it observed
+  std::size_t observations_without_view = 0;
+};
+RunProblem problem_from_run(const std::filesystem::path& run, const Trajectory& trajectory,
+                            const std::string& view_model,
+                            const pose::VisibilityOptions& visibility);
+
+// Runs the correction and writes OUT. Throws InputError for a bad run folder or options.
+CorrectResult run_correct(const CorrectOptions& options, const FuseProgress& progress = {});
+
+// `objmap fuse --correct-poses`: fuse into a temporary run folder, correct it into fuse.out, and
+// remove the temporary folder. `correct.run` and `correct.out` are ignored.
+CorrectResult run_fuse_and_correct(const FuseOptions& fuse, const CorrectOptions& correct,
+                                   const FuseProgress& progress = {});
+
+}  // namespace objmap::pipeline
