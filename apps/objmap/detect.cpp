@@ -1,0 +1,171 @@
+// objmap detect: runs a detector through OpenCV's dnn module over the rgb frames of a TUM folder
+// (Darknet YOLO such as Yolo-Fastest: boxes; TensorFlow Mask R-CNN: instance masks) and writes the
+// canonical segmentation, one <timestamp>.json per rgb frame.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <opencv2/core/utils/logger.hpp>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "objmap/core/error.h"
+#include "objmap/io/atomic.h"
+#include "objmap/segmentation/detect.h"
+#include "objmap/segmentation/write.h"
+#include "progress.h"
+
+namespace objmap::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct DetectCommand {
+  std::string dataset;
+  std::string out;
+  std::string model;
+  std::string config;
+  std::string classes_file;
+  std::string classes;  // comma list, "all", or empty = the paper's eight
+  bool nms_per_class = false;
+  segmentation::DetectOptions options;
+};
+
+// Runs of fewer frames get no progress bar.
+constexpr std::size_t kProgressMinFrames = 20;
+
+std::vector<std::string> split_classes(const std::string& list) {
+  std::vector<std::string> names;
+  std::string current;
+  for (char c : list + ",") {
+    if (c != ',') {
+      current.push_back(c);
+      continue;
+    }
+    names.push_back(current);
+    current.clear();
+  }
+  return names;
+}
+
+void run_detect(DetectCommand& cmd) {
+  // OpenCV's dnn may log warnings on stderr; the user sees objmap's lines only.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+  segmentation::DetectOptions& o = cmd.options;
+  o.model = cmd.model;
+  o.config = cmd.config;
+  o.classes_file = cmd.classes_file;
+  o.nms_across_classes = !cmd.nms_per_class;
+  if (cmd.classes == "all") {
+    o.classes.clear();
+  } else if (!cmd.classes.empty()) {
+    o.classes = split_classes(cmd.classes);
+  }
+  require(fs::is_directory(cmd.dataset), cmd.dataset,
+          "no such folder; expected a TUM RGB-D folder with rgb.txt");
+
+  // The model first (its errors before any progress output), then the frames.
+  const auto load_start = std::chrono::steady_clock::now();
+  std::unique_ptr<segmentation::Detector> detector;
+  try {
+    detector = std::make_unique<segmentation::Detector>(o);
+  } catch (const InputError& e) {
+    // The library names the option by its field; the user knows it by its flag.
+    if (e.where() == "DetectOptions.classes") throw InputError("--classes", e.reason());
+    throw;
+  }
+  const double load_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count();
+  const std::vector<segmentation::DetectFrame> frames = segmentation::list_rgb_frames(cmd.dataset);
+  // A bar for long runs only: a short run's error (e.g. no detections) stays the one line on
+  // stderr.
+  std::unique_ptr<ProgressBar> bar;
+  if (frames.size() >= kProgressMinFrames)
+    bar = std::make_unique<ProgressBar>("detect", frames.size());
+  const segmentation::DetectResult result = segmentation::detect_frames(
+      *detector, frames, cmd.dataset, [&](std::size_t done, std::size_t /*total*/) {
+        if (bar) bar->update(done);
+      });
+  if (bar) bar->finish();
+
+  io::StagingDir staging(cmd.out);
+  segmentation::write_segmentation(staging.path(), result.segmentation);
+  staging.commit();
+
+  const auto& m = result.model;
+  std::printf("wrote       %s (%zu frame files)\n", cmd.out.c_str(),
+              result.segmentation.frames.size());
+  std::printf("model       %s: %s + %s, input %d x %d, %zu classes\n",
+              segmentation::model_kind_name(m.kind).c_str(), m.model.string().c_str(),
+              m.config.string().c_str(), m.input_width, m.input_height, m.class_names.size());
+  std::string kept;
+  if (m.kept_class_ids.size() == m.class_names.size()) {
+    kept = "all";
+  } else {
+    for (std::size_t i = 0; i < m.kept_class_ids.size(); ++i)
+      kept += (i ? ", " : "") + m.class_names[static_cast<std::size_t>(m.kept_class_ids[i])];
+  }
+  std::printf("classes     %s (score >= %.2f, NMS IoU %.2f %s)\n", kept.c_str(), o.score_threshold,
+              o.nms_threshold, o.nms_across_classes ? "across classes" : "per class");
+  std::printf("frames      %zu, %zu with detections\n", result.frames,
+              result.frames_with_detections);
+  std::printf("instances   %zu (%s)\n", result.instances,
+              m.kind == segmentation::ModelKind::kDarknetYolo ? "boxes" : "boxes with masks");
+  for (const auto& [name, n] : result.instances_per_class)
+    std::printf("  %-20s %zu\n", name.c_str(), n);
+  std::printf("time        %.2f s loading the model, %.2f s for the frames (%.1f ms per frame)\n",
+              load_seconds, result.seconds,
+              result.frames ? 1000.0 * result.seconds / result.frames : 0.0);
+}
+
+void setup_detect(CLI::App& app) {
+  auto cmd = std::make_shared<DetectCommand>();
+  segmentation::DetectOptions& o = cmd->options;
+  auto* c = app.add_subcommand(
+      "detect",
+      "Detect objects in the rgb frames of a TUM folder with OpenCV's dnn module and write the "
+      "canonical segmentation (SEG/<timestamp>.json). Models: Darknet YOLO (.weights + .cfg, "
+      "e.g. Yolo-Fastest; boxes) or TensorFlow Mask R-CNN (frozen_inference_graph.pb + .pbtxt; "
+      "instance masks). Nothing is downloaded (docs/cli.md says where to get the models).");
+  c->add_option("--dataset", cmd->dataset, "TUM RGB-D folder (rgb.txt, rgb/)")->required();
+  c->add_option("--model", cmd->model,
+                "model weights: Darknet .weights or TensorFlow Mask R-CNN .pb")
+      ->required();
+  c->add_option("--config", cmd->config,
+                "network description: Darknet .cfg (default: the model's name with .cfg) or the "
+                ".pbtxt text graph (required for .pb)");
+  c->add_option("--classes-file", cmd->classes_file,
+                "class names, one per line, line i = class id i-1 (default: built-in COCO-80 for "
+                "Darknet, COCO-90 for Mask R-CNN)");
+  c->add_option("--classes", cmd->classes,
+                "comma-separated classes to keep, or 'all' (default: the paper's eight: chair, "
+                "cup, tv monitor, teddy bear, bottle, book, keyboard, mouse)");
+  c->add_option("--score-threshold", o.score_threshold, "minimum class score of a detection")
+      ->capture_default_str();
+  c->add_option(
+       "--nms-threshold", o.nms_threshold,
+       "non-maximum suppression: of two boxes overlapping with IoU above this the weaker goes")
+      ->capture_default_str();
+  c->add_flag("--nms-per-class", cmd->nms_per_class,
+              "suppress overlapping boxes within each class only (default: across classes, one "
+              "box per object)");
+  c->add_option("--input-width", o.input_width,
+                "network input width in pixels (0: the model's, e.g. the cfg's width; Mask R-CNN "
+                "800)")
+      ->capture_default_str();
+  c->add_option("--input-height", o.input_height, "network input height in pixels (0: the model's)")
+      ->capture_default_str();
+  c->add_option("--mask-threshold", o.mask_threshold,
+                "Mask R-CNN: mask value above which a pixel is the object's")
+      ->capture_default_str();
+  c->add_option("--out", cmd->out, "output segmentation folder (replaced if it exists)")
+      ->required();
+  c->callback([cmd] { run_detect(*cmd); });
+}
+
+}  // namespace
+
+OBJMAP_COMMAND(25, "detect", setup_detect);
+
+}  // namespace objmap::app
