@@ -10,7 +10,9 @@
 #include "command.h"
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
+#include "objmap/io/camera_io.h"
 #include "objmap/io/image.h"
+#include "objmap/io/trajectory.h"
 #include "objmap/segmentation/read.h"
 #include "objmap/segmentation/write.h"
 #include "objmap/track/track_segmentation.h"
@@ -26,10 +28,13 @@ struct TrackCommand {
   std::string segmentation;
   std::string out;
   std::string seg_format = "auto";
+  std::string trajectory;  // on: the 3D gate
+  std::string camera;
   bool no_appearance = false;
   bool same_class = false;
   bool online_output = false;
   track::TrackOptions options;
+  track::Position3dOptions position;
 };
 
 void run_track(TrackCommand& cmd) {
@@ -46,13 +51,25 @@ void run_track(TrackCommand& cmd) {
   // Appearance needs the rgb images; a stream of boxes without images is tracked on motion alone.
   o.tracker.use_appearance = !cmd.no_appearance && images.has_images;
 
+  // The 3D gate: the instances' robust centroids from the depth images and the trajectory.
+  o.tracker.use_gate_3d = !cmd.trajectory.empty();
+  track::FramePositionsFn positions;
+  std::string camera_reason;
+  if (o.tracker.use_gate_3d) {
+    const io::CameraChoice choice = io::choose_camera(cmd.dataset, cmd.camera);
+    camera_reason = choice.reason;
+    const Trajectory trajectory = io::read_trajectory(cmd.trajectory);
+    positions = track::depth_positions(cmd.dataset, input, trajectory, choice.camera, cmd.position);
+  }
+
   std::unique_ptr<ProgressBar> bar;
   const track::TrackResult result = track::track_segmentation(
       input, o, [&](std::size_t i) { return io::read_rgb(images.files[i], 0, 0); },
       [&](std::size_t done, std::size_t total) {
         if (!bar) bar = std::make_unique<ProgressBar>("track", total);
         bar->update(done);
-      });
+      },
+      positions);
   if (bar) bar->finish();
 
   io::StagingDir staging(cmd.out);
@@ -71,6 +88,22 @@ void run_track(TrackCommand& cmd) {
                                     : cmd.no_appearance
                                         ? "off (--no-appearance): motion and IoU only"
                                         : "off (the dataset has no images): motion and IoU only");
+  if (result.used_gate_3d) {
+    std::printf(
+        "3d gate       %.2f m (growing %.2f m/s after a 3D update; last %d positions), camera "
+        "%s\n",
+        o.tracker.gate_3d_m, o.tracker.gate_3d_speed_mps, o.tracker.gate_3d_history,
+        camera_reason.c_str());
+    std::printf("              %zu frames with a pose, %zu without (tracked without the gate)\n",
+                result.frames_with_pose, result.frames_without_pose);
+    std::printf(
+        "              %zu of %zu instances with a 3D position (%zu through box masks; no box "
+        "mask %zu, too few depth pixels %zu)\n",
+        result.instances_with_position, result.instances, result.instances_mask_from_box,
+        result.instances_no_mask_from_box, result.instances_few_depth_pixels);
+  } else {
+    std::printf("3d gate       off (no --trajectory)\n");
+  }
   std::printf("tracks        %zu confirmed of %zu started (n_init %d, max_age %d)\n",
               result.tracks.size(), result.tracks_started, o.tracker.n_init, o.tracker.max_age);
   std::printf("instances     %zu of %zu with a track id (%.1f%%)\n", result.instances_tracked,
@@ -109,6 +142,23 @@ void setup_track(CLI::App& app) {
   c->add_flag("--online-output", cmd->online_output,
               "label only detections made while their track was confirmed (DeepSORT's online "
               "output); default: a confirmed track's first tentative detections too");
+  c->add_option("--trajectory", cmd->trajectory,
+                "camera trajectory (TUM format, world_from_cam): turns the 3D gate on (needs the "
+                "depth images of --dataset)");
+  c->add_option("--camera", cmd->camera,
+                "camera for the 3D gate: preset fr1|fr2|fr3 or a .json/.yaml file (default: from "
+                "the dataset, as fuse)");
+  c->add_option("--gate-3d-m", t.gate_3d_m,
+                "3D gate: a detection joins a track only within this distance (m) of the track's "
+                "last 3D position")
+      ->capture_default_str();
+  c->add_option("--gate-3d-speed", t.gate_3d_speed_mps,
+                "3D gate: the radius grows with this speed bound (m/s) times the time since the "
+                "track's last 3D position")
+      ->capture_default_str();
+  c->add_option("--gate-3d-history", t.gate_3d_history,
+                "3D gate: within the radius of any of the track's last N 3D positions")
+      ->capture_default_str();
   c->add_option("--max-age", t.max_age, "frames a lost confirmed track survives")
       ->capture_default_str();
   c->add_option("--n-init", t.n_init, "hits to confirm a track")->capture_default_str();

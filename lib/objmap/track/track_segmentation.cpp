@@ -16,7 +16,8 @@ namespace objmap::track {
 namespace fs = std::filesystem;
 
 TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
-                               const FrameImage& image, const TrackProgress& progress) {
+                               const FrameImage& image, const TrackProgress& progress,
+                               const FramePositionsFn& positions) {
   options.check();
   const std::string where = input.source.empty() ? "segmentation" : input.source;
   require(!input.frames.empty(), where, "no frame; expected at least one frame of detections");
@@ -29,6 +30,11 @@ TrackResult track_segmentation(const segmentation::Segmentation& input, const Tr
   require(!appearance || static_cast<bool>(image), "track_segmentation",
           "appearance is on but no image source was given; expected rgb images or "
           "use_appearance = false");
+  const bool gate_3d = options.tracker.use_gate_3d;
+  require(!gate_3d || static_cast<bool>(positions), "track_segmentation",
+          "the 3D gate is on but no position source was given; expected depth and a trajectory "
+          "or use_gate_3d = false");
+  TrackResult result;
 
   // 1. Online DeepSORT over the frames in time order.
   Tracker tracker(options.tracker);
@@ -47,7 +53,27 @@ TrackResult track_segmentation(const segmentation::Segmentation& input, const Tr
       if (appearance) d.descriptor = colour_descriptor(bgr, inst, options.tracker.appearance);
       detections.push_back(std::move(d));
     }
-    associations[f] = tracker.step(detections);
+    if (gate_3d) {
+      const FramePositions p = positions(f);
+      ++(p.has_pose ? result.frames_with_pose : result.frames_without_pose);
+      if (p.has_pose) {
+        require(p.instances.size() == detections.size(), "track_segmentation",
+                "the position source gave " + std::to_string(p.instances.size()) +
+                    " positions for a frame of " + std::to_string(detections.size()) +
+                    " instances; expected one per instance");
+        for (std::size_t i = 0; i < detections.size(); ++i) {
+          const InstancePosition& ip = p.instances[i];
+          detections[i].point_in_world = ip.point_in_world;
+          if (ip.point_in_world) {
+            ++result.instances_with_position;
+            if (ip.mask_from_box) ++result.instances_mask_from_box;
+          }
+          if (ip.status == PositionStatus::kNoMaskFromBox) ++result.instances_no_mask_from_box;
+          if (ip.status == PositionStatus::kTooFewDepthPixels) ++result.instances_few_depth_pixels;
+        }
+      }
+    }
+    associations[f] = tracker.step(detections, frame.timestamp);
     if (progress) progress(f + 1, input.frames.size());
   }
 
@@ -69,12 +95,12 @@ TrackResult track_segmentation(const segmentation::Segmentation& input, const Tr
     output_id[order[i].second] = static_cast<int>(i) + 1;
 
   // 3. Track ids into the instances, and the per-track summary.
-  TrackResult result;
   result.tracked = input;
   result.frames = input.frames.size();
   result.instances = instances;
   result.tracks_started = static_cast<std::size_t>(started);
   result.used_appearance = appearance;
+  result.used_gate_3d = gate_3d;
   result.tracks.resize(order.size());
   std::vector<std::map<std::string, int>> votes(order.size());
   for (std::size_t f = 0; f < associations.size(); ++f) {
@@ -117,6 +143,16 @@ std::string tracks_json(const TrackResult& r) {
   out["instances_tracked"] = r.instances_tracked;
   out["tracks_started"] = r.tracks_started;
   out["appearance"] = r.used_appearance;
+  if (r.used_gate_3d) {
+    nlohmann::ordered_json g;
+    g["frames_with_pose"] = r.frames_with_pose;
+    g["frames_without_pose"] = r.frames_without_pose;
+    g["instances_with_position"] = r.instances_with_position;
+    g["instances_mask_from_box"] = r.instances_mask_from_box;
+    g["instances_no_mask_from_box"] = r.instances_no_mask_from_box;
+    g["instances_few_depth_pixels"] = r.instances_few_depth_pixels;
+    out["gate_3d"] = g;
+  }
   nlohmann::ordered_json tracks = nlohmann::ordered_json::array();
   for (const TrackSummary& s : r.tracks) {
     nlohmann::ordered_json t;

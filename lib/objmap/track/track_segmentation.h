@@ -8,6 +8,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "objmap/segmentation/types.h"
+#include "objmap/track/position_3d.h"
 #include "objmap/track/tracker.h"
 
 // Offline tracking of a whole segmentation (`objmap track`): the frames in time order through the
@@ -40,6 +41,15 @@ struct TrackResult {
   std::size_t instances_tracked = 0;  // instances given a track id
   std::size_t tracks_started = 0;     // tentative tracks created (confirmed or not)
   bool used_appearance = false;
+  // 3D gate (options.tracker.use_gate_3d): frames with a pose (and depth), frames without one
+  // (tracked without the gate), instances given a 3D position, and of the others why not.
+  bool used_gate_3d = false;
+  std::size_t frames_with_pose = 0;
+  std::size_t frames_without_pose = 0;
+  std::size_t instances_with_position = 0;
+  std::size_t instances_mask_from_box = 0;     // positions made through box_mask.h
+  std::size_t instances_no_mask_from_box = 0;  // box-only instances whose box gave no mask
+  std::size_t instances_few_depth_pixels = 0;  // masks with too few valid depth pixels
 };
 
 // The rgb image (CV_8UC3 BGR) of frame `index` of the segmentation; called once per frame, in
@@ -47,14 +57,20 @@ struct TrackResult {
 using FrameImage = std::function<cv::Mat(std::size_t index)>;
 using TrackProgress = std::function<void(std::size_t done, std::size_t total)>;
 
-// Tracks the instances of `input` (frames sorted by timestamp; each frame is one time step).
-// Throws InputError when the segmentation has no frame or no instance at all, and for bad options.
+// Tracks the instances of `input` (frames sorted by timestamp; each frame is one time step, its
+// timestamp the tracker's time). `positions` gives the instances' 3D positions, required when
+// options.tracker.use_gate_3d (see depth_positions). Throws InputError when the segmentation has
+// no frame or no instance at all, and for bad options.
 TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
-                               const FrameImage& image = {}, const TrackProgress& progress = {});
+                               const FrameImage& image = {}, const TrackProgress& progress = {},
+                               const FramePositionsFn& positions = {});
 
 // tracks.json: {"frames":N,"instances":N,"instances_tracked":N,"tracks_started":N,
 // "appearance":bool,"tracks":[{"id","class","first_frame","last_frame","first_timestamp",
-// "last_timestamp","length"}]} (deterministic).
+// "last_timestamp","length"}]} (deterministic); with the 3D gate also
+// "gate_3d":{"frames_with_pose",
+// "frames_without_pose","instances_with_position","instances_mask_from_box",
+// "instances_no_mask_from_box","instances_few_depth_pixels"} before "tracks".
 std::string tracks_json(const TrackResult& result);
 
 // Length statistics of the confirmed tracks (frames labelled per track).

@@ -65,6 +65,13 @@ void TrackerOptions::check() const {
   require(std::isfinite(min_score), "TrackerOptions.min_score", "must be finite");
   require(std::isfinite(min_height_px) && min_height_px >= 0, "TrackerOptions.min_height_px",
           "must be >= 0, got " + std::to_string(min_height_px));
+  require(std::isfinite(gate_3d_m) && gate_3d_m > 0, "TrackerOptions.gate_3d_m",
+          "must be > 0 metres, got " + std::to_string(gate_3d_m));
+  require(std::isfinite(gate_3d_speed_mps) && gate_3d_speed_mps >= 0,
+          "TrackerOptions.gate_3d_speed_mps",
+          "must be >= 0 m/s, got " + std::to_string(gate_3d_speed_mps));
+  require(gate_3d_history >= 1, "TrackerOptions.gate_3d_history",
+          "must be >= 1, got " + std::to_string(gate_3d_history));
 }
 
 std::string Track::class_name() const {
@@ -91,11 +98,19 @@ Tracker::Tracker(const TrackerOptions& options) : options_(options), kalman_(opt
   options_.check();
 }
 
-void Tracker::match(const std::vector<Detection>& detections, Matches& matches,
+void Tracker::match(const std::vector<Detection>& detections, double timestamp_s, Matches& matches,
                     std::vector<int>& unmatched_tracks,
                     std::vector<int>& unmatched_detections) const {
-  const auto class_ok = [&](const Track& t, const Detection& d) {
-    return !options_.same_class_only || t.class_name() == d.class_name;
+  // Class and 3D gates: a pair that fails either may not match in any stage.
+  const auto pair_ok = [&](const Track& t, const Detection& d) {
+    if (options_.same_class_only && t.class_name() != d.class_name) return false;
+    if (!options_.use_gate_3d || t.points_in_world.empty() || !d.point_in_world) return true;
+    for (const auto& [time_s, point] : t.points_in_world) {
+      const double elapsed_s = std::max(0.0, timestamp_s - time_s);
+      const double radius_m = std::max(options_.gate_3d_m, options_.gate_3d_speed_mps * elapsed_s);
+      if ((*d.point_in_world - point).norm() <= radius_m) return true;
+    }
+    return false;
   };
 
   // Cascade cost (DeepSORT eqs 1-3, 5): appearance = smallest cosine distance to the track's
@@ -111,7 +126,7 @@ void Tracker::match(const std::vector<Detection>& detections, Matches& matches,
       for (std::size_t c = 0; c < di.size(); ++c) {
         const Detection& d = detections[di[c]];
         double value = maha[c];
-        bool admissible = maha[c] <= options_.gating_threshold && class_ok(t, d);
+        bool admissible = maha[c] <= options_.gating_threshold && pair_ok(t, d);
         if (options_.use_appearance) {
           double cosine = 1.0;
           for (const Descriptor& sample : t.gallery)
@@ -133,8 +148,8 @@ void Tracker::match(const std::vector<Detection>& detections, Matches& matches,
       const segmentation::Box predicted = t.predicted_box();
       for (std::size_t c = 0; c < di.size(); ++c) {
         const Detection& d = detections[di[c]];
-        cost(r, c) = t.time_since_update > 1 || !class_ok(t, d) ? kInfiniteCost
-                                                                : 1.0 - box_iou(predicted, d.box);
+        cost(r, c) = t.time_since_update > 1 || !pair_ok(t, d) ? kInfiniteCost
+                                                               : 1.0 - box_iou(predicted, d.box);
       }
     }
     return cost;
@@ -178,7 +193,8 @@ void Tracker::match(const std::vector<Detection>& detections, Matches& matches,
   unmatched_detections = detections_left;
 }
 
-std::vector<Association> Tracker::step(const std::vector<Detection>& all_detections) {
+std::vector<Association> Tracker::step(const std::vector<Detection>& all_detections,
+                                       double timestamp_s) {
   // Detections that are tracked at all (score and height), with their index in the input.
   std::vector<Detection> detections;
   std::vector<int> input_index;
@@ -203,7 +219,7 @@ std::vector<Association> Tracker::step(const std::vector<Detection>& all_detecti
 
   Matches matches;
   std::vector<int> unmatched_tracks, unmatched_detections;
-  match(detections, matches, unmatched_tracks, unmatched_detections);
+  match(detections, timestamp_s, matches, unmatched_tracks, unmatched_detections);
 
   std::vector<Association> out(all_detections.size());
   const auto add_hit = [&](Track& t, const Detection& d, int detection) {
@@ -211,6 +227,11 @@ std::vector<Association> Tracker::step(const std::vector<Detection>& all_detecti
     t.time_since_update = 0;
     ++t.class_votes[d.class_name];
     if (d.descriptor) t.new_samples.push_back(*d.descriptor);
+    if (d.point_in_world) {
+      t.points_in_world.emplace_back(timestamp_s, *d.point_in_world);
+      while (static_cast<int>(t.points_in_world.size()) > options_.gate_3d_history)
+        t.points_in_world.pop_front();
+    }
     if (t.track_state == TrackState::kTentative && t.hits >= options_.n_init)
       t.track_state = TrackState::kConfirmed;
     Association& a = out[input_index[detection]];
