@@ -28,4 +28,6 @@ echo "== objmap eval ate --gt $scene/groundtruth.txt --est $scene/estimated.txt"
 "$objmap" eval ate --gt "$scene/groundtruth.txt" --est "$scene/estimated.txt"
 echo
 echo "The object map is in $run: objects.json, objects/*.ply, map_semantic.ply (open the PLY files"
-echo "in CloudCompare, MeshLab or Open3D); a top view in $run/report/topview.png."
+echo "in CloudCompare, MeshLab or Open3D)."
+echo "The report (one self-contained page: top view, trajectory, thumbnails, tables):"
+echo "  $run/report/report.html"

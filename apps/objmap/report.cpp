@@ -1,110 +1,388 @@
-// objmap report: a picture and a summary of a fuse run (the top view of the semantic map with the
-// objects drawn on it, and a Markdown table of the objects).
+// objmap report: one self-contained HTML page (and a Markdown summary) of a fuse run: the semantic
+// map seen from above with the objects, the trajectories coloured by their error, the error over
+// time, a thumbnail per object and the paper's tables.
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <sstream>
+#include <optional>
 
 #include "command.h"
 #include "objmap/core/error.h"
+#include "objmap/eval/ate.h"
+#include "objmap/eval/objects.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/objects_json.h"
 #include "objmap/io/ply.h"
+#include "objmap/io/trajectory.h"
+#include "objmap/report/page.h"
+#include "objmap/report/plots.h"
+#include "objmap/report/thumbnail.h"
 #include "objmap/report/topview.h"
 
 namespace objmap::app {
 namespace {
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 struct ReportOptions {
-  fs::path run;            // fuse output folder
-  fs::path out;            // default RUN/report
-  std::string up = "z";    // world up axis
-  double pixel_m = 0.005;  // top view resolution
+  fs::path run;         // fuse output folder
+  fs::path out;         // default RUN/report
+  fs::path gt;          // ground-truth trajectory; default the dataset's groundtruth.txt
+  fs::path corrected;   // corrected trajectory; default RUN/trajectory_corrected.txt if present
+  fs::path gt_objects;  // ground-truth objects; default the dataset's objects_gt.json if present
+  fs::path reference;   // or a reference map RUN_GT/objects.json
+  std::string gt_class = "object";  // class of the objects of a cuboid list
+  std::string up = "z";             // world up axis
+  double pixel_m = 0.005;           // top view resolution
+  int thumbnail_px = 160;           // thumbnail side
 };
 
+// The series colours: the casing of a coloured trajectory and its line in the error plot.
+const Rgb kGtColor{70, 70, 70};
+const Rgb kEstColor{20, 20, 20};
+const Rgb kCorrectedColor{150, 50, 175};
+
+json read_json(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "cannot open");
+  try {
+    return json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
+  }
+}
+
+std::string png_bytes(const cv::Mat& image) {
+  std::vector<unsigned char> png;
+  cv::imencode(".png", image, png);
+  return std::string(png.begin(), png.end());
+}
+
+// A path from run.json "inputs.<key>.path", when there.
+std::optional<fs::path> input_path(const json& run, const std::string& key) {
+  if (!run.is_object() || !run.contains("inputs") || !run["inputs"].contains(key)) return {};
+  const json& entry = run["inputs"][key];
+  if (!entry.is_object() || !entry.contains("path") || !entry["path"].is_string()) return {};
+  return fs::path(entry["path"].get<std::string>());
+}
+
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  return fs::equivalent(a, b, ec) && !ec;
+}
+
+// One trajectory against the ground truth: the ATE and the plot series (aligned poses, error per
+// pose; poses without a partner NaN).
+report::PlotSeries aligned_series(const std::string& name, const Rgb& color,
+                                  const eval::AteResult& ate) {
+  report::PlotSeries s;
+  s.name = name;
+  s.color = color;
+  const std::size_t n = ate.aligned.size();
+  s.errors_m.assign(n, std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t i = 0; i < ate.matches.size(); ++i)
+    s.errors_m[ate.matches[i].est_index] = ate.errors_m[i];
+  for (const StampedPose& p : ate.aligned.poses) {
+    s.stamps_s.push_back(p.timestamp);
+    s.positions_m.push_back(p.world_from_cam.translation());
+  }
+  return s;
+}
+
 void run_report(const ReportOptions& options) {
-  const fs::path objects_file = options.run / "objects.json";
-  const fs::path map_file = options.run / "map_semantic.ply";
   require(options.up == "x" || options.up == "y" || options.up == "z", "--up",
           "'" + options.up + "'; expected x, y or z");
-  const auto objects = io::read_objects_json(objects_file);
-  const PointCloud map = io::read_ply(map_file);
+  require(options.thumbnail_px >= 32 && options.thumbnail_px <= 1024, "--thumbnail",
+          std::to_string(options.thumbnail_px) + "; expected 32 to 1024 pixels");
+  const int up_axis = options.up[0] - 'x';
+  report::PageContent page;
+  page.title = "objmap report: " + fs::absolute(options.run).lexically_normal().filename().string();
+  if (page.title == "objmap report: ")
+    page.title += fs::absolute(options.run).lexically_normal().parent_path().filename().string();
+  page.run_path = options.run.string();
 
-  // 1. The top view with the objects.
+  // 1. The run: objects (required), run.json (counts, inputs, Table 6). Every small input is read
+  //    before the big ones (the maps), so that a bad one fails fast.
+  const fs::path objects_file = options.run / "objects.json";
+  const std::vector<io::MappedObject> objects = io::read_objects_json(objects_file);
+  const json objects_doc = read_json(objects_file);
+  json run;
+  const fs::path run_file = options.run / "run.json";
+  if (fs::exists(run_file)) {
+    run = read_json(run_file);
+    if (run.contains("counts") && run["counts"].is_object()) {
+      const json& c = run["counts"];
+      report::RunCounts counts;
+      counts.frames = c.value("frames", 0LL);
+      counts.keyframes = c.value("keyframes", 0LL);
+      counts.instances = c.value("instances", 0LL);
+      counts.objects_confirmed = c.value("objects_confirmed", 0LL);
+      counts.objects_before_confirmation = c.value("objects_before_confirmation", 0LL);
+      page.counts = counts;
+    }
+    if (run.contains("points")) page.points = eval::read_point_counts(run_file);
+  } else {
+    page.notes.push_back(run_file.string() + " not found: no counts, no trajectory, no Table 6");
+  }
+  page.inputs.push_back("run: " + options.run.string());
+
+  // 2. Trajectories: the run's estimate, the ground truth, the corrected one.
+  std::optional<Trajectory> est, gt, corrected;
+  if (const auto est_path = input_path(run, "trajectory")) {
+    if (fs::exists(*est_path)) {
+      est = io::read_trajectory(*est_path);
+      page.inputs.push_back("estimated trajectory: " + est_path->string());
+    } else {
+      page.notes.push_back("the run's trajectory " + est_path->string() +
+                           " is not there: no trajectory plots");
+    }
+  }
+  fs::path gt_path = options.gt;
+  if (gt_path.empty()) {
+    if (const auto dataset = input_path(run, "dataset")) {
+      const fs::path candidate = *dataset / "groundtruth.txt";
+      const auto est_path = input_path(run, "trajectory");
+      if (fs::exists(candidate) && !(est_path && same_file(candidate, *est_path)))
+        gt_path = candidate;
+      else if (fs::exists(candidate))
+        page.notes.push_back(
+            "the run was fused with the dataset's groundtruth.txt itself: no "
+            "trajectory error to show (give --gt F to compare with another)");
+    }
+  }
+  if (!gt_path.empty()) {
+    gt = io::read_trajectory(gt_path);
+    page.inputs.push_back("ground-truth trajectory: " + gt_path.string());
+  }
+  fs::path corrected_path = options.corrected;
+  if (corrected_path.empty() && fs::exists(options.run / "trajectory_corrected.txt"))
+    corrected_path = options.run / "trajectory_corrected.txt";
+  if (!corrected_path.empty()) {
+    corrected = io::read_trajectory(corrected_path);
+    page.inputs.push_back("corrected trajectory: " + corrected_path.string());
+  }
+
+  // 3. ATE per pose and the plots.
+  struct Estimate {
+    std::string name;
+    const std::optional<Trajectory>* trajectory;
+    Rgb color;
+  };
+  const Estimate estimates[] = {{"estimated", &est, kEstColor},
+                                {"corrected", &corrected, kCorrectedColor}};
+  std::vector<report::PlotSeries> series;
+  if (gt && (est || corrected)) {
+    report::PlotSeries g;
+    g.name = "ground truth";
+    g.color = kGtColor;
+    g.dashed = true;
+    std::vector<report::PlotSeries> coloured;
+    double t0 = std::numeric_limits<double>::infinity(), t1 = -t0;
+    for (const Estimate& e : estimates) {
+      const auto& [name, traj, color] = e;
+      if (!*traj) continue;
+      const eval::AteResult ate = eval::evaluate_ate(*gt, **traj, eval::AteOptions{});
+      page.ate.push_back({name, gt_path.string(), (*traj)->source, ate.stats});
+      coloured.push_back(aligned_series(name, color, ate));
+      for (const eval::StampMatch& m : ate.matches) {
+        t0 = std::min(t0, gt->poses[m.gt_index].timestamp);
+        t1 = std::max(t1, gt->poses[m.gt_index].timestamp);
+      }
+    }
+    for (const StampedPose& p : gt->poses)  // the ground truth over the compared span
+      if (p.timestamp >= t0 && p.timestamp <= t1) {
+        g.stamps_s.push_back(p.timestamp);
+        g.positions_m.push_back(p.world_from_cam.translation());
+      }
+    series.push_back(g);
+    series.insert(series.end(), coloured.begin(), coloured.end());
+  } else {
+    for (const Estimate& e : estimates) {
+      const auto& [name, traj, color] = e;
+      if (!*traj) continue;
+      report::PlotSeries s;
+      s.name = name;
+      s.color = color;
+      for (const StampedPose& p : (*traj)->poses) {
+        s.stamps_s.push_back(p.timestamp);
+        s.positions_m.push_back(p.world_from_cam.translation());
+      }
+      series.push_back(s);
+    }
+  }
+  report::PlotOptions plot_options;
+  plot_options.up_axis = up_axis;
+  if (!series.empty()) {
+    page.trajectory_plot.file = "trajectory.svg";
+    page.trajectory_plot.bytes = report::trajectory_svg(series, plot_options);
+    page.trajectory_plot.caption =
+        page.ate.empty()
+            ? "Camera trajectory seen from above (" + options.up + " up)."
+            : "Trajectories seen from above (" + options.up +
+                  " up), each estimate aligned to the ground truth (Horn) and coloured by its "
+                  "absolute error; the ring marks the start.";
+  }
+  if (!page.ate.empty()) {
+    page.ate_plot.file = "ate.svg";
+    page.ate_plot.bytes = report::error_over_time_svg(series, plot_options);
+    page.ate_plot.caption = "Absolute trajectory error over time.";
+  }
+
+  // 4. Tables 3-5 against ground-truth objects (--gt-objects, --reference, or the dataset's
+  //    objects_gt.json).
+  fs::path gt_objects = options.gt_objects;
+  if (gt_objects.empty() && options.reference.empty())
+    if (const auto dataset = input_path(run, "dataset"))
+      if (fs::exists(*dataset / "objects_gt.json")) gt_objects = *dataset / "objects_gt.json";
+  if (!gt_objects.empty() || !options.reference.empty()) {
+    eval::ObjectEvalReport e;
+    e.map_source = objects_file.string();
+    std::vector<eval::ReferenceObject> reference;
+    if (!options.reference.empty()) {
+      e.mode = "reference";
+      e.reference_source = options.reference.string();
+      reference = eval::to_reference(io::read_objects_json(options.reference));
+      page.inputs.push_back("reference map: " + options.reference.string());
+    } else {
+      e.mode = "ground_truth";
+      e.reference_source = gt_objects.string();
+      reference = eval::read_objects_gt(gt_objects, options.gt_class);
+      page.inputs.push_back("ground-truth objects: " + gt_objects.string());
+    }
+    e.result = eval::evaluate_objects(objects, reference, e.options);
+    page.object_eval = e;
+  }
+
+  // 5. The top view with the objects and the camera path (in the map's frame: the run's estimate).
+  const PointCloud map = io::read_ply(options.run / "map_semantic.ply");
   report::TopViewOptions view_options;
-  view_options.up_axis = options.up[0] - 'x';
+  view_options.up_axis = up_axis;
   view_options.pixel_m = options.pixel_m;
+  view_options.fade = 0.2;
+  if (run.is_object() && run.contains("options") && run["options"].contains("map") &&
+      run["options"]["map"].contains("voxel_m") && run["options"]["map"]["voxel_m"].is_number())
+    view_options.point_size_m = run["options"]["map"]["voxel_m"].get<double>();
   std::vector<report::TopViewObject> drawn;
   for (const auto& o : objects)
     drawn.push_back({o.id, std::to_string(o.id) + " " + o.class_name, o.obb,
                      fusion::class_color(o.class_name)});
-  const report::TopView view = report::render_top_view(map, drawn, view_options);
-  std::vector<unsigned char> png;
-  cv::imencode(".png", view.image, png);
+  std::vector<report::TopViewPath> paths;
+  if (est) {
+    report::TopViewPath path;
+    path.color = Rgb{230, 0, 120};
+    for (const StampedPose& p : est->poses)
+      path.points_in_world.push_back(p.world_from_cam.translation());
+    paths.push_back(path);
+  }
+  const report::TopView view = report::render_top_view(map, drawn, view_options, paths);
+  page.topview.file = "topview.png";
+  page.topview.bytes = png_bytes(view.image);
+  page.topview.width_px = view.image.cols;
+  page.topview.height_px = view.image.rows;
+  char caption[512];
+  std::snprintf(caption, sizeof caption,
+                "map_semantic.ply seen from above (%s up, %.1f mm per pixel, %zu points): each "
+                "object's oriented box outlined in its class colour and labelled \"id class\"%s; "
+                "the bar is 1 m.",
+                options.up.c_str(), view.pixel_m * 1000, map.size(),
+                est ? ", the camera path in magenta (ring: start)" : "");
+  page.topview.caption = caption;
 
-  // 2. The summary: counts of the run, the objects table, the picture.
-  nlohmann::json run;
-  if (std::ifstream in(options.run / "run.json"); in)
-    run = nlohmann::json::parse(in, nullptr, false);
-  std::ostringstream md;
-  md << "# objmap run " << options.run.filename().string() << "\n\n";
-  if (run.is_object() && run.contains("counts")) {
-    const auto& c = run["counts"];
-    md << "Keyframes: " << c.value("keyframes", 0) << " of " << c.value("frames", 0)
-       << " frames; instances: " << c.value("instances", 0)
-       << "; objects: " << c.value("objects_confirmed", 0) << " confirmed of "
-       << c.value("objects_before_confirmation", 0) << ".\n\n";
+  // 6. A thumbnail per object, the point counts before the filters from objects.json.
+  report::ThumbnailOptions thumb_options;
+  thumb_options.size_px = options.thumbnail_px;
+  thumb_options.up_axis = up_axis;
+  if (run.is_object() && run.contains("options") && run["options"].contains("objects") &&
+      run["options"]["objects"].contains("voxel_m") &&
+      run["options"]["objects"]["voxel_m"].is_number())
+    thumb_options.point_size_m = run["options"]["objects"]["voxel_m"].get<double>();
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const io::MappedObject& o = objects[i];
+    report::PageObject p;
+    p.object = o;
+    const json& record = objects_doc["objects"][i];
+    if (record.contains("points") && record["points"].is_object()) {
+      const json& pts = record["points"];
+      if (pts.contains("raw") && pts["raw"].is_number_unsigned())
+        p.points_raw = pts["raw"].get<std::size_t>();
+      if (pts.contains("voxel_filtered") && pts["voxel_filtered"].is_number_unsigned())
+        p.points_voxel = pts["voxel_filtered"].get<std::size_t>();
+    }
+    const fs::path ply =
+        options.run / (o.ply.empty() ? "objects/" + std::to_string(o.id) + ".ply" : o.ply);
+    const PointCloud cloud = io::read_ply(ply);
+    const std::string label = std::to_string(o.id) + " " + o.class_name;
+    const cv::Mat thumb = report::render_thumbnail(cloud, label, thumb_options);
+    p.thumbnail.file = "thumbnails/" + ply.stem().string() + ".png";
+    p.thumbnail.bytes = png_bytes(thumb);
+    p.thumbnail.width_px = thumb.cols;
+    p.thumbnail.height_px = thumb.rows;
+    const Vec3 size_cm = 200.0 * o.obb.half_extent;
+    char text[256];
+    std::snprintf(text, sizeof text, "%s: %zu points, %d observations, %.0f×%.0f×%.0f cm",
+                  label.c_str(), cloud.size(), o.observations, size_cm.x(), size_cm.y(),
+                  size_cm.z());
+    p.thumbnail.caption = text;
+    page.objects.push_back(std::move(p));
   }
-  md << "![top view of the semantic map](topview.png)\n\n";
-  md << "Top view of `map_semantic.ply` (" << view.pixel_m * 1000 << " mm per pixel, " << options.up
-     << " up); each object's oriented box outlined and labelled \"id class\".\n\n";
-  md << "| id | class | x | y | z | points | observations | score |\n";
-  md << "|---:|---|---:|---:|---:|---:|---:|---:|\n";
-  std::map<std::string, int> per_class;
-  char line[256];
-  for (const auto& o : objects) {
-    std::snprintf(line, sizeof line, "| %d | %s | %.3f | %.3f | %.3f | %zu | %d | %.2f |\n", o.id,
-                  o.class_name.c_str(), o.centroid.x(), o.centroid.y(), o.centroid.z(), o.points,
-                  o.observations, o.score);
-    md << line;
-    ++per_class[o.class_name];
-  }
-  md << "\nObjects per class: ";
-  bool first = true;
-  for (const auto& [name, count] : per_class) {
-    md << (first ? "" : ", ") << name << " " << count;
-    first = false;
-  }
-  md << ".\n";
 
+  // 7. The files: the page, the summary and every picture beside them.
   const fs::path out = options.out.empty() ? options.run / "report" : options.out;
   io::StagingDir staging(out);
-  io::write_file_atomic(staging.path() / "topview.png", std::string(png.begin(), png.end()));
-  io::write_file_atomic(staging.path() / "report.md", md.str());
+  io::write_file_atomic(staging.path() / page.topview.file, page.topview.bytes);
+  for (const report::PagePicture* p : {&page.trajectory_plot, &page.ate_plot})
+    if (!p->bytes.empty()) io::write_file_atomic(staging.path() / p->file, p->bytes);
+  for (const report::PageObject& o : page.objects)
+    io::write_file_atomic(staging.path() / o.thumbnail.file, o.thumbnail.bytes);
+  io::write_file_atomic(staging.path() / "report.md", report::page_markdown(page));
+  io::write_file_atomic(staging.path() / "report.html", report::page_html(page));
   staging.commit();
-  std::printf("objects     %zu\n", objects.size());
-  std::printf("written     %s/topview.png (%dx%d), %s/report.md\n", out.c_str(), view.image.cols,
-              view.image.rows, out.c_str());
+
+  std::printf("%s\n", report::summary_line(page).c_str());
+  for (const std::string& note : page.notes) std::printf("note: %s\n", note.c_str());
+  std::printf("written     %s/{report.md, topview.png%s%s, thumbnails/ (%zu)}\n", out.c_str(),
+              page.trajectory_plot.bytes.empty() ? "" : ", trajectory.svg",
+              page.ate_plot.bytes.empty() ? "" : ", ate.svg", page.objects.size());
+  std::printf("report      %s\n", (out / "report.html").c_str());
 }
 
 void setup_report(CLI::App& app) {
   auto options = std::make_shared<ReportOptions>();
   auto* cmd = app.add_subcommand(
       "report",
-      "Pictures and a summary of a fuse run: OUT/topview.png (the semantic map seen from above "
-      "with "
-      "every object's box and label) and OUT/report.md (counts and the objects table).");
+      "A self-contained HTML page of a fuse run (OUT/report.html) and a Markdown summary with its "
+      "pictures: the semantic map seen from above with every object's box and label, the "
+      "trajectories coloured by their absolute error and the error over time (when a ground "
+      "truth is known), a thumbnail per object, and the tables (objects, objects per class, "
+      "centroid errors against ground-truth objects, point reduction).");
   cmd->add_option("--run", options->run, "the folder written by 'objmap fuse'")->required();
   cmd->add_option("--out", options->out, "output folder (default RUN/report)");
+  cmd->add_option("--gt", options->gt,
+                  "ground-truth trajectory (default: groundtruth.txt of the run's dataset, unless "
+                  "the run was fused with that very file)");
+  cmd->add_option("--corrected", options->corrected,
+                  "corrected trajectory (default: RUN/trajectory_corrected.txt when present)");
+  auto* gt_objects = cmd->add_option(
+      "--gt-objects", options->gt_objects,
+      "ground-truth objects for Tables 3-5 (default: objects_gt.json of the run's dataset when "
+      "present): objects_gt.json or a cuboid list");
+  cmd->add_option("--reference", options->reference,
+                  "or a reference map RUN_GT/objects.json (fused with the ground-truth trajectory)")
+      ->excludes(gt_objects);
+  cmd->add_option("--gt-class", options->gt_class, "class of the objects of a cuboid list")
+      ->capture_default_str();
   cmd->add_option("--up", options->up, "world axis that points up: x, y or z")
       ->capture_default_str();
   cmd->add_option("--pixel", options->pixel_m, "top view resolution, metres per pixel")
+      ->capture_default_str();
+  cmd->add_option("--thumbnail", options->thumbnail_px, "thumbnail side, pixels")
       ->capture_default_str();
   cmd->callback([options] { run_report(*options); });
 }

@@ -1,44 +1,212 @@
-// objmap report on a fuse run of a synthetic scene.
+// objmap report on a fuse run of a synthetic scene (the cached seed-3 run of tests/integration).
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "objmap/eval/ate.h"
 #include "objmap/io/objects_json.h"
+#include "objmap/io/trajectory.h"
 #include "support/test_support.h"
+#include "xml_check.h"
 
 namespace objmap::test {
 namespace {
 
-TEST(ReportCli, WritesATopViewAndOneTableRowPerObject) {
-  RunResult r;
-  const fs::path scene = cached_output(
-      "seed3-orbit60-scene", {"synth", "--out", "{OUT}", "--seed", "3", "--orbit-speed", "60"}, &r);
-  ASSERT_TRUE(fs::exists(scene)) << r.err;
-  const fs::path run = cached_output(
-      "seed3-orbit60-fuse",
-      {"fuse", "--dataset", scene.string(), "--trajectory", (scene / "groundtruth.txt").string(),
-       "--segmentation", (scene / "segmentation").string(), "--out", "{OUT}"},
-      &r);
-  ASSERT_TRUE(fs::exists(run)) << r.err;
-  TempDir dir;
-  r = run_objmap({"report", "--run", run.string(), "--out", (dir / "rep").string()});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const cv::Mat image = cv::imread((dir / "rep" / "topview.png").string(), cv::IMREAD_COLOR);
-  ASSERT_FALSE(image.empty());
-  EXPECT_GT(image.cols, 200);
-  const auto objects = io::read_objects_json(run / "objects.json");
-  const std::string md = read_text(dir / "rep" / "report.md");
-  std::size_t rows = 0;
-  for (const auto& o : objects)
-    rows += md.find("| " + std::to_string(o.id) + " | " + o.class_name + " |") != std::string::npos;
-  EXPECT_EQ(rows, objects.size());
+struct Cached {
+  fs::path scene, run;
+  RunResult result;
+};
+
+const Cached& cached_run() {
+  static Cached c = [] {
+    Cached r;
+    r.scene =
+        cached_output("seed3-orbit60-scene",
+                      {"synth", "--out", "{OUT}", "--seed", "3", "--orbit-speed", "60"}, &r.result);
+    if (!fs::exists(r.scene)) return r;
+    r.run = cached_output("seed3-orbit60-fuse",
+                          {"fuse", "--dataset", r.scene.string(), "--trajectory",
+                           (r.scene / "groundtruth.txt").string(), "--segmentation",
+                           (r.scene / "segmentation").string(), "--out", "{OUT}"},
+                          &r.result);
+    return r;
+  }();
+  return c;
 }
 
-TEST(ReportCli, MissingRunIsExit2) {
+// A test decoder, independent of the library's encoder.
+std::string base64_decode(const std::string& text) {
+  std::string out;
+  unsigned buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    int v = -1;
+    if (c >= 'A' && c <= 'Z')
+      v = c - 'A';
+    else if (c >= 'a' && c <= 'z')
+      v = c - 'a' + 26;
+    else if (c >= '0' && c <= '9')
+      v = c - '0' + 52;
+    else if (c == '+')
+      v = 62;
+    else if (c == '/')
+      v = 63;
+    else
+      continue;  // padding
+    buffer = buffer << 6 | v;
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += static_cast<char>(buffer >> bits & 0xff);
+    }
+  }
+  return out;
+}
+
+// Every PNG embedded in the page, decoded.
+std::vector<cv::Mat> embedded_pngs(const std::string& html) {
+  std::vector<cv::Mat> images;
+  const std::string key = "src=\"data:image/png;base64,";
+  for (std::size_t at = html.find(key); at != std::string::npos; at = html.find(key, at + 1)) {
+    const std::size_t start = at + key.size();
+    const std::string bytes = base64_decode(html.substr(start, html.find('"', start) - start));
+    images.push_back(
+        cv::imdecode(std::vector<uchar>(bytes.begin(), bytes.end()), cv::IMREAD_COLOR));
+  }
+  return images;
+}
+
+// A copy of the run (big files linked) whose run.json names `trajectory` as the estimate, so that
+// the dataset's groundtruth.txt is a different file: the ground truth of the report.
+fs::path run_with_estimate(const fs::path& run, const fs::path& trajectory, const fs::path& dir) {
+  const fs::path copy = dir / "run";
+  fs::create_directories(copy);
+  for (const char* name : {"objects.json", "map_semantic.ply", "objects"})
+    fs::create_symlink(fs::absolute(run / name), copy / name);
+  auto doc = nlohmann::json::parse(read_text(run / "run.json"));
+  doc["inputs"]["trajectory"]["path"] = fs::absolute(trajectory).string();
+  write_text(copy / "run.json", doc.dump(1));
+  return copy;
+}
+
+TEST(ReportCli, PageHasOneThumbnailPerObjectAndEveryPictureDecodes) {
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
   TempDir dir;
-  const auto r = run_objmap({"report", "--run", (dir / "nothing").string()});
+  const fs::path out = dir / "rep";
+  const RunResult r = run_objmap({"report", "--run", c.run.string(), "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto objects = io::read_objects_json(c.run / "objects.json");
+  ASSERT_EQ(objects.size(), 12u);
+
+  // The page: well-formed, one thumbnail figure per object, every picture embedded and decoding.
+  const std::string html = read_text(out / "report.html");
+  EXPECT_EQ(xml_problem(html), "");
+  EXPECT_EQ(count_of(html, "data-object-id=\""), objects.size());
+  for (const auto& o : objects)
+    EXPECT_NE(html.find("data-object-id=\"" + std::to_string(o.id) + "\""), std::string::npos);
+  const auto images = embedded_pngs(html);
+  ASSERT_EQ(images.size(), objects.size() + 1);  // the top view and the thumbnails
+  EXPECT_GT(images[0].cols, 300);
+  for (std::size_t i = 1; i < images.size(); ++i) {
+    ASSERT_FALSE(images[i].empty()) << i;
+    EXPECT_EQ(images[i].size(), cv::Size(160, 160)) << i;
+  }
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);  // nothing from the network
+
+  // The files beside it.
+  const cv::Mat top = cv::imread((out / "topview.png").string(), cv::IMREAD_COLOR);
+  EXPECT_EQ(top.size(), images[0].size());
+  std::size_t thumbnails = 0;
+  for (const auto& entry : fs::directory_iterator(out / "thumbnails")) {
+    const cv::Mat t = cv::imread(entry.path().string(), cv::IMREAD_COLOR);
+    EXPECT_EQ(t.size(), cv::Size(160, 160)) << entry.path();
+    ++thumbnails;
+  }
+  EXPECT_EQ(thumbnails, objects.size());
+  const std::string md = read_text(out / "report.md");
+  for (const auto& o : objects)
+    EXPECT_NE(md.find("| " + std::to_string(o.id) + " | " + o.class_name + " |"), std::string::npos)
+        << o.id;
+
+  // Fused with groundtruth.txt itself: the trajectory alone, no error plot; the scene's
+  // objects_gt.json gives Tables 3-5 (all 12 objects matched, as the integration test asserts).
+  const std::string svg = read_text(out / "trajectory.svg");
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(count_of(svg, "<polyline"), 1u);
+  EXPECT_FALSE(fs::exists(out / "ate.svg"));
+  EXPECT_NE(r.out.find("note: the run was fused with the dataset's groundtruth.txt"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(html.find("Table 3: number of objects per class"), std::string::npos);
+  EXPECT_NE(r.out.find("12/12 ground-truth objects matched"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(out.string() + "/report.html"), std::string::npos) << r.out;
+}
+
+TEST(ReportCli, TrajectoriesAgainstTheGroundTruthThenTheCorrectedOne) {
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  const fs::path run = run_with_estimate(c.run, c.scene / "estimated.txt", dir.path());
+  RunResult r = run_objmap({"report", "--run", run.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string svg = read_text(run / "report" / "trajectory.svg");
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(count_of(svg, "<polyline"), 2u);  // ground truth + estimate
+  std::string ate = read_text(run / "report" / "ate.svg");
+  EXPECT_EQ(xml_problem(ate), "");
+  EXPECT_EQ(count_of(ate, "<polyline"), 1u);
+  // The ATE shown is the one of eval ate (same association and alignment).
+  const auto expected = eval::evaluate_ate(io::read_trajectory(c.scene / "groundtruth.txt"),
+                                           io::read_trajectory(c.scene / "estimated.txt"), {});
+  char rmse[64];
+  std::snprintf(rmse, sizeof rmse, "ATE RMSE estimated %.4f m (%zu pose pairs)",
+                expected.stats.rmse, expected.stats.count);
+  EXPECT_GT(expected.stats.rmse, 0.005);
+  EXPECT_NE(r.out.find(rmse), std::string::npos) << r.out << "\nexpected: " << rmse;
+  std::snprintf(rmse, sizeof rmse, "estimated (RMSE %.4f m)", expected.stats.rmse);
+  EXPECT_NE(ate.find(rmse), std::string::npos) << rmse;  // the error plot's legend
+
+  // A corrected trajectory beside the run: a third line, a second error curve.
+  Trajectory corrected = io::read_trajectory(c.scene / "groundtruth.txt");
+  for (std::size_t i = 0; i < corrected.poses.size(); ++i)
+    corrected.poses[i].world_from_cam.translation().x() += i % 2 ? 0.004 : -0.004;
+  io::write_trajectory(run / "trajectory_corrected.txt", corrected);
+  r = run_objmap({"report", "--run", run.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  svg = read_text(run / "report" / "trajectory.svg");
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(count_of(svg, "<polyline"), 3u);
+  ate = read_text(run / "report" / "ate.svg");
+  EXPECT_EQ(xml_problem(ate), "");
+  EXPECT_EQ(count_of(ate, "<polyline"), 2u);
+  EXPECT_NE(r.out.find(", corrected 0.004"), std::string::npos) << r.out;
+  EXPECT_EQ(xml_problem(read_text(run / "report" / "report.html")), "");
+}
+
+TEST(ReportCli, RunWithoutObjectsJsonIsExit2NamingTheFile) {
+  TempDir dir;
+  fs::create_directories(dir / "run");
+  write_text(dir / "run" / "run.json", "{}");
+  const auto r = run_objmap({"report", "--run", (dir / "run").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("objects.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find((dir / "run" / "objects.json").string()), std::string::npos) << r.err;
+  EXPECT_EQ(count_of(r.err, "\n"), 1u) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "run" / "report"));
+}
+
+TEST(ReportCli, BadGroundTruthIsExit2NamingTheLine) {
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  write_text(dir / "gt.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n");
+  const auto r = run_objmap({"report", "--run", c.run.string(), "--gt", (dir / "gt.txt").string(),
+                             "--out", (dir / "rep").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find((dir / "gt.txt").string() + ":2"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "rep"));
 }
 
 TEST(ObjectsJson, MissingFieldIsNamed) {

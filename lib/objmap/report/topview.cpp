@@ -17,6 +17,11 @@ void TopViewOptions::check() const {
   require(margin_px >= 0 && margin_px <= 1000, "TopViewOptions.margin_px", "must be in [0, 1000]");
   require(clip_percent >= 0 && clip_percent < 50, "TopViewOptions.clip_percent",
           "must be in [0, 50)");
+  require(std::isfinite(point_size_m) && point_size_m >= 0, "TopViewOptions.point_size_m",
+          "must be >= 0");
+  require(fade >= 0 && fade <= 0.9, "TopViewOptions.fade", "must be in [0, 0.9]");
+  require(label_scale > 0.1 && label_scale <= 3, "TopViewOptions.label_scale",
+          "must be in (0.1, 3]");
 }
 
 namespace {
@@ -37,7 +42,7 @@ double percentile(std::vector<float>& v, double p) {
 }  // namespace
 
 TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
-                        const TopViewOptions& options) {
+                        const TopViewOptions& options, const std::vector<TopViewPath>& paths) {
   options.check();
   int a = 0, b = 1;
   horizontal_axes(options.up_axis, a, b);
@@ -59,6 +64,13 @@ TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject
     b0 = std::min(b0, o.obb.center[b] - 0.2);
     b1 = std::max(b1, o.obb.center[b] + 0.2);
   }
+  for (const TopViewPath& path : paths)
+    for (const Vec3& p : path.points_in_world) {
+      a0 = std::min(a0, p[a] - 0.05);
+      a1 = std::max(a1, p[a] + 0.05);
+      b0 = std::min(b0, p[b] - 0.05);
+      b1 = std::max(b1, p[b] + 0.05);
+    }
   if (a1 - a0 < 0.1) a1 = a0 + 0.1;
   if (b1 - b0 < 0.1) b1 = b0 + 0.1;
   const double extent = std::max(a1 - a0, b1 - b0);
@@ -75,23 +87,35 @@ TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject
     return cv::Point2d((pa - view.origin_a) / pixel_m, (view.origin_b - pb) / pixel_m);
   };
 
-  // 2. Z-buffer: the highest point of each pixel.
+  // 2. Z-buffer: the highest point of each pixel; each point a square of point_size_m.
   cv::Mat top(height, width, CV_32F, cv::Scalar(-std::numeric_limits<float>::infinity()));
   const bool colors = cloud.has_colors();
+  const int half =
+      std::clamp(static_cast<int>(std::lround(options.point_size_m / pixel_m / 2)), 0, 8);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const auto& p = cloud.points[i];
     const cv::Point2d px = to_pixel(p[a], p[b]);
     const int u = static_cast<int>(px.x), v = static_cast<int>(px.y);
-    if (u < 0 || v < 0 || u >= width || v >= height) continue;
-    float& z = top.at<float>(v, u);
-    if (p[up] <= z) continue;
-    z = p[up];
+    if (u + half < 0 || v + half < 0 || u - half >= width || v - half >= height) continue;
     const Rgb c = colors ? cloud.colors[i] : Rgb{90, 90, 90};
-    view.image.at<cv::Vec3b>(v, u) = cv::Vec3b(c.b, c.g, c.r);
+    for (int vv = std::max(0, v - half); vv <= std::min(height - 1, v + half); ++vv)
+      for (int uu = std::max(0, u - half); uu <= std::min(width - 1, u + half); ++uu) {
+        float& z = top.at<float>(vv, uu);
+        if (p[up] <= z) continue;
+        z = p[up];
+        view.image.at<cv::Vec3b>(vv, uu) = cv::Vec3b(c.b, c.g, c.r);
+      }
   }
+  // Faded towards white, so that boxes, labels and paths stand out.
+  if (options.fade > 0)
+    view.image.convertTo(view.image, CV_8UC3, 1.0 - options.fade, 255.0 * options.fade);
 
-  // 3. Objects: the outline of each oriented box seen from above, and its label.
+  // 3. Paths (the camera), under the objects.
+  for (const TopViewPath& path : paths) draw_path(view, path.points_in_world, path.color, up);
+
+  // 4. Objects: the outline of each oriented box seen from above, a dot at its centre.
   if (options.draw_objects) {
+    std::vector<cv::Point> centers;
     for (const auto& o : objects) {
       std::vector<cv::Point2f> corners;
       for (int i = 0; i < 8; ++i) {
@@ -105,23 +129,94 @@ TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject
       cv::convexHull(corners, hull);
       std::vector<cv::Point> poly(hull.begin(), hull.end());
       const cv::Scalar color(o.color.b, o.color.g, o.color.r);
-      cv::polylines(view.image, poly, true, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-      cv::polylines(view.image, poly, true, color, 1, cv::LINE_AA);
+      cv::polylines(view.image, poly, true, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
+      cv::polylines(view.image, poly, true, color, 2, cv::LINE_AA);
       const cv::Point2d c = to_pixel(o.obb.center[a], o.obb.center[b]);
-      const cv::Point org(static_cast<int>(c.x) + 4, static_cast<int>(c.y) - 4);
-      cv::putText(view.image, o.label, org, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                  cv::Scalar(255, 255, 255), 3, cv::LINE_AA);
-      cv::putText(view.image, o.label, org, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
-                  cv::LINE_AA);
+      centers.emplace_back(static_cast<int>(std::lround(c.x)), static_cast<int>(std::lround(c.y)));
+    }
+    // 5. Labels: each at the first free place on rings around its centre (none hides another),
+    //    with a leader line when moved away; a white box with a border in the class colour.
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      cv::circle(view.image, centers[k], 4, cv::Scalar(0, 0, 0), -1, cv::LINE_AA);
+      cv::circle(view.image, centers[k], 2,
+                 cv::Scalar(objects[k].color.b, objects[k].color.g, objects[k].color.r), -1,
+                 cv::LINE_AA);
+    }
+    std::vector<cv::Rect> placed;
+    const double font_scale = options.label_scale;
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      const auto& o = objects[k];
+      const cv::Point c = centers[k];
+      const cv::Scalar color(o.color.b, o.color.g, o.color.r);
+      int baseline = 0;
+      const cv::Size text =
+          cv::getTextSize(o.label, cv::FONT_HERSHEY_SIMPLEX, font_scale, 1, &baseline);
+      const cv::Size box(text.width + 8, text.height + baseline + 6);
+      cv::Rect chosen;
+      bool found = false;
+      for (int ring = 0; ring <= 8 && !found; ++ring) {
+        const int r = ring * (box.height + 2);
+        const int steps = ring == 0 ? 1 : 12;
+        for (int s = 0; s < steps && !found; ++s) {
+          const double angle = -M_PI / 4 + 2 * M_PI * s / steps;
+          const cv::Point p(
+              c.x + 7 + static_cast<int>(std::lround(r * std::cos(angle))),
+              c.y - box.height / 2 + static_cast<int>(std::lround(r * std::sin(angle))));
+          const bool left = std::cos(angle) < -0.3;
+          const cv::Rect rect(left ? p.x - 14 - box.width : p.x, p.y, box.width, box.height);
+          if (rect.x < 0 || rect.y < 0 || rect.x + rect.width > width ||
+              rect.y + rect.height > height)
+            continue;
+          bool free = true;
+          for (const cv::Rect& q : placed)
+            if ((rect & cv::Rect(q.x - 2, q.y - 2, q.width + 4, q.height + 4)).area() > 0)
+              free = false;
+          if (!free) continue;
+          chosen = rect;
+          found = true;
+        }
+      }
+      if (!found) chosen = cv::Rect(c.x + 7, c.y - box.height / 2, box.width, box.height);
+      placed.push_back(chosen);
+      const cv::Point near(std::clamp(c.x, chosen.x, chosen.x + chosen.width),
+                           std::clamp(c.y, chosen.y, chosen.y + chosen.height));
+      if (cv::norm(near - c) > 9)
+        cv::line(view.image, c, near, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+      cv::rectangle(view.image, chosen, cv::Scalar(255, 255, 255), cv::FILLED);
+      cv::rectangle(view.image, chosen, color, 2);
+      cv::putText(view.image, o.label, cv::Point(chosen.x + 4, chosen.y + 3 + text.height),
+                  cv::FONT_HERSHEY_SIMPLEX, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
     }
   }
   // A 1 m scale bar in the bottom-left corner.
   const int bar = static_cast<int>(1.0 / pixel_m);
   const cv::Point s0(options.margin_px / 2 + 4, height - 8);
+  cv::rectangle(view.image, cv::Rect(s0.x - 4, s0.y - 22, bar + 8, 28), cv::Scalar(255, 255, 255),
+                cv::FILLED);
   cv::line(view.image, s0, s0 + cv::Point(bar, 0), cv::Scalar(0, 0, 0), 2);
   cv::putText(view.image, "1 m", s0 + cv::Point(4, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return view;
+}
+
+void draw_path(TopView& view, const std::vector<Vec3>& points_in_world, const Rgb& color,
+               int up_axis) {
+  require(up_axis >= 0 && up_axis <= 2, "draw_path.up_axis", "must be 0, 1 or 2 (x, y, z)");
+  require(view.pixel_m > 0 && !view.image.empty(), "draw_path.view", "must be a rendered view");
+  int a = 0, b = 1;
+  horizontal_axes(up_axis, a, b);
+  std::vector<cv::Point> poly;
+  for (const Vec3& p : points_in_world) {
+    const cv::Point px(static_cast<int>(std::lround((p[a] - view.origin_a) / view.pixel_m)),
+                       static_cast<int>(std::lround((view.origin_b - p[b]) / view.pixel_m)));
+    if (poly.empty() || px != poly.back()) poly.push_back(px);
+  }
+  if (poly.empty()) return;
+  const cv::Scalar bgr(color.b, color.g, color.r);
+  cv::polylines(view.image, poly, false, cv::Scalar(255, 255, 255), 4, cv::LINE_AA);
+  cv::polylines(view.image, poly, false, bgr, 2, cv::LINE_AA);
+  cv::circle(view.image, poly.front(), 6, cv::Scalar(255, 255, 255), 3, cv::LINE_AA);
+  cv::circle(view.image, poly.front(), 6, bgr, 2, cv::LINE_AA);
 }
 
 }  // namespace objmap::report

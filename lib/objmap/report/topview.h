@@ -16,6 +16,11 @@ struct TopViewOptions {
   int margin_px = 24;      // blank border around the map
   double clip_percent = 0.5;  // the extent ignores this % of points on each side (stray points)
   bool draw_objects = true;   // object footprints (OBB seen from above) with "id class" labels
+  double point_size_m = 0.0;  // side of the square drawn per point (0: one pixel); the map's voxel
+                              // size fills the gaps between points
+  double fade = 0.0;          // the map blended this much towards white (0..0.9), so that boxes
+                              // and labels stand out
+  double label_scale = 0.5;   // label font scale (OpenCV Hershey simplex)
   void check() const;         // throws InputError naming the bad field
 };
 
@@ -26,6 +31,12 @@ struct TopViewObject {
   Rgb color;
 };
 
+// A path to draw, e.g. the camera positions of the run's trajectory (in the map's frame).
+struct TopViewPath {
+  std::vector<Vec3> points_in_world;
+  Rgb color{20, 20, 20};
+};
+
 struct TopView {
   cv::Mat image;  // CV_8UC3 BGR
   double pixel_m = 0.0;
@@ -34,7 +45,15 @@ struct TopView {
 };
 
 // Each pixel shows the highest point above it (z-buffer along up_axis); empty pixels are white.
+// The view covers the map (clip_percent aside), every object and every path; paths are drawn over
+// the points and under the objects.
 TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
-                        const TopViewOptions& options = {});
+                        const TopViewOptions& options = {},
+                        const std::vector<TopViewPath>& paths = {});
+
+// Draws a path of world points (e.g. the camera positions of the run's trajectory, in the map's
+// frame) on the view: a line with a dark casing and a ring at its first point.
+void draw_path(TopView& view, const std::vector<Vec3>& points_in_world, const Rgb& color,
+               int up_axis = 2);
 
 }  // namespace objmap::report

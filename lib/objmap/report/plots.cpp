@@ -1,0 +1,304 @@
+#include "objmap/report/plots.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "objmap/core/error.h"
+#include "objmap/report/svg.h"
+
+namespace objmap::report {
+
+Rgb error_color(double t) {
+  if (!std::isfinite(t)) return Rgb{150, 150, 150};
+  t = std::clamp(t, 0.0, 1.0);
+  struct Anchor {
+    double t;
+    double r, g, b;
+  };
+  static const Anchor anchors[] = {{0.0, 40, 60, 190},
+                                   {0.3, 25, 160, 200},
+                                   {0.5, 50, 170, 70},
+                                   {0.72, 235, 170, 20},
+                                   {1.0, 205, 25, 30}};
+  for (std::size_t i = 1; i < std::size(anchors); ++i) {
+    const Anchor& a = anchors[i - 1];
+    const Anchor& b = anchors[i];
+    if (t <= b.t) {
+      const double s = (t - a.t) / (b.t - a.t);
+      const auto mix = [s](double x, double y) {
+        return static_cast<std::uint8_t>(std::lround(x + s * (y - x)));
+      };
+      return Rgb{mix(a.r, b.r), mix(a.g, b.g), mix(a.b, b.b)};
+    }
+  }
+  return Rgb{205, 25, 30};
+}
+
+void PlotOptions::check() const {
+  require(std::isfinite(width_px) && width_px >= 200 && width_px <= 4000, "PlotOptions.width_px",
+          "must be in [200, 4000]");
+  require(std::isfinite(height_px) && height_px >= 150 && height_px <= 4000,
+          "PlotOptions.height_px", "must be in [150, 4000]");
+  require(up_axis >= 0 && up_axis <= 2, "PlotOptions.up_axis", "must be 0, 1 or 2 (x, y, z)");
+}
+
+namespace {
+std::vector<double> ticks_with_step(double lo, double hi, double step);
+}  // namespace
+
+std::vector<double> nice_ticks(double lo, double hi, int target) {
+  std::vector<double> ticks;
+  if (!std::isfinite(lo) || !std::isfinite(hi) || hi <= lo || target < 1) return ticks;
+  const double raw = (hi - lo) / target;
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = mag;
+  for (const double m : {1.0, 2.0, 5.0, 10.0}) {
+    step = m * mag;
+    if (step >= raw) break;
+  }
+  return ticks_with_step(lo, hi, step);
+}
+
+namespace {
+
+std::vector<double> ticks_with_step(double lo, double hi, double step) {
+  std::vector<double> ticks;
+  if (!(step > 0) || !std::isfinite(lo) || !std::isfinite(hi)) return ticks;
+  for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + 1e-9 * step; k += 1.0)
+    ticks.push_back(std::abs(k * step) < 1e-12 * step ? 0.0 : k * step);
+  return ticks;
+}
+
+const std::string kGrid = "#e4e4e4";
+const std::string kFrame = "#8a8a8a";
+const std::string kText = "#333333";
+
+// Tick label: as many decimals as the step needs.
+std::string tick_text(double value, double step) {
+  int decimals = 0;
+  while (decimals < 6 && std::abs(step * std::pow(10.0, decimals) -
+                                  std::round(step * std::pow(10.0, decimals))) > 1e-6)
+    ++decimals;
+  char s[64];
+  std::snprintf(s, sizeof s, "%.*f", decimals, value);
+  return s;
+}
+
+double step_of(const std::vector<double>& ticks) {
+  return ticks.size() >= 2 ? ticks[1] - ticks[0] : 1.0;
+}
+
+bool has_errors(const PlotSeries& s) {
+  return !s.errors_m.empty() && s.errors_m.size() == s.positions_m.size();
+}
+
+// Legend entries left to right along the top edge.
+void legend(Svg& svg, const std::vector<PlotSeries>& series, double x, double y,
+            const std::vector<std::string>& labels) {
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    const PlotSeries& s = series[i];
+    SvgAttributes a = {{"stroke", hex_color(s.color)}, {"stroke-width", "2.5"}};
+    if (s.dashed) a.push_back({"stroke-dasharray", "6 4"});
+    svg.line(x, y - 4, x + 22, y - 4, a);
+    svg.text(x + 27, y, labels[i], {{"fill", kText}});
+    x += 27 + 6.6 * labels[i].size() + 16;
+  }
+}
+
+// The colour bar: `steps` boxes from 0 (bottom) to max_error (top), ticks in metres.
+void color_bar(Svg& svg, double x, double top, double bottom, double max_error) {
+  const int steps = 48;
+  const double h = (bottom - top) / steps;
+  svg.open_group({{"stroke", "none"}});
+  for (int i = 0; i < steps; ++i) {
+    const double t = (i + 0.5) / steps;
+    svg.rect(x, bottom - (i + 1) * h, 12, h + 0.3, {{"fill", hex_color(error_color(t))}});
+  }
+  svg.close_group();
+  svg.rect(x, top, 12, bottom - top, {{"fill", "none"}, {"stroke", kFrame}});
+  const auto ticks = nice_ticks(0.0, max_error, 4);
+  for (const double v : ticks) {
+    const double y = bottom - v / max_error * (bottom - top);
+    svg.line(x + 12, y, x + 16, y, {{"stroke", kFrame}});
+    svg.text(x + 18, y + 4, tick_text(v, step_of(ticks)), {{"fill", kText}, {"font-size", "11"}});
+  }
+  svg.text(x - 6, top - 8, "error [m]", {{"fill", kText}, {"font-size", "11"}});
+}
+
+std::string axis_name(int axis) { return std::string(1, static_cast<char>('x' + axis)) + " [m]"; }
+
+}  // namespace
+
+std::string trajectory_svg(const std::vector<PlotSeries>& series, const PlotOptions& options) {
+  options.check();
+  const int ax = (options.up_axis + 1) % 3, bx = (options.up_axis + 2) % 3;
+  bool colored = false;
+  double max_error = 0.0;
+  double a0 = std::numeric_limits<double>::infinity(), a1 = -a0, b0 = a0, b1 = -a0;
+  for (const PlotSeries& s : series) {
+    for (const Vec3& p : s.positions_m) {
+      a0 = std::min(a0, p[ax]), a1 = std::max(a1, p[ax]);
+      b0 = std::min(b0, p[bx]), b1 = std::max(b1, p[bx]);
+    }
+    if (has_errors(s)) {
+      colored = true;
+      for (const double e : s.errors_m)
+        if (std::isfinite(e)) max_error = std::max(max_error, e);
+    }
+  }
+  if (!std::isfinite(a0)) a0 = b0 = 0, a1 = b1 = 1;
+  if (max_error <= 0) max_error = 1e-3;
+  // The colour scale ends on a tick, so the bar's top is labelled.
+  {
+    const auto t = nice_ticks(0.0, max_error, 4);
+    const double step = step_of(t);
+    max_error = std::ceil(max_error / step - 1e-9) * step;
+  }
+
+  // 1. Plot area and an equal-axis fit of the data (5% padding, at least 10 cm).
+  const double left = 58, top = 34, right = options.width_px - (colored ? 78 : 16),
+               bottom = options.height_px - 42;
+  const double pw = right - left, ph = bottom - top;
+  const double ra = std::max(0.1, (a1 - a0) * 1.1), rb = std::max(0.1, (b1 - b0) * 1.1);
+  const double scale = std::min(pw / ra, ph / rb);
+  const double ca = 0.5 * (a0 + a1), cb = 0.5 * (b0 + b1);
+  const double va0 = ca - pw / (2 * scale), va1 = ca + pw / (2 * scale);
+  const double vb0 = cb - ph / (2 * scale), vb1 = cb + ph / (2 * scale);
+  const auto X = [&](double a) { return left + (a - va0) * scale; };
+  const auto Y = [&](double b) { return bottom - (b - vb0) * scale; };
+
+  Svg svg(options.width_px, options.height_px);
+  svg.rect(0, 0, options.width_px, options.height_px, {{"fill", "#ffffff"}});
+  // 2. Metre grid and axes.
+  const int target = std::max(3, static_cast<int>(std::min(pw, ph) / 70));
+  const auto ta = nice_ticks(va0, va1, target), tb = nice_ticks(vb0, vb1, target);
+  const double step = std::min(step_of(ta), step_of(tb));
+  const auto ga = ticks_with_step(va0, va1, step), gb = ticks_with_step(vb0, vb1, step);
+  svg.open_group({{"stroke", kGrid}, {"stroke-width", "1"}});
+  for (const double v : ga) svg.line(X(v), top, X(v), bottom, {});
+  for (const double v : gb) svg.line(left, Y(v), right, Y(v), {});
+  svg.close_group();
+  svg.open_group({{"fill", kText}, {"font-size", "11"}});
+  for (const double v : ga)
+    svg.text(X(v), bottom + 15, tick_text(v, step), {{"text-anchor", "middle"}});
+  for (const double v : gb)
+    svg.text(left - 5, Y(v) + 4, tick_text(v, step), {{"text-anchor", "end"}});
+  svg.close_group();
+  svg.rect(left, top, pw, ph, {{"fill", "none"}, {"stroke", kFrame}});
+  svg.text(0.5 * (left + right), bottom + 33, axis_name(ax),
+           {{"fill", kText}, {"text-anchor", "middle"}});
+  const std::string ylabel_y = svg_number(0.5 * (top + bottom));
+  svg.text(16, 0.5 * (top + bottom), axis_name(bx),
+           {{"fill", kText},
+            {"text-anchor", "middle"},
+            {"transform", "rotate(-90 16 " + ylabel_y + ")"}});
+
+  // 3. The series: one polyline each (a casing under the error colours for coloured series; each
+  //    further coloured series narrower, so that one drawn over another leaves it visible).
+  int coloured_index = 0;
+  for (const PlotSeries& s : series) {
+    std::vector<std::pair<double, double>> pts;
+    pts.reserve(s.positions_m.size());
+    for (const Vec3& p : s.positions_m) pts.emplace_back(X(p[ax]), Y(p[bx]));
+    const bool c = has_errors(s);
+    const double casing = std::max(3.0, 6.5 - 2.5 * coloured_index);
+    if (c) ++coloured_index;
+    SvgAttributes a = {{"stroke", hex_color(s.color)},
+                       {"stroke-width", c ? svg_number(casing) : "1.6"},
+                       {"stroke-linejoin", "round"},
+                       {"stroke-linecap", "round"}};
+    if (s.dashed) a.push_back({"stroke-dasharray", "6 4"});
+    svg.polyline(pts, a);
+    if (!c) continue;
+    svg.open_group({{"stroke-width", svg_number(casing - 2.2)}, {"stroke-linecap", "round"}});
+    for (std::size_t i = 1; i < pts.size(); ++i) {
+      const double e0 = s.errors_m[i - 1], e1 = s.errors_m[i];
+      if (!std::isfinite(e0) || !std::isfinite(e1)) continue;
+      svg.line(pts[i - 1].first, pts[i - 1].second, pts[i].first, pts[i].second,
+               {{"stroke", hex_color(error_color(0.5 * (e0 + e1) / max_error))}});
+    }
+    svg.close_group();
+    if (!pts.empty())  // the start
+      svg.circle(pts.front().first, pts.front().second, 4,
+                 {{"fill", "#ffffff"}, {"stroke", hex_color(s.color)}, {"stroke-width", "1.5"}});
+  }
+
+  // 4. Legend and colour bar.
+  std::vector<std::string> labels;
+  for (const PlotSeries& s : series) labels.push_back(s.name);
+  legend(svg, series, left, 20, labels);
+  if (colored) color_bar(svg, right + 16, top + 14, bottom, max_error);
+  return svg.str();
+}
+
+std::string error_over_time_svg(const std::vector<PlotSeries>& series, const PlotOptions& options) {
+  options.check();
+  std::vector<PlotSeries> plotted;
+  double t0 = std::numeric_limits<double>::infinity(), t1 = -t0, e1 = 0.0;
+  for (const PlotSeries& s : series) {
+    if (!has_errors(s) || s.stamps_s.size() != s.errors_m.size()) continue;
+    plotted.push_back(s);
+    for (std::size_t i = 0; i < s.errors_m.size(); ++i) {
+      if (!std::isfinite(s.errors_m[i])) continue;
+      t0 = std::min(t0, s.stamps_s[i]), t1 = std::max(t1, s.stamps_s[i]);
+      e1 = std::max(e1, s.errors_m[i]);
+    }
+  }
+  if (!std::isfinite(t0)) t0 = 0, t1 = 1;
+  if (t1 - t0 <= 0) t1 = t0 + 1;
+  if (e1 <= 0) e1 = 1e-3;
+
+  const double left = 58, top = 34, right = options.width_px - 16, bottom = options.height_px - 42;
+  const auto tt = nice_ticks(0.0, t1 - t0, 6);
+  const auto te = nice_ticks(0.0, e1 * 1.05, 5);
+  const double x_max = std::max(t1 - t0, tt.empty() ? 0.0 : tt.back());
+  const double y_max = std::max(e1 * 1.05, te.empty() ? 0.0 : te.back());
+  const auto X = [&](double t) { return left + (t - t0) / x_max * (right - left); };
+  const auto Y = [&](double e) { return bottom - e / y_max * (bottom - top); };
+
+  Svg svg(options.width_px, options.height_px);
+  svg.rect(0, 0, options.width_px, options.height_px, {{"fill", "#ffffff"}});
+  svg.open_group({{"stroke", kGrid}, {"stroke-width", "1"}});
+  for (const double v : tt) svg.line(X(t0 + v), top, X(t0 + v), bottom, {});
+  for (const double v : te) svg.line(left, Y(v), right, Y(v), {});
+  svg.close_group();
+  svg.open_group({{"fill", kText}, {"font-size", "11"}});
+  for (const double v : tt)
+    svg.text(X(t0 + v), bottom + 15, tick_text(v, step_of(tt)), {{"text-anchor", "middle"}});
+  for (const double v : te)
+    svg.text(left - 5, Y(v) + 4, tick_text(v, step_of(te)), {{"text-anchor", "end"}});
+  svg.close_group();
+  svg.rect(left, top, right - left, bottom - top, {{"fill", "none"}, {"stroke", kFrame}});
+  svg.text(0.5 * (left + right), bottom + 33, "time since the first pose [s]",
+           {{"fill", kText}, {"text-anchor", "middle"}});
+  const std::string mid = svg_number(0.5 * (top + bottom));
+  svg.text(
+      16, 0.5 * (top + bottom), "absolute error [m]",
+      {{"fill", kText}, {"text-anchor", "middle"}, {"transform", "rotate(-90 16 " + mid + ")"}});
+
+  std::vector<std::string> labels;
+  for (const PlotSeries& s : plotted) {
+    std::vector<std::pair<double, double>> pts;
+    double sum2 = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < s.errors_m.size(); ++i) {
+      if (!std::isfinite(s.errors_m[i])) continue;
+      pts.emplace_back(X(s.stamps_s[i]), Y(s.errors_m[i]));
+      sum2 += s.errors_m[i] * s.errors_m[i];
+      ++n;
+    }
+    SvgAttributes a = {
+        {"stroke", hex_color(s.color)}, {"stroke-width", "1.6"}, {"stroke-linejoin", "round"}};
+    if (s.dashed) a.push_back({"stroke-dasharray", "6 4"});
+    svg.polyline(pts, a);
+    char rmse[64];
+    std::snprintf(rmse, sizeof rmse, " (RMSE %.4f m)", n ? std::sqrt(sum2 / n) : 0.0);
+    labels.push_back(s.name + rmse);
+  }
+  legend(svg, plotted, left, 20, labels);
+  return svg.str();
+}
+
+}  // namespace objmap::report

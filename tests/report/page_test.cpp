@@ -1,0 +1,64 @@
+#include "objmap/report/page.h"
+
+#include <gtest/gtest.h>
+
+#include "xml_check.h"
+
+namespace objmap::report {
+namespace {
+
+using test::count_of;
+using test::xml_problem;
+
+PageContent small_page() {
+  PageContent c;
+  c.title = "objmap report: <run & co>";
+  c.counts = RunCounts{100, 40, 300, 2, 3};
+  c.topview = {"topview.png", "PNGBYTES", 10, 20, "map from above"};
+  for (int id : {3, 8}) {
+    PageObject o;
+    o.object.id = id;
+    o.object.class_name = id == 3 ? "cup" : "<script>x";
+    o.object.points = 1234567;
+    o.points_raw = 7654321;
+    o.thumbnail = {"thumbnails/" + std::to_string(id) + ".png", "T", 160, 160, "caption"};
+    c.objects.push_back(o);
+  }
+  c.ate.push_back({"estimated", "gt.txt", "est.txt", {}});
+  c.ate.back().stats.count = 5;
+  c.ate.back().stats.rmse = 0.01234;
+  c.notes.push_back("a note with 'quotes'");
+  return c;
+}
+
+TEST(Page, SummaryLineSaysWhatTheRunHas) {
+  EXPECT_EQ(summary_line(small_page()),
+            "40 keyframes of 100 frames, 300 instances; 2 objects (1 <script>x, 1 cup); ATE RMSE "
+            "estimated 0.0123 m (5 pose pairs).");
+  PageContent empty;
+  EXPECT_EQ(summary_line(empty), "0 objects; ATE not computed (no ground-truth trajectory).");
+}
+
+TEST(Page, HtmlIsWellFormedSelfContainedAndEscaped) {
+  const std::string html = page_html(small_page());
+  EXPECT_EQ(xml_problem(html), "");
+  EXPECT_EQ(html.find("<script"), std::string::npos);  // the class name is text, not a tag
+  EXPECT_NE(html.find("&lt;script&gt;x"), std::string::npos);
+  EXPECT_EQ(count_of(html, "data-object-id=\""), 2u);
+  EXPECT_EQ(count_of(html, "src=\"data:image/png;base64,"), 3u);  // top view + 2 thumbnails
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);
+  EXPECT_NE(html.find("1 234 567"), std::string::npos);  // points, grouped
+  EXPECT_NE(html.find("Objects per class"), std::string::npos);
+  EXPECT_EQ(html.find("Table 3"), std::string::npos);  // no ground-truth objects
+}
+
+TEST(Page, MarkdownReferencesTheFilesBeside) {
+  const std::string md = page_markdown(small_page());
+  EXPECT_NE(md.find("![top view of the semantic map](topview.png)"), std::string::npos) << md;
+  EXPECT_NE(md.find("(thumbnails/3.png)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| estimated | 5 | 0.0123 |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("base64"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace objmap::report
