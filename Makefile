@@ -26,8 +26,13 @@ test: deps build
 demo: deps build
 	@bash scripts/demo.sh $(OBJMAP) $(DEMO)
 
+# make bench [DATA=DIR]: every table of docs/benchmarks.md on the sequences under DATA plus three
+# synthetic scenes (scripts/bench.sh; about 10 minutes on 2 cores); writes the generated section
+# of docs/benchmarks.md and out/bench/. Installs python3-open3d for the Open3D baseline if it can.
 bench: deps build
-	@bash scripts/bench.sh $(OBJMAP) $(DATA)
+	@bash scripts/install-deps.sh --bench
+	@BENCH_COMMAND="make bench$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
+	  bash scripts/bench.sh $(OBJMAP) $(DATA)
 
 format:
 	@bash scripts/format.sh

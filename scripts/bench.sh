@@ -1,60 +1,263 @@
 #!/usr/bin/env bash
-# make bench: the measured tables of docs/benchmarks.md, reproduced on whatever data is given.
-#   1. object maps on synthetic scenes (seeds 1 2 3 5 7): fuse with the ground-truth and with the
-#      drifting estimated trajectory, eval objects against the true objects and (Tables 4-5) against
-#      the ground-truth map, eval ate of the estimate;
-#   2. fr3_cabinet_58kf (if in DATA): fuse, eval objects against the ground-truth cuboid;
-#      fr1_rpy_every4: fuse and the report's top view of the semantic map;
-#   3. the benchmark programs (bench_fuse: the whole fuse on fr1_rpy_every4 vs decoding its PNGs,
-#      peak RSS, vs Open3D; bench_fusion: the stages).
-# Outputs go to out/bench/ (JSON of every eval); the console shows the tables.
-set -euo pipefail
+# make bench: every table of docs/benchmarks.md, measured on whatever data is given.
+#   bash scripts/bench.sh [OBJMAP] [DATA]      (make bench [DATA=DIR] [BUILD=DIR])
+#
+# 1. Sequences: every folder under DATA (depth <= 3) with rgb.txt and depth.txt. For each:
+#      segmentation = the first of segmentation/, detections*/, boxes*/, masks/ (none: skipped);
+#      estimate     = CameraTrajectory.txt, else KeyFrameTrajectory.txt, else *estimate*.txt / vo_*.txt;
+#      ground truth = groundtruth.txt; ground-truth objects = objects_gt.json, else objects_gt.txt.
+#    Plus the synthetic scenes `objmap synth --seed N --orbit-speed 60` (N in $BENCH_SEEDS, default
+#    1 2 3): their estimated.txt drifts, objects_gt.json is exact.
+#    Then: fuse with groundtruth.txt (and with the estimate), eval objects (map vs ground-truth objects:
+#    Table 3; map of the estimate vs map of the ground truth: Tables 4-5; Table 6 from run.json),
+#    eval ate of the estimate and, when `objmap correct` exists, of its corrected trajectories
+#    (--method paper and graph: Table 7) and of the map fused with the corrected poses.
+#    An estimate in its own SLAM frame (first pose = identity) is first moved onto the ground truth's
+#    pose at its first stamp; one that covers only part of the sequence is compared with a map fused
+#    with groundtruth.txt over the same span (scripts/bench_tables.py prepare).
+# 2. Performance on fr1_rpy_every4 (groundtruth.txt): objmap fuse (wall, CPU, peak RSS per keyframe),
+#    the PNG-decode floor (bench_fuse), and the same dense-map job with Open3D
+#    (scripts/open3d_baseline.py; n/a when python3-open3d is missing).
+# 3. scripts/bench_tables.py writes the tables between <!-- bench:begin --> and <!-- bench:end -->
+#    of docs/benchmarks.md (the rest of the file is untouched) and out/bench/tables.md.
+# Outputs: out/bench/<sequence>/ (runs, every eval JSON, logs). Environment: BENCH_OUT, BENCH_SEEDS,
+# BENCH_REPEAT (timing rounds, default 3), BENCH_PERF=0 (skip part 2), BENCH_DOC (the Markdown file),
+# BENCH_PROGRAMS=1 (also run every build/bin/bench_* program and print its output).
+set -uo pipefail
 objmap=${1:-build/bin/objmap}
 data=${2:-../shared/data}
 out=${BENCH_OUT:-out/bench}
-seeds=${BENCH_SEEDS:-"1 2 3 5 7"}
-bindir=$(dirname "$objmap")
+seeds=${BENCH_SEEDS-"1 2 3"}
+repeat=${BENCH_REPEAT:-3}
+doc=${BENCH_DOC:-docs/benchmarks.md}
+here=$(cd "$(dirname "$0")" && pwd)
+tables="$here/bench_tables.py"
+py=python3
+
+if [ ! -x "$objmap" ]; then
+  echo "bench: no objmap binary at $objmap (make build first)" >&2
+  exit 2
+fi
+bindir=$(cd "$(dirname "$objmap")" && pwd)
+objmap="$bindir/$(basename "$objmap")"
+case "$out" in
+  "" | / | . | ..) echo "bench: refusing BENCH_OUT='$out'" >&2; exit 2 ;;
+esac
+rm -rf "$out"
 mkdir -p "$out"
+out=$(cd "$out" && pwd)
+started=$(date -u +%s)
 
-for seed in $seeds; do
-  s="$out/synth_$seed"
-  echo "== synthetic scene, seed $seed (objmap synth --seed $seed --orbit-speed 60)"
-  "$objmap" synth --out "$s/scene" --seed "$seed" --orbit-speed 60 >/dev/null 2>&1
-  for traj in groundtruth estimated; do
-    "$objmap" fuse --dataset "$s/scene" --trajectory "$s/scene/$traj.txt" \
-      --segmentation "$s/scene/segmentation" --out "$s/run_$traj" >/dev/null 2>&1
+has_correct=0
+# An unknown subcommand makes CLI11 print the main help (exit 0), so look for the command's options.
+if "$objmap" correct --help 2>/dev/null | grep -q -- "--method"; then has_correct=1; fi
+{
+  echo "has_correct=$has_correct"
+  echo "load_start=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null)"
+  echo "date=$(date -u '+%Y-%m-%d %H:%M UTC')"
+} >"$out/features.txt"
+
+step() { echo "bench: $*" >&2; }
+
+# run LOG CMD...: runs CMD with its output in LOG; on failure says so (the bench goes on).
+run() {
+  local log=$1
+  shift
+  if "$@" >"$log" 2>&1; then return 0; fi
+  echo "  failed ($(tail -n 1 "$log")): $*" >&2
+  return 1
+}
+
+frames_of() { grep -vc '^\s*#' "$1/rgb.txt" 2>/dev/null || echo 0; }
+
+first_match() {  # first existing path among the arguments (globs expanded by the caller)
+  local p
+  for p in "$@"; do
+    if [ -e "$p" ]; then
+      echo "$p"
+      return
+    fi
   done
-  "$objmap" eval objects --map "$s/run_groundtruth/objects.json" \
-    --gt-objects "$s/scene/objects_gt.json" --json "$s/objects_vs_truth.json" | sed -n '/Table 3/,/^$/p'
-  "$objmap" eval ate --gt "$s/scene/groundtruth.txt" --est "$s/scene/estimated.txt" \
-    --json "$s/ate.json" | grep -E "rmse|pairs"
-  "$objmap" eval objects --map "$s/run_estimated/objects.json" \
-    --reference "$s/run_groundtruth/objects.json" --json "$s/objects_est_vs_gt_map.json" |
-    sed -n '/Tables 4-5/,/^$/p'
+}
+
+# bench_sequence NAME KIND DATASET SEGMENTATION ESTIMATE GT_OBJECTS [extra fuse args...]
+bench_sequence() {
+  local name=$1 kind=$2 dataset=$3 seg=$4 est=$5 gtobj=$6
+  shift 6
+  local o="$out/$name" m
+  mkdir -p "$o"
+  {
+    echo "name=$name"
+    echo "kind=$kind"
+    echo "dataset=$dataset"
+    echo "segmentation=$seg"
+    echo "estimate=$est"
+    echo "gt_objects=$gtobj"
+    echo "frames=$(frames_of "$dataset")"
+    echo "fuse_args=$*"
+  } >"$o/meta.txt"
+  step "$name: fuse with groundtruth.txt"
+  run "$o/fuse_gt.log" "$objmap" fuse --dataset "$dataset" --trajectory "$dataset/groundtruth.txt" \
+    --segmentation "$seg" --out "$o/run_gt" "$@" || return 0
+  if [ -n "$gtobj" ]; then
+    run "$o/eval_gt_vs_truth.log" "$objmap" eval objects --map "$o/run_gt/objects.json" \
+      --gt-objects "$gtobj" --json "$o/objects_gt_vs_truth.json"
+  fi
+  [ -n "$est" ] || return 0
+  run "$o/ate_est.log" "$objmap" eval ate --gt "$dataset/groundtruth.txt" --est "$est" \
+    --json "$o/ate_est.json"
+  # The estimate in the ground truth's frame (SLAM output starts at the identity) and, when it
+  # covers only part of the sequence, the reference map over the same frames.
+  $py "$tables" prepare --dataset "$dataset" --gt "$dataset/groundtruth.txt" --est "$est" \
+    --out-dir "$o" >"$o/prepare.txt" 2>&1
+  local est_map ref_traj ref_run="$o/run_gt"
+  est_map=$(sed -n 's/^estimate=//p' "$o/prepare.txt")
+  ref_traj=$(sed -n 's/^reference=//p' "$o/prepare.txt")
+  [ -n "$est_map" ] || est_map=$est
+  {
+    echo "estimate_fused=$est_map"
+    echo "aligned=$(sed -n 's/^aligned=//p' "$o/prepare.txt")"
+    echo "reference_trajectory=$ref_traj"
+  } >>"$o/meta.txt"
+  if [ -n "$ref_traj" ]; then
+    step "$name: fuse with groundtruth.txt over the estimate's time span"
+    ref_run="$o/run_gt_span"
+    run "$o/fuse_gt_span.log" "$objmap" fuse --dataset "$dataset" --trajectory "$ref_traj" \
+      --segmentation "$seg" --out "$ref_run" "$@" || return 0
+  fi
+  step "$name: fuse with $(basename "$est_map")"
+  if run "$o/fuse_est.log" "$objmap" fuse --dataset "$dataset" --trajectory "$est_map" \
+    --segmentation "$seg" --out "$o/run_est" "$@"; then
+    run "$o/eval_est_vs_gtmap.log" "$objmap" eval objects --map "$o/run_est/objects.json" \
+      --reference "$ref_run/objects.json" --json "$o/objects_est_vs_gtmap.json"
+    if [ -n "$gtobj" ]; then
+      run "$o/eval_est_vs_truth.log" "$objmap" eval objects --map "$o/run_est/objects.json" \
+        --gt-objects "$gtobj" --json "$o/objects_est_vs_truth.json"
+    fi
+  fi
+  [ $has_correct -eq 1 ] && [ -d "$o/run_est" ] || return 0
+  for m in paper graph; do
+    step "$name: objmap correct --method $m"
+    run "$o/correct_$m.log" "$objmap" correct --run "$o/run_est" --out "$o/correct_$m" \
+      --method "$m" || continue
+    local corrected="$o/correct_$m/trajectory_corrected.txt"
+    [ -f "$corrected" ] || corrected=$(ls "$o/correct_$m/"*corrected*.txt 2>/dev/null | head -n 1)
+    [ -n "$corrected" ] && [ -f "$corrected" ] || continue
+    run "$o/ate_corrected_$m.log" "$objmap" eval ate --gt "$dataset/groundtruth.txt" \
+      --est "$corrected" --json "$o/ate_corrected_$m.json"
+    # correct writes a run folder (the re-fuse with the corrected poses); if not, fuse here.
+    local corr_run="$o/correct_$m"
+    if [ ! -f "$corr_run/objects.json" ]; then
+      corr_run="$o/run_corrected_$m"
+      run "$o/fuse_corrected_$m.log" "$objmap" fuse --dataset "$dataset" \
+        --trajectory "$corrected" --segmentation "$seg" --out "$corr_run" "$@" || continue
+    fi
+    run "$o/eval_corrected_${m}_vs_gtmap.log" "$objmap" eval objects \
+      --map "$corr_run/objects.json" --reference "$ref_run/objects.json" \
+      --json "$o/objects_corrected_${m}_vs_gtmap.json"
+  done
+}
+
+# 1a. Synthetic scenes.
+for seed in $seeds; do
+  s="$out/synth_seed$seed/scene"
+  step "synth_seed$seed: objmap synth --seed $seed --orbit-speed 60"
+  mkdir -p "$out/synth_seed$seed"
+  run "$out/synth_seed$seed/synth.log" "$objmap" synth --out "$s" --seed "$seed" \
+    --orbit-speed 60 || continue
+  bench_sequence "synth_seed$seed" synthetic "$s" "$s/segmentation" "$s/estimated.txt" \
+    "$s/objects_gt.json"
 done
 
-cab="$data/tum/fr3_cabinet_58kf"
-if [ -d "$cab" ]; then
-  echo "== fr3_cabinet_58kf (boxes_yolov2, groundtruth.txt)"
-  "$objmap" fuse --dataset "$cab" --trajectory "$cab/groundtruth.txt" \
-    --segmentation "$cab/boxes_yolov2" --out "$out/fr3_cabinet" 2>/dev/null | sed -n '1,8p'
-  "$objmap" eval objects --map "$out/fr3_cabinet/objects.json" --gt-objects "$cab/objects_gt.txt" \
-    --json "$out/fr3_cabinet_objects.json" | sed -n '/Tables 4-5/,$p'
+# 1b. Real sequences under DATA.
+rpy=""
+rpy_name=""
+if [ -d "$data" ]; then
+  data=$(cd "$data" && pwd)
+  while IFS= read -r rgbtxt; do
+    dir=$(dirname "$rgbtxt")
+    [ -f "$dir/depth.txt" ] || continue
+    name=$(basename "$dir")
+    [ -e "$out/$name" ] && name=$(echo "${dir#"$data"/}" | tr '/' '_')
+    seg=$(first_match "$dir/segmentation" "$dir"/detections* "$dir"/boxes* "$dir/masks")
+    est=$(first_match "$dir/CameraTrajectory.txt" "$dir/KeyFrameTrajectory.txt" \
+      "$dir"/*estimate*.txt "$dir"/vo_*.txt)
+    gtobj=$(first_match "$dir/objects_gt.json" "$dir/objects_gt.txt")
+    if [ -z "$seg" ] || [ ! -f "$dir/groundtruth.txt" ]; then
+      mkdir -p "$out/$name"
+      {
+        echo "name=$name"
+        echo "kind=real"
+        echo "dataset=$dir"
+        echo "frames=$(frames_of "$dir")"
+        echo "skipped=$([ -z "$seg" ] && echo "no segmentation folder" || echo "no groundtruth.txt")"
+      } >"$out/$name/meta.txt"
+      step "$name: skipped ($(sed -n 's/^skipped=//p' "$out/$name/meta.txt"))"
+      continue
+    fi
+    # Short clips (a camera that hardly moves) use every frame, not only the motion keyframes.
+    extra=()
+    [ "$(frames_of "$dir")" -le 30 ] && extra=(--keyframes all)
+    bench_sequence "$name" real "$dir" "$seg" "$est" "$gtobj" "${extra[@]}"
+    [ "$(basename "$dir")" = fr1_rpy_every4 ] && rpy=$dir && rpy_name=$name
+  done < <(find "$data" -mindepth 1 -maxdepth 4 -name rgb.txt | sort)
+else
+  step "no data folder $data: synthetic scenes only"
 fi
 
-rpy="$data/tum/fr1_rpy_every4"
-if [ -d "$rpy" ]; then
-  echo "== fr1_rpy_every4 (detections_yolofastest, groundtruth.txt): objects and the top view"
-  "$objmap" fuse --dataset "$rpy" --trajectory "$rpy/groundtruth.txt" \
-    --segmentation "$rpy/detections_yolofastest" --out "$out/fr1_rpy_every4" 2>/dev/null
-  "$objmap" report --run "$out/fr1_rpy_every4" --pixel 0.008
+# 2. Performance: objmap fuse vs the decode floor vs Open3D on fr1_rpy_every4 (ground truth).
+perf="$out/perf"
+mkdir -p "$perf"
+if [ "${BENCH_PERF:-1}" != 0 ] && [ -n "$rpy" ]; then
+  echo "dataset=$rpy" >"$perf/meta.txt"
+  seg=$(sed -n 's/^segmentation=//p' "$out/$rpy_name/meta.txt")
+  for r in $(seq 1 "$repeat"); do
+    step "perf: objmap fuse, round $r of $repeat"
+    run "$perf/objmap_$r.log" $py "$tables" measure --json "$perf/objmap_$r.json" -- \
+      "$objmap" fuse --dataset "$rpy" --trajectory "$rpy/groundtruth.txt" --segmentation "$seg" \
+      --out "$perf/run_$r"
+    [ -f "$perf/run_$r/run.json" ] && cp "$perf/run_$r/run.json" "$perf/objmap_run_$r.json"
+    rm -rf "$perf/run_$r"
+  done
+  if [ -x "$bindir/bench_fuse" ]; then
+    step "perf: bench_fuse --repeat $repeat (fuse vs PNG decoding)"
+    OBJMAP_DATA="$data" run "$perf/bench_fuse.log" "$bindir/bench_fuse" --repeat "$repeat" \
+      --dataset "$rpy"
+    cp "$perf/bench_fuse.log" "$perf/bench_fuse.txt"
+  else
+    echo "bench_fuse not built (configure with -DOBJMAP_BUILD_BENCHMARKS=ON)" >"$perf/bench_fuse.txt"
+  fi
+  o3d_py=""
+  for cand in /usr/bin/python3 python3; do
+    if command -v "$cand" >/dev/null && "$cand" -c "import open3d" >/dev/null 2>&1; then
+      o3d_py=$cand
+      break
+    fi
+  done
+  if [ -n "$o3d_py" ]; then
+    step "perf: Open3D baseline (scripts/open3d_baseline.py, 1-2 minutes, 2.7 GB)"
+    if "$o3d_py" "$here/open3d_baseline.py" --dataset "$rpy" --trajectory "$rpy/groundtruth.txt" \
+      >"$perf/open3d.json" 2>"$perf/open3d.log"; then
+      cat "$perf/open3d.log" >&2
+    else
+      echo "  failed: $(tail -n 1 "$perf/open3d.log")" >&2
+      rm -f "$perf/open3d.json"
+    fi
+  else
+    echo "python3-open3d not installed (scripts/install-deps.sh --bench)" >"$perf/open3d.log"
+    step "perf: Open3D n/a (python3-open3d not installed)"
+  fi
 fi
 
-found=0
-for b in "$bindir"/bench_*; do
-  [ -x "$b" ] || continue
-  found=1
-  echo "== $b"
-  OBJMAP_DATA="$data" "$b"
-done
-[ $found -eq 1 ] || echo "no benchmark programs built (configure with -DOBJMAP_BUILD_BENCHMARKS=ON)"
+if [ "${BENCH_PROGRAMS:-0}" = 1 ]; then
+  for b in "$bindir"/bench_*; do
+    [ -x "$b" ] || continue
+    echo "== $b"
+    OBJMAP_DATA="$data" "$b"
+  done
+fi
+
+# 3. The tables.
+step "writing the tables ($doc between <!-- bench:begin --> and <!-- bench:end -->)"
+$py "$tables" render --bench "$out" --doc "$doc" --data "$data" --objmap "$objmap" \
+  --seconds $(($(date -u +%s) - started)) --command "${BENCH_COMMAND:-make bench DATA=$data}"

@@ -1,18 +1,51 @@
 #!/usr/bin/env bash
 # Installs the Debian packages objmap needs, only those that are missing. Idempotent and quiet when
 # everything is present. Run as root (or with sudo available).
+#   scripts/install-deps.sh           build and test dependencies
+#   scripts/install-deps.sh --bench   also what `make bench` uses: python3 (the table script) and
+#                                     python3-open3d (the Open3D baseline, optional: when it cannot be
+#                                     installed the bench says n/a for it and goes on)
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev)
+bench_required=(python3)
+bench_optional=(python3-open3d)
+bench=0
+for arg in "$@"; do
+  case "$arg" in
+    --bench) bench=1 ;;
+    *) echo "install-deps: unknown option $arg (expected --bench)" >&2; exit 2 ;;
+  esac
+done
+[ $bench -eq 1 ] && packages+=("${bench_required[@]}")
+
+is_installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 missing=()
 for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  is_installed "$p" || missing+=("$p")
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
-echo "install-deps: installing ${missing[*]}" >&2
+optional=()
+if [ $bench -eq 1 ]; then
+  for p in "${bench_optional[@]}"; do
+    is_installed "$p" || optional+=("$p")
+  done
+fi
+[ ${#missing[@]} -eq 0 ] && [ ${#optional[@]} -eq 0 ] && exit 0
 sudo_cmd=()
 [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
 export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+updated=0
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}" >&2
+  "${sudo_cmd[@]}" apt-get update -qq
+  updated=1
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+if [ ${#optional[@]} -gt 0 ]; then
+  echo "install-deps: installing ${optional[*]} (optional, for make bench)" >&2
+  { [ $updated -eq 1 ] || "${sudo_cmd[@]}" apt-get update -qq; } &&
+    "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${optional[@]}" >/dev/null ||
+    echo "install-deps: could not install ${optional[*]}; make bench will say n/a for Open3D" >&2
+fi
+exit 0

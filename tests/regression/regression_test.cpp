@@ -1,0 +1,327 @@
+// CI regression gate: the whole pipeline on a synthetic scene and on fr3_cabinet_58kf, with the
+// paper's Table 3/4/5 style errors compared to the thresholds of tests/regression/thresholds.json
+// (each the measured value plus a small margin, the measurement recorded beside it). A change that
+// makes any of them worse than its threshold fails `make test`. Each check prints
+// "metric: measured X, threshold <= Y (recorded Z on DATE)".
+//
+// The runs are shared through cached_output with tests/integration (same keys, same arguments):
+// "seed3-orbit60-scene" (objmap synth --seed 3 --orbit-speed 60), "seed3-orbit60-fuse" (fuse with
+// groundtruth.txt), plus "seed3-orbit60-fuse-estimated" (fuse with the drifting estimated.txt) and
+// "fr3cabinet-fuse" (fr3_cabinet_58kf with groundtruth.txt and boxes_yolov2).
+#include <gtest/gtest-spi.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/test_support.h"
+
+namespace objmap::test {
+namespace {
+
+using nlohmann::json;
+
+fs::path thresholds_file() {
+  return fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "tests" / "regression" / "thresholds.json";
+}
+
+const json& thresholds() {
+  static const json doc = [] {
+    std::ifstream in(thresholds_file());
+    return json::parse(in, nullptr, /*allow_exceptions=*/false);
+  }();
+  return doc;
+}
+
+// Compares `value` with the metric's "max" (or "min") threshold and prints both.
+void check(const std::string& metric, double value) {
+  SCOPED_TRACE(metric);
+  const json& all = thresholds();
+  ASSERT_TRUE(all.is_object() && all.contains("metrics")) << thresholds_file();
+  ASSERT_TRUE(all["metrics"].contains(metric))
+      << "no threshold for " << metric << " in " << thresholds_file() << " (measured " << value
+      << ")";
+  const json& t = all["metrics"][metric];
+  const std::string recorded = " (recorded " + t.value("measured", json()).dump() + " on " +
+                               t.value("date", std::string("?")) + ")";
+  if (t.contains("max")) {
+    const double max = t["max"].get<double>();
+    std::cout << "[ regression ] " << metric << ": measured " << value << ", threshold <= " << max
+              << recorded << std::endl;
+    EXPECT_LE(value, max) << metric << " regressed beyond its threshold" << recorded;
+  }
+  if (t.contains("min")) {
+    const double min = t["min"].get<double>();
+    std::cout << "[ regression ] " << metric << ": measured " << value << ", threshold >= " << min
+              << recorded << std::endl;
+    EXPECT_GE(value, min) << metric << " regressed beyond its threshold" << recorded;
+  }
+}
+
+// `objmap eval objects <args> --json F`, parsed; null on failure (with the reason in `why`).
+json eval_objects(const std::vector<std::string>& args, std::string* why) {
+  TempDir dir;
+  std::vector<std::string> a{"eval", "objects"};
+  a.insert(a.end(), args.begin(), args.end());
+  a.insert(a.end(), {"--json", (dir / "eval.json").string()});
+  const RunResult r = run_objmap(a);
+  if (r.exit_code != 0) {
+    *why = "exit " + std::to_string(r.exit_code) + ": " + r.err;
+    return json();
+  }
+  std::ifstream in(dir / "eval.json");
+  return json::parse(in, nullptr, false);
+}
+
+const json& overall(const json& rows) {
+  for (const auto& r : rows)
+    if (r.at("class") == "overall") return r;
+  static const json none;
+  return none;
+}
+
+struct SyntheticRuns {
+  fs::path scene, gt_run, est_run;
+  RunResult synth, gt_fuse, est_fuse;
+};
+
+const SyntheticRuns& synthetic() {
+  static const SyntheticRuns runs = [] {
+    SyntheticRuns s;
+    s.scene =
+        cached_output("seed3-orbit60-scene",
+                      {"synth", "--out", "{OUT}", "--seed", "3", "--orbit-speed", "60"}, &s.synth);
+    if (!fs::exists(s.scene)) return s;
+    auto fuse = [&](const std::string& key, const std::string& trajectory, RunResult* result) {
+      return cached_output(
+          key,
+          {"fuse", "--dataset", s.scene.string(), "--trajectory", (s.scene / trajectory).string(),
+           "--segmentation", (s.scene / "segmentation").string(), "--out", "{OUT}"},
+          result);
+    };
+    s.gt_run = fuse("seed3-orbit60-fuse", "groundtruth.txt", &s.gt_fuse);
+    s.est_run = fuse("seed3-orbit60-fuse-estimated", "estimated.txt", &s.est_fuse);
+    return s;
+  }();
+  return runs;
+}
+
+TEST(Regression, ThresholdsFileIsComplete) {
+  const json& all = thresholds();
+  ASSERT_TRUE(all.is_object() && all.contains("metrics")) << thresholds_file();
+  ASSERT_GE(all["metrics"].size(), 8u);
+  for (const auto& [name, t] : all["metrics"].items()) {
+    SCOPED_TRACE(name);
+    EXPECT_TRUE(t.contains("max") || t.contains("min"));
+    ASSERT_TRUE(t.contains("measured") && t["measured"].is_number());
+    EXPECT_TRUE(t.contains("date") && t["date"].is_string());
+    EXPECT_TRUE(t.contains("command") && t["command"].is_string());
+    // A threshold is the measurement plus a margin: the recorded measurement passes it.
+    const double measured = t["measured"].get<double>();
+    if (t.contains("max")) {
+      EXPECT_LE(measured, t["max"].get<double>());
+    }
+    if (t.contains("min")) {
+      EXPECT_GE(measured, t["min"].get<double>());
+    }
+  }
+}
+
+TEST(Regression, GateFailsBeyondAThreshold) {
+  EXPECT_NONFATAL_FAILURE(check("fr3_cabinet.centroid_error_m", 1.0),
+                          "regressed beyond its threshold");
+  EXPECT_NONFATAL_FAILURE(check("fr3_cabinet.obb_iou", 0.0), "regressed beyond its threshold");
+}
+
+// Table 3 and the centroid error of the map fused with the ground-truth trajectory, against the
+// scene's exact objects (objects_gt.json, volume centroids).
+TEST(Regression, SyntheticSeed3MapVsTrueObjects) {
+  const SyntheticRuns& s = synthetic();
+  ASSERT_TRUE(fs::exists(s.scene)) << s.synth.err;
+  ASSERT_TRUE(fs::exists(s.gt_run)) << s.gt_fuse.err;
+  std::string why;
+  const json e = eval_objects({"--map", (s.gt_run / "objects.json").string(), "--gt-objects",
+                               (s.scene / "objects_gt.json").string()},
+                              &why);
+  ASSERT_TRUE(e.is_object()) << why;
+  const json& counts = overall(e.at("counts"));
+  const json& centroid = overall(e.at("centroid_error"));
+  ASSERT_TRUE(counts.is_object() && centroid.is_object());
+  check("synthetic_seed3.gt_map.count_error", counts.at("error").get<double>());
+  check(
+      "synthetic_seed3.gt_map.unmatched_true_objects",
+      static_cast<double>(centroid.at("reference").get<int>() - centroid.at("matched").get<int>()));
+  check("synthetic_seed3.gt_map.mean_centroid_error_m", centroid["distance_m"]["mean"]);
+  check("synthetic_seed3.gt_map.max_centroid_error_m", centroid["distance_m"]["max"]);
+  check("synthetic_seed3.gt_map.mean_obb_iou", centroid["iou"]["mean"]);
+}
+
+// Tables 4-5 (the paper's protocol): the map fused with the drifting estimated.txt against the
+// map fused with groundtruth.txt, and against the true objects.
+TEST(Regression, SyntheticSeed3EstimateMapVsGroundTruthMap) {
+  const SyntheticRuns& s = synthetic();
+  ASSERT_TRUE(fs::exists(s.gt_run)) << s.gt_fuse.err;
+  ASSERT_TRUE(fs::exists(s.est_run)) << s.est_fuse.err;
+  std::string why;
+  const json e = eval_objects({"--map", (s.est_run / "objects.json").string(), "--reference",
+                               (s.gt_run / "objects.json").string()},
+                              &why);
+  ASSERT_TRUE(e.is_object()) << why;
+  const json& counts = overall(e.at("counts"));
+  const json& centroid = overall(e.at("centroid_error"));
+  ASSERT_TRUE(counts.is_object() && centroid.is_object());
+  check("synthetic_seed3.est_map_vs_gt_map.count_error", counts.at("error").get<double>());
+  check("synthetic_seed3.est_map_vs_gt_map.mean_centroid_error_m", centroid["distance_m"]["mean"]);
+
+  const json t = eval_objects({"--map", (s.est_run / "objects.json").string(), "--gt-objects",
+                               (s.scene / "objects_gt.json").string()},
+                              &why);
+  ASSERT_TRUE(t.is_object()) << why;
+  check("synthetic_seed3.est_map.mean_centroid_error_m",
+        overall(t.at("centroid_error"))["distance_m"]["mean"]);
+}
+
+// fr3_cabinet_58kf: one cabinet, YOLOv2 boxes without class or track id, ground-truth trajectory;
+// the ground truth is a cuboid (objects_gt.txt).
+TEST(Regression, Fr3CabinetObjectVsCuboid) {
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr3_cabinet_58kf");
+  RunResult fuse;
+  const fs::path run = cached_output(
+      "fr3cabinet-fuse",
+      {"fuse", "--dataset", data.string(), "--trajectory", (data / "groundtruth.txt").string(),
+       "--segmentation", (data / "boxes_yolov2").string(), "--out", "{OUT}"},
+      &fuse);
+  ASSERT_TRUE(fs::exists(run)) << fuse.err;
+  std::string why;
+  const json e = eval_objects({"--map", (run / "objects.json").string(), "--gt-objects",
+                               (data / "objects_gt.txt").string()},
+                              &why);
+  ASSERT_TRUE(e.is_object()) << why;
+  const json& counts = overall(e.at("counts"));
+  const json& centroid = overall(e.at("centroid_error"));
+  ASSERT_TRUE(counts.is_object() && centroid.is_object());
+  check("fr3_cabinet.count_error", counts.at("error").get<double>());
+  ASSERT_EQ(centroid.at("matched").get<int>(), 1) << "the cabinet is not in the map";
+  check("fr3_cabinet.centroid_error_m", centroid["distance_m"]["mean"]);
+  check("fr3_cabinet.obb_iou", centroid["iou"]["mean"]);
+}
+
+// scripts/bench_tables.py (make bench): `python3 bench_tables.py <args>`, output in `log`.
+int bench_tables(const std::string& args, const fs::path& log) {
+  const fs::path script = fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "scripts" / "bench_tables.py";
+  const std::string cmd = "python3 " + script.string() + " " + args + " >" + log.string() + " 2>&1";
+  return std::system(cmd.c_str());
+}
+
+bool has_python3() { return std::system("python3 -c pass >/dev/null 2>&1") == 0; }
+
+// A bench output folder with one synthetic sequence: 12 true objects, 11 mapped.
+void write_fake_bench(const fs::path& bench) {
+  write_text(bench / "features.txt", "has_correct=0\nload_start=1.0 1.0 1.0\n");
+  write_text(bench / "synth_seed9" / "meta.txt",
+             "name=synth_seed9\nkind=synthetic\nframes=90\nsegmentation=/x/segmentation\n"
+             "estimate=\ngt_objects=/x/objects_gt.json\n");
+  write_text(bench / "synth_seed9" / "run_gt" / "run.json",
+             R"({"counts": {"frames": 90, "keyframes": 90, "keyframe_mode": "motion",
+                 "objects_confirmed": 11},
+                 "points": {"dense_back_projected": 1000, "dense_map": 500, "objects_raw": 400,
+                 "objects_voxel_filtered": 200, "objects_outlier_filtered": 150,
+                 "objects_map": 150}})");
+  const std::string stats =
+      R"({"count": 11, "rmse": 0.04, "mean": 0.0321, "median": 0.03, "std": 0.01, "min": 0.01,
+          "max": 0.08})";
+  write_text(bench / "synth_seed9" / "objects_gt_vs_truth.json",
+             R"({"counts": [{"class": "overall", "reference": 12, "mapped": 11,
+                 "error": 0.0833333}],
+                 "centroid_error": [{"class": "overall", "reference": 12, "mapped": 11,
+                 "matched": 11, "distance_m": )" +
+                 stats + R"(, "iou": )" + stats + "}]}");
+}
+
+TEST(BenchTables, RenderReplacesOnlyTheGeneratedSection) {
+  if (!has_python3()) GTEST_SKIP() << "no python3";
+  TempDir dir;
+  write_fake_bench(dir / "bench");
+  const std::string head = "# Benchmarks\n\nIntro written by hand.\n\n";
+  const std::string tail = "\n\n## Analysis\n\nHand-written analysis, kept.\n";
+  write_text(dir / "doc.md", head + "<!-- bench:begin -->\nOLD TABLES\n<!-- bench:end -->" + tail);
+  const std::string args = "render --bench " + (dir / "bench").string() + " --doc " +
+                           (dir / "doc.md").string() + " --command 'make bench'";
+  ASSERT_EQ(bench_tables(args, dir / "log"), 0) << read_text(dir / "log");
+  const std::string doc = read_text(dir / "doc.md");
+  EXPECT_EQ(doc.rfind(head, 0), 0u) << doc;
+  EXPECT_EQ(doc.substr(doc.size() - tail.size()), tail) << doc;
+  EXPECT_EQ(doc.find("OLD TABLES"), std::string::npos) << doc;
+  // Table 3 row: 12 true objects, 11 mapped, 8.3%; Table 4-5 column: mean 0.0321 m.
+  EXPECT_NE(doc.find("| synth_seed9 | 12 | 11 | 8.3% |"), std::string::npos) << doc;
+  EXPECT_NE(doc.find("0.0321"), std::string::npos) << doc;
+  EXPECT_NE(doc.find("0.0115"), std::string::npos) << "the paper's Table 7 beside ours";
+
+  // Without markers the section goes after the intro, before the first "## " heading.
+  write_text(dir / "doc.md", head + "## Analysis\n\nkept\n");
+  ASSERT_EQ(bench_tables(args, dir / "log"), 0) << read_text(dir / "log");
+  const std::string doc2 = read_text(dir / "doc.md");
+  const auto begin = doc2.find("<!-- bench:begin -->");
+  ASSERT_NE(begin, std::string::npos) << doc2;
+  EXPECT_EQ(begin, head.size()) << doc2;
+  EXPECT_LT(doc2.find("<!-- bench:end -->"), doc2.find("## Analysis\n\nkept\n")) << doc2;
+}
+
+TEST(BenchTables, PrepareMovesASlamEstimateOntoTheGroundTruth) {
+  if (!has_python3()) GTEST_SKIP() << "no python3";
+  TempDir dir;
+  // Ground truth: start at (1, 2, 3) turned 90 degrees about z, then move along its x axis.
+  // The estimate starts at the identity (SLAM frame) and covers the first 3 of 5 frames.
+  const double s = std::sqrt(0.5);
+  std::string gt, est, rgb = "# rgb\n";
+  for (int i = 0; i < 5; ++i) {
+    const double t = 10.0 + 0.1 * i;
+    gt += std::to_string(t) + " 1 " + std::to_string(2.0 + 0.1 * i) + " 3 0 0 " +
+          std::to_string(s) + " " + std::to_string(s) + "\n";
+    if (i < 3) est += std::to_string(t) + " " + std::to_string(0.1 * i) + " 0 0 0 0 0 1\n";
+    rgb += std::to_string(t) + " rgb/" + std::to_string(i) + ".png\n";
+  }
+  write_text(dir / "seq" / "groundtruth.txt", gt);
+  write_text(dir / "seq" / "rgb.txt", rgb);
+  write_text(dir / "est.txt", est);
+  const std::string args = "prepare --dataset " + (dir / "seq").string() + " --gt " +
+                           (dir / "seq" / "groundtruth.txt").string() + " --est " +
+                           (dir / "est.txt").string() + " --out-dir " + (dir / "out").string();
+  ASSERT_EQ(bench_tables(args, dir / "log"), 0) << read_text(dir / "log");
+  const std::string log = read_text(dir / "log");
+  EXPECT_NE(log.find("aligned=1"), std::string::npos) << log;
+  EXPECT_NE(log.find("reference=" + (dir / "out" / "groundtruth_span.txt").string()),
+            std::string::npos)
+      << log;
+  // Third estimate pose: 0.2 m along the camera's x, i.e. world y after the 90 degree turn.
+  std::istringstream aligned(read_text(dir / "out" / "estimate_aligned.txt"));
+  std::string line;
+  std::vector<std::vector<double>> rows;
+  while (std::getline(aligned, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream row(line);
+    std::vector<double> v(8);
+    for (double& x : v) row >> x;
+    rows.push_back(v);
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_NEAR(rows[2][1], 1.0, 1e-5);
+  EXPECT_NEAR(rows[2][2], 2.2, 1e-5);
+  EXPECT_NEAR(rows[2][3], 3.0, 1e-5);
+  EXPECT_NEAR(std::abs(rows[2][6]), s, 1e-5);
+  EXPECT_NEAR(std::abs(rows[2][7]), s, 1e-5);
+  // The reference ground truth keeps only the estimate's span (3 of 5 poses).
+  std::istringstream span(read_text(dir / "out" / "groundtruth_span.txt"));
+  int poses = 0;
+  while (std::getline(span, line)) poses += !line.empty() && line[0] != '#';
+  EXPECT_EQ(poses, 3);
+}
+
+}  // namespace
+}  // namespace objmap::test
