@@ -44,7 +44,7 @@ void setup_all(CLI::App& app) {
 int main(int argc, char** argv) {
   CLI::App app{
       "objmap: object-oriented semantic maps from a finished RGB-D SLAM run.\n"
-      "Pipeline: synth | validate -> track -> fuse -> eval -> report.\n"
+      "Pipeline: synth | validate -> detect -> track -> fuse -> correct -> eval -> report.\n"
       "Run 'objmap <command> --help' for the options of one command."};
   app.set_version_flag("--version", std::string("objmap ") + objmap::version());
   app.require_subcommand(1);

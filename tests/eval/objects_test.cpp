@@ -212,6 +212,17 @@ TEST(ObjectsGt, ReadsTheFr3CabinetCuboid) {
   EXPECT_EQ(read_objects_gt(dir / "objects_gt.txt", "cabinet")[0].class_name, "cabinet");
 }
 
+TEST(ObjectsGt, ReadsTheYcbvPositionList) {
+  OBJMAP_DATA_OR_SKIP(dir, "ycbv_0000_10f");
+  const auto objects = read_objects_gt(dir / "objects_gt.txt");
+  ASSERT_EQ(objects.size(), 3u);
+  EXPECT_EQ(objects[0].id, 8);
+  EXPECT_EQ(objects[0].class_name, "009 gelatin box");
+  EXPECT_TRUE(objects[0].centroid.isApprox(Vec3(-0.08726, 0.01807, 0.03214)));
+  EXPECT_EQ(objects[0].obb.half_extent, Vec3::Zero());  // a position, no extent
+  EXPECT_EQ(objects[2].class_name, "061 foam brick");
+}
+
 TEST(ObjectsGt, ReadsJsonAndRejectsBadFiles) {
   TempDir tmp;
   write_text(tmp / "gt.json",

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -271,6 +272,23 @@ std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path
   io::LineReader in(file);
   std::vector<ReferenceObject> out;
   while (in.next()) {
+    // A position list ("id class x y z [key value]...", e.g. ycbv_0000_10f/objects_gt.txt): the
+    // second field is a class name, not a number. Such an object has a position and no extent.
+    char* end = nullptr;
+    const std::string& second = in.field(in.fields().size() > 1 ? 1 : 0);
+    std::strtod(second.c_str(), &end);
+    if (in.fields().size() >= 5 && *end != '\0') {  // not wholly a number ("009_gelatin_box")
+      ReferenceObject r;
+      r.id = static_cast<int>(in.number(0, "id"));
+      r.class_name = second;  // '_' for spaces, as objmap names classes ("009 gelatin box")
+      std::replace(r.class_name.begin(), r.class_name.end(), '_', ' ');
+      r.centroid = {in.number(2, "x"), in.number(3, "y"), in.number(4, "z")};
+      r.obb.center = r.centroid;
+      r.obb.rotation = Eigen::Matrix3d::Identity();
+      r.obb.half_extent = Vec3::Zero();
+      out.push_back(std::move(r));
+      continue;
+    }
     in.expect_fields(7, "x y z yaw half_x half_y half_z (metres, radians)");
     ReferenceObject r;
     r.id = static_cast<int>(out.size()) + 1;
@@ -286,8 +304,8 @@ std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path
   }
   if (out.empty())
     throw InputError(file.string(),
-                     "no cuboid; expected lines \"x y z yaw half_x half_y half_z\" or "
-                     "objects_gt.json");
+                     "no cuboid; expected lines \"x y z yaw half_x half_y half_z\", "
+                     "\"id class x y z\" or objects_gt.json");
   return out;
 }
 
