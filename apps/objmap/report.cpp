@@ -135,7 +135,18 @@ void run_report(const ReportOptions& options) {
 
   // 2. Trajectories: the run's estimate, the ground truth, the corrected one.
   std::optional<Trajectory> est, gt, corrected;
-  if (const auto est_path = input_path(run, "trajectory")) {
+  std::optional<fs::path> run_trajectory = input_path(run, "trajectory");
+  // A run made by `objmap correct` (or fuse --correct-poses) was fused with its corrected
+  // trajectory; its estimate is then the input of the correction (correction.json).
+  if (std::ifstream cin(options.run / "correction.json"); cin) {
+    const json correction = json::parse(cin, nullptr, false);
+    if (correction.is_object() && correction.contains("input_trajectory") &&
+        correction["input_trajectory"].is_string()) {
+      const fs::path input = correction["input_trajectory"].get<std::string>();
+      if (fs::exists(input)) run_trajectory = input;
+    }
+  }
+  if (const auto est_path = run_trajectory) {
     if (fs::exists(*est_path)) {
       est = io::read_trajectory(*est_path);
       page.inputs.push_back("estimated trajectory: " + est_path->string());
@@ -148,7 +159,7 @@ void run_report(const ReportOptions& options) {
   if (gt_path.empty()) {
     if (const auto dataset = input_path(run, "dataset")) {
       const fs::path candidate = *dataset / "groundtruth.txt";
-      const auto est_path = input_path(run, "trajectory");
+      const auto& est_path = run_trajectory;
       if (fs::exists(candidate) && !(est_path && same_file(candidate, *est_path)))
         gt_path = candidate;
       else if (fs::exists(candidate))
@@ -274,10 +285,13 @@ void run_report(const ReportOptions& options) {
     drawn.push_back({o.id, std::to_string(o.id) + " " + o.class_name, o.obb,
                      fusion::class_color(o.class_name)});
   std::vector<report::TopViewPath> paths;
-  if (est) {
+  // The map was fused with the run's own trajectory: the corrected one for a corrected run.
+  const std::optional<Trajectory>& map_trajectory =
+      fs::exists(options.run / "correction.json") && corrected ? corrected : est;
+  if (map_trajectory) {
     report::TopViewPath path;
     path.color = Rgb{230, 0, 120};
-    for (const StampedPose& p : est->poses)
+    for (const StampedPose& p : map_trajectory->poses)
       path.points_in_world.push_back(p.world_from_cam.translation());
     paths.push_back(path);
   }

@@ -184,6 +184,20 @@ TEST(ReportCli, TrajectoriesAgainstTheGroundTruthThenTheCorrectedOne) {
   EXPECT_EQ(count_of(ate, "<polyline"), 2u);
   EXPECT_NE(r.out.find(", corrected 0.004"), std::string::npos) << r.out;
   EXPECT_EQ(xml_problem(read_text(run / "report" / "report.html")), "");
+
+  // A run written by `objmap correct` was fused with its corrected trajectory; the estimate shown
+  // is still the correction's input (correction.json), not the corrected file a second time.
+  auto doc = nlohmann::json::parse(read_text(run / "run.json"));
+  doc["inputs"]["trajectory"]["path"] = fs::absolute(run / "trajectory_corrected.txt").string();
+  write_text(run / "run.json", doc.dump(1));
+  write_text(run / "correction.json",
+             nlohmann::json{{"input_trajectory", fs::absolute(c.scene / "estimated.txt").string()}}
+                 .dump());
+  r = run_objmap({"report", "--run", run.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::snprintf(rmse, sizeof rmse, "ATE RMSE estimated %.4f m, corrected 0.004",
+                expected.stats.rmse);
+  EXPECT_NE(r.out.find(rmse), std::string::npos) << r.out << "\nexpected: " << rmse;
 }
 
 TEST(ReportCli, RunWithoutObjectsJsonIsExit2NamingTheFile) {
