@@ -32,6 +32,8 @@ import subprocess
 import sys
 import time
 
+from tum import nearest, quat_to_matrix, read_list, read_trajectory
+
 BEGIN = "<!-- bench:begin -->"
 END = "<!-- bench:end -->"
 
@@ -68,25 +70,6 @@ def measure(args):
 
 
 # ----------------------------------------------------------------------------------------- prepare
-def read_tum(path):
-    rows = []
-    with open(path) as f:
-        for line in f:
-            parts = line.split()
-            if len(parts) == 8 and not parts[0].startswith("#"):
-                rows.append([float(v) for v in parts])
-    rows.sort()
-    return rows
-
-
-def quat_to_matrix(qx, qy, qz, qw):
-    n = (qx * qx + qy * qy + qz * qz + qw * qw) ** 0.5
-    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
-    return [[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-            [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-            [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]]
-
-
 def matrix_to_quat(m):
     tr = m[0][0] + m[1][1] + m[2][2]
     if tr > 0:
@@ -113,22 +96,12 @@ def is_identity(row, tol=1e-6):
 
 
 def nearest_row(rows, t, max_diff=0.02):
-    best = min(rows, key=lambda r: abs(r[0] - t))
-    return best if abs(best[0] - t) <= max_diff else None
-
-
-def rgb_stamps(dataset):
-    out = []
-    with open(os.path.join(dataset, "rgb.txt")) as f:
-        for line in f:
-            parts = line.split()
-            if parts and not parts[0].startswith("#"):
-                out.append(float(parts[0]))
-    return out
+    i = nearest([r[0] for r in rows], t, max_diff)
+    return None if i is None else rows[i]
 
 
 def prepare(args):
-    gt, est = read_tum(args.gt), read_tum(args.est)
+    gt, est = read_trajectory(args.gt), read_trajectory(args.est)
     os.makedirs(args.out_dir, exist_ok=True)
     estimate, aligned = args.est, 0
     if est and gt:
@@ -149,7 +122,7 @@ def prepare(args):
                                               " ".join("%.6f" % v for v in q)))
     reference = ""
     if est and gt:
-        stamps = rgb_stamps(args.dataset)
+        stamps = [t for t, _ in read_list(os.path.join(args.dataset, "rgb.txt"))]
         lo, hi = est[0][0] - 0.02, est[-1][0] + 0.02
         posed = [t for t in stamps if nearest_row(gt, t) is not None]
         in_span = [t for t in posed if lo <= t <= hi]

@@ -16,6 +16,8 @@ import argparse
 import math
 import random
 
+from tum import fail, read_trajectory
+
 
 def quat_mul(a, b):
     ax, ay, az, aw = a
@@ -42,17 +44,9 @@ def main():
                         help="yaw drift rate, degrees per metre travelled")
     args = parser.parse_args()
 
-    rows = []
-    with open(args.input) as f:
-        for line in f:
-            fields = line.replace(",", " ").split()
-            if not fields or fields[0].startswith("#"):
-                continue
-            if len(fields) != 8:
-                raise SystemExit("%s: a line with %d fields; expected 8" % (args.input, len(fields)))
-            rows.append([float(x) for x in fields])
+    rows = read_trajectory(args.input)
     if not rows:
-        raise SystemExit("%s: no pose" % args.input)
+        fail(args.input, "no pose; expected lines timestamp tx ty tz qx qy qz qw")
 
     rng = random.Random(args.seed)
     theta = rng.uniform(0.0, 2.0 * math.pi)

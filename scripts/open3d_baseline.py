@@ -19,13 +19,14 @@ Peak RSS is this process's (resource.getrusage). Needs Debian's python3-open3d (
 0.05 m or 5 degrees of motion since the last one); all (default) takes every posed frame.
 """
 import argparse
-import bisect
 import json
 import math
 import os
 import resource
 import sys
 import time
+
+from tum import fail, nearest, quat_to_matrix, read_list, read_trajectory
 
 PRESETS = {  # TUM RGB-D intrinsics (fx, fy, cx, cy), 640x480
     "fr1": (517.3, 516.5, 318.6, 255.3),
@@ -34,63 +35,9 @@ PRESETS = {  # TUM RGB-D intrinsics (fx, fy, cx, cy), 640x480
 }
 
 
-def fail(where, reason):
-    sys.stderr.write("open3d_baseline: error: %s: %s\n" % (where, reason))
-    sys.exit(2)
-
-
-def read_list(path):
-    """TUM rgb.txt / depth.txt: 'timestamp filename' per line, '#' comments."""
-    rows = []
-    with open(path) as f:
-        for n, line in enumerate(f, 1):
-            line = line.strip()
-            if not line or line.startswith("#"):
-                continue
-            parts = line.split()
-            if len(parts) < 2:
-                fail("%s:%d" % (path, n), "%d fields; expected 2: timestamp filename" % len(parts))
-            rows.append((float(parts[0]), parts[1]))
-    rows.sort()
-    return rows
-
-
-def read_trajectory(path):
-    """TUM trajectory: 'timestamp tx ty tz qx qy qz qw' per line."""
-    rows = []
-    with open(path) as f:
-        for n, line in enumerate(f, 1):
-            line = line.strip()
-            if not line or line.startswith("#"):
-                continue
-            parts = line.split()
-            if len(parts) != 8:
-                fail("%s:%d" % (path, n),
-                     "%d fields; expected 8: timestamp tx ty tz qx qy qz qw" % len(parts))
-            rows.append(tuple(float(v) for v in parts))
-    rows.sort()
-    return rows
-
-
-def nearest(stamps, t, max_diff):
-    i = bisect.bisect_left(stamps, t)
-    best = None
-    for j in (i - 1, i):
-        if 0 <= j < len(stamps) and abs(stamps[j] - t) <= max_diff:
-            if best is None or abs(stamps[j] - t) < abs(stamps[best] - t):
-                best = j
-    return best
-
-
 def pose_matrix(tx, ty, tz, qx, qy, qz, qw):
-    n = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
-    return [
-        [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw), tx],
-        [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw), ty],
-        [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy), tz],
-        [0.0, 0.0, 0.0, 1.0],
-    ]
+    r = quat_to_matrix(qx, qy, qz, qw)
+    return [r[0] + [tx], r[1] + [ty], r[2] + [tz], [0.0, 0.0, 0.0, 1.0]]
 
 
 def camera_for(args):
