@@ -73,10 +73,17 @@ std::map<int, Score> run_ycbv(const fs::path& dir, double margin) {
       const BoxMaskResult r = mask_from_box(box, depth, cam, {});
       EXPECT_EQ(r.status, BoxMaskStatus::kOk) << name << " " << mask_file.filename();
       std::size_t inter = 0, uni = 0, inter_valid = 0, uni_valid = 0, found = 0;
+      int mu0 = labels.cols, mv0 = labels.rows, mu1 = -1, mv1 = -1;  // the mask's bounds
       for (int v = 0; v < labels.rows; ++v) {
         for (int u = 0; u < labels.cols; ++u) {
           const bool t = labels.at<std::uint8_t>(v, u) == id;
           const bool m = r.mask.at(u, v);
+          if (m) {
+            mu0 = std::min(mu0, u);
+            mv0 = std::min(mv0, v);
+            mu1 = std::max(mu1, u);
+            mv1 = std::max(mv1, v);
+          }
           const bool valid = depth.at<std::uint16_t>(v, u) > 0;
           inter += t && m;
           uni += t || m;
@@ -84,6 +91,12 @@ std::map<int, Score> run_ycbv(const fs::path& dir, double margin) {
           inter_valid += valid && t && m;
           uni_valid += valid && (t || m);
         }
+      }
+      // The result's bounds are those of its mask's pixels (fuse passes them on, unscanned).
+      if (r.status == BoxMaskStatus::kOk) {
+        EXPECT_EQ(r.bounds, cv::Rect(mu0, mv0, mu1 - mu0 + 1, mv1 - mv0 + 1)) << name;
+      } else {
+        EXPECT_TRUE(r.bounds.empty());
       }
       Score& s = scores[id];
       s.iou_sum += uni ? double(inter) / uni : 0;

@@ -298,6 +298,7 @@ TEST(BoxMask, BoxPartlyOutsideTheImageIsClipped) {
   EXPECT_EQ(result.u1, 640);
   EXPECT_EQ(result.v1, 480);
   EXPECT_EQ(result.pixels, 80u * 80u);
+  EXPECT_EQ(result.bounds, cv::Rect(560, 400, 80, 80));
   for (int v = 400; v < 480; ++v) {
     for (int u = 560; u < 640; ++u) ASSERT_EQ(result.mask.at(u, v), 1) << u << "," << v;
   }
@@ -317,6 +318,7 @@ TEST(BoxMask, TinyRegionIsEmpty) {
   const BoxMaskResult result = mask_from_box({250, 150, 100, 100}, depth, cam, {});
   EXPECT_EQ(result.status, BoxMaskStatus::kTooSmall);
   EXPECT_EQ(count(result.mask), 0u);
+  EXPECT_TRUE(result.bounds.empty());
   BoxMaskOptions small;
   small.min_pixels = 5;
   small.min_box_fraction = 0;

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <string>
 
 #include "objmap/core/error.h"
@@ -73,6 +75,44 @@ PointCloud frame(int f) {
                 Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(f), 3});
   }
   return c;
+}
+
+TEST(VoxelMap, EveryPointLandsInItsOwnVoxelWhateverItsPlaceInTheBatch) {
+  // insert() takes four points at a time where it can: every point, in any lane and in the scalar
+  // tail, must land in voxel_key()'s voxel with voxel_coords()'s offset, and the points that are
+  // not finite or out of range are dropped. One point per voxel (spread apart), so each voxel's
+  // sums are that point's own values.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  PointCloud c;
+  std::size_t bad = 0;
+  for (int i = 0; i < 1031; ++i) {  // not a multiple of 4 (scalar tail)
+    const float t = static_cast<float>(i);
+    Vec3f p(0.37f * t - 150.f, -0.0f - 0.21f * t, 0.013f * t + (i % 3 == 0 ? -0.0f : 0.5f));
+    if (i % 17 == 3) p[i % 3] = (i % 2) ? nan : -inf;
+    if (i % 29 == 5) p[(i + 1) % 3] = 2.0e4f;  // beyond the ±10 km key range at 1 cm
+    if (i % 31 == 7) p[i % 3] = -1.0e4f;       // exactly at the range's lower end: kept
+    c.push_back(p, Rgb{static_cast<std::uint8_t>(i), 7, static_cast<std::uint8_t>(255 - i % 256)});
+  }
+  VoxelMap map({0.01, 1});
+  map.insert(c);
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    Eigen::Vector3i ijk;
+    Eigen::Vector3f offset;
+    if (!geometry::voxel_coords(c.points[i], 100.0f, ijk, offset)) {
+      ++bad;
+      continue;
+    }
+    const VoxelData* v = map.find(geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z()));
+    ASSERT_NE(v, nullptr) << i;
+    ASSERT_EQ(v->count, 1u) << i;
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(v->offset_sum[k], offset[k]) << i << " axis " << k;
+    EXPECT_EQ(v->color_sum[0], c.colors[i].r) << i;
+    EXPECT_EQ(v->color_sum[2], c.colors[i].b) << i;
+  }
+  EXPECT_GT(bad, 50u);
+  EXPECT_EQ(map.points_dropped(), bad);
+  EXPECT_EQ(map.size(), c.size() - bad);
 }
 
 TEST(VoxelMap, IdenticalOutputForOneAndTwoThreads) {
@@ -151,6 +191,42 @@ TEST(VoxelMap, ShardedMapsMergeShardByShardLikeOneMap) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("shard count"), std::string::npos) << e.what();
   }
+}
+
+TEST(VoxelMap, TakeShardMergesLikeMergeShardAndEmptiesTheSource) {
+  // One reused frame map, taken shard by shard into `taken`, against fresh frame maps merged into
+  // `merged`: the same voxels with bit-equal sums, and the frame map is left empty each time.
+  VoxelMapOptions sharded{0.01, 1, 16};
+  VoxelMap merged(sharded), taken(sharded), reused(sharded);
+  for (int f = 0; f < 3; ++f) {
+    const PointCloud c = frame(f);
+    VoxelMap fresh(sharded);
+    fresh.insert(c);
+    reused.insert(c);
+    ASSERT_GT(reused.size(), 0u);
+    for (std::size_t k = 0; k < 16; ++k) {
+      merged.merge_shard(fresh, k);
+      taken.take_shard(reused, k);
+    }
+    EXPECT_EQ(reused.size(), 0u);
+    EXPECT_EQ(reused.find(geometry::pack_voxel(0, 0, 0)), nullptr);
+    reused.reset();  // what fuse does next: the counters only
+  }
+  const auto a = merged.sorted_voxels(), b = taken.sorted_voxels();
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 1000u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].first, b[i].first);
+    EXPECT_EQ(a[i].second->count, b[i].second->count);
+    EXPECT_EQ(a[i].second->color_count, b[i].second->color_count);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(a[i].second->offset_sum[k], b[i].second->offset_sum[k]);
+      EXPECT_EQ(a[i].second->color_sum[k], b[i].second->color_sum[k]);
+    }
+  }
+  VoxelMap four({0.01, 1, 4});
+  EXPECT_THROW(taken.take_shard(four, 0), InputError);
+  EXPECT_THROW(taken.take_shard(taken, 0), InputError);
 }
 
 TEST(Palette, CocoNamesAndFixedColours) {

@@ -5,6 +5,10 @@
 #include <string>
 #include <thread>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "objmap/core/error.h"
 
 namespace objmap::fusion {
@@ -51,12 +55,8 @@ VoxelMap::VoxelMap(const VoxelMapOptions& options) {
   inv_voxel_m_ = static_cast<float>(1.0 / options.voxel_m);
   threads_ = static_cast<std::size_t>(options.threads);
   shards_.resize(static_cast<std::size_t>(options.shards > 0 ? options.shards : options.threads));
-}
-
-// By the voxel's x index (no second hash of the key): a frame spans many x slices, so its voxels
-// spread over the shards.
-std::size_t VoxelMap::shard_of(VoxelKey key) const {
-  return shards_.size() == 1 ? 0 : static_cast<std::size_t>(key >> 42) % shards_.size();
+  const std::size_t n = shards_.size();
+  if ((n & (n - 1)) == 0) shard_mask_ = n - 1;
 }
 
 void VoxelMap::reset() {
@@ -104,72 +104,138 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
   std::vector<std::uint32_t> run_shard;
   const std::size_t n = cloud.size();
   std::size_t dropped = 0;
-  std::vector<Run> runs;
-  runs.reserve(kBatch);
+  std::vector<Run> runs(
+      kBatch);  // at most one run per point; filled by index (no call in the loop)
+  // Per point of a batch (structure of arrays): voxel coordinates, offsets inside the voxel, valid.
   std::vector<std::int32_t> cell(3 * kBatch);
   std::vector<float> frac(3 * kBatch);
   std::vector<std::uint8_t> valid(kBatch);
+  std::int32_t* const cx = cell.data();
+  std::int32_t* const cy = cx + kBatch;
+  std::int32_t* const cz = cy + kBatch;
+  float* const fx = frac.data();
+  float* const fy = fx + kBatch;
+  float* const fz = fy + kBatch;
   constexpr float lim = static_cast<float>(geometry::kVoxelCoordLimit);
   for (std::size_t begin = 0; begin < n; begin += kBatch) {
     const std::size_t end = std::min(n, begin + kBatch);
-    // 1. Voxel coordinates and in-voxel offsets of the batch (a branch-free, vectorisable loop).
+    // 1. Voxel coordinates and in-voxel offsets of the batch: four points at a time with SSE2 (the
+    //    same float operations as the scalar loop, so the same bits), the rest one by one.
     const std::size_t count = end - begin;
-    for (std::size_t j = 0; j < count; ++j) {
+    std::size_t j = 0;
+#if defined(__SSE2__)
+    {
+      const float* src = cloud.points[begin].data();  // Vec3f: 3 packed floats per point
+      const __m128 inv = _mm_set1_ps(inv_voxel_m_), lo = _mm_set1_ps(-lim), hi = _mm_set1_ps(lim);
+      const auto floor4 = [](__m128 v, __m128i& cell4) {  // fast_floor on 4 lanes; returns offset
+        const __m128i t = _mm_cvttps_epi32(v);
+        const __m128i below = _mm_castps_si128(_mm_cmplt_ps(v, _mm_cvtepi32_ps(t)));
+        cell4 = _mm_add_epi32(t, below);  // t - 1 where v < t
+        return _mm_sub_ps(v, _mm_cvtepi32_ps(cell4));
+      };
+      for (; j + 4 <= count; j += 4) {
+        const __m128 a = _mm_loadu_ps(src + 3 * j);                       // x0 y0 z0 x1
+        const __m128 b = _mm_loadu_ps(src + 3 * j + 4);                   // y1 z1 x2 y2
+        const __m128 c = _mm_loadu_ps(src + 3 * j + 8);                   // z2 x3 y3 z3
+        const __m128 bc = _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2));  // x2 y2 z2 x3
+        const __m128 ab = _mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
+        const __m128 cd = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3));  // y2 y2 y3 y3
+        __m128 sx = _mm_mul_ps(_mm_shuffle_ps(a, bc, _MM_SHUFFLE(3, 0, 3, 0)), inv);
+        __m128 sy = _mm_mul_ps(_mm_shuffle_ps(ab, cd, _MM_SHUFFLE(2, 0, 2, 0)), inv);
+        __m128 sz = _mm_mul_ps(_mm_shuffle_ps(ab, c, _MM_SHUFFLE(3, 0, 3, 1)), inv);
+        // In range (NaN fails every ordered compare); the others become 0 as in the scalar loop.
+        __m128 ok = _mm_and_ps(_mm_cmpge_ps(sx, lo), _mm_cmplt_ps(sx, hi));
+        ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(sy, lo), _mm_cmplt_ps(sy, hi)));
+        ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(sz, lo), _mm_cmplt_ps(sz, hi)));
+        sx = _mm_and_ps(sx, ok);
+        sy = _mm_and_ps(sy, ok);
+        sz = _mm_and_ps(sz, ok);
+        __m128i ix, iy, iz;
+        _mm_storeu_ps(fx + j, floor4(sx, ix));
+        _mm_storeu_ps(fy + j, floor4(sy, iy));
+        _mm_storeu_ps(fz + j, floor4(sz, iz));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cx + j), ix);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cy + j), iy);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cz + j), iz);
+        const int bits = _mm_movemask_ps(ok);
+        for (int k = 0; k < 4; ++k) valid[j + k] = static_cast<std::uint8_t>((bits >> k) & 1);
+      }
+    }
+#endif
+    for (; j < count; ++j) {
       const Vec3f& p = cloud.points[begin + j];
       float sx = p.x() * inv_voxel_m_, sy = p.y() * inv_voxel_m_, sz = p.z() * inv_voxel_m_;
       const bool ok = sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim;
       if (!ok) sx = sy = sz = 0.f;  // no float-to-int conversion of NaN or huge values
       const std::int32_t ix = geometry::fast_floor(sx), iy = geometry::fast_floor(sy),
                          iz = geometry::fast_floor(sz);
-      cell[3 * j] = ix;
-      cell[3 * j + 1] = iy;
-      cell[3 * j + 2] = iz;
-      frac[3 * j] = sx - static_cast<float>(ix);
-      frac[3 * j + 1] = sy - static_cast<float>(iy);
-      frac[3 * j + 2] = sz - static_cast<float>(iz);
+      cx[j] = ix;
+      cy[j] = iy;
+      cz[j] = iz;
+      fx[j] = sx - static_cast<float>(ix);
+      fy[j] = sy - static_cast<float>(iy);
+      fz[j] = sz - static_cast<float>(iz);
       valid[j] = ok;
     }
-    // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels).
-    runs.clear();
+    // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels). The open
+    //    run is summed in locals and appended when it ends (no store-to-load round trip through
+    //    the run list per point); the additions are the same, in the same order.
+    std::size_t m = 0;  // runs of this batch
+    const Rgb* colors = colour ? cloud.colors.data() + begin : nullptr;
     VoxelKey run_key = kNoVoxel;
     bool run_ours = false;
-    for (std::size_t j = 0; j < count; ++j) {
-      if (!valid[j]) {
-        ++dropped;
-        continue;
+    float s0 = 0.f, s1 = 0.f, s2 = 0.f;
+    std::uint32_t c0 = 0, c1 = 0, c2 = 0, points = 0;
+    for (std::size_t i = 0; i <= count; ++i) {
+      VoxelKey key = kNoVoxel;  // i == count: closes the last run
+      if (i < count) {
+        if (!valid[i]) {
+          ++dropped;
+          continue;
+        }
+        key = geometry::pack_voxel(cx[i], cy[i], cz[i]);
       }
-      const VoxelKey key = geometry::pack_voxel(cell[3 * j], cell[3 * j + 1], cell[3 * j + 2]);
       if (key != run_key) {
+        if (run_ours) {
+          Run& r = runs[m++];
+          r.key = run_key;
+          r.sum.offset_sum[0] = s0;
+          r.sum.offset_sum[1] = s1;
+          r.sum.offset_sum[2] = s2;
+          r.sum.count = points;
+          r.sum.color_sum[0] = c0;  // 0 without colours
+          r.sum.color_sum[1] = c1;
+          r.sum.color_sum[2] = c2;
+          r.sum.color_count = colour ? points : 0;
+        }
+        if (i == count) break;
         run_key = key;
         run_ours = !sharded || shard_of(key) == shard;
-        if (run_ours) runs.push_back(Run{key, VoxelData{}});
+        s0 = s1 = s2 = 0.f;
+        c0 = c1 = c2 = points = 0;
       }
       if (!run_ours) continue;
-      VoxelData& r = runs.back().sum;
-      r.offset_sum[0] += frac[3 * j];
-      r.offset_sum[1] += frac[3 * j + 1];
-      r.offset_sum[2] += frac[3 * j + 2];
-      ++r.count;
+      s0 += fx[i];
+      s1 += fy[i];
+      s2 += fz[i];
+      ++points;
       if (colour) {
-        const Rgb& c = cloud.colors[begin + j];
-        r.color_sum[0] += c.r;
-        r.color_sum[1] += c.g;
-        r.color_sum[2] += c.b;
-        ++r.color_count;
+        c0 += colors[i].r;
+        c1 += colors[i].g;
+        c2 += colors[i].b;
       }
     }
     // 3. The runs into the table(s), in order, prefetching ahead.
-    write_runs(runs, shard, label, run_shard, per_shard);
+    write_runs(runs.data(), m, shard, label, run_shard, per_shard);
   }
   return dropped;
 }
 
 // No rehash below: prefetched slots stay valid.
-void VoxelMap::write_runs(const std::vector<Run>& runs, std::size_t shard, std::int32_t label,
+void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard, std::int32_t label,
                           std::vector<std::uint32_t>& run_shard,
                           std::vector<std::size_t>& per_shard) {
   constexpr std::size_t kAhead = 12;  // runs prefetched ahead
-  const std::size_t m = runs.size();
   const bool all = shard == kAllShards;
   if (all) {
     run_shard.resize(m);
@@ -270,6 +336,27 @@ void VoxelMap::merge_shard(const VoxelMap& other, std::size_t shard) {
   for (std::size_t r = 0; r < todo.size(); ++r) {
     if (r + kAhead < todo.size()) dst.prefetch(todo[r + kAhead].first);
     add_voxel(dst, todo[r].first, *todo[r].second);
+  }
+}
+
+void VoxelMap::take_shard(VoxelMap& other, std::size_t shard) {
+  require(other.voxel_m_ == voxel_m_ && other.shards_.size() == shards_.size() &&
+              shard < shards_.size() && &other != this,
+          "VoxelMap::take_shard",
+          "maps differ in voxel size or shard count, are the same map, or no shard " +
+              std::to_string(shard) + "; expected two equal maps and a shard below " +
+              std::to_string(shards_.size()));
+  constexpr std::size_t kAhead = 12;  // as merge_shard
+  Table& src = other.shards_[shard];
+  Table& dst = shards_[shard];
+  thread_local std::vector<Run> todo;  // the voxels, copied out of the slots being emptied
+  todo.clear();
+  src.drain([&](VoxelKey key, const VoxelData& v) { todo.push_back(Run{key, v}); });
+  dst.reserve(dst.size() + todo.size());  // no rehash below: prefetched slots stay valid
+  for (std::size_t r = 0; r < std::min(todo.size(), kAhead); ++r) dst.prefetch(todo[r].key);
+  for (std::size_t r = 0; r < todo.size(); ++r) {
+    if (r + kAhead < todo.size()) dst.prefetch(todo[r + kAhead].key);
+    add_voxel(dst, todo[r].key, todo[r].sum);
   }
 }
 

@@ -60,6 +60,10 @@ class VoxelMap {
   // merge_counts). Each voxel of `other` is added once, so the result equals merge() of the same
   // maps in the same order.
   void merge_shard(const VoxelMap& other, std::size_t shard);
+  // merge_shard() that also empties shard `shard` of `other` (keeping its memory), in the same pass
+  // over its slots: what a later other.reset() would write is done while the slots are in cache.
+  // The values added and their order are merge_shard()'s.
+  void take_shard(VoxelMap& other, std::size_t shard);
   // Adds `other`'s points_inserted and points_dropped (the part of merge() merge_shard leaves out).
   void merge_counts(const VoxelMap& other);
   std::size_t shard_count() const { return shards_.size(); }
@@ -144,14 +148,20 @@ class VoxelMap {
   };
   static constexpr std::size_t kBatch = 1024;  // points per batch of runs (see insert_shard)
   using Table = geometry::VoxelHashTable<VoxelData>;
-  std::size_t shard_of(VoxelKey key) const;
+  // By the voxel's x index (no second hash of the key): a frame spans many x slices, so its voxels
+  // spread over the shards. A mask when the shard count is a power of two (no division per run).
+  std::size_t shard_of(VoxelKey key) const {
+    const std::size_t x = static_cast<std::size_t>(key >> 42);
+    return shard_mask_ != kNoMask ? x & shard_mask_ : x % shards_.size();
+  }
+  static constexpr std::size_t kNoMask = ~std::size_t{0};
   VoxelPoints sorted_points_impl(bool release);  // release: free each shard once read
   // kAllShards: one pass that fills every shard (single-threaded insert of a sharded map).
   static constexpr std::size_t kAllShards = ~std::size_t{0};
   std::size_t insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label);
-  // Adds a batch's runs (in order) to shard `shard`'s table, or with kAllShards each to its own
+  // Adds a batch's m runs (in order) to shard `shard`'s table, or with kAllShards each to its own
   // (run_shard: scratch), prefetching ahead.
-  void write_runs(const std::vector<Run>& runs, std::size_t shard, std::int32_t label,
+  void write_runs(const Run* runs, std::size_t m, std::size_t shard, std::int32_t label,
                   std::vector<std::uint32_t>& run_shard, std::vector<std::size_t>& per_shard);
   void add_voxel(Table& table, VoxelKey key, const VoxelData& src);
 
@@ -159,6 +169,7 @@ class VoxelMap {
   float inv_voxel_m_;
   std::size_t threads_ = 1;
   std::vector<Table> shards_;
+  std::size_t shard_mask_ = kNoMask;  // shards_.size() - 1 when that is a power of two
   std::uint64_t points_inserted_ = 0;
   std::uint64_t points_dropped_ = 0;
 };

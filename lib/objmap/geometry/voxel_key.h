@@ -106,9 +106,23 @@ class VoxelHashTable {
     if (cap > slots_.size()) rehash(cap);
   }
 
-  // Empties the table and keeps its slots (no allocation when refilled to the same size).
+  // Empties the table and keeps its slots (no allocation when refilled to the same size). An empty
+  // table's slots are all Slot{} already (entries are never erased one by one): nothing to write.
   void reset() {
+    if (size_ == 0) return;
     std::fill(slots_.begin(), slots_.end(), Slot{});
+    size_ = 0;
+  }
+
+  // f(key, value) for every entry, in slot order, each slot emptied once visited: for_each() and
+  // reset() in one pass over the slots.
+  template <typename F>
+  void drain(F&& f) {
+    for (Slot& s : slots_) {
+      if (s.key == kNoVoxel) continue;
+      f(s.key, s.value);
+      s = Slot{};
+    }
     size_ = 0;
   }
 

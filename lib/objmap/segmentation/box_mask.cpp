@@ -40,13 +40,18 @@ constexpr std::uint8_t kSeed = 32;     // seed candidate: central, at the mode d
 struct Workspace {
   std::vector<float> z_m;                       // box-local depth in metres, 0 = invalid
   std::vector<std::uint8_t> flags;              // box-local flags
+  std::vector<std::uint8_t> saved_flags;        // flags of the first region (see step 5)
   std::vector<std::uint8_t> scratch, scratch2;  // morphology
-  std::vector<std::int32_t> queue;              // region growing
-  std::vector<std::int32_t> seed_queue;
-  std::vector<std::pair<std::int32_t, double>> components;  // seed components: start, weight
-  std::vector<float> ray_x, ray_y;        // (u − cx)/fx per column, (v − cy)/fy per row
-  std::vector<float> weight_u, weight_v;  // centre weights per column / row
-  std::vector<double> hist, hist_z;       // depth histogram: weight, weighted depth sum
+  // Region growing: box-local pixels as (x, y), so that no division recovers them from an index.
+  struct Px {
+    std::int32_t x, y;
+  };
+  std::vector<Px> queue;
+  std::vector<Px> seed_queue;
+  std::vector<std::pair<Px, double>> components;  // seed components: start, weight
+  std::vector<float> ray_x, ray_y;                // (u − cx)/fx per column, (v − cy)/fy per row
+  std::vector<float> weight_u, weight_v;          // centre weights per column / row
+  std::vector<double> hist, hist_z;               // depth histogram: weight, weighted depth sum
   std::vector<Eigen::Vector3f> samples;
   std::vector<std::uint8_t> sample_inlier;
 };
@@ -588,14 +593,14 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
       }
     }
     // Flood one component of the seed candidates from `start`; returns its centre weight.
-    const auto flood_seeds = [&](std::int32_t start) {
+    const auto flood_seeds = [&](Workspace::Px start) {
       ws.queue.clear();
       ws.queue.push_back(start);
-      ws.flags[start] |= kInMask;
+      ws.flags[static_cast<std::size_t>(start.y) * bw + start.x] |= kInMask;
       double weight = 0;
       for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-        const std::int32_t i = ws.queue[head];
-        const int xi = i % bw, yi = i / bw;
+        const int xi = ws.queue[head].x, yi = ws.queue[head].y;
+        const std::int32_t i = yi * bw + xi;
         weight += static_cast<double>(ws.weight_u[xi]) * ws.weight_v[yi];
         const float z = ws.z_m[i];
         const float step = step_at(z);
@@ -606,7 +611,7 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
           const std::uint8_t f = ws.flags[j];
           if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
           ws.flags[j] = f | kInMask;
-          ws.queue.push_back(j);
+          ws.queue.push_back({xx, yy});
         }
       }
       return weight;
@@ -617,10 +622,10 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     double best_weight = 0;
     for (int y = win.y0; y < win.y1; ++y) {
       for (int x = win.x0; x < win.x1; ++x) {
-        const std::int32_t start = y * bw + x;
-        if (!(ws.flags[start] & kSeed) || (ws.flags[start] & kInMask)) continue;
-        const double weight = flood_seeds(start);
-        starts.emplace_back(start, weight);
+        const std::uint8_t f = ws.flags[static_cast<std::size_t>(y) * bw + x];
+        if (!(f & kSeed) || (f & kInMask)) continue;
+        const double weight = flood_seeds({x, y});
+        starts.emplace_back(Workspace::Px{x, y}, weight);
         best_weight = std::max(best_weight, weight);
       }
     }
@@ -642,8 +647,8 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
 
     // Region growing across smooth depth inside the band.
     for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-      const std::int32_t i = ws.queue[head];
-      const int x = i % bw, y = i / bw;
+      const int x = ws.queue[head].x, y = ws.queue[head].y;
+      const std::int32_t i = y * bw + x;
       const float z = ws.z_m[i];
       const float step = step_at(z);
       for (int k = 0; k < n_neigh; ++k) {
@@ -662,7 +667,7 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
           }
         }
         ws.flags[j] = f | kInMask;
-        ws.queue.push_back(j);
+        ws.queue.push_back({xx, yy});
       }
     }
     g.pixels = ws.queue.size();
@@ -693,12 +698,16 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
   const std::uint8_t exclude = have_plane ? kSupport : 0;
   Grown grown = grow(mode);
   if (grown.leak() > options.max_border_leak) {
-    const double first_mode = mode;
-    bool found = false;
+    // grow() depends only on the mode and on flags it does not change (kValid, kSupport): the
+    // nearest candidate's region is kept as its flags rather than grown again if every one leaks.
+    const Grown first = grown;
+    bool found = false, regrown = false;
     for (int k = 1; k < options.depth_candidates && !found; ++k) {
       const double next =
           near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share, exclude, k);
       if (next <= 0) break;
+      if (!regrown) ws.saved_flags = ws.flags;
+      regrown = true;
       const Grown g = grow(next);
       if (g.pixels > 0 && g.leak() <= options.max_border_leak) {
         grown = g;
@@ -706,7 +715,10 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
         found = true;
       }
     }
-    if (!found && options.depth_candidates > 1) grown = grow(first_mode);
+    if (!found) {
+      grown = first;
+      if (regrown) ws.flags.swap(ws.saved_flags);
+    }
   }
   result.mode_depth_m = mode;
   result.band_half_width_m = grown.band;
@@ -726,13 +738,24 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     }
   }
   std::size_t pixels = 0;
+  int bx0 = bw, bx1 = -1, by0 = bh, by1 = -1;  // box-local bounds of the mask's pixels
   for (int y = 0; y < bh; ++y) {
     std::uint8_t* out = result.mask.data.data() + static_cast<std::size_t>(v0 + y) * width + u0;
     const std::uint8_t* in = bits.data() + static_cast<std::size_t>(y) * bw;
+    std::size_t row_pixels = 0;
     for (int x = 0; x < bw; ++x) {
       out[x] = in[x];
-      pixels += in[x];
+      row_pixels += in[x];
     }
+    if (row_pixels == 0) continue;
+    pixels += row_pixels;
+    int first = 0, last = bw - 1;
+    while (!in[first]) ++first;
+    while (!in[last]) --last;
+    bx0 = std::min(bx0, first);
+    bx1 = std::max(bx1, last);
+    by0 = std::min(by0, y);
+    by1 = std::max(by1, y);
   }
 
   const double min_area =
@@ -743,6 +766,7 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     return result;
   }
   result.pixels = pixels;
+  result.bounds = cv::Rect(u0 + bx0, v0 + by0, bx1 - bx0 + 1, by1 - by0 + 1);
   result.status = BoxMaskStatus::kOk;
   return result;
 }

@@ -140,8 +140,11 @@ struct BoxMaskResult {
   // Full-image mask (width and height of the depth image, 0/1 per pixel); all zero unless status is
   // kOk. It is left without data (mask.empty()) only when the depth image itself is empty.
   Mask mask;
-  double mode_depth_m = 0;             // depth of the object surface chosen (0 when none)
-  std::size_t pixels = 0;              // pixels in the mask
+  double mode_depth_m = 0;  // depth of the object surface chosen (0 when none)
+  std::size_t pixels = 0;   // pixels in the mask
+  // Bounding rectangle of the mask's pixels (as geometry::mask_bounds(mask), without scanning the
+  // whole image); empty unless status is kOk.
+  cv::Rect bounds;
   bool support_plane_removed = false;  // a support plane was accepted and its inliers left out
   BoxMaskStatus status = BoxMaskStatus::kOk;
   // Diagnostics.
