@@ -17,9 +17,28 @@ void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
       ->check(CLI::IsMember({"graph", "paper"}))
       ->capture_default_str();
   cmd->add_option("--view-model", o.view_model,
+                  "icp: align each observation's points to the object's first view "
+                  "(point-to-plane ICP on the depth pixels) and use where that puts the first "
+                  "view's centroid; observations that do not align fall back to visible; "
                   "visible: compare an observed centroid with the centroid of the object model's "
                   "part visible from the keyframe; centroid: with the whole model's (the paper)")
-      ->check(CLI::IsMember({"visible", "centroid"}))
+      ->check(CLI::IsMember({"icp", "visible", "centroid"}))
+      ->capture_default_str();
+  cmd->add_option("--icp-max-view-angle", o.icp_max_view_angle_deg,
+                  "icp: an observation is aligned to earlier views of its object that look at it "
+                  "from within this angle, degrees")
+      ->capture_default_str();
+  cmd->add_option("--icp-groups", o.icp_groups,
+                  "icp: an observation that no earlier view aligns starts a group of its own "
+                  "(true), or keeps the visible model against its object's first view (false)")
+      ->capture_default_str();
+  cmd->add_option("--icp-inlier-distance", o.icp.inlier_distance_m,
+                  "icp: after the alignment, a point this close to the earlier view counts as "
+                  "overlapping, metres")
+      ->capture_default_str();
+  cmd->add_option("--icp-min-overlap", o.icp.min_inlier_share,
+                  "icp: share of an observation's points that must overlap the earlier view for "
+                  "the alignment to count")
       ->capture_default_str();
   cmd->add_option("--min-pairs", c.min_pairs, "matched objects needed to correct a keyframe")
       ->capture_default_str();
@@ -41,14 +60,16 @@ void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
       ->capture_default_str();
   cmd->add_option("--held-out-improvement", c.min_held_out_improvement,
                   "corrections fitted to half of the objects must lower the other half's "
-                  "residual RMS by this share, else refused (negative: a worsening allowed)")
-      ->capture_default_str();
+                  "residual RMS by this share, else refused (negative: a worsening allowed); "
+                  "default by view model: icp 0, visible/centroid 0.2")
+      ->each([&o](const std::string&) { o.view_model_thresholds = false; });
   cmd->add_option("--reweight-rounds", c.reweight_rounds,
                   "re-estimate each object's noise from the solution and solve again")
       ->capture_default_str();
   cmd->add_option("--min-improvement", c.min_improvement,
-                  "the observation residual RMS must drop by this share, else refused")
-      ->capture_default_str();
+                  "the observation residual RMS must drop by this share, else refused; default "
+                  "by view model: icp 0.15, visible/centroid 0.1")
+      ->each([&o](const std::string&) { o.view_model_thresholds = false; });
 }
 
 void print_summary(const pipeline::CorrectOptions& o, const pipeline::CorrectResult& r) {
@@ -56,6 +77,9 @@ void print_summary(const pipeline::CorrectOptions& o, const pipeline::CorrectRes
   std::printf("method      %s (view model %s)\n", c.method.c_str(), o.view_model.c_str());
   std::printf("problem     %zu keyframes, %zu objects, %zu observations\n", c.keyframes.size(),
               r.landmarks, r.observations);
+  if (o.view_model == "icp")
+    std::printf("icp         %zu of %zu observations aligned to their model\n",
+                r.observations_aligned, r.observations);
   std::printf("residual    %.4f -> %.4f m (observation RMS)\n", c.residual_before_m,
               c.residual_after_m);
   std::printf("largest     %.4f m, %.3f deg\n", c.max_translation_m, c.max_rotation_deg);

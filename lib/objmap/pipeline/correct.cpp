@@ -2,12 +2,16 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
@@ -152,7 +156,8 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                    {"keyframes_corrected", result.accepted ? c.corrected_keyframes : 0},
                    {"landmarks", result.landmarks},
                    {"observations", result.observations},
-                   {"observations_without_view", result.observations_without_view}};
+                   {"observations_without_view", result.observations_without_view},
+                   {"observations_aligned", result.observations_aligned}};
   doc["consistency"] = {{"observation_rms_before_m", c.residual_before_m},
                         {"held_out_rms_before_m", c.held_out_before_m},
                         {"held_out_rms_after_m", c.held_out_after_m},
@@ -232,16 +237,164 @@ FuseOptions fuse_options_of(const fs::path& run_dir, const json& run, const fs::
 void CorrectOptions::check() const {
   require(!run.empty(), "CorrectOptions.run", "empty; expected a fuse run folder");
   require(!out.empty(), "CorrectOptions.out", "empty; expected an output folder");
-  require(view_model == "visible" || view_model == "centroid", "CorrectOptions.view_model",
-          "'" + view_model + "' is not a view model; expected visible or centroid");
+  require(view_model == "visible" || view_model == "centroid" || view_model == "icp",
+          "CorrectOptions.view_model",
+          "'" + view_model + "' is not a view model; expected visible, centroid or icp");
+  icp.check();
   require(threads >= 1, "CorrectOptions.threads", "must be >= 1");
   visibility.check();
   correction.check();
 }
 
+// view_model icp: every object's observations grouped by view. In keyframe order, an observation
+// is aligned (point-to-plane ICP) to the anchor observations of its object that look at it from
+// within max_view_angle_deg; the first that aligns takes it into its group, else it anchors a new
+// group. Each group with >= 2 members becomes a landmark at its anchor's centroid, and each member
+// observes that point where its alignment puts it (centroid_in_cam = (ΔT·world_from_cam)⁻¹·anchor
+// centroid). Two views of the same side of an object are compared point by point, at the
+// resolution of the depth image, not through the 1 cm model (which the drift itself blurs).
+void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOptions& options,
+                   const std::map<int, double>& keyframe_time, RunProblem& rp) {
+  const fs::path run_file = run / "run.json";
+  ScratchDir scratch(options.out, "icp");
+  FuseOptions fo = fuse_options_of(run, run_doc, scratch.path());
+  fo.trajectory = input_path(run_doc, run_file, "trajectory");
+  fo.out = scratch.path() / "run";
+  fo.threads = options.threads;
+  std::vector<int> keyframe_indices;
+  for (const auto& [kf, t] : keyframe_time) keyframe_indices.push_back(kf);
+  const std::vector<fusion::Observation> remade = remake_observations(fo, keyframe_indices);
+  // Problem keyframe slot -> run keyframe index.
+  std::vector<int> run_keyframe;
+  for (const auto& [kf, t] : keyframe_time) run_keyframe.push_back(kf);
+  std::map<int, std::vector<const fusion::Observation*>> of_keyframe;
+  for (const auto& o : remade)
+    if (o.keyframe_index && o.centroid_in_cam) of_keyframe[*o.keyframe_index].push_back(&o);
+  const pose::Problem& problem = rp.problem;
+  const std::size_t n_obs = problem.observations.size();
+  // The remade observation of each problem observation: same keyframe, same centroid.
+  std::vector<const fusion::Observation*> source(n_obs, nullptr);
+  for (std::size_t i = 0; i < n_obs; ++i) {
+    const pose::Observation& o = problem.observations[i];
+    double best = 1e-6;
+    for (const fusion::Observation* r : of_keyframe[run_keyframe[o.keyframe]]) {
+      const double d = (*r->centroid_in_cam - o.centroid_in_cam).norm();
+      if (d < best) best = d, source[i] = r;
+    }
+  }
+  // Per object, its observations in keyframe order (the problem keeps them by object).
+  std::vector<std::vector<std::size_t>> of_landmark(problem.landmarks.size());
+  for (std::size_t i = 0; i < n_obs; ++i)
+    if (source[i]) of_landmark[problem.observations[i].landmark].push_back(i);
+  for (auto& v : of_landmark)
+    std::stable_sort(v.begin(), v.end(), [&](std::size_t a, std::size_t b) {
+      return problem.observations[a].keyframe < problem.observations[b].keyframe;
+    });
+  struct Member {
+    std::size_t observation;
+    Pose correction;
+  };
+  struct Group {
+    std::size_t landmark;
+    Vec3 anchor_centroid, view;  // world frame; view: unit vector camera -> anchor centroid
+    std::unique_ptr<pose::ModelAligner> aligner;
+    std::vector<Member> members;
+  };
+  std::vector<std::vector<Group>> groups(problem.landmarks.size());
+  const double cos_max = std::cos(options.icp_max_view_angle_deg * 3.14159265358979323846 / 180.0);
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t j = next++; j < problem.landmarks.size(); j = next++) {
+      auto& mine = groups[j];
+      for (std::size_t i : of_landmark[j]) {
+        const PointCloud& cloud = source[i]->points_in_world;
+        const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
+        const Vec3 centroid = pose * problem.observations[i].centroid_in_cam;
+        const Vec3 view = (centroid - pose.translation()).normalized();
+        // Anchors looking from within the angle, the closest direction first.
+        std::vector<std::pair<double, std::size_t>> candidates;
+        for (std::size_t g = 0;
+             g < (options.icp_groups ? mine.size() : std::min<std::size_t>(1, mine.size())); ++g) {
+          const double c = mine[g].view.dot(view);
+          if (c >= cos_max) candidates.emplace_back(-c, g);
+        }
+        std::sort(candidates.begin(), candidates.end());
+        bool joined = false;
+        for (const auto& [c, g] : candidates) {
+          const pose::IcpResult r = mine[g].aligner->align(cloud);
+          if (!r.aligned) continue;
+          mine[g].members.push_back({i, r.correction});
+          joined = true;
+          break;
+        }
+        if (joined || (!options.icp_groups && !mine.empty())) continue;
+        Group group;
+        group.landmark = j;
+        Vec3 sum = Vec3::Zero();
+        for (const Vec3f& p : cloud.points) sum += p.cast<double>();
+        group.anchor_centroid = sum / static_cast<double>(cloud.size());
+        group.view = view;
+        group.aligner = std::make_unique<pose::ModelAligner>(cloud, options.icp);
+        group.members.push_back({i, Pose::Identity()});
+        mine.push_back(std::move(group));
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < options.threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (!options.icp_groups) {
+    // One anchor per object; the observations it does not align keep the visible-part model.
+    for (std::size_t j = 0; j < groups.size(); ++j) {
+      if (groups[j].empty() || groups[j][0].members.size() < 2) continue;
+      const Group& g = groups[j][0];
+      for (const Member& m : g.members) {
+        pose::Observation& o = rp.problem.observations[m.observation];
+        o.centroid_in_cam =
+            (m.correction * problem.keyframes[o.keyframe].world_from_cam).inverse() *
+            g.anchor_centroid;
+        o.bias_in_world = g.anchor_centroid - problem.landmarks[j].position_in_world;
+        ++rp.observations_aligned;
+      }
+    }
+    return;
+  }
+  // The new problem: one landmark per group of >= 2 members.
+  RunProblem out;
+  out.problem.keyframes = problem.keyframes;
+  out.keyframe_objects = rp.keyframe_objects;
+  out.observations_without_view = 0;
+  for (std::size_t j = 0; j < groups.size(); ++j) {
+    for (const Group& g : groups[j]) {
+      if (g.members.size() < 2) {
+        ++out.observations_without_view;
+        continue;
+      }
+      pose::Landmark landmark = problem.landmarks[j];
+      landmark.position_in_world = g.anchor_centroid;
+      for (const Member& m : g.members) {
+        pose::Observation o = problem.observations[m.observation];
+        o.landmark = out.problem.landmarks.size();
+        o.centroid_in_cam =
+            (m.correction * problem.keyframes[o.keyframe].world_from_cam).inverse() *
+            g.anchor_centroid;
+        o.bias_in_world = Vec3::Zero();
+        out.problem.observations.push_back(o);
+        ++out.observations_aligned;
+      }
+      out.problem.landmarks.push_back(landmark);
+      out.object_ids.push_back(rp.object_ids[j]);
+    }
+  }
+  for (std::size_t i = 0; i < n_obs; ++i)
+    if (!source[i]) ++out.observations_without_view;
+  rp = std::move(out);
+}
+
 RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
-                            const std::string& view_model,
-                            const pose::VisibilityOptions& visibility) {
+                            const CorrectOptions& options) {
+  const std::string& view_model = options.view_model;
   const fs::path run_file = run / "run.json";
   const fs::path objects_file = run / "objects.json";
   const json run_doc = read_json_file(run_file);
@@ -324,7 +477,7 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
     rp.keyframe_objects[o.keyframe].push_back(rp.object_ids[r.landmark]);
   }
   // The partial-view bias of each observation: render every model from the keyframe's pose.
-  if (view_model == "visible") {
+  if (view_model == "visible" || view_model == "icp") {
     std::vector<const PointCloud*> model_ptrs;
     for (const auto& m : models) model_ptrs.push_back(&m);
     std::vector<std::vector<std::size_t>> of_keyframe(rp.problem.keyframes.size());
@@ -333,7 +486,7 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
     for (std::size_t k = 0; k < rp.problem.keyframes.size(); ++k) {
       if (of_keyframe[k].empty()) continue;
       const auto visible = pose::visible_centroids(
-          model_ptrs, rp.problem.keyframes[k].world_from_cam, camera, visibility);
+          model_ptrs, rp.problem.keyframes[k].world_from_cam, camera, options.visibility);
       for (std::size_t i : of_keyframe[k]) {
         pose::Observation& o = rp.problem.observations[i];
         if (visible[o.landmark])
@@ -344,11 +497,20 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
       }
     }
   }
+  // ICP: each observation's points, made again from the run's inputs, aligned to an earlier view
+  // of the same object (its anchor).
+  if (view_model == "icp") icp_landmarks(run, run_doc, options, keyframe_time, rp);
   return rp;
 }
 
-CorrectResult run_correct(const CorrectOptions& options, const FuseProgress& progress) {
-  options.check();
+CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progress) {
+  given.check();
+  CorrectOptions options = given;
+  if (options.view_model_thresholds) {
+    const bool icp = options.view_model == "icp";
+    options.correction.min_improvement = icp ? 0.15 : 0.10;
+    options.correction.min_held_out_improvement = icp ? 0.0 : 0.20;
+  }
   const auto t_start = Clock::now();
   CorrectResult result;
   const fs::path run_file = options.run / "run.json";
@@ -357,11 +519,11 @@ CorrectResult run_correct(const CorrectOptions& options, const FuseProgress& pro
   const Trajectory trajectory = io::read_trajectory(trajectory_path);
 
   // 1. The problem: keyframes, object landmarks, observations (with their partial-view bias).
-  const RunProblem rp =
-      problem_from_run(options.run, trajectory, options.view_model, options.visibility);
+  const RunProblem rp = problem_from_run(options.run, trajectory, options);
   result.landmarks = rp.problem.landmarks.size();
   result.observations = rp.problem.observations.size();
   result.observations_without_view = rp.observations_without_view;
+  result.observations_aligned = rp.observations_aligned;
 
   // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage.
   result.correction = pose::correct_poses(rp.problem, options.correction);
@@ -393,8 +555,7 @@ CorrectResult run_correct(const CorrectOptions& options, const FuseProgress& pro
     result.refused_map = true;
     // 5. The re-fused map's own consistency must not get worse.
     if (options.check_map) {
-      const RunProblem again =
-          problem_from_run(options.out, corrected, options.view_model, options.visibility);
+      const RunProblem again = problem_from_run(options.out, corrected, options);
       std::vector<Pose> poses;
       for (const auto& k : again.problem.keyframes) poses.push_back(k.world_from_cam);
       result.map_rms_after_m = pose::median_scatter_m(again.problem, poses);

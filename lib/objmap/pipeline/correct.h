@@ -5,6 +5,7 @@
 
 #include "objmap/pipeline/fuse.h"
 #include "objmap/pose/correct.h"
+#include "objmap/pose/icp.h"
 #include "objmap/pose/visible.h"
 
 // `objmap correct`: object-constrained pose correction of a finished fuse run (paper §3.4,
@@ -23,8 +24,20 @@ struct CorrectOptions {
   // How an observed centroid is compared with its object: "visible" (default) with the centroid of
   // the part of the object model visible from the keyframe (partial-view bias removed), or
   // "centroid" with the whole model's centroid (the paper).
-  std::string view_model = "visible";
-  pose::VisibilityOptions visibility;  // z-buffer rendering of the models
+  // "icp": each observation's points (re-made from the run's inputs) aligned to the object model
+  // (point-to-plane ICP): the model's centroid where that alignment puts it in the camera frame;
+  // observations that do not align fall back to "visible".
+  std::string view_model = "icp";
+  pose::VisibilityOptions visibility;     // z-buffer rendering of the models
+  pose::IcpOptions icp;                   // view_model icp
+  double icp_max_view_angle_deg = 180.0;  // icp: anchors looking from within this angle are tried
+  // icp: true: an observation no anchor aligns starts a new group (a landmark of its own); false:
+  // one anchor per object (its first view) and the other observations keep the visible model.
+  bool icp_groups = false;
+  // Acceptance thresholds by view model (correction.min_improvement, min_held_out_improvement):
+  // icp 0.15 / 0.0, visible and centroid 0.10 / 0.20 (docs/pose.md: calibrated on synthetic
+  // scenes with and without drift). false: correction's own values.
+  bool view_model_thresholds = true;
   pose::CorrectionOptions correction;  // method (graph | paper), evidence, noise, bounds
   // After the re-fuse, the map's own consistency (median object scatter of the new run) must not
   // exceed the input run's, else the whole result is refused.
@@ -37,6 +50,7 @@ struct CorrectResult {
   pose::CorrectionResult correction;
   std::size_t landmarks = 0, observations = 0;
   std::size_t observations_without_view = 0;  // visible part too small: bias 0
+  std::size_t observations_aligned = 0;       // view_model icp: aligned to their model
   bool accepted = false;  // the final verdict (correction and the re-fused map's check)
   std::string reason;
   double map_rms_before_m = 0.0;  // median object scatter of the input run (median_scatter_m)
@@ -54,10 +68,12 @@ struct RunProblem {
   std::vector<int> object_ids;                     // per landmark
   std::vector<std::vector<int>> keyframe_objects;  // per keyframe, the object ids it observed
   std::size_t observations_without_view = 0;
+  std::size_t observations_aligned = 0;  // view_model icp: observations aligned to their model
 };
+// `options` gives the view model (and for icp: the ICP options, threads, and OUT, beside which a
+// temporary folder is made).
 RunProblem problem_from_run(const std::filesystem::path& run, const Trajectory& trajectory,
-                            const std::string& view_model,
-                            const pose::VisibilityOptions& visibility);
+                            const CorrectOptions& options);
 
 // Runs the correction and writes OUT. Throws InputError for a bad run folder or options.
 CorrectResult run_correct(const CorrectOptions& options, const FuseProgress& progress = {});

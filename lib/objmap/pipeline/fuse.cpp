@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -290,12 +291,12 @@ struct FrameWork {
 
 // Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so that
 // voxels are merged, not pixels) merged into `dense` in keyframe order, and each instance's pixels
-// into an observation.
+// into an observation. Without `dense` (and `order`, `pool`), the observations only.
 FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
                            const geometry::RayTable& rays, const io::FramePair& frame,
                            const Keyframe& keyframe, int keyframe_index,
-                           const segmentation::FrameSegmentation* seg, fusion::VoxelMap& dense,
-                           ShardedMergeOrder& order, FrameMapPool& pool) {
+                           const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
+                           ShardedMergeOrder* order, FrameMapPool* pool) {
   FrameWork work;
 
   // 1. The images (checked: size, type).
@@ -306,17 +307,17 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   geometry::BackprojectOptions dense_options = options.depth;
   dense_options.stride = options.dense_stride;
   const geometry::DepthFrame dense_frame(depth, keyframe.world_from_cam, &bgr);
-  {
-    std::unique_ptr<fusion::VoxelMap> frame_map = pool.take();
+  if (dense) {
+    std::unique_ptr<fusion::VoxelMap> frame_map = pool->take();
     {
       const auto points = geometry::backproject(rays, dense_frame, dense_options);
       work.dense_points = points.points_in_world.size();
       frame_map->reserve(points.points_in_world.size() / 8);  // ~1 voxel per 4-15 points here
       frame_map->insert(points.points_in_world);
     }
-    order.merge_in_order(static_cast<std::size_t>(keyframe_index),
-                         [&](std::size_t shard) { dense.merge_shard(*frame_map, shard); });
-    pool.give_back(std::move(frame_map));
+    order->merge_in_order(static_cast<std::size_t>(keyframe_index),
+                          [&](std::size_t shard) { dense->take_shard(*frame_map, shard); });
+    pool->give_back(std::move(frame_map));
   }
 
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
@@ -329,6 +330,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     }
     segmentation::Mask box_mask;
     const segmentation::Mask* mask = instance.mask ? &*instance.mask : nullptr;
+    cv::Rect bounds;
     if (!mask) {
       ++work.from_box;
       auto made = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
@@ -338,9 +340,11 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
       }
       box_mask = std::move(made.mask);
       mask = &box_mask;
+      bounds = made.bounds;  // what mask_bounds() finds, known without a scan of the image
+    } else {
+      bounds = geometry::mask_bounds(*mask);
     }
-    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, mask,
-                                              geometry::mask_bounds(*mask));
+    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, mask, bounds);
     if (instance_frame.roi.empty()) {
       ++work.empty;
       continue;
@@ -481,23 +485,34 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
 
 }  // namespace
 
-FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
-  options.check();
-  const auto t_start = Clock::now();
-  FuseResult result;
+// What a fuse reads before the keyframes: the TUM folder, the camera, the trajectory, the
+// segmentation, and the keyframes with their segmentation frames.
+struct FuseInputs {
+  io::TumDataset dataset;
+  Trajectory trajectory;
+  segmentation::ReadOptions read;
+  SegmentationSource seg_source;
+  std::vector<std::ptrdiff_t> seg_of;  // each keyframe's segmentation frame, -1: none
+  std::size_t with_seg = 0;            // keyframes with a segmentation frame
+};
 
+// Steps 1-2 of a fuse; fills the inputs' part of `result` (camera, frames, keyframes, times).
+FuseInputs load_inputs(const FuseOptions& options, FuseResult& result) {
+  FuseInputs in;
   // 1. Inputs: the TUM folder, the camera, the trajectory, the segmentation.
   auto t0 = Clock::now();
   io::TumOptions tum;
   tum.max_diff_s = options.max_diff_s;
-  const io::TumDataset dataset = io::read_tum_dataset(options.dataset, tum);
+  in.dataset = io::read_tum_dataset(options.dataset, tum);
+  const io::TumDataset& dataset = in.dataset;
   result.frames = dataset.frames.size();
   const io::CameraChoice choice = io::choose_camera(options.dataset, options.camera);
   result.camera = choice.camera;
   result.camera_reason = choice.reason;
   const Camera& camera = result.camera;
-  const Trajectory trajectory = io::read_trajectory(options.trajectory);
-  segmentation::ReadOptions read;
+  in.trajectory = io::read_trajectory(options.trajectory);
+  const Trajectory& trajectory = in.trajectory;
+  segmentation::ReadOptions& read = in.read;
   read.format = options.seg_format;
   read.image_width = camera.width;
   read.image_height = camera.height;
@@ -508,7 +523,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   result.seg_format = options.seg_format == "auto"
                           ? segmentation::detect_format(options.segmentation)
                           : options.seg_format;
-  SegmentationSource seg_source;
+  SegmentationSource& seg_source = in.seg_source;
   if (result.seg_format == "json") {
     for (const auto& entry : fs::directory_iterator(options.segmentation)) {
       const fs::path& file = entry.path();
@@ -536,8 +551,9 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const auto& keyframes = result.keyframes.keyframes;
 
   // Each keyframe's segmentation frame: the one named by its rgb timestamp (within 1 ms).
-  std::vector<std::ptrdiff_t> seg_of(keyframes.size(), -1);
-  std::size_t with_seg = 0;
+  std::vector<std::ptrdiff_t>& seg_of = in.seg_of;
+  seg_of.assign(keyframes.size(), -1);
+  std::size_t& with_seg = in.with_seg;
   {
     std::size_t j = 0;
     const auto& stamps = seg_source.stamps;
@@ -555,6 +571,28 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       "no segmentation frame has the timestamp of one of the " + std::to_string(keyframes.size()) +
           " keyframes; expected files named by the rgb timestamps of " + options.dataset.string());
   result.times.push_back({"select keyframes", seconds_since(t0)});
+  return in;
+}
+
+// Keyframe i's instances: read now (canonical JSON, into `lazy`) or taken from the whole
+// segmentation; nullptr when the keyframe has no segmentation frame.
+const segmentation::FrameSegmentation* keyframe_segmentation(
+    const FuseInputs& in, std::size_t i, segmentation::FrameSegmentation& lazy) {
+  if (in.seg_of[i] < 0) return nullptr;
+  if (in.seg_source.files.empty()) return &in.seg_source.whole.frames[in.seg_of[i]];
+  lazy = segmentation::read_frame_json(in.seg_source.files[in.seg_of[i]].second, in.read);
+  return &lazy;
+}
+
+FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
+  options.check();
+  const auto t_start = Clock::now();
+  FuseResult result;
+  const FuseInputs inputs = load_inputs(options, result);
+  const io::TumDataset& dataset = inputs.dataset;
+  const Camera& camera = result.camera;
+  const auto& keyframes = result.keyframes.keyframes;
+  auto t0 = Clock::now();
 
   // 3. Back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead; this
   //    thread merges their results strictly in keyframe order, so the maps do not depend on the
@@ -584,18 +622,10 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
         // The keyframe's instances: read now (canonical JSON) or taken from the whole
         // segmentation.
         segmentation::FrameSegmentation lazy;
-        const segmentation::FrameSegmentation* seg_frame = nullptr;
-        if (seg_of[i] >= 0) {
-          if (seg_source.files.empty()) {
-            seg_frame = &seg_source.whole.frames[seg_of[i]];
-          } else {
-            lazy = segmentation::read_frame_json(seg_source.files[seg_of[i]].second, read);
-            seg_frame = &lazy;
-          }
-        }
+        const segmentation::FrameSegmentation* seg_frame = keyframe_segmentation(inputs, i, lazy);
         return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
-                                keyframes[i], static_cast<int>(i), seg_frame, dense, merge_order,
-                                frame_maps);
+                                keyframes[i], static_cast<int>(i), seg_frame, &dense, &merge_order,
+                                &frame_maps);
       } catch (...) {
         merge_order.fail();  // later keyframes must not wait for this one's merge
         throw;
@@ -731,13 +761,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
         {"format", result.seg_format},
         {"checksum", folder_checksum(options.segmentation)}}},
       {"camera", nlohmann::ordered_json::parse(io::camera_json(camera))},
-      {"camera_reason", choice.reason}};
+      {"camera_reason", result.camera_reason}};
   run["options"] = ordered_json::parse(config_to_json(fuse_config_fields(echo)));
   run["counts"] = {{"frames", result.frames},
                    {"frames_with_pose", result.keyframes.frames_with_pose},
                    {"keyframe_mode", result.keyframes.mode},
                    {"keyframes", keyframes.size()},
-                   {"keyframes_with_segmentation", with_seg},
+                   {"keyframes_with_segmentation", inputs.with_seg},
                    {"instances", result.instances_seen},
                    {"instances_below_min_score", result.instances_skipped_score},
                    {"instances_mask_from_box", result.instances_from_box},
@@ -773,6 +803,54 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
   staging.commit();
   return result;
+}
+
+std::vector<fusion::Observation> remake_observations(const FuseOptions& options,
+                                                     const std::vector<int>& keyframe_indices) {
+  {
+    FuseOptions checked = options;  // nothing is written: `out` may be empty
+    if (checked.out.empty()) checked.out = "unused";
+    checked.check();
+  }
+  FuseResult result;
+  const FuseInputs inputs = load_inputs(options, result);
+  const auto& keyframes = result.keyframes.keyframes;
+  for (int i : keyframe_indices)
+    require(i >= 0 && static_cast<std::size_t>(i) < keyframes.size(), options.dataset.string(),
+            "keyframe " + std::to_string(i) + " does not exist (" +
+                std::to_string(keyframes.size()) +
+                " keyframes); expected the inputs and options the run was fused with");
+  const geometry::RayTable rays = geometry::make_ray_table(result.camera, options.threads);
+  std::vector<std::vector<fusion::Observation>> per_keyframe(keyframe_indices.size());
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto worker = [&] {
+    for (std::size_t j = next++; j < keyframe_indices.size(); j = next++) {
+      try {
+        const std::size_t i = static_cast<std::size_t>(keyframe_indices[j]);
+        segmentation::FrameSegmentation lazy;
+        const segmentation::FrameSegmentation* seg = keyframe_segmentation(inputs, i, lazy);
+        per_keyframe[j] = process_keyframe(options, result.camera, rays,
+                                           inputs.dataset.frames[keyframes[i].frame], keyframes[i],
+                                           static_cast<int>(i), seg, nullptr, nullptr, nullptr)
+                              .observations;
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        next = keyframe_indices.size();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < options.threads; ++t) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+  std::vector<fusion::Observation> out;
+  for (auto& v : per_keyframe)
+    for (auto& o : v) out.push_back(std::move(o));
+  return out;
 }
 
 }  // namespace objmap::pipeline

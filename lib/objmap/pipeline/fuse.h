@@ -86,4 +86,12 @@ using FuseProgress = std::function<void(std::size_t done, std::size_t total)>;
 // behind then.
 FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress = {});
 
+// The instance observations of the given keyframes (indices into the run's keyframes), re-made
+// from the inputs exactly as run_fuse makes them (masks, back-projection, points in the world with
+// the trajectory's poses), before any association, in the order of `keyframe_indices`; no map, no
+// output (options.out is not used). What objmap correct aligns to earlier views. Throws InputError
+// like run_fuse, and for a keyframe index the inputs do not have.
+std::vector<fusion::Observation> remake_observations(const FuseOptions& options,
+                                                     const std::vector<int>& keyframe_indices);
+
 }  // namespace objmap::pipeline
