@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -11,9 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-#include <thread>
 
 #include "objmap/core/error.h"
+#include "objmap/core/parallel.h"
+#include "objmap/geometry/bounds.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/camera_io.h"
 #include "objmap/io/ply.h"
@@ -261,12 +261,10 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
   fo.trajectory = input_path(run_doc, run_file, "trajectory");
   fo.out = scratch.path() / "run";
   fo.threads = options.threads;
-  std::vector<int> keyframe_indices;
-  for (const auto& [kf, t] : keyframe_time) keyframe_indices.push_back(kf);
-  const std::vector<fusion::Observation> remade = remake_observations(fo, keyframe_indices);
-  // Problem keyframe slot -> run keyframe index.
+  // Problem keyframe slot -> run keyframe index (the problem's keyframes are keyframe_time's).
   std::vector<int> run_keyframe;
   for (const auto& [kf, t] : keyframe_time) run_keyframe.push_back(kf);
+  const std::vector<fusion::Observation> remade = remake_observations(fo, run_keyframe);
   std::map<int, std::vector<const fusion::Observation*>> of_keyframe;
   for (const auto& o : remade)
     if (o.keyframe_index && o.centroid_in_cam) of_keyframe[*o.keyframe_index].push_back(&o);
@@ -302,48 +300,39 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
   };
   std::vector<std::vector<Group>> groups(problem.landmarks.size());
   const double cos_max = std::cos(options.icp_max_view_angle_deg * 3.14159265358979323846 / 180.0);
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t j = next++; j < problem.landmarks.size(); j = next++) {
-      auto& mine = groups[j];
-      for (std::size_t i : of_landmark[j]) {
-        const PointCloud& cloud = source[i]->points_in_world;
-        const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
-        const Vec3 centroid = pose * problem.observations[i].centroid_in_cam;
-        const Vec3 view = (centroid - pose.translation()).normalized();
-        // Anchors looking from within the angle, the closest direction first.
-        std::vector<std::pair<double, std::size_t>> candidates;
-        for (std::size_t g = 0;
-             g < (options.icp_groups ? mine.size() : std::min<std::size_t>(1, mine.size())); ++g) {
-          const double c = mine[g].view.dot(view);
-          if (c >= cos_max) candidates.emplace_back(-c, g);
-        }
-        std::sort(candidates.begin(), candidates.end());
-        bool joined = false;
-        for (const auto& [c, g] : candidates) {
-          const pose::IcpResult r = mine[g].aligner->align(cloud);
-          if (!r.aligned) continue;
-          mine[g].members.push_back({i, r.correction});
-          joined = true;
-          break;
-        }
-        if (joined || (!options.icp_groups && !mine.empty())) continue;
-        Group group;
-        group.landmark = j;
-        Vec3 sum = Vec3::Zero();
-        for (const Vec3f& p : cloud.points) sum += p.cast<double>();
-        group.anchor_centroid = sum / static_cast<double>(cloud.size());
-        group.view = view;
-        group.aligner = std::make_unique<pose::ModelAligner>(cloud, options.icp);
-        group.members.push_back({i, Pose::Identity()});
-        mine.push_back(std::move(group));
+  parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
+    auto& mine = groups[j];
+    for (std::size_t i : of_landmark[j]) {
+      const PointCloud& cloud = source[i]->points_in_world;
+      const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
+      const Vec3 centroid = pose * problem.observations[i].centroid_in_cam;
+      const Vec3 view = (centroid - pose.translation()).normalized();
+      // Anchors looking from within the angle, the closest direction first.
+      std::vector<std::pair<double, std::size_t>> candidates;
+      for (std::size_t g = 0;
+           g < (options.icp_groups ? mine.size() : std::min<std::size_t>(1, mine.size())); ++g) {
+        const double c = mine[g].view.dot(view);
+        if (c >= cos_max) candidates.emplace_back(-c, g);
       }
+      std::sort(candidates.begin(), candidates.end());
+      bool joined = false;
+      for (const auto& [c, g] : candidates) {
+        const pose::IcpResult r = mine[g].aligner->align(cloud);
+        if (!r.aligned) continue;
+        mine[g].members.push_back({i, r.correction});
+        joined = true;
+        break;
+      }
+      if (joined || (!options.icp_groups && !mine.empty())) continue;
+      Group group;
+      group.landmark = j;
+      group.anchor_centroid = geometry::centroid(cloud);
+      group.view = view;
+      group.aligner = std::make_unique<pose::ModelAligner>(cloud, options.icp);
+      group.members.push_back({i, Pose::Identity()});
+      mine.push_back(std::move(group));
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < options.threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+  });
   if (!options.icp_groups) {
     // One anchor per object; the observations it does not align keep the visible-part model.
     for (std::size_t j = 0; j < groups.size(); ++j) {
@@ -427,9 +416,7 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
     if (model.empty()) {
       landmark.position_in_world = vec3(o.at("centroid"), objects_file, where + ".centroid");
     } else {
-      Vec3 sum = Vec3::Zero();
-      for (const Vec3f& p : model.points) sum += p.cast<double>();
-      landmark.position_in_world = sum / static_cast<double>(model.size());
+      landmark.position_in_world = geometry::centroid(model);
     }
     const json obs = field<json>(o, "observations", objects_file, where);
     require(obs.is_array(), objects_file.string() + ": " + where + ".observations",

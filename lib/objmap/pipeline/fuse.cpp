@@ -2,7 +2,6 @@
 
 #include <sys/resource.h>
 
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -15,6 +14,7 @@
 #include <thread>
 
 #include "objmap/core/error.h"
+#include "objmap/core/parallel.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/io/atomic.h"
@@ -822,31 +822,15 @@ std::vector<fusion::Observation> remake_observations(const FuseOptions& options,
                 " keyframes); expected the inputs and options the run was fused with");
   const geometry::RayTable rays = geometry::make_ray_table(result.camera, options.threads);
   std::vector<std::vector<fusion::Observation>> per_keyframe(keyframe_indices.size());
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto worker = [&] {
-    for (std::size_t j = next++; j < keyframe_indices.size(); j = next++) {
-      try {
-        const std::size_t i = static_cast<std::size_t>(keyframe_indices[j]);
-        segmentation::FrameSegmentation lazy;
-        const segmentation::FrameSegmentation* seg = keyframe_segmentation(inputs, i, lazy);
-        per_keyframe[j] = process_keyframe(options, result.camera, rays,
-                                           inputs.dataset.frames[keyframes[i].frame], keyframes[i],
-                                           static_cast<int>(i), seg, nullptr, nullptr, nullptr)
-                              .observations;
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = keyframe_indices.size();
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < options.threads; ++t) threads.emplace_back(worker);
-  worker();
-  for (auto& t : threads) t.join();
-  if (error) std::rethrow_exception(error);
+  parallel_for(keyframe_indices.size(), options.threads, [&](std::size_t j) {
+    const std::size_t i = static_cast<std::size_t>(keyframe_indices[j]);
+    segmentation::FrameSegmentation lazy;
+    const segmentation::FrameSegmentation* seg = keyframe_segmentation(inputs, i, lazy);
+    per_keyframe[j] =
+        process_keyframe(options, result.camera, rays, inputs.dataset.frames[keyframes[i].frame],
+                         keyframes[i], static_cast<int>(i), seg, nullptr, nullptr, nullptr)
+            .observations;
+  });
   std::vector<fusion::Observation> out;
   for (auto& v : per_keyframe)
     for (auto& o : v) out.push_back(std::move(o));
