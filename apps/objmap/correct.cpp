@@ -32,6 +32,25 @@ void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
                   "icp: an observation that no earlier view aligns starts a group of its own "
                   "(true), or keeps the visible model against its object's first view (false)")
       ->capture_default_str();
+  cmd->add_option("--icp-links", o.icp_links,
+                  "icp: align each observation also to up to this many earlier views of its "
+                  "object (the previous, the earliest, one between) that look at it from within "
+                  "--icp-link-max-view-angle; each alignment is a relative-pose factor between "
+                  "the two keyframes (graph); 0: none")
+      ->check(CLI::Range(0, 3))
+      ->capture_default_str();
+  cmd->add_option("--icp-link-max-view-angle", o.icp_link_max_view_angle_deg,
+                  "icp: views of an object further apart than this angle are not linked, degrees")
+      ->capture_default_str();
+  cmd->add_option("--link-sigma", c.link_sigma_m, "graph: std of a view link's translation, metres")
+      ->capture_default_str();
+  cmd->add_option("--link-sigma-deg", c.link_sigma_deg,
+                  "graph: std of a view link's rotation, degrees")
+      ->capture_default_str();
+  cmd->add_option("--held-out-link-improvement", c.min_held_out_link_improvement,
+                  "with view links: links held out of the fit must get this share closer to the "
+                  "corrected poses (RMS in sigmas), else refused")
+      ->capture_default_str();
   cmd->add_option("--icp-inlier-distance", o.icp.inlier_distance_m,
                   "icp: after the alignment, a point this close to the earlier view counts as "
                   "overlapping, metres")
@@ -55,8 +74,15 @@ void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
   cmd->add_option("--max-translation", c.max_translation_m,
                   "a larger correction of any keyframe refuses the result, metres")
       ->capture_default_str();
+  cmd->add_option("--max-translation-per-m", c.max_translation_fraction,
+                  "the translation bound grows by this share of the path travelled to the "
+                  "keyframe (drift grows with the path)")
+      ->capture_default_str();
   cmd->add_option("--max-rotation", c.max_rotation_deg,
                   "a larger correction of any keyframe refuses the result, degrees")
+      ->capture_default_str();
+  cmd->add_option("--max-rotation-per-m", c.max_rotation_deg_per_m,
+                  "the rotation bound grows by this many degrees per metre travelled")
       ->capture_default_str();
   cmd->add_option("--held-out-improvement", c.min_held_out_improvement,
                   "corrections fitted to half of the objects must lower the other half's "
@@ -80,6 +106,9 @@ void print_summary(const pipeline::CorrectOptions& o, const pipeline::CorrectRes
   if (o.view_model == "icp")
     std::printf("icp         %zu of %zu observations aligned to their model\n",
                 r.observations_aligned, r.observations);
+  if (o.view_model == "icp" && o.icp_links > 0)
+    std::printf("links       %zu view links of %zu pairs tried; RMS %.2f -> %.2f sigmas\n", r.links,
+                r.links_tried, c.link_rms_before_sigmas, c.link_rms_after_sigmas);
   std::printf("residual    %.4f -> %.4f m (observation RMS)\n", c.residual_before_m,
               c.residual_after_m);
   std::printf("largest     %.4f m, %.3f deg\n", c.max_translation_m, c.max_rotation_deg);

@@ -1,6 +1,7 @@
 // Pose correction on small constructed problems whose answer is known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -131,6 +132,75 @@ TEST(CorrectPoses, GraphRecoversAKnownDrift) {
   EXPECT_EQ(r.keyframes[0].translation_m, 0.0);
 }
 
+// View links (relative poses measured by aligning two views of one object): with one landmark
+// only, its centroid cannot fix the rotation drift; links between consecutive keyframes and back to
+// the first ones (the camera's loop) can.
+TEST(CorrectPoses, ViewLinksRecoverADriftOneLandmarkCannot) {
+  const Scene s = orbit_scene(30);
+  const std::vector<Pose> input = drifted(s.truth, 0.004, 0.002);  // 6.6 deg and 6.5 cm at the end
+  Problem problem = observe(s, input, 0.002, 2);
+  problem.observations.erase(
+      std::remove_if(problem.observations.begin(), problem.observations.end(),
+                     [](const Observation& o) { return o.landmark != 0; }),
+      problem.observations.end());
+  const CorrectionResult alone = correct_poses(problem, {});
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (std::size_t b = 1; b < input.size(); ++b)
+    for (std::size_t a : {b - 1, std::size_t{0}}) {
+      if (a == 0 && b > 1 && a == b - 1) continue;
+      if (a == 0 && b == 1 && problem.links.size() == 1) continue;  // (0, 1) once
+      ViewLink l{a, b, 0, s.truth[a].inverse() * s.truth[b]};
+      l.a_from_b.translation() += 0.002 * Vec3(noise(rng), noise(rng), noise(rng));
+      problem.links.push_back(l);
+    }
+  CorrectionOptions options;
+  options.min_improvement = 0.0;
+  options.min_held_out_improvement = -1.0;
+  options.max_rotation_deg = 10.0;
+  const CorrectionResult linked = correct_poses(problem, options);
+  ASSERT_TRUE(linked.accepted) << linked.reason;
+  const double before = position_rms(input, s.truth);
+  const double after = position_rms(linked.world_from_cam, s.truth);
+  EXPECT_LT(after, 0.25 * before) << before << " -> " << after;
+  EXPECT_LT(after, position_rms(alone.proposed, s.truth));
+  EXPECT_LT(linked.link_rms_after_sigmas, 0.5 * linked.link_rms_before_sigmas);
+  EXPECT_LT(linked.held_out_link_after_sigmas, 0.75 * linked.held_out_link_before_sigmas);
+}
+
+TEST(CorrectPoses, ViewLinksThatDisagreeWithTheDriftAreRefused) {
+  // Links that measure noise, not the drift: the held-out links do not get closer.
+  const Scene s = orbit_scene(20);
+  Problem problem = observe(s, s.truth, 0.002, 4);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  for (std::size_t b = 1; b < s.truth.size(); ++b) {
+    ViewLink l{b - 1, b, 0, s.truth[b - 1].inverse() * s.truth[b]};
+    l.a_from_b.translation() += Vec3(noise(rng), noise(rng), noise(rng));
+    problem.links.push_back(l);
+  }
+  CorrectionOptions options;
+  options.min_improvement = 0.0;
+  options.min_held_out_improvement = -1.0;
+  const CorrectionResult r = correct_poses(problem, options);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason.rfind("refused: too little gain on held-out view links", 0), 0u) << r.reason;
+}
+
+TEST(CorrectPoses, BoundsGrowWithThePathTravelled) {
+  const Scene s = orbit_scene(30);
+  const std::vector<Pose> input = drifted(s.truth, 0.002, 0.004);  // 12 cm at the end
+  const Problem problem = observe(s, input, 0.002, 6);
+  CorrectionOptions options;
+  options.max_translation_m = 0.03;
+  const CorrectionResult fixed = correct_poses(problem, options);
+  EXPECT_FALSE(fixed.accepted);
+  EXPECT_EQ(fixed.reason.rfind("refused: a keyframe would move", 0), 0u) << fixed.reason;
+  options.max_translation_fraction = 0.2;  // the orbit is 1.3 m long: 0.03 + 0.26 m at the end
+  const CorrectionResult grown = correct_poses(problem, options);
+  EXPECT_TRUE(grown.accepted) << grown.reason;
+}
+
 TEST(CorrectPoses, PaperRecoversAPerturbedKeyframeExactly) {
   const Scene s = orbit_scene(5);
   std::vector<Pose> input = s.truth;
@@ -205,6 +275,15 @@ TEST(CorrectPoses, BadInputThrowsWithTheReason) {
     FAIL() << "no exception";
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "observation 0: keyframe 3 does not exist; expected < 1");
+  }
+  p.observations.clear();
+  p.keyframes.push_back({1.0, Pose::Identity()});
+  p.links.push_back({1, 1, 0, Pose::Identity()});
+  try {
+    correct_poses(p, {});
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "link 0: keyframes 1 and 1: expected two different keyframes < 2");
   }
   CorrectionOptions bad;
   bad.method = "icp";

@@ -144,7 +144,12 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                     {"odometry_sigma_deg_per_deg", o.odometry_sigma_deg_per_deg},
                     {"odometry_sigma_deg_per_m", o.odometry_sigma_deg_per_m},
                     {"max_translation_m", o.max_translation_m},
+                    {"max_translation_fraction", o.max_translation_fraction},
                     {"max_rotation_deg", o.max_rotation_deg},
+                    {"max_rotation_deg_per_m", o.max_rotation_deg_per_m},
+                    {"link_sigma_m", o.link_sigma_m},
+                    {"link_sigma_deg", o.link_sigma_deg},
+                    {"min_held_out_link_improvement", o.min_held_out_link_improvement},
                     {"min_improvement", o.min_improvement},
                     {"min_held_out_improvement", o.min_held_out_improvement},
                     {"reweight_rounds", o.reweight_rounds},
@@ -157,14 +162,22 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                    {"landmarks", result.landmarks},
                    {"observations", result.observations},
                    {"observations_without_view", result.observations_without_view},
-                   {"observations_aligned", result.observations_aligned}};
+                   {"observations_aligned", result.observations_aligned},
+                   {"view_links", result.links},
+                   {"view_links_tried", result.links_tried}};
   doc["consistency"] = {{"observation_rms_before_m", c.residual_before_m},
                         {"held_out_rms_before_m", c.held_out_before_m},
                         {"held_out_rms_after_m", c.held_out_after_m},
                         {"observation_rms_after_m", c.residual_after_m},
                         {"odometry_rms_sigmas", c.odometry_rms_sigmas},
+                        {"link_rms_before_sigmas", c.link_rms_before_sigmas},
+                        {"link_rms_after_sigmas", c.link_rms_after_sigmas},
+                        {"held_out_link_rms_before_sigmas", c.held_out_link_before_sigmas},
+                        {"held_out_link_rms_after_sigmas", c.held_out_link_after_sigmas},
                         {"map_scatter_before_m", result.map_rms_before_m},
-                        {"map_scatter_after_m", result.map_rms_after_m}};
+                        {"map_scatter_after_m", result.map_rms_after_m},
+                        {"map_objects_before", result.map_objects_before},
+                        {"map_objects_after", result.map_objects_after}};
   doc["max_correction"] = {{"translation_m", c.max_translation_m},
                            {"rotation_deg", c.max_rotation_deg}};
   doc["solver"] = {{"iterations", c.iterations}, {"seconds", c.seconds}};
@@ -211,6 +224,28 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                    {"residual_after_m", (after - c.landmarks_in_world[ob.landmark]).norm()}});
   }
   doc["observations"] = obs;
+  // Per view link: the two keyframes, the object, how far the poses are from the measured
+  // relative pose, before and after.
+  ordered_json links = ordered_json::array();
+  for (const auto& l : rp.problem.links) {
+    const auto error = [&](const Pose& a, const Pose& b) {
+      const Pose e = l.a_from_b.inverse() * (a.inverse() * b);
+      return std::make_pair(e.translation().norm(),
+                            Eigen::AngleAxisd(e.linear()).angle() * 180.0 / 3.14159265358979323846);
+    };
+    const auto [tb, rb] =
+        error(rp.problem.keyframes[l.a].world_from_cam, rp.problem.keyframes[l.b].world_from_cam);
+    const auto [ta, ra] = error(c.proposed[l.a], c.proposed[l.b]);
+    links.push_back({{"object", rp.object_ids[l.landmark]},
+                     {"keyframes", {l.a, l.b}},
+                     {"sigma_m", l.sigma_m},
+                     {"sigma_deg", l.sigma_deg},
+                     {"error_before_m", tb},
+                     {"error_before_deg", rb},
+                     {"error_after_m", ta},
+                     {"error_after_deg", ra}});
+  }
+  doc["links"] = links;
   return doc.dump(2) + "\n";
 }
 
@@ -333,7 +368,66 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
       mine.push_back(std::move(group));
     }
   });
+  // View links: each observation aligned to a few earlier views of its object that look at the
+  // same side (the previous one, the earliest, the one between); an alignment measures the relative
+  // pose of the two keyframes.
+  std::vector<pose::ViewLink> links;
+  if (options.icp_links > 0) {
+    const double cos_link =
+        std::cos(options.icp_link_max_view_angle_deg * 3.14159265358979323846 / 180.0);
+    for (std::size_t j = 0; j < problem.landmarks.size(); ++j) {
+      const std::vector<std::size_t>& mine = of_landmark[j];
+      if (mine.size() < 2) continue;
+      std::vector<Vec3> view(mine.size());
+      std::vector<std::unique_ptr<pose::ModelAligner>> aligners(mine.size());
+      parallel_for(mine.size(), options.threads, [&](std::size_t p) {
+        const pose::Observation& o = problem.observations[mine[p]];
+        const Pose& pose = problem.keyframes[o.keyframe].world_from_cam;
+        view[p] = (pose * o.centroid_in_cam - pose.translation()).normalized();
+        aligners[p] =
+            std::make_unique<pose::ModelAligner>(source[mine[p]]->points_in_world, options.icp);
+      });
+      std::vector<std::vector<pose::ViewLink>> found(mine.size());
+      std::vector<std::size_t> tried(mine.size(), 0);
+      parallel_for(mine.size(), options.threads, [&](std::size_t p) {
+        const std::size_t kb = problem.observations[mine[p]].keyframe;
+        std::vector<std::size_t> candidates;
+        for (std::size_t q = 0; q < p; ++q)
+          if (problem.observations[mine[q]].keyframe != kb && view[q].dot(view[p]) >= cos_link)
+            candidates.push_back(q);
+        if (candidates.empty()) return;
+        std::vector<std::size_t> targets = {candidates.back(), candidates.front(),
+                                            candidates[candidates.size() / 2]};
+        targets.resize(std::min<std::size_t>(targets.size(), options.icp_links));
+        std::sort(targets.begin(), targets.end());
+        targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
+        const Pose& pose_b = problem.keyframes[kb].world_from_cam;
+        for (std::size_t q : targets) {
+          ++tried[p];
+          const pose::IcpResult r = aligners[q]->align(source[mine[p]]->points_in_world);
+          if (!r.aligned || !std::isfinite(r.rotation_sigma_deg)) continue;
+          const std::size_t ka = problem.observations[mine[q]].keyframe;
+          const Pose& pose_a = problem.keyframes[ka].world_from_cam;
+          // A rotation error about the object's centre moves the camera by that angle times its
+          // distance.
+          const double distance = (r.centre - pose_b.translation()).norm();
+          const double scale = options.icp_link_sigma_scale;
+          pose::ViewLink link{ka, kb, j, pose_a.inverse() * r.correction * pose_b};
+          link.sigma_deg = scale * r.rotation_sigma_deg;
+          link.sigma_m =
+              scale * (r.translation_sigma_m + r.rotation_sigma_deg * M_PI / 180.0 * distance);
+          if (link.sigma_deg > options.icp_link_max_sigma_deg) continue;
+          found[p].push_back(link);
+        }
+      });
+      for (std::size_t p = 0; p < mine.size(); ++p) {
+        links.insert(links.end(), found[p].begin(), found[p].end());
+        rp.links_tried += tried[p];
+      }
+    }
+  }
   if (!options.icp_groups) {
+    rp.problem.links = links;
     // One anchor per object; the observations it does not align keep the visible-part model.
     for (std::size_t j = 0; j < groups.size(); ++j) {
       if (groups[j].empty() || groups[j][0].members.size() < 2) continue;
@@ -378,6 +472,16 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
   }
   for (std::size_t i = 0; i < n_obs; ++i)
     if (!source[i]) ++out.observations_without_view;
+  // Links keep their keyframes; their landmark becomes the object's first group.
+  std::map<int, std::size_t> first_landmark;
+  for (std::size_t k = out.object_ids.size(); k-- > 0;) first_landmark[out.object_ids[k]] = k;
+  for (pose::ViewLink l : links) {
+    const auto it = first_landmark.find(rp.object_ids[l.landmark]);
+    if (it == first_landmark.end()) continue;
+    l.landmark = it->second;
+    out.problem.links.push_back(l);
+  }
+  out.links_tried = rp.links_tried;
   rp = std::move(out);
 }
 
@@ -511,6 +615,8 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
   result.observations = rp.problem.observations.size();
   result.observations_without_view = rp.observations_without_view;
   result.observations_aligned = rp.observations_aligned;
+  result.links = rp.problem.links.size();
+  result.links_tried = rp.links_tried;
 
   // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage.
   result.correction = pose::correct_poses(rp.problem, options.correction);
@@ -546,7 +652,13 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
       std::vector<Pose> poses;
       for (const auto& k : again.problem.keyframes) poses.push_back(k.world_from_cam);
       result.map_rms_after_m = pose::median_scatter_m(again.problem, poses);
-      if (result.map_rms_after_m > result.map_rms_before_m) {
+      // Scatters compare like with like only when the objects are the same; fewer objects (one
+      // that the drift had split, joined again) spread their observations around the whole object.
+      result.map_objects_before = rp.problem.landmarks.size();
+      result.map_objects_after = again.problem.landmarks.size();
+      const bool fewer = options.view_model == "icp" && options.icp_links > 0 &&
+                         result.map_objects_after < result.map_objects_before;
+      if (result.map_rms_after_m > result.map_rms_before_m && !fewer) {
         result.accepted = false;
         char buffer[200];
         std::snprintf(buffer, sizeof buffer,

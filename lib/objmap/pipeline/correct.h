@@ -34,6 +34,16 @@ struct CorrectOptions {
   // icp: true: an observation no anchor aligns starts a new group (a landmark of its own); false:
   // one anchor per object (its first view) and the other observations keep the visible model.
   bool icp_groups = false;
+  // icp: view links. Each observation is also aligned to up to this many earlier views of its
+  // object that look at it from within icp_link_max_view_angle_deg (the previous such view, the
+  // earliest and the one between); each alignment is a relative-pose factor between the two
+  // keyframes in the graph. 0: no links.
+  int icp_links = 0;
+  double icp_link_max_view_angle_deg = 30.0;
+  // A link's std is this many times the alignment's own (rms² · H⁻¹; ICP errors are correlated
+  // and larger than that); a link whose rotation std exceeds icp_link_max_sigma_deg is dropped.
+  double icp_link_sigma_scale = 3.0;
+  double icp_link_max_sigma_deg = 0.5;
   // Acceptance thresholds by view model (correction.min_improvement, min_held_out_improvement):
   // icp 0.15 / 0.0, visible and centroid 0.10 / 0.20 (docs/pose.md: calibrated on synthetic
   // scenes with and without drift). false: correction's own values.
@@ -51,12 +61,16 @@ struct CorrectResult {
   std::size_t landmarks = 0, observations = 0;
   std::size_t observations_without_view = 0;  // visible part too small: bias 0
   std::size_t observations_aligned = 0;       // view_model icp: aligned to their model
+  std::size_t links = 0, links_tried = 0;     // view_model icp: view links made / pairs tried
   bool accepted = false;  // the final verdict (correction and the re-fused map's check)
   std::string reason;
   double map_rms_before_m = 0.0;  // median object scatter of the input run (median_scatter_m)
   double map_rms_after_m = 0.0;   // ... of the re-fused run (0 when not re-fused)
-  bool refused_map = false;       // the map was fused again
-  FuseResult fuse;                // the re-fuse (empty when refused before it)
+  // Objects with observations in the input run and in the re-fused one (with view links, fewer
+  // objects after lets the scatter rise: observations of a split object joined again).
+  std::size_t map_objects_before = 0, map_objects_after = 0;
+  bool refused_map = false;  // the map was fused again
+  FuseResult fuse;           // the re-fuse (empty when refused before it)
   double seconds_correct = 0.0, seconds_total = 0.0;
 };
 
@@ -69,6 +83,7 @@ struct RunProblem {
   std::vector<std::vector<int>> keyframe_objects;  // per keyframe, the object ids it observed
   std::size_t observations_without_view = 0;
   std::size_t observations_aligned = 0;  // view_model icp: observations aligned to their model
+  std::size_t links_tried = 0;           // view_model icp: view pairs aligned for links
 };
 // `options` gives the view model (and for icp: the ICP options, threads, and OUT, beside which a
 // temporary folder is made).

@@ -146,6 +146,46 @@ void validate(const Problem& problem) {
     require(o.centroid_in_cam.allFinite() && o.bias_in_world.allFinite(), where,
             "centroid and bias must be finite");
   }
+  for (std::size_t i = 0; i < problem.links.size(); ++i) {
+    const ViewLink& l = problem.links[i];
+    const std::string where = "link " + std::to_string(i);
+    require(l.a < problem.keyframes.size() && l.b < problem.keyframes.size() && l.a != l.b, where,
+            "keyframes " + std::to_string(l.a) + " and " + std::to_string(l.b) +
+                ": expected two different keyframes < " + std::to_string(problem.keyframes.size()));
+    require(l.landmark < problem.landmarks.size(), where,
+            "landmark " + std::to_string(l.landmark) + " does not exist");
+    require(l.a_from_b.matrix().allFinite(), where, "relative pose must be finite");
+    require(std::isfinite(l.sigma_m) && l.sigma_m >= 0 && std::isfinite(l.sigma_deg) &&
+                l.sigma_deg >= 0,
+            where, "sigmas must be finite and >= 0");
+  }
+}
+
+// Residual of a relative pose a_from_b against poses, in sigmas (translation, rotation).
+double relative_pose_sigmas(const Pose& measured, const Pose& a, const Pose& b, double sigma_m,
+                            double sigma_deg) {
+  const Pose actual = a.inverse() * b;
+  const double et = (actual.translation() - measured.translation()).norm() / sigma_m;
+  const double er = angle_deg(measured.linear().transpose() * actual.linear()) / sigma_deg;
+  return std::sqrt(et * et + er * er);
+}
+
+// RMS over the links of relative_pose_sigmas.
+// (only the links flagged in `use` when it is given).
+double link_rms_sigmas(const Problem& problem, const std::vector<Pose>& poses,
+                       const CorrectionOptions& options, const std::vector<bool>& use = {}) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < problem.links.size(); ++i) {
+    if (!use.empty() && !use[i]) continue;
+    const ViewLink& l = problem.links[i];
+    const double e = relative_pose_sigmas(l.a_from_b, poses[l.a], poses[l.b],
+                                          std::max(options.link_sigma_m, l.sigma_m),
+                                          std::max(options.link_sigma_deg, l.sigma_deg));
+    sum += e * e;
+    ++n;
+  }
+  return n > 0 ? std::sqrt(sum / n) : 0.0;
 }
 
 // Residual RMS of one keyframe's observations against given landmark positions.
@@ -182,6 +222,14 @@ void CorrectionOptions::check() const {
           "must be >= 0");
   require(positive(max_translation_m), "CorrectionOptions.max_translation_m", "must be > 0");
   require(positive(max_rotation_deg), "CorrectionOptions.max_rotation_deg", "must be > 0");
+  require(non_negative(max_translation_fraction), "CorrectionOptions.max_translation_fraction",
+          "must be >= 0");
+  require(non_negative(max_rotation_deg_per_m), "CorrectionOptions.max_rotation_deg_per_m",
+          "must be >= 0");
+  require(positive(link_sigma_m), "CorrectionOptions.link_sigma_m", "must be > 0");
+  require(positive(link_sigma_deg), "CorrectionOptions.link_sigma_deg", "must be > 0");
+  require(std::isfinite(min_held_out_link_improvement) && min_held_out_link_improvement < 1,
+          "CorrectionOptions.min_held_out_link_improvement", "must be < 1");
   require(std::isfinite(min_improvement) && min_improvement >= 0 && min_improvement < 1,
           "CorrectionOptions.min_improvement", "must be in [0, 1)");
   require(std::isfinite(ray_sigma_factor) && ray_sigma_factor >= 1,
@@ -356,7 +404,8 @@ double odometry_sigma_deg(const CorrectionOptions& o, const Pose& i_from_j) {
 // One pose graph: every keyframe pose and every used landmark seen at least twice.
 Solution solve_graph(const Problem& problem, const CorrectionOptions& options,
                      const std::vector<Pose>& input, const std::vector<Vec3>& landmarks,
-                     const std::vector<double>& sigma, const std::vector<bool>& use) {
+                     const std::vector<double>& sigma, const std::vector<bool>& use,
+                     const std::vector<bool>& use_link) {
   const std::size_t n_kf = input.size();
   std::vector<int> seen(problem.landmarks.size(), 0);
   std::vector<int> of_keyframe(n_kf, 0);
@@ -386,6 +435,17 @@ Solution solve_graph(const Problem& problem, const CorrectionOptions& options,
         1.0 / options.ray_sigma_factor});
     cp.AddResidualBlock(cost, new ceres::HuberLoss(options.robust_sigmas), blocks[o.keyframe].q,
                         blocks[o.keyframe].t, landmark_blocks[o.landmark].data());
+  }
+  // View links: the relative pose two views of one object measure (robust: a wrong alignment).
+  for (std::size_t i = 0; i < problem.links.size(); ++i) {
+    if (!use_link[i]) continue;
+    const ViewLink& l = problem.links[i];
+    auto* cost = new ceres::AutoDiffCostFunction<OdometryFactor, 6, 4, 3, 4, 3>(
+        new OdometryFactor{Eigen::Quaterniond(l.a_from_b.linear()), l.a_from_b.translation(),
+                           1.0 / std::max(options.link_sigma_m, l.sigma_m),
+                           kDegPerRad / std::max(options.link_sigma_deg, l.sigma_deg)});
+    cp.AddResidualBlock(cost, new ceres::HuberLoss(options.robust_sigmas), blocks[l.a].q,
+                        blocks[l.a].t, blocks[l.b].q, blocks[l.b].t);
   }
   for (auto& b : blocks)
     if (cp.HasParameterBlock(b.q)) cp.SetManifold(b.q, new ceres::EigenQuaternionManifold);
@@ -417,12 +477,13 @@ Solution solve_graph(const Problem& problem, const CorrectionOptions& options,
 // the residuals of the solution, solve again.
 Solution solve(const Problem& problem, const CorrectionOptions& options,
                const std::vector<Pose>& input, const std::vector<Vec3>& landmarks,
-               const std::vector<bool>& use) {
+               const std::vector<bool>& use, const std::vector<bool>& use_link) {
   std::vector<double> sigma = landmark_sigmas_m(problem, input, options.observation_sigma_m);
   Solution s;
   for (int round = 0; round <= options.reweight_rounds; ++round) {
-    s = options.method == "paper" ? solve_paper(problem, options, input, landmarks, sigma, use)
-                                  : solve_graph(problem, options, input, landmarks, sigma, use);
+    s = options.method == "paper"
+            ? solve_paper(problem, options, input, landmarks, sigma, use)
+            : solve_graph(problem, options, input, landmarks, sigma, use, use_link);
     sigma = landmark_sigmas_m(problem, s.poses, options.observation_sigma_m);
   }
   return s;
@@ -453,7 +514,9 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
 
   // 1. Solve with every landmark.
   const std::size_t n_obs = problem.observations.size();
-  const Solution all = solve(problem, options, input, landmarks_in, std::vector<bool>(n_obs, true));
+  const std::size_t n_links = problem.links.size();
+  const Solution all = solve(problem, options, input, landmarks_in, std::vector<bool>(n_obs, true),
+                             std::vector<bool>(n_links, true));
   const std::vector<Pose>& proposed = all.poses;
   int iterations = all.iterations;
 
@@ -462,7 +525,7 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
   //    objects (>= 4 objects), else the keyframes (alternately).
   const std::vector<double> sigma_in =
       landmark_sigmas_m(problem, input, options.observation_sigma_m);
-  double held_before = 0.0, held_after = 0.0;
+  double held_before = 0.0, held_after = 0.0, held_link_before = 0.0, held_link_after = 0.0;
   if (options.held_out_check) {
     const bool by_object = n_lm >= 4;
     for (int fold = 0; fold < 2; ++fold) {
@@ -472,21 +535,38 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
         test[i] = static_cast<int>((by_object ? o.landmark : o.keyframe) % 2) == fold;
         fit[i] = !test[i];
       }
-      const Solution s = solve(problem, options, input, landmarks_in, fit);
+      std::vector<bool> fit_link(n_links);
+      // Links by a hash of their index: the order of links follows their kind (the previous
+      // view, the earliest...), and each fold must have some of every kind.
+      for (std::size_t i = 0; i < n_links; ++i)
+        fit_link[i] = static_cast<int>(((i * 2654435761u) >> 16) & 1u) != fold;
+      const Solution s = solve(problem, options, input, landmarks_in, fit, fit_link);
       iterations += s.iterations;
       const double b = observation_rms_m(problem, input, sigma_in, test);
       const double a = observation_rms_m(problem, s.poses, sigma_in, test);
       held_before += b * b;
       held_after += a * a;
+      std::vector<bool> test_link(n_links);
+      for (std::size_t i = 0; i < n_links; ++i) test_link[i] = !fit_link[i];
+      const double lb = link_rms_sigmas(problem, input, options, test_link);
+      const double la = link_rms_sigmas(problem, s.poses, options, test_link);
+      held_link_before += lb * lb;
+      held_link_after += la * la;
     }
     held_before = std::sqrt(held_before / 2.0);
     held_after = std::sqrt(held_after / 2.0);
+    held_link_before = std::sqrt(held_link_before / 2.0);
+    held_link_after = std::sqrt(held_link_after / 2.0);
   }
+  result.held_out_link_before_sigmas = held_link_before;
+  result.held_out_link_after_sigmas = held_link_after;
   result.held_out_before_m = held_before;
   result.held_out_after_m = held_after;
 
-  // 3. Per-keyframe report and the bounds.
+  // 3. Per-keyframe report and the bounds (which grow with the path travelled, as drift does).
   result.proposed = proposed;
+  double travelled = 0.0;
+  std::string over_bounds;
   for (std::size_t k = 0; k < n_kf; ++k) {
     KeyframeCorrection kc;
     kc.index = k;
@@ -497,6 +577,15 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
     kc.residual_after_m = keyframe_rms(problem, of_keyframe[k], proposed[k], all.landmarks);
     kc.translation_m = (proposed[k].translation() - input[k].translation()).norm();
     kc.rotation_deg = angle_deg(proposed[k].linear() * input[k].linear().transpose());
+    if (k > 0) travelled += (input[k].translation() - input[k - 1].translation()).norm();
+    const double bound_m = options.max_translation_m + options.max_translation_fraction * travelled;
+    const double bound_deg = options.max_rotation_deg + options.max_rotation_deg_per_m * travelled;
+    if (over_bounds.empty() && (kc.translation_m > bound_m || kc.rotation_deg > bound_deg))
+      over_bounds =
+          fmt("refused: a keyframe would move %.3f m / %.2f deg, over the bounds", kc.translation_m,
+              kc.rotation_deg) +
+          fmt(" (%.3f m / %.2f deg", bound_m, bound_deg) +
+          fmt(" for keyframe %.0f after %.2f m of path)", static_cast<double>(k), travelled);
     kc.corrected = kc.translation_m > 0.0 || kc.rotation_deg > 0.0;
     kc.reason = all.reasons[k];
     result.max_translation_m = std::max(result.max_translation_m, kc.translation_m);
@@ -519,6 +608,8 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
       sum += et * et + er * er;
     }
     result.odometry_rms_sigmas = n_kf > 1 ? std::sqrt(sum / (n_kf - 1)) : 0.0;
+    result.link_rms_before_sigmas = link_rms_sigmas(problem, input, options);
+    result.link_rms_after_sigmas = link_rms_sigmas(problem, proposed, options);
   }
 
   // 4. The whole result: refused when it moves a pose beyond the bounds, does not make the
@@ -527,17 +618,21 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
   const double held_needed = held_before * (1.0 - options.min_held_out_improvement);
   if (result.corrected_keyframes == 0) {
     result.reason = "refused: no keyframe has enough evidence for a correction";
-  } else if (result.max_translation_m > options.max_translation_m ||
-             result.max_rotation_deg > options.max_rotation_deg) {
-    result.reason =
-        fmt("refused: a keyframe would move %.3f m / %.2f deg, over the bounds",
-            result.max_translation_m, result.max_rotation_deg) +
-        fmt(" (%.3f m / %.2f deg)", options.max_translation_m, options.max_rotation_deg);
+  } else if (!over_bounds.empty()) {
+    result.reason = over_bounds;
   } else if (!(result.residual_after_m <= needed)) {
     result.reason = fmt(
         "refused: object observations not consistent enough: residual RMS %.4f -> %.4f m, needs "
         "<= %.4f m",
         result.residual_before_m, result.residual_after_m, needed);
+  } else if (options.held_out_check && n_links > 0 &&
+             !(held_link_after <=
+               held_link_before * (1.0 - options.min_held_out_link_improvement))) {
+    result.reason =
+        fmt("refused: too little gain on held-out view links (RMS %.2f -> %.2f sigmas, needs <= "
+            "%.2f): the views of the objects do not confirm the correction",
+            held_link_before, held_link_after,
+            held_link_before * (1.0 - options.min_held_out_link_improvement));
   } else if (options.held_out_check && !(held_after <= held_needed)) {
     result.reason =
         fmt("refused: too little gain on held-out observations (residual RMS %.4f -> %.4f m, needs "

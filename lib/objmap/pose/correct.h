@@ -37,10 +37,23 @@ struct Observation {
   double weight = 1.0;  // > 0; scales the information of the factor
 };
 
+// Two keyframes' views of the same object aligned to each other (ICP of the object's points): the
+// relative pose they measure, a_from_b ≈ world_from_cam[a]⁻¹ · world_from_cam[b]. An object seen
+// from overlapping views pins down all six degrees of freedom between them, not only where its
+// centroid lies.
+struct ViewLink {
+  std::size_t a = 0, b = 0;  // indices into Problem::keyframes, a != b
+  std::size_t landmark = 0;  // the object whose views were aligned
+  Pose a_from_b = Pose::Identity();
+  // Its std (translation, rotation); the options' link_sigma_m / link_sigma_deg when larger.
+  double sigma_m = 0.0, sigma_deg = 0.0;
+};
+
 struct Problem {
   std::vector<StampedPose> keyframes;  // input poses world_from_cam, increasing time
   std::vector<Landmark> landmarks;
   std::vector<Observation> observations;
+  std::vector<ViewLink> links;  // graph only; may be empty
 };
 
 struct CorrectionOptions {
@@ -60,11 +73,18 @@ struct CorrectionOptions {
   double odometry_sigma_deg = 0.05;          // rotation std per step, base, degrees
   double odometry_sigma_deg_per_deg = 0.02;  // ... plus this share of the step rotation
   double odometry_sigma_deg_per_m = 1.0;     // ... plus this many degrees per metre travelled
-  // Bounds and acceptance.
+  // View links (graph): std of an ICP-measured relative pose.
+  double link_sigma_m = 0.01;
+  double link_sigma_deg = 1.0;
+  // Bounds and acceptance. A keyframe may move at most max_translation_m plus
+  // max_translation_fraction of the path travelled up to it (drift grows with the path), and turn
+  // at most max_rotation_deg plus max_rotation_deg_per_m per metre travelled.
   double max_translation_m = 0.10;  // a larger correction of any keyframe refuses the result
-  double max_rotation_deg = 5.0;    // idem, rotation
-  double min_improvement = 0.10;    // observation RMS must drop by this share (else refused)
-  int max_iterations = 100;         // Ceres iterations
+  double max_translation_fraction = 0.0;
+  double max_rotation_deg = 5.0;  // idem, rotation
+  double max_rotation_deg_per_m = 0.0;
+  double min_improvement = 0.10;  // observation RMS must drop by this share (else refused)
+  int max_iterations = 100;       // Ceres iterations
   // paper: eq 20 plus a prior on the input pose whose std is the drift the run may have
   // accumulated (odometry sigmas × path length so far); false: eq 20 alone (the paper's).
   bool paper_prior = true;
@@ -75,6 +95,8 @@ struct CorrectionOptions {
   // this share (fitting noise does not, correcting drift does).
   bool held_out_check = true;
   double min_held_out_improvement = 0.20;
+  // With view links: the held-out links' RMS (in sigmas) must drop by this share too.
+  double min_held_out_link_improvement = 0.25;
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -105,10 +127,14 @@ struct CorrectionResult {
   // and after.
   double residual_before_m = 0.0;
   double residual_after_m = 0.0;
-  double held_out_before_m = 0.0;    // the held-out folds' residual RMS, input poses
-  double held_out_after_m = 0.0;     // ... with the poses fitted to the other fold
-  double odometry_rms_sigmas = 0.0;  // graph: RMS of the odometry factors after, in sigmas
-  double max_translation_m = 0.0;    // largest keyframe correction
+  double held_out_before_m = 0.0;            // the held-out folds' residual RMS, input poses
+  double held_out_after_m = 0.0;             // ... with the poses fitted to the other fold
+  double odometry_rms_sigmas = 0.0;          // graph: RMS of the odometry factors after, in sigmas
+  double link_rms_before_sigmas = 0.0;       // graph: RMS of the view links, input poses, in sigmas
+  double link_rms_after_sigmas = 0.0;        // ... with the proposed poses
+  double held_out_link_before_sigmas = 0.0;  // the held-out folds' link RMS, input poses
+  double held_out_link_after_sigmas = 0.0;   // ... with the poses fitted to the other fold
+  double max_translation_m = 0.0;            // largest keyframe correction
   double max_rotation_deg = 0.0;
   int iterations = 0;
   double seconds = 0.0;

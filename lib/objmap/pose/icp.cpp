@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -169,6 +170,30 @@ IcpResult ModelAligner::align(const PointCloud& observation) const {
     centre = step * centre;
     if (xi.norm() < o.convergence_m) break;
   }
+  // The uncertainty at the end: covariance rms² · H⁻¹ of the (radius-scaled rotation,
+  // translation) update.
+  {
+    Eigen::Matrix<double, 6, 6> jtj;
+    Eigen::Matrix<double, 6, 1> jtr;
+    pairs(total, inliers, sum_sq, &jtj, &jtr);
+    const double variance = inliers > 6 ? sum_sq / static_cast<double>(inliers - 6) : 0.0;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(jtj);
+    const double largest = eig.eigenvalues()(5);
+    if (inliers <= 6 || !(eig.eigenvalues()(0) > 1e-12 * largest)) {
+      result.rotation_sigma_deg = result.translation_sigma_m =
+          std::numeric_limits<double>::infinity();
+    } else {
+      const Eigen::Matrix<double, 6, 6> cov = variance * eig.eigenvectors() *
+                                              eig.eigenvalues().cwiseInverse().asDiagonal() *
+                                              eig.eigenvectors().transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> trans(cov.bottomRightCorner<3, 3>());
+      result.rotation_sigma_deg =
+          std::sqrt(std::max(0.0, rot.eigenvalues()(2))) / radius * 180.0 / kPi;
+      result.translation_sigma_m = std::sqrt(std::max(0.0, trans.eigenvalues()(2)));
+    }
+  }
+  result.centre = centre;
   // The final pairs: only points within inlier_distance_m of the model count.
   max_sq = std::min(max_sq, o.inlier_distance_m * o.inlier_distance_m);
   pairs(total, inliers, sum_sq, nullptr, nullptr);

@@ -34,6 +34,13 @@ struct IcpResult {
   double rms_m = 0.0;                  // point-to-plane RMS of the pairs at the end
   int iterations = 0;
   std::size_t points = 0;  // observation points used (after thinning)
+  // Uncertainty of the alignment at the end, from the point-to-plane information (rms² · H⁻¹ of
+  // the Gauss-Newton problem): the std of its least constrained rotation (about the observation's
+  // centre) and translation. A surface that does not pin a direction down (a bottle turning about
+  // its axis, a plane sliding in itself) gives a large value (infinity when singular).
+  double rotation_sigma_deg = 0.0;
+  double translation_sigma_m = 0.0;
+  Vec3 centre = Vec3::Zero();  // the observation's centre after the alignment, world frame
 };
 
 // A model with its kd-tree and normals, built once and aligned against many observations.
