@@ -4,7 +4,8 @@
 #
 # 1. Sequences: every folder under DATA (depth <= 3) with rgb.txt and depth.txt. For each:
 #      segmentation = the first of segmentation/, detections*/, boxes*/, masks/ (none: skipped);
-#      estimate     = CameraTrajectory.txt, else KeyFrameTrajectory.txt, else *estimate*.txt / vo_*.txt;
+#      estimate     = CameraTrajectory.txt, else KeyFrameTrajectory.txt, else *estimate*.txt / vo_*.txt,
+#                     else a drifted copy of groundtruth.txt (scripts/drift_trajectory.py --seed 1);
 #      ground truth = groundtruth.txt; ground-truth objects = objects_gt.json, else objects_gt.txt.
 #    Plus the synthetic scenes `objmap synth --seed N --orbit-speed 60` (N in $BENCH_SEEDS, default
 #    1 2 3): their estimated.txt drifts, objects_gt.json is exact.
@@ -183,6 +184,14 @@ if [ -d "$data" ]; then
     est=$(first_match "$dir/CameraTrajectory.txt" "$dir/KeyFrameTrajectory.txt" \
       "$dir"/*estimate*.txt "$dir"/vo_*.txt)
     gtobj=$(first_match "$dir/objects_gt.json" "$dir/objects_gt.txt")
+    if [ -z "$est" ] && [ -n "$seg" ] && [ -f "$dir/groundtruth.txt" ]; then
+      # No SLAM estimate: a seeded drifted copy of the ground truth (3% of the path, 2 deg/m yaw),
+      # so that Table 7 has a row for the sequence.
+      mkdir -p "$out/$name"
+      est="$out/$name/drifted_seed1.txt"
+      $py "$here/drift_trajectory.py" "$dir/groundtruth.txt" "$est" --seed 1 \
+        >"$out/$name/drift.log" 2>&1 || est=""
+    fi
     if [ -z "$seg" ] || [ ! -f "$dir/groundtruth.txt" ]; then
       mkdir -p "$out/$name"
       {

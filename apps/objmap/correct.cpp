@@ -76,14 +76,16 @@ void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
       ->capture_default_str();
   cmd->add_option("--max-translation-per-m", c.max_translation_fraction,
                   "the translation bound grows by this share of the path travelled to the "
-                  "keyframe (drift grows with the path)")
-      ->capture_default_str();
+                  "keyframe (drift grows with the path); default: 0.03 for the correction with "
+                  "view links, 0 without")
+      ->each([&o](const std::string&) { o.link_bounds = false; });
   cmd->add_option("--max-rotation", c.max_rotation_deg,
                   "a larger correction of any keyframe refuses the result, degrees")
       ->capture_default_str();
   cmd->add_option("--max-rotation-per-m", c.max_rotation_deg_per_m,
-                  "the rotation bound grows by this many degrees per metre travelled")
-      ->capture_default_str();
+                  "the rotation bound grows by this many degrees per metre travelled; default: "
+                  "1.5 for the correction with view links, 0 without")
+      ->each([&o](const std::string&) { o.link_bounds = false; });
   cmd->add_option("--held-out-improvement", c.min_held_out_improvement,
                   "corrections fitted to half of the objects must lower the other half's "
                   "residual RMS by this share, else refused (negative: a worsening allowed); "
@@ -107,8 +109,10 @@ void print_summary(const pipeline::CorrectOptions& o, const pipeline::CorrectRes
     std::printf("icp         %zu of %zu observations aligned to their model\n",
                 r.observations_aligned, r.observations);
   if (o.view_model == "icp" && o.icp_links > 0)
-    std::printf("links       %zu view links of %zu pairs tried; RMS %.2f -> %.2f sigmas\n", r.links,
-                r.links_tried, c.link_rms_before_sigmas, c.link_rms_after_sigmas);
+    std::printf("links       %zu view links of %zu pairs tried; %s\n", r.links, r.links_tried,
+                r.links_used  ? "used"
+                : r.links > 0 ? "not used (they do not confirm)"
+                              : "none");
   std::printf("residual    %.4f -> %.4f m (observation RMS)\n", c.residual_before_m,
               c.residual_after_m);
   std::printf("largest     %.4f m, %.3f deg\n", c.max_translation_m, c.max_rotation_deg);

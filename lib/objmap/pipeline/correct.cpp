@@ -134,6 +134,8 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
   doc["view_model"] = options.view_model;
   doc["accepted"] = result.accepted;
   doc["reason"] = result.reason;
+  doc["view_links_used"] = result.links_used;
+  doc["reason_with_view_links"] = result.reason_with_links;
   doc["options"] = {{"min_pairs", o.min_pairs},
                     {"min_spread_m", o.min_spread_m},
                     {"observation_sigma_m", o.observation_sigma_m},
@@ -165,19 +167,20 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                    {"observations_aligned", result.observations_aligned},
                    {"view_links", result.links},
                    {"view_links_tried", result.links_tried}};
-  doc["consistency"] = {{"observation_rms_before_m", c.residual_before_m},
-                        {"held_out_rms_before_m", c.held_out_before_m},
-                        {"held_out_rms_after_m", c.held_out_after_m},
-                        {"observation_rms_after_m", c.residual_after_m},
-                        {"odometry_rms_sigmas", c.odometry_rms_sigmas},
-                        {"link_rms_before_sigmas", c.link_rms_before_sigmas},
-                        {"link_rms_after_sigmas", c.link_rms_after_sigmas},
-                        {"held_out_link_rms_before_sigmas", c.held_out_link_before_sigmas},
-                        {"held_out_link_rms_after_sigmas", c.held_out_link_after_sigmas},
-                        {"map_scatter_before_m", result.map_rms_before_m},
-                        {"map_scatter_after_m", result.map_rms_after_m},
-                        {"map_objects_before", result.map_objects_before},
-                        {"map_objects_after", result.map_objects_after}};
+  doc["consistency"] = {
+      {"observation_rms_before_m", c.residual_before_m},
+      {"held_out_rms_before_m", c.held_out_before_m},
+      {"held_out_rms_after_m", c.held_out_after_m},
+      {"observation_rms_after_m", c.residual_after_m},
+      {"odometry_rms_sigmas", c.odometry_rms_sigmas},
+      {"link_rms_before_sigmas", result.with_links.link_rms_before_sigmas},
+      {"link_rms_after_sigmas", result.with_links.link_rms_after_sigmas},
+      {"held_out_link_rms_before_sigmas", result.with_links.held_out_link_before_sigmas},
+      {"held_out_link_rms_after_sigmas", result.with_links.held_out_link_after_sigmas},
+      {"map_scatter_before_m", result.map_rms_before_m},
+      {"map_scatter_after_m", result.map_rms_after_m},
+      {"map_objects_before", result.map_objects_before},
+      {"map_objects_after", result.map_objects_after}};
   doc["max_correction"] = {{"translation_m", c.max_translation_m},
                            {"rotation_deg", c.max_rotation_deg}};
   doc["solver"] = {{"iterations", c.iterations}, {"seconds", c.seconds}};
@@ -602,6 +605,8 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
     options.correction.min_improvement = icp ? 0.15 : 0.10;
     options.correction.min_held_out_improvement = icp ? 0.0 : 0.20;
   }
+  // View links serve the pose graph only.
+  if (options.view_model != "icp" || options.correction.method != "graph") options.icp_links = 0;
   const auto t_start = Clock::now();
   CorrectResult result;
   const fs::path run_file = options.run / "run.json";
@@ -618,10 +623,29 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
   result.links = rp.problem.links.size();
   result.links_tried = rp.links_tried;
 
-  // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage.
-  result.correction = pose::correct_poses(rp.problem, options.correction);
+  // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage. With
+  //    view links first (bounds that grow with the path, as the links confirm large corrections);
+  //    when the links do not confirm it, the same problem without them, with the fixed bounds.
+  if (!rp.problem.links.empty()) {
+    pose::CorrectionOptions with_links = options.correction;
+    if (options.link_bounds) {
+      with_links.max_translation_fraction = options.link_max_translation_per_m;
+      with_links.max_rotation_deg_per_m = options.link_max_rotation_deg_per_m;
+    }
+    result.correction = pose::correct_poses(rp.problem, with_links);
+    result.with_links = result.correction;
+    result.links_used = result.correction.accepted;
+  }
+  if (!result.links_used) {
+    pose::Problem without = rp.problem;
+    without.links.clear();
+    result.correction = pose::correct_poses(without, options.correction);
+    if (!rp.problem.links.empty()) result.reason_with_links = result.with_links.reason;
+  }
   result.accepted = result.correction.accepted;
   result.reason = result.correction.reason;
+  if (!result.reason_with_links.empty())
+    result.reason += " (with view links: " + result.reason_with_links + ")";
   {
     std::vector<Pose> poses;
     for (const auto& k : rp.problem.keyframes) poses.push_back(k.world_from_cam);
@@ -648,7 +672,9 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
     result.refused_map = true;
     // 5. The re-fused map's own consistency must not get worse.
     if (options.check_map) {
-      const RunProblem again = problem_from_run(options.out, corrected, options);
+      CorrectOptions no_links = options;
+      no_links.icp_links = 0;  // the scatter needs no links
+      const RunProblem again = problem_from_run(options.out, corrected, no_links);
       std::vector<Pose> poses;
       for (const auto& k : again.problem.keyframes) poses.push_back(k.world_from_cam);
       result.map_rms_after_m = pose::median_scatter_m(again.problem, poses);
@@ -656,8 +682,7 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
       // that the drift had split, joined again) spread their observations around the whole object.
       result.map_objects_before = rp.problem.landmarks.size();
       result.map_objects_after = again.problem.landmarks.size();
-      const bool fewer = options.view_model == "icp" && options.icp_links > 0 &&
-                         result.map_objects_after < result.map_objects_before;
+      const bool fewer = result.links_used && result.map_objects_after < result.map_objects_before;
       if (result.map_rms_after_m > result.map_rms_before_m && !fewer) {
         result.accepted = false;
         char buffer[200];

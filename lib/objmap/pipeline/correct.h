@@ -38,12 +38,19 @@ struct CorrectOptions {
   // object that look at it from within icp_link_max_view_angle_deg (the previous such view, the
   // earliest and the one between); each alignment is a relative-pose factor between the two
   // keyframes in the graph. 0: no links.
-  int icp_links = 0;
+  int icp_links = 3;
   double icp_link_max_view_angle_deg = 30.0;
   // A link's std is this many times the alignment's own (rms² · H⁻¹; ICP errors are correlated
   // and larger than that); a link whose rotation std exceeds icp_link_max_sigma_deg is dropped.
   double icp_link_sigma_scale = 3.0;
   double icp_link_max_sigma_deg = 0.5;
+  // With view links the bounds grow with the path travelled (correction.max_translation_fraction,
+  // max_rotation_deg_per_m set to these); when the links do not confirm a correction, the problem
+  // is solved again without them and with correction's own bounds. false: correction's bounds for
+  // both (set when --max-translation-per-m or --max-rotation-per-m is given).
+  bool link_bounds = true;
+  double link_max_translation_per_m = 0.03;
+  double link_max_rotation_deg_per_m = 1.5;
   // Acceptance thresholds by view model (correction.min_improvement, min_held_out_improvement):
   // icp 0.15 / 0.0, visible and centroid 0.10 / 0.20 (docs/pose.md: calibrated on synthetic
   // scenes with and without drift). false: correction's own values.
@@ -62,7 +69,10 @@ struct CorrectResult {
   std::size_t observations_without_view = 0;  // visible part too small: bias 0
   std::size_t observations_aligned = 0;       // view_model icp: aligned to their model
   std::size_t links = 0, links_tried = 0;     // view_model icp: view links made / pairs tried
-  bool accepted = false;  // the final verdict (correction and the re-fused map's check)
+  bool links_used = false;            // the accepted correction is the one with the view links
+  std::string reason_with_links;      // why the correction with view links was refused (else empty)
+  pose::CorrectionResult with_links;  // the solve with the view links (when there were any)
+  bool accepted = false;              // the final verdict (correction and the re-fused map's check)
   std::string reason;
   double map_rms_before_m = 0.0;  // median object scatter of the input run (median_scatter_m)
   double map_rms_after_m = 0.0;   // ... of the re-fused run (0 when not re-fused)
