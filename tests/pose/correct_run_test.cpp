@@ -11,6 +11,7 @@
 #include "objmap/eval/objects.h"
 #include "objmap/io/objects_json.h"
 #include "objmap/io/trajectory.h"
+#include "objmap/pipeline/correct.h"
 #include "objmap/pipeline/fuse.h"
 #include "support/schema_check.h"
 #include "support/test_support.h"
@@ -199,6 +200,27 @@ TEST(CorrectCli, MalformedObjectsJsonNamesTheField) {
                        "array of 3 numbers"),
             std::string::npos)
       << r.err;
+}
+
+TEST(CorrectOptionsCheck, ViewLinkOptionsNameTheField) {
+  pipeline::CorrectOptions o;
+  o.run = "run";
+  o.out = "out";
+  o.icp_links = 4;
+  try {
+    o.check();
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(),
+                 "CorrectOptions.icp_links: must be in [0, 3] (the previous, the earliest and the "
+                 "middle view), got 4");
+  }
+  o.icp_links = 3;
+  o.icp_link_max_view_angle_deg = 0.0;
+  EXPECT_THROW(o.check(), InputError);
+  o.icp_link_max_view_angle_deg = 30.0;
+  o.correction.link_sigma_m = -1.0;
+  EXPECT_THROW(o.check(), InputError);
 }
 
 // Real sequences: never worse than the input (within 1%).

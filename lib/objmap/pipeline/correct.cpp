@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -279,6 +280,21 @@ void CorrectOptions::check() const {
           "CorrectOptions.view_model",
           "'" + view_model + "' is not a view model; expected visible, centroid or icp");
   icp.check();
+  require(icp_links >= 0 && icp_links <= 3, "CorrectOptions.icp_links",
+          "must be in [0, 3] (the previous, the earliest and the middle view), got " +
+              std::to_string(icp_links));
+  const auto in = [](double v, double lo, double hi) {
+    return std::isfinite(v) && v > lo && v <= hi;
+  };
+  require(in(icp_link_max_view_angle_deg, 0.0, 180.0), "CorrectOptions.icp_link_max_view_angle_deg",
+          "must be in (0, 180]");
+  require(in(icp_link_sigma_scale, 0.0, 1e6), "CorrectOptions.icp_link_sigma_scale", "must be > 0");
+  require(in(icp_link_max_sigma_deg, 0.0, 1e6), "CorrectOptions.icp_link_max_sigma_deg",
+          "must be > 0");
+  require(std::isfinite(link_max_translation_per_m) && link_max_translation_per_m >= 0,
+          "CorrectOptions.link_max_translation_per_m", "must be >= 0");
+  require(std::isfinite(link_max_rotation_deg_per_m) && link_max_rotation_deg_per_m >= 0,
+          "CorrectOptions.link_max_rotation_deg_per_m", "must be >= 0");
   require(threads >= 1, "CorrectOptions.threads", "must be >= 1");
   visibility.check();
   correction.check();
