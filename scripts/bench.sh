@@ -51,7 +51,10 @@ started=$(date -u +%s)
 
 has_correct=0
 # An unknown subcommand makes CLI11 print the main help (exit 0), so look for the command's options.
-if "$objmap" correct --help 2>/dev/null | grep -q -- "--method"; then has_correct=1; fi
+# (The help is read whole first: `grep -q` on a pipe would cut it short, and with pipefail the
+# SIGPIPE of the writer would count as "no correct".)
+correct_help=$("$objmap" correct --help 2>/dev/null || true)
+if grep -q -- "--method" <<<"$correct_help"; then has_correct=1; fi
 {
   echo "has_correct=$has_correct"
   echo "load_start=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null)"
