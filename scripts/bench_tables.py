@@ -422,14 +422,18 @@ def table7(seqs, has_correct):
                 cells.append("n/a (objmap correct not built)")
             elif a:
                 c = s["correction_" + method] or {}
+                before = s["ate_est"]["rmse"]
                 note = ""
                 if c.get("accepted") is False:
                     note = " (refused, poses kept: %s)" % c.get("reason", "?").replace(
                         "refused: ", "")
                 elif c.get("accepted"):
-                    note = " (%s of %s keyframes corrected)" % (
-                        c.get("counts", {}).get("keyframes_corrected", "?"),
-                        c.get("counts", {}).get("keyframes", "?"))
+                    change = ("%+.1f%%, " % (100.0 * (a["rmse"] - before) / before)
+                              if before > 0 else "")
+                    note = " (%s%s of %s keyframes corrected%s)" % (
+                        change, c.get("counts", {}).get("keyframes_corrected", "?"),
+                        c.get("counts", {}).get("keyframes", "?"),
+                        ", view links" if c.get("view_links_used") else "")
                 cells.append(fmt(a["rmse"]) + note)
             else:
                 cells.append("failed: " + (s["correct_log_" + method] or "no corrected trajectory"))
