@@ -187,6 +187,21 @@ TEST(CorrectPoses, ViewLinksThatDisagreeWithTheDriftAreRefused) {
   EXPECT_EQ(r.reason.rfind("refused: too little gain on held-out view links", 0), 0u) << r.reason;
 }
 
+TEST(CorrectPoses, ACorrectionBelowAMillimetreIsRefused) {
+  const Scene s = orbit_scene(20);
+  const std::vector<Pose> input = drifted(s.truth, 0.00001, 0.00002);  // 0.4 mm at the end
+  const Problem problem = observe(s, input, 0.00005, 7);
+  CorrectionOptions options;
+  options.min_improvement = 0.0;
+  options.min_held_out_improvement = -1.0;
+  const CorrectionResult r = correct_poses(problem, options);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason.rfind("refused: nothing to correct", 0), 0u) << r.reason;
+  options.min_translation_m = 0.0;
+  options.min_rotation_deg = 0.0;
+  EXPECT_TRUE(correct_poses(problem, options).accepted);
+}
+
 TEST(CorrectPoses, BoundsGrowWithThePathTravelled) {
   const Scene s = orbit_scene(30);
   const std::vector<Pose> input = drifted(s.truth, 0.002, 0.004);  // 12 cm at the end

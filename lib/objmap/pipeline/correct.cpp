@@ -154,6 +154,8 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                     {"link_sigma_deg", o.link_sigma_deg},
                     {"min_held_out_link_improvement", o.min_held_out_link_improvement},
                     {"min_improvement", o.min_improvement},
+                    {"min_translation_m", o.min_translation_m},
+                    {"min_rotation_deg", o.min_rotation_deg},
                     {"min_held_out_improvement", o.min_held_out_improvement},
                     {"reweight_rounds", o.reweight_rounds},
                     {"paper_prior", o.paper_prior},
@@ -394,6 +396,9 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
   if (options.icp_links > 0) {
     const double cos_link =
         std::cos(options.icp_link_max_view_angle_deg * 3.14159265358979323846 / 180.0);
+    pose::IcpOptions link_icp = options.icp;
+    link_icp.max_points = options.icp_link_max_points;
+    link_icp.max_model_points = options.icp_link_max_model_points;
     for (std::size_t j = 0; j < problem.landmarks.size(); ++j) {
       const std::vector<std::size_t>& mine = of_landmark[j];
       if (mine.size() < 2) continue;
@@ -404,7 +409,7 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
         const Pose& pose = problem.keyframes[o.keyframe].world_from_cam;
         view[p] = (pose * o.centroid_in_cam - pose.translation()).normalized();
         aligners[p] =
-            std::make_unique<pose::ModelAligner>(source[mine[p]]->points_in_world, options.icp);
+            std::make_unique<pose::ModelAligner>(source[mine[p]]->points_in_world, link_icp);
       });
       std::vector<std::vector<pose::ViewLink>> found(mine.size());
       std::vector<std::size_t> tried(mine.size(), 0);

@@ -40,6 +40,10 @@ struct CorrectOptions {
   // keyframes in the graph. 0: no links.
   int icp_links = 3;
   double icp_link_max_view_angle_deg = 30.0;
+  // Link alignments use thinner clouds than the anchor alignment (many more pairs): the view
+  // thinned to this many points, each model to this many.
+  std::size_t icp_link_max_points = 1000;
+  std::size_t icp_link_max_model_points = 5000;
   // A link's std is this many times the alignment's own (rms² · H⁻¹; ICP errors are correlated
   // and larger than that); a link whose rotation std exceeds icp_link_max_sigma_deg is dropped.
   double icp_link_sigma_scale = 3.0;

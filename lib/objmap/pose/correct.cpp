@@ -222,6 +222,8 @@ void CorrectionOptions::check() const {
           "must be >= 0");
   require(positive(max_translation_m), "CorrectionOptions.max_translation_m", "must be > 0");
   require(positive(max_rotation_deg), "CorrectionOptions.max_rotation_deg", "must be > 0");
+  require(non_negative(min_translation_m), "CorrectionOptions.min_translation_m", "must be >= 0");
+  require(non_negative(min_rotation_deg), "CorrectionOptions.min_rotation_deg", "must be >= 0");
   require(non_negative(max_translation_fraction), "CorrectionOptions.max_translation_fraction",
           "must be >= 0");
   require(non_negative(max_rotation_deg_per_m), "CorrectionOptions.max_rotation_deg_per_m",
@@ -620,6 +622,12 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
     result.reason = "refused: no keyframe has enough evidence for a correction";
   } else if (!over_bounds.empty()) {
     result.reason = over_bounds;
+  } else if (result.max_translation_m < options.min_translation_m &&
+             result.max_rotation_deg < options.min_rotation_deg) {
+    result.reason =
+        fmt("refused: nothing to correct: the largest change, %.4f m / %.3f deg, is",
+            result.max_translation_m, result.max_rotation_deg) +
+        fmt(" below %.4f m / %.3f deg", options.min_translation_m, options.min_rotation_deg);
   } else if (!(result.residual_after_m <= needed)) {
     result.reason = fmt(
         "refused: object observations not consistent enough: residual RMS %.4f -> %.4f m, needs "
