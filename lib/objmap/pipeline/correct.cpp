@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -356,39 +357,66 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
   };
   std::vector<std::vector<Group>> groups(problem.landmarks.size());
   const double cos_max = std::cos(options.icp_max_view_angle_deg * 3.14159265358979323846 / 180.0);
-  parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
-    auto& mine = groups[j];
-    for (std::size_t i : of_landmark[j]) {
-      const PointCloud& cloud = source[i]->points_in_world;
-      const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
-      const Vec3 centroid = pose * problem.observations[i].centroid_in_cam;
-      const Vec3 view = (centroid - pose.translation()).normalized();
-      // Anchors looking from within the angle, the closest direction first.
-      std::vector<std::pair<double, std::size_t>> candidates;
-      for (std::size_t g = 0;
-           g < (options.icp_groups ? mine.size() : std::min<std::size_t>(1, mine.size())); ++g) {
-        const double c = mine[g].view.dot(view);
-        if (c >= cos_max) candidates.emplace_back(-c, g);
+  // The direction from the keyframe's camera to an observation's centroid, world frame.
+  const auto view_of = [&](std::size_t i) {
+    const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
+    return Vec3((pose * problem.observations[i].centroid_in_cam - pose.translation()).normalized());
+  };
+  const auto make_group = [&](std::size_t j, std::size_t i) {
+    Group group;
+    group.landmark = j;
+    group.anchor_centroid = geometry::centroid(source[i]->points_in_world);
+    group.view = view_of(i);
+    group.aligner = std::make_unique<pose::ModelAligner>(source[i]->points_in_world, options.icp);
+    group.members.push_back({i, Pose::Identity()});
+    return group;
+  };
+  if (!options.icp_groups) {
+    // One anchor per object (its first view); every other view aligns to it on its own, so all
+    // alignments run in parallel.
+    parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
+      if (!of_landmark[j].empty()) groups[j].push_back(make_group(j, of_landmark[j].front()));
+    });
+    std::vector<std::pair<std::size_t, std::size_t>> jobs;  // (landmark, observation)
+    for (std::size_t j = 0; j < of_landmark.size(); ++j)
+      for (std::size_t k = 1; k < of_landmark[j].size(); ++k)
+        jobs.emplace_back(j, of_landmark[j][k]);
+    std::vector<std::optional<Pose>> aligned(jobs.size());
+    parallel_for(jobs.size(), options.threads, [&](std::size_t n) {
+      const auto [j, i] = jobs[n];
+      const Group& g = groups[j].front();
+      if (g.view.dot(view_of(i)) < cos_max) return;
+      const pose::IcpResult r = g.aligner->align(source[i]->points_in_world);
+      if (r.aligned) aligned[n] = r.correction;
+    });
+    for (std::size_t n = 0; n < jobs.size(); ++n)
+      if (aligned[n])
+        groups[jobs[n].first].front().members.push_back({jobs[n].second, *aligned[n]});
+  } else {
+    // Groups: an observation joins the first anchor (closest direction first) that aligns it, or
+    // anchors a group of its own; the order matters, so each object runs in keyframe order.
+    parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
+      auto& mine = groups[j];
+      for (std::size_t i : of_landmark[j]) {
+        const Vec3 view = view_of(i);
+        std::vector<std::pair<double, std::size_t>> candidates;
+        for (std::size_t g = 0; g < mine.size(); ++g) {
+          const double c = mine[g].view.dot(view);
+          if (c >= cos_max) candidates.emplace_back(-c, g);
+        }
+        std::sort(candidates.begin(), candidates.end());
+        bool joined = false;
+        for (const auto& [c, g] : candidates) {
+          const pose::IcpResult r = mine[g].aligner->align(source[i]->points_in_world);
+          if (!r.aligned) continue;
+          mine[g].members.push_back({i, r.correction});
+          joined = true;
+          break;
+        }
+        if (!joined) mine.push_back(make_group(j, i));
       }
-      std::sort(candidates.begin(), candidates.end());
-      bool joined = false;
-      for (const auto& [c, g] : candidates) {
-        const pose::IcpResult r = mine[g].aligner->align(cloud);
-        if (!r.aligned) continue;
-        mine[g].members.push_back({i, r.correction});
-        joined = true;
-        break;
-      }
-      if (joined || (!options.icp_groups && !mine.empty())) continue;
-      Group group;
-      group.landmark = j;
-      group.anchor_centroid = geometry::centroid(cloud);
-      group.view = view;
-      group.aligner = std::make_unique<pose::ModelAligner>(cloud, options.icp);
-      group.members.push_back({i, Pose::Identity()});
-      mine.push_back(std::move(group));
-    }
-  });
+    });
+  }
   // View links: each observation aligned to a few earlier views of its object that look at the
   // same side (the previous one, the earliest, the one between); an alignment measures the relative
   // pose of the two keyframes.

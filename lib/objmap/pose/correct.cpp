@@ -622,12 +622,6 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
     result.reason = "refused: no keyframe has enough evidence for a correction";
   } else if (!over_bounds.empty()) {
     result.reason = over_bounds;
-  } else if (result.max_translation_m < options.min_translation_m &&
-             result.max_rotation_deg < options.min_rotation_deg) {
-    result.reason =
-        fmt("refused: nothing to correct: the largest change, %.4f m / %.3f deg, is",
-            result.max_translation_m, result.max_rotation_deg) +
-        fmt(" below %.4f m / %.3f deg", options.min_translation_m, options.min_rotation_deg);
   } else if (!(result.residual_after_m <= needed)) {
     result.reason = fmt(
         "refused: object observations not consistent enough: residual RMS %.4f -> %.4f m, needs "
@@ -646,6 +640,12 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
         fmt("refused: too little gain on held-out observations (residual RMS %.4f -> %.4f m, needs "
             "<= %.4f m): the correction would fit noise or a systematic bias, not drift",
             held_before, held_after, held_needed);
+  } else if (result.max_translation_m < options.min_translation_m &&
+             result.max_rotation_deg < options.min_rotation_deg) {
+    result.reason =
+        fmt("refused: nothing to correct: the largest change, %.4f m / %.3f deg, is",
+            result.max_translation_m, result.max_rotation_deg) +
+        fmt(" below %.4f m / %.3f deg", options.min_translation_m, options.min_rotation_deg);
   } else {
     result.accepted = true;
     result.reason = fmt("accepted: residual RMS %.4f -> %.4f m, held-out %.4f",
