@@ -1,8 +1,6 @@
 #include "objmap/pose/icp.h"
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
+#include <flann/flann.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -38,10 +36,15 @@ void IcpOptions::check() const {
           "must be in (0, 1)");
 }
 
+// The model's kd-tree is FLANN's single kd-tree (the one PCL's KdTreeFLANN builds, leaves of 15
+// points, exact search), queried a whole cloud at a time: one call per ICP iteration instead of one
+// per point (bench: docs/pose.md).
+using KdIndex = flann::Index<flann::L2_Simple<float>>;
+
 struct ModelAligner::Impl {
   IcpOptions options;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud{new pcl::PointCloud<pcl::PointXYZ>};
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree{/*sorted=*/false};
+  std::vector<float> xyz;  // the model points, 3 floats each (the kd-tree's data)
+  std::unique_ptr<KdIndex> index;
   std::vector<Vec3> points;
   std::vector<Vec3> normals;  // zero where the neighbourhood is not a surface
   Vec3 centroid = Vec3::Zero();
@@ -54,25 +57,31 @@ ModelAligner::ModelAligner(const PointCloud& model, const IcpOptions& options)
   const std::size_t stride = (model.size() + options.max_model_points - 1) /
                              std::max<std::size_t>(1, options.max_model_points);
   const std::size_t n = stride > 0 ? (model.size() + stride - 1) / stride : 0;
-  impl_->cloud->resize(n);
+  impl_->xyz.reserve(3 * n);
   impl_->points.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3f& p = model.points[i * stride];
-    (*impl_->cloud)[i] = pcl::PointXYZ(p.x(), p.y(), p.z());
+    impl_->xyz.insert(impl_->xyz.end(), {p.x(), p.y(), p.z()});
     impl_->points[i] = p.cast<double>();
     impl_->centroid += impl_->points[i];
   }
   if (n > 0) impl_->centroid /= static_cast<double>(n);
   impl_->normals.assign(n, Vec3::Zero());
   if (n < static_cast<std::size_t>(options.normal_neighbours)) return;
-  impl_->tree.setInputCloud(impl_->cloud);
+  flann::Matrix<float> data(impl_->xyz.data(), n, 3);
+  impl_->index = std::make_unique<KdIndex>(data, flann::KDTreeSingleIndexParams(15));
+  impl_->index->buildIndex();
   // Normals: the smallest principal axis of each point's neighbourhood.
-  std::vector<int> idx(options.normal_neighbours);
-  std::vector<float> sq(options.normal_neighbours);
+  const std::size_t k = static_cast<std::size_t>(options.normal_neighbours);
+  std::vector<int> neighbours(n * k);
+  std::vector<float> sq(n * k);
+  flann::Matrix<int> idx_all(neighbours.data(), n, k);
+  flann::Matrix<float> sq_all(sq.data(), n, k);
+  flann::SearchParams params(-1, 0.0f, /*sorted=*/false);
+  impl_->index->knnSearch(data, idx_all, sq_all, k, params);
   for (std::size_t i = 0; i < n; ++i) {
-    const int found =
-        impl_->tree.nearestKSearch((*impl_->cloud)[i], options.normal_neighbours, idx, sq);
-    if (found < 3) continue;
+    const int* idx = neighbours.data() + i * k;
+    const int found = static_cast<int>(k);
     Vec3 mean = Vec3::Zero();
     for (int j = 0; j < found; ++j) mean += impl_->points[idx[j]];
     mean /= found;
@@ -116,22 +125,31 @@ IcpResult ModelAligner::align(const PointCloud& observation) const {
   const double radius = std::max(1e-3, std::sqrt(radius_sq / static_cast<double>(source.size())));
   Pose total = Pose::Identity();
   double max_sq = o.max_correspondence_m * o.max_correspondence_m;
-  std::vector<int> idx(1);
-  std::vector<float> sq(1);
+  const std::size_t m = source.size();
+  std::vector<float> query(3 * m), sq(m);
+  std::vector<int> nearest(m);
+  std::vector<Vec3> placed(m);
+  flann::Matrix<float> query_mat(query.data(), m, 3), sq_mat(sq.data(), m, 1);
+  flann::Matrix<int> nearest_mat(nearest.data(), m, 1);
+  const flann::SearchParams params(-1, 0.0f, /*sorted=*/false);
   auto pairs = [&](const Pose& t, std::size_t& inliers, double& sum_sq,
                    Eigen::Matrix<double, 6, 6>* jtj, Eigen::Matrix<double, 6, 1>* jtr) {
     inliers = 0;
     sum_sq = 0;
     if (jtj) jtj->setZero(), jtr->setZero();
-    for (const Vec3& s : source) {
-      const Vec3 p = t * s;
-      const pcl::PointXYZ q(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                            static_cast<float>(p.z()));
-      if (impl_->tree.nearestKSearch(q, 1, idx, sq) < 1 || sq[0] > max_sq) continue;
-      const Vec3& n = impl_->normals[idx[0]];
+    // Every point's nearest model point in one query.
+    for (std::size_t i = 0; i < m; ++i) {
+      placed[i] = t * source[i];
+      for (int c = 0; c < 3; ++c) query[3 * i + c] = static_cast<float>(placed[i][c]);
+    }
+    impl_->index->knnSearch(query_mat, nearest_mat, sq_mat, 1, params);
+    for (std::size_t i = 0; i < m; ++i) {
+      const Vec3& p = placed[i];
+      if (nearest[i] < 0 || sq[i] > max_sq) continue;
+      const Vec3& n = impl_->normals[nearest[i]];
       if (n.isZero()) continue;
       ++inliers;
-      const double r = n.dot(p - impl_->points[idx[0]]);
+      const double r = n.dot(p - impl_->points[nearest[i]]);
       sum_sq += r * r;
       if (!jtj) continue;
       const double w = std::abs(r) <= o.huber_m ? 1.0 : o.huber_m / std::abs(r);
