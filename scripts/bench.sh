@@ -217,6 +217,26 @@ else
   step "no data folder $data: synthetic scenes only"
 fi
 
+# 1c. Speed of objmap correct on a 200-keyframe run (issue: "seconds, not minutes").
+speed="$out/correct_speed"
+if [ "${BENCH_PERF:-1}" != 0 ] && [ $has_correct -eq 1 ]; then
+  mkdir -p "$speed"
+  step "correct speed: synth --frames 200 --orbit-speed 60, fuse, correct (icp and visible)"
+  if run "$speed/synth.log" "$objmap" synth --out "$speed/scene" --seed 1 --frames 200 \
+    --orbit-speed 60 &&
+    run "$speed/fuse.log" "$objmap" fuse --dataset "$speed/scene" --trajectory \
+      "$speed/scene/estimated.txt" --segmentation "$speed/scene/segmentation" --out "$speed/run"; then
+    for v in icp visible; do
+      run "$speed/correct_$v.log" $py "$tables" measure --json "$speed/correct_$v.json" -- \
+        "$objmap" correct --run "$speed/run" --out "$speed/correct_$v" --view-model "$v"
+      [ -f "$speed/correct_$v/correction.json" ] &&
+        cp "$speed/correct_$v/correction.json" "$speed/correction_$v.json"
+      rm -rf "$speed/correct_$v"
+    done
+  fi
+  rm -rf "$speed/scene" "$speed/run"
+fi
+
 # 2. Performance: objmap fuse vs the decode floor vs Open3D on fr1_rpy_every4 (ground truth).
 perf="$out/perf"
 mkdir -p "$perf"

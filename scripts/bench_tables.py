@@ -407,6 +407,28 @@ def table6(seqs):
     ], rows)
 
 
+def correct_speed(bench):
+    """One line: objmap correct on the 200-keyframe synthetic run, per view model."""
+    d = os.path.join(bench, "correct_speed")
+    cells = []
+    for v in ("icp", "visible"):
+        m = load_json(os.path.join(d, "correct_%s.json" % v))
+        c = load_json(os.path.join(d, "correction_%s.json" % v))
+        if not m or not c:
+            continue
+        counts = c.get("counts", {})
+        cells.append("--view-model %s: %.1f s wall, %.1f s CPU, %.0f MB (%s keyframes, %s "
+                     "observations, %s view links of %s pairs)" % (
+                         v, m["seconds"], m["cpu_seconds"], m["peak_rss_mb"],
+                         counts.get("keyframes", "?"), counts.get("observations", "?"),
+                         counts.get("view_links", 0), counts.get("view_links_tried", 0)))
+    if not cells:
+        return "Speed of objmap correct on 200 keyframes: not measured (BENCH_PERF=0 or no correct)."
+    return ("Speed of `objmap correct` (graph, with the re-fuse when accepted) on a 200-keyframe "
+            "synthetic run (`objmap synth --seed 1 --frames 200 --orbit-speed 60`, fused with "
+            "estimated.txt): " + "; ".join(cells) + ".")
+
+
 def table7(seqs, has_correct):
     rows = []
     for s in seqs:
@@ -598,6 +620,8 @@ def render(args):
         "### Table 7: ATE RMSE before and after the object-constrained pose correction",
         "",
         table7(seqs, has_correct),
+        "",
+        correct_speed(bench),
         "",
         "### Performance: objmap fuse vs the PNG-decode floor vs Open3D",
         "",
