@@ -81,6 +81,14 @@ std::vector<Pose> drifted(const std::vector<Pose>& truth, double yaw_per_kf, dou
   return out;
 }
 
+// Acceptance thresholds off (residual drop, held-out observations): the tests of other guardrails.
+CorrectionOptions without_thresholds() {
+  CorrectionOptions options;
+  options.min_improvement = 0.0;
+  options.min_held_out_improvement = -1.0;
+  return options;
+}
+
 double position_rms(const std::vector<Pose>& a, const std::vector<Pose>& b) {
   double sum = 0.0;
   for (std::size_t k = 0; k < a.size(); ++k)
@@ -154,9 +162,7 @@ TEST(CorrectPoses, ViewLinksRecoverADriftOneLandmarkCannot) {
       l.a_from_b.translation() += 0.002 * Vec3(noise(rng), noise(rng), noise(rng));
       problem.links.push_back(l);
     }
-  CorrectionOptions options;
-  options.min_improvement = 0.0;
-  options.min_held_out_improvement = -1.0;
+  CorrectionOptions options = without_thresholds();
   options.max_rotation_deg = 10.0;
   const CorrectionResult linked = correct_poses(problem, options);
   ASSERT_TRUE(linked.accepted) << linked.reason;
@@ -179,9 +185,7 @@ TEST(CorrectPoses, ViewLinksThatDisagreeWithTheDriftAreRefused) {
     l.a_from_b.translation() += Vec3(noise(rng), noise(rng), noise(rng));
     problem.links.push_back(l);
   }
-  CorrectionOptions options;
-  options.min_improvement = 0.0;
-  options.min_held_out_improvement = -1.0;
+  CorrectionOptions options = without_thresholds();
   const CorrectionResult r = correct_poses(problem, options);
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason.rfind("refused: too little gain on held-out view links", 0), 0u) << r.reason;
@@ -191,9 +195,7 @@ TEST(CorrectPoses, ACorrectionBelowAMillimetreIsRefused) {
   const Scene s = orbit_scene(20);
   const std::vector<Pose> input = drifted(s.truth, 0.00001, 0.00002);  // 0.4 mm at the end
   const Problem problem = observe(s, input, 0.00005, 7);
-  CorrectionOptions options;
-  options.min_improvement = 0.0;
-  options.min_held_out_improvement = -1.0;
+  CorrectionOptions options = without_thresholds();
   const CorrectionResult r = correct_poses(problem, options);
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason.rfind("refused: nothing to correct", 0), 0u) << r.reason;

@@ -303,6 +303,82 @@ void CorrectOptions::check() const {
   correction.check();
 }
 
+namespace {
+
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
+// The direction from the keyframe's camera to observation i's centroid, world frame.
+Vec3 view_direction(const pose::Problem& problem, std::size_t i) {
+  const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
+  return (pose * problem.observations[i].centroid_in_cam - pose.translation()).normalized();
+}
+
+// View links: each observation aligned to a few earlier views of its object that look at the
+// same side (the previous one, the earliest, the one between); an alignment measures the relative
+// pose of the two keyframes. `source[i]` holds observation i's points (world frame, input poses),
+// `of_landmark[j]` object j's observations in keyframe order; `tried` counts the alignments.
+std::vector<pose::ViewLink> view_links(const pose::Problem& problem,
+                                       const std::vector<const fusion::Observation*>& source,
+                                       const std::vector<std::vector<std::size_t>>& of_landmark,
+                                       const CorrectOptions& options, std::size_t& tried_total) {
+  std::vector<pose::ViewLink> links;
+  const double cos_link = std::cos(options.icp_link_max_view_angle_deg * kRadPerDeg);
+  pose::IcpOptions link_icp = options.icp;
+  link_icp.max_points = options.icp_link_max_points;
+  link_icp.max_model_points = options.icp_link_max_model_points;
+  for (std::size_t j = 0; j < of_landmark.size(); ++j) {
+    const std::vector<std::size_t>& mine = of_landmark[j];
+    if (mine.size() < 2) continue;
+    std::vector<Vec3> view(mine.size());
+    std::vector<std::unique_ptr<pose::ModelAligner>> aligners(mine.size());
+    parallel_for(mine.size(), options.threads, [&](std::size_t p) {
+      view[p] = view_direction(problem, mine[p]);
+      aligners[p] =
+          std::make_unique<pose::ModelAligner>(source[mine[p]]->points_in_world, link_icp);
+    });
+    std::vector<std::vector<pose::ViewLink>> found(mine.size());
+    std::vector<std::size_t> tried(mine.size(), 0);
+    parallel_for(mine.size(), options.threads, [&](std::size_t p) {
+      const std::size_t kb = problem.observations[mine[p]].keyframe;
+      std::vector<std::size_t> candidates;
+      for (std::size_t q = 0; q < p; ++q)
+        if (problem.observations[mine[q]].keyframe != kb && view[q].dot(view[p]) >= cos_link)
+          candidates.push_back(q);
+      if (candidates.empty()) return;
+      std::vector<std::size_t> targets = {candidates.back(), candidates.front(),
+                                          candidates[candidates.size() / 2]};
+      targets.resize(std::min<std::size_t>(targets.size(), options.icp_links));
+      std::sort(targets.begin(), targets.end());
+      targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
+      const Pose& pose_b = problem.keyframes[kb].world_from_cam;
+      for (std::size_t q : targets) {
+        ++tried[p];
+        const pose::IcpResult r = aligners[q]->align(source[mine[p]]->points_in_world);
+        if (!r.aligned || !std::isfinite(r.rotation_sigma_deg)) continue;
+        const std::size_t ka = problem.observations[mine[q]].keyframe;
+        const Pose& pose_a = problem.keyframes[ka].world_from_cam;
+        // A rotation error about the object's centre moves the camera by that angle times its
+        // distance.
+        const double distance = (r.centre - pose_b.translation()).norm();
+        const double scale = options.icp_link_sigma_scale;
+        pose::ViewLink link{ka, kb, j, pose_a.inverse() * r.correction * pose_b};
+        link.sigma_deg = scale * r.rotation_sigma_deg;
+        link.sigma_m =
+            scale * (r.translation_sigma_m + r.rotation_sigma_deg * M_PI / 180.0 * distance);
+        if (link.sigma_deg > options.icp_link_max_sigma_deg) continue;
+        found[p].push_back(link);
+      }
+    });
+    for (std::size_t p = 0; p < mine.size(); ++p) {
+      links.insert(links.end(), found[p].begin(), found[p].end());
+      tried_total += tried[p];
+    }
+  }
+  return links;
+}
+
+}  // namespace
+
 // view_model icp: every object's observations grouped by view. In keyframe order, an observation
 // is aligned (point-to-plane ICP) to the anchor observations of its object that look at it from
 // within max_view_angle_deg; the first that aligns takes it into its group, else it anchors a new
@@ -356,12 +432,8 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
     std::vector<Member> members;
   };
   std::vector<std::vector<Group>> groups(problem.landmarks.size());
-  const double cos_max = std::cos(options.icp_max_view_angle_deg * 3.14159265358979323846 / 180.0);
-  // The direction from the keyframe's camera to an observation's centroid, world frame.
-  const auto view_of = [&](std::size_t i) {
-    const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
-    return Vec3((pose * problem.observations[i].centroid_in_cam - pose.translation()).normalized());
-  };
+  const double cos_max = std::cos(options.icp_max_view_angle_deg * kRadPerDeg);
+  const auto view_of = [&](std::size_t i) { return view_direction(problem, i); };
   const auto make_group = [&](std::size_t j, std::size_t i) {
     Group group;
     group.landmark = j;
@@ -417,67 +489,9 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
       }
     });
   }
-  // View links: each observation aligned to a few earlier views of its object that look at the
-  // same side (the previous one, the earliest, the one between); an alignment measures the relative
-  // pose of the two keyframes.
   std::vector<pose::ViewLink> links;
-  if (options.icp_links > 0) {
-    const double cos_link =
-        std::cos(options.icp_link_max_view_angle_deg * 3.14159265358979323846 / 180.0);
-    pose::IcpOptions link_icp = options.icp;
-    link_icp.max_points = options.icp_link_max_points;
-    link_icp.max_model_points = options.icp_link_max_model_points;
-    for (std::size_t j = 0; j < problem.landmarks.size(); ++j) {
-      const std::vector<std::size_t>& mine = of_landmark[j];
-      if (mine.size() < 2) continue;
-      std::vector<Vec3> view(mine.size());
-      std::vector<std::unique_ptr<pose::ModelAligner>> aligners(mine.size());
-      parallel_for(mine.size(), options.threads, [&](std::size_t p) {
-        const pose::Observation& o = problem.observations[mine[p]];
-        const Pose& pose = problem.keyframes[o.keyframe].world_from_cam;
-        view[p] = (pose * o.centroid_in_cam - pose.translation()).normalized();
-        aligners[p] =
-            std::make_unique<pose::ModelAligner>(source[mine[p]]->points_in_world, link_icp);
-      });
-      std::vector<std::vector<pose::ViewLink>> found(mine.size());
-      std::vector<std::size_t> tried(mine.size(), 0);
-      parallel_for(mine.size(), options.threads, [&](std::size_t p) {
-        const std::size_t kb = problem.observations[mine[p]].keyframe;
-        std::vector<std::size_t> candidates;
-        for (std::size_t q = 0; q < p; ++q)
-          if (problem.observations[mine[q]].keyframe != kb && view[q].dot(view[p]) >= cos_link)
-            candidates.push_back(q);
-        if (candidates.empty()) return;
-        std::vector<std::size_t> targets = {candidates.back(), candidates.front(),
-                                            candidates[candidates.size() / 2]};
-        targets.resize(std::min<std::size_t>(targets.size(), options.icp_links));
-        std::sort(targets.begin(), targets.end());
-        targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
-        const Pose& pose_b = problem.keyframes[kb].world_from_cam;
-        for (std::size_t q : targets) {
-          ++tried[p];
-          const pose::IcpResult r = aligners[q]->align(source[mine[p]]->points_in_world);
-          if (!r.aligned || !std::isfinite(r.rotation_sigma_deg)) continue;
-          const std::size_t ka = problem.observations[mine[q]].keyframe;
-          const Pose& pose_a = problem.keyframes[ka].world_from_cam;
-          // A rotation error about the object's centre moves the camera by that angle times its
-          // distance.
-          const double distance = (r.centre - pose_b.translation()).norm();
-          const double scale = options.icp_link_sigma_scale;
-          pose::ViewLink link{ka, kb, j, pose_a.inverse() * r.correction * pose_b};
-          link.sigma_deg = scale * r.rotation_sigma_deg;
-          link.sigma_m =
-              scale * (r.translation_sigma_m + r.rotation_sigma_deg * M_PI / 180.0 * distance);
-          if (link.sigma_deg > options.icp_link_max_sigma_deg) continue;
-          found[p].push_back(link);
-        }
-      });
-      for (std::size_t p = 0; p < mine.size(); ++p) {
-        links.insert(links.end(), found[p].begin(), found[p].end());
-        rp.links_tried += tried[p];
-      }
-    }
-  }
+  if (options.icp_links > 0)
+    links = view_links(problem, source, of_landmark, options, rp.links_tried);
   if (!options.icp_groups) {
     rp.problem.links = links;
     // One anchor per object; the observations it does not align keep the visible-part model.

@@ -170,6 +170,14 @@ double relative_pose_sigmas(const Pose& measured, const Pose& a, const Pose& b, 
   return std::sqrt(et * et + er * er);
 }
 
+// A link's std: its own, at least the options' floor.
+double link_sigma_m(const CorrectionOptions& options, const ViewLink& l) {
+  return std::max(options.link_sigma_m, l.sigma_m);
+}
+double link_sigma_deg(const CorrectionOptions& options, const ViewLink& l) {
+  return std::max(options.link_sigma_deg, l.sigma_deg);
+}
+
 // RMS over the links of relative_pose_sigmas.
 // (only the links flagged in `use` when it is given).
 double link_rms_sigmas(const Problem& problem, const std::vector<Pose>& poses,
@@ -180,8 +188,7 @@ double link_rms_sigmas(const Problem& problem, const std::vector<Pose>& poses,
     if (!use.empty() && !use[i]) continue;
     const ViewLink& l = problem.links[i];
     const double e = relative_pose_sigmas(l.a_from_b, poses[l.a], poses[l.b],
-                                          std::max(options.link_sigma_m, l.sigma_m),
-                                          std::max(options.link_sigma_deg, l.sigma_deg));
+                                          link_sigma_m(options, l), link_sigma_deg(options, l));
     sum += e * e;
     ++n;
   }
@@ -442,10 +449,9 @@ Solution solve_graph(const Problem& problem, const CorrectionOptions& options,
   for (std::size_t i = 0; i < problem.links.size(); ++i) {
     if (!use_link[i]) continue;
     const ViewLink& l = problem.links[i];
-    auto* cost = new ceres::AutoDiffCostFunction<OdometryFactor, 6, 4, 3, 4, 3>(
-        new OdometryFactor{Eigen::Quaterniond(l.a_from_b.linear()), l.a_from_b.translation(),
-                           1.0 / std::max(options.link_sigma_m, l.sigma_m),
-                           kDegPerRad / std::max(options.link_sigma_deg, l.sigma_deg)});
+    auto* cost = new ceres::AutoDiffCostFunction<OdometryFactor, 6, 4, 3, 4, 3>(new OdometryFactor{
+        Eigen::Quaterniond(l.a_from_b.linear()), l.a_from_b.translation(),
+        1.0 / link_sigma_m(options, l), kDegPerRad / link_sigma_deg(options, l)});
     cp.AddResidualBlock(cost, new ceres::HuberLoss(options.robust_sigmas), blocks[l.a].q,
                         blocks[l.a].t, blocks[l.b].q, blocks[l.b].t);
   }
@@ -602,12 +608,10 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
     double sum = 0.0;
     for (std::size_t k = 0; k + 1 < n_kf; ++k) {
       const Pose i_from_j = input[k].inverse() * input[k + 1];
-      const Pose after = proposed[k].inverse() * proposed[k + 1];
-      const double et = (after.translation() - i_from_j.translation()).norm() /
-                        odometry_sigma_m(options, i_from_j);
-      const double er = angle_deg(i_from_j.linear().transpose() * after.linear()) /
-                        odometry_sigma_deg(options, i_from_j);
-      sum += et * et + er * er;
+      const double e = relative_pose_sigmas(i_from_j, proposed[k], proposed[k + 1],
+                                            odometry_sigma_m(options, i_from_j),
+                                            odometry_sigma_deg(options, i_from_j));
+      sum += e * e;
     }
     result.odometry_rms_sigmas = n_kf > 1 ? std::sqrt(sum / (n_kf - 1)) : 0.0;
     result.link_rms_before_sigmas = link_rms_sigmas(problem, input, options);
