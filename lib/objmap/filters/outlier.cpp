@@ -1,8 +1,6 @@
 #include "objmap/filters/outlier.h"
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
+#include <flann/flann.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -34,25 +32,34 @@ OutlierResult remove_outliers(const PointCloud& cloud, const OutlierOptions& opt
     return result;
   }
 
-  auto pcl_cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  pcl_cloud->resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3f& p = cloud.points[i];
-    (*pcl_cloud)[i] = pcl::PointXYZ(p.x(), p.y(), p.z());
-  }
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree(/*sorted=*/true);
-  tree.setInputCloud(pcl_cloud);
+  // FLANN's single kd-tree (the one PCL's KdTreeFLANN builds: leaves of 15 points, exact search,
+  // neighbours sorted by distance), queried a block of points at a time: PCL's one-point
+  // nearestKSearch costs an OpenMP region and allocations per query (docs/fusion.md).
+  static_assert(sizeof(Vec3f) == 3 * sizeof(float), "points must be packed xyz floats");
+  flann::Matrix<float> data(const_cast<float*>(cloud.points.front().data()), n, 3);
+  flann::Index<flann::L2_Simple<float>> tree(data, flann::KDTreeSingleIndexParams(15));
+  tree.buildIndex();
 
   // 1. d_i: mean distance to the K nearest neighbours (the first hit, the point itself, skipped).
   std::vector<double> mean_distance(n);
   auto work = [&](std::size_t begin, std::size_t end) {
-    std::vector<int> idx(k + 1);
-    std::vector<float> sq(k + 1);
-    for (std::size_t i = begin; i < end; ++i) {
-      const int found = tree.nearestKSearch((*pcl_cloud)[i], k + 1, idx, sq);
-      double sum = 0.0;
-      for (int j = 1; j < found; ++j) sum += std::sqrt(static_cast<double>(sq[j]));
-      mean_distance[i] = found > 1 ? sum / (found - 1) : 0.0;
+    constexpr std::size_t kBlock = 4096;
+    const std::size_t kk = static_cast<std::size_t>(k) + 1;
+    std::vector<int> idx(kBlock * kk);
+    std::vector<float> sq(kBlock * kk);
+    const flann::SearchParams params(-1, 0.0f, /*sorted=*/true);
+    for (std::size_t b = begin; b < end; b += kBlock) {
+      const std::size_t rows = std::min(kBlock, end - b);
+      flann::Matrix<float> queries(data[b], rows, 3);
+      flann::Matrix<int> idx_m(idx.data(), rows, kk);
+      flann::Matrix<float> sq_m(sq.data(), rows, kk);
+      tree.knnSearch(queries, idx_m, sq_m, kk, params);
+      for (std::size_t r = 0; r < rows; ++r) {
+        const float* d = sq.data() + r * kk;
+        double sum = 0.0;
+        for (std::size_t j = 1; j < kk; ++j) sum += std::sqrt(static_cast<double>(d[j]));
+        mean_distance[b + r] = sum / static_cast<double>(kk - 1);
+      }
     }
   };
   const int threads = std::max(1, std::min<int>(options.threads, static_cast<int>(n / 1024) + 1));
