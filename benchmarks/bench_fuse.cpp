@@ -19,6 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "objmap/io/image.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/fuse.h"
@@ -86,13 +88,21 @@ double process_cpu_seconds() {
 
 // Seconds to decode the rgb and depth PNGs of `frames` with `threads` threads (frame i on thread
 // i mod threads), as the fuse workers do; `cpu_s`: the CPU time it took (user + system).
+// With `opencv`, the files are read by cv::imread (libpng, zlib) instead of objmap's reader (the
+// one fuse uses: libdeflate for these PNGs, the same pixels): the plain way of decoding them.
 double decode_seconds(const std::vector<io::FramePair>& frames, int width, int height, int threads,
-                      double* cpu_s = nullptr) {
+                      double* cpu_s = nullptr, bool opencv = false) {
   const double cpu0 = process_cpu_seconds();
   const auto t0 = Clock::now();
   auto work = [&](int t) {
     std::size_t bytes = 0;
     for (std::size_t i = static_cast<std::size_t>(t); i < frames.size(); i += threads) {
+      if (opencv) {
+        const cv::Mat bgr = cv::imread(frames[i].rgb_file.string(), cv::IMREAD_UNCHANGED);
+        const cv::Mat depth = cv::imread(frames[i].depth_file.string(), cv::IMREAD_UNCHANGED);
+        bytes += bgr.total() + depth.total();
+        continue;
+      }
       const cv::Mat bgr = io::read_rgb(frames[i].rgb_file, width, height);
       const cv::Mat depth = io::read_depth(frames[i].depth_file, width, height);
       bytes += bgr.total() + depth.total();
@@ -163,7 +173,7 @@ int main(int argc, char** argv) {
     const io::TumDataset data = io::read_tum_dataset(dataset, tum);
     std::vector<io::FramePair> frames;
     for (const auto& k : result.keyframes.keyframes) frames.push_back(data.frames[k.frame]);
-    double dec1_s = 1e30, decn_s = 1e30, dec1_cpu_s = 1e30;
+    double dec1_s = 1e30, decn_s = 1e30, dec1_cpu_s = 1e30, cv1_s = 1e30;
     for (int r = 0; r < repeat; ++r) {
       double cpu = 0.0;
       dec1_s = std::min(dec1_s,
@@ -171,10 +181,12 @@ int main(int argc, char** argv) {
       dec1_cpu_s = std::min(dec1_cpu_s, cpu);
       decn_s = std::min(decn_s,
                         decode_seconds(frames, result.camera.width, result.camera.height, threads));
+      cv1_s = std::min(cv1_s, decode_seconds(frames, result.camera.width, result.camera.height, 1,
+                                             nullptr, /*opencv=*/true));
     }
 
     const double fuse_ms = 1000.0 * fuse_s / n, dec1_ms = 1000.0 * dec1_s / n,
-                 decn_ms = 1000.0 * decn_s / n;
+                 decn_ms = 1000.0 * decn_s / n, cv1_ms = 1000.0 * cv1_s / n;
     std::printf("objmap %s, bench_fuse\n", objmap::version());
     std::printf("dataset              %s (%zu keyframes, ground-truth trajectory)\n",
                 dataset.string().c_str(), n);
@@ -183,10 +195,14 @@ int main(int argc, char** argv) {
     std::printf(
         "fuse CPU time        %8.2f ms/keyframe  (user + system, all threads; the process)\n",
         1000.0 * cpu_s / n);
-    std::printf("decode, 1 thread     %8.2f ms/keyframe  (rgb + depth PNG)\n", dec1_ms);
+    std::printf(
+        "decode, 1 thread     %8.2f ms/keyframe  (rgb + depth PNG, objmap's reader as in fuse)\n",
+        dec1_ms);
     std::printf("decode, %d threads    %8.2f ms/keyframe\n", threads, decn_ms);
     std::printf("fuse / decode(1)     %8.2f   (target <= 1.5)\n", fuse_ms / dec1_ms);
     std::printf("fuse / decode(%d)     %8.2f\n", threads, fuse_ms / decn_ms);
+    std::printf("OpenCV imread, 1 thr %8.2f ms/keyframe  (the same PNGs, libpng + zlib)\n", cv1_ms);
+    std::printf("fuse / imread(1)     %8.2f\n", fuse_ms / cv1_ms);
     // CPU time against CPU time: steadier than wall time on a loaded machine. With `threads`
     // cores free, the wall-time ratio approaches this / threads.
     std::printf("decode CPU, 1 thread %8.2f ms/keyframe\n", 1000.0 * dec1_cpu_s / n);

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "objmap/core/error.h"
+#include "objmap/io/png_fast.h"
 
 namespace objmap::io {
 
@@ -47,11 +48,14 @@ std::vector<unsigned char> read_bytes(const fs::path& file) {
   std::error_code ec;
   if (!fs::exists(file, ec)) throw InputError(file.string(), "image file not found");
   if (!fs::is_regular_file(file, ec)) throw InputError(file.string(), "is not a file");
-  std::ifstream in(file, std::ios::binary);
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
   if (!in) throw InputError(file.string(), "cannot open the image file for reading");
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError(file.string(), "read error");
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw InputError(file.string(), "read error");
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(size));
+  in.seekg(0);
+  in.read(reinterpret_cast<char*>(bytes.data()), size);
+  if (in.gcount() != size) throw InputError(file.string(), "read error");
   if (bytes.empty()) throw InputError(file.string(), "empty file; expected an image");
   return bytes;
 }
@@ -66,7 +70,13 @@ cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bo
                      "truncated PNG (no IEND chunk at the end); expected " + expected);
   if (format == Format::kJpeg && !jpeg_complete(bytes))
     throw InputError(file.string(), "truncated JPEG (no end marker); expected " + expected);
+  // The PNGs of RGB-D recordings go through the faster decoder (same pixels); the rest, and any
+  // PNG it refuses, through OpenCV.
   cv::Mat image;
+  if (format == Format::kPng) {
+    image = decode_png_fast(bytes.data(), bytes.size());
+    if (!image.empty()) return image;
+  }
   try {
     image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {

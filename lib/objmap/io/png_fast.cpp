@@ -1,0 +1,179 @@
+#include "objmap/io/png_fast.h"
+
+#include <libdeflate.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace objmap::io {
+
+namespace {
+
+std::uint32_t be32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+
+struct DecompressorDeleter {
+  void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
+};
+
+// One decompressor and one scratch buffer per thread (fuse decodes on every worker).
+struct Scratch {
+  std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> inflater{
+      libdeflate_alloc_decompressor()};
+  std::vector<unsigned char> idat;      // the concatenated IDAT payloads
+  std::vector<unsigned char> filtered;  // inflated: per row a filter byte and the row's bytes
+};
+
+int paeth(int a, int b, int c) {
+  const int p = a + b - c;
+  const int pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+  if (pa <= pb && pa <= pc) return a;
+  return pb <= pc ? b : c;
+}
+
+// Undoes the row filter of `row` (n bytes, bpp bytes per pixel) in place; `prev` is the previous
+// row already unfiltered, or nullptr for the first row (all zero). False for an unknown filter.
+bool unfilter(int filter, unsigned char* row, const unsigned char* prev, std::size_t n,
+              std::size_t bpp) {
+  switch (filter) {
+    case 0:  // None
+      return true;
+    case 1:  // Sub
+      for (std::size_t i = bpp; i < n; ++i) row[i] = static_cast<unsigned char>(row[i] + row[i - bpp]);
+      return true;
+    case 2:  // Up
+      if (prev)
+        for (std::size_t i = 0; i < n; ++i) row[i] = static_cast<unsigned char>(row[i] + prev[i]);
+      return true;
+    case 3:  // Average
+      for (std::size_t i = 0; i < n; ++i) {
+        const int left = i >= bpp ? row[i - bpp] : 0;
+        const int up = prev ? prev[i] : 0;
+        row[i] = static_cast<unsigned char>(row[i] + ((left + up) >> 1));
+      }
+      return true;
+    case 4:  // Paeth
+      for (std::size_t i = 0; i < n; ++i) {
+        const int left = i >= bpp ? row[i - bpp] : 0;
+        const int up = prev ? prev[i] : 0;
+        const int up_left = prev && i >= bpp ? prev[i - bpp] : 0;
+        row[i] = static_cast<unsigned char>(row[i] + paeth(left, up, up_left));
+      }
+      return true;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (size < 8 + 25 || std::memcmp(data, kSignature, 8) != 0) return {};
+  thread_local Scratch scratch;
+  if (!scratch.inflater) return {};
+
+  // 1. Chunks: IHDR first, the IDATs concatenated, up to IEND; every CRC checked.
+  std::uint32_t width = 0, height = 0;
+  int bit_depth = 0, colour_type = -1;
+  bool ended = false;
+  scratch.idat.clear();
+  std::size_t pos = 8;
+  while (pos + 12 <= size) {
+    const std::uint32_t length = be32(data + pos);
+    if (length > size - pos - 12) return {};
+    const unsigned char* type = data + pos + 4;
+    const unsigned char* payload = data + pos + 8;
+    const std::uint32_t crc = be32(payload + length);
+    if (libdeflate_crc32(0, type, length + 4) != crc) return {};
+    const bool first = pos == 8;
+    pos += 12 + std::size_t{length};
+    if (first != (std::memcmp(type, "IHDR", 4) == 0)) return {};
+    if (first) {
+      if (length != 13) return {};
+      width = be32(payload);
+      height = be32(payload + 4);
+      bit_depth = payload[8];
+      colour_type = payload[9];
+      // Compression 0, filter method 0, no interlace.
+      if (payload[10] != 0 || payload[11] != 0 || payload[12] != 0) return {};
+    } else if (std::memcmp(type, "IDAT", 4) == 0) {
+      scratch.idat.insert(scratch.idat.end(), payload, payload + length);
+    } else if (std::memcmp(type, "IEND", 4) == 0) {
+      ended = true;
+      break;
+    } else if (std::memcmp(type, "tRNS", 4) == 0 || std::memcmp(type, "PLTE", 4) == 0) {
+      return {};  // OpenCV turns transparency into an alpha channel: leave these to it
+    }
+    // Other ancillary chunks (gAMA, pHYs, text, ...) do not change the pixels OpenCV gives.
+  }
+  if (!ended || scratch.idat.empty()) return {};
+
+  // 2. The pixel types decoded here, as cv::imdecode(IMREAD_UNCHANGED) returns them.
+  int channels = 0;
+  if (bit_depth == 8 && colour_type == 0)
+    channels = 1;
+  else if (bit_depth == 8 && colour_type == 2)
+    channels = 3;
+  else if (bit_depth == 8 && colour_type == 6)
+    channels = 4;
+  else if (bit_depth == 16 && colour_type == 0)
+    channels = 1;
+  else
+    return {};
+  if (width == 0 || height == 0 || width > (1u << 15) || height > (1u << 15)) return {};
+  const std::size_t bpp = static_cast<std::size_t>(channels) * (bit_depth / 8);
+  const std::size_t row_bytes = std::size_t{width} * bpp;
+  const std::size_t filtered_bytes = std::size_t{height} * (row_bytes + 1);
+
+  // 3. Inflate (zlib stream, Adler-32 checked) to exactly the expected size.
+  scratch.filtered.resize(filtered_bytes);
+  std::size_t actual = 0;
+  if (libdeflate_zlib_decompress(scratch.inflater.get(), scratch.idat.data(), scratch.idat.size(),
+                                 scratch.filtered.data(), filtered_bytes,
+                                 &actual) != LIBDEFLATE_SUCCESS ||
+      actual != filtered_bytes)
+    return {};
+
+  // 4. Unfilter row by row, then into OpenCV's layout: BGR(A), 16-bit values in host order.
+  const int type = bit_depth == 16 ? CV_16UC1 : CV_MAKETYPE(CV_8U, channels);
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), type);
+  const unsigned char* prev = nullptr;
+  for (std::uint32_t y = 0; y < height; ++y) {
+    unsigned char* row = scratch.filtered.data() + std::size_t{y} * (row_bytes + 1);
+    if (!unfilter(row[0], row + 1, prev, row_bytes, bpp)) return {};
+    const unsigned char* src = row + 1;
+    prev = src;
+    unsigned char* dst = image.ptr<unsigned char>(static_cast<int>(y));
+    if (bit_depth == 16) {
+      auto* out = reinterpret_cast<std::uint16_t*>(dst);
+      for (std::uint32_t x = 0; x < width; ++x)
+        out[x] = static_cast<std::uint16_t>((src[2 * x] << 8) | src[2 * x + 1]);
+    } else if (channels == 3) {
+      for (std::uint32_t x = 0; x < width; ++x) {
+        dst[3 * x] = src[3 * x + 2];
+        dst[3 * x + 1] = src[3 * x + 1];
+        dst[3 * x + 2] = src[3 * x];
+      }
+    } else if (channels == 4) {
+      for (std::uint32_t x = 0; x < width; ++x) {
+        dst[4 * x] = src[4 * x + 2];
+        dst[4 * x + 1] = src[4 * x + 1];
+        dst[4 * x + 2] = src[4 * x];
+        dst[4 * x + 3] = src[4 * x + 3];
+      }
+    } else {
+      std::memcpy(dst, src, row_bytes);
+    }
+  }
+  return image;
+}
+
+}  // namespace objmap::io
