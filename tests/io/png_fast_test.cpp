@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdint>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -39,8 +39,8 @@ cv::Mat fast(const std::vector<unsigned char>& png) {
 // Same type, size and every byte.
 ::testing::AssertionResult same_pixels(const cv::Mat& a, const cv::Mat& b) {
   if (a.type() != b.type() || a.size() != b.size())
-    return ::testing::AssertionFailure() << "type/size " << a.type() << " " << a.size() << " vs "
-                                         << b.type() << " " << b.size();
+    return ::testing::AssertionFailure()
+           << "type/size " << a.type() << " " << a.size() << " vs " << b.type() << " " << b.size();
   for (int y = 0; y < a.rows; ++y)
     if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0)
       return ::testing::AssertionFailure() << "row " << y << " differs";
@@ -80,9 +80,10 @@ void put_chunk(std::vector<unsigned char>& out, const char* type,
   put32(out, crc32(body.data(), body.size()));
 }
 
-// A PNG written here, row y with filter y % 5 (None, Sub, Up, Average, Paeth), the zlib stream in
-// stored (uncompressed) blocks: every row filter is used, whatever an encoder would choose.
-std::vector<unsigned char> png_with_every_filter(const cv::Mat& image) {
+// A PNG written here, row y with filter filters[y % size] (0 None, 1 Sub, 2 Up, 3 Average, 4
+// Paeth), the zlib stream in stored (uncompressed) blocks: the row filters are the test's choice,
+// not an encoder's.
+std::vector<unsigned char> png_with_filters(const cv::Mat& image, const std::vector<int>& filters) {
   const int channels = image.channels();
   const bool wide = image.depth() == CV_16U;
   const std::size_t bpp = static_cast<std::size_t>(channels) * (wide ? 2 : 1);
@@ -102,7 +103,7 @@ std::vector<unsigned char> png_with_every_filter(const cv::Mat& image) {
           row[at] = image.ptr<std::uint8_t>(y)[x * channels + from];
         }
       }
-    const int filter = y % 5;
+    const int filter = filters[static_cast<std::size_t>(y) % filters.size()];
     raw.push_back(static_cast<unsigned char>(filter));
     for (std::size_t i = 0; i < n; ++i) {
       const int a = i >= bpp ? row[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
@@ -152,14 +153,21 @@ std::vector<unsigned char> png_with_every_filter(const cv::Mat& image) {
 }
 
 TEST(PngFast, EveryRowFilterAsOpenCvDecodesIt) {
-  for (int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1}) {
-    const cv::Mat image = picture(41, 300, type, 5u + type);  // rows > 64 kB of stored data
-    const std::vector<unsigned char> png = png_with_every_filter(image);
-    const cv::Mat want = cv::imdecode(png, cv::IMREAD_UNCHANGED);
-    ASSERT_TRUE(same_pixels(want, image)) << "the test's own PNG, type " << type;
-    const cv::Mat got = fast(png);
-    ASSERT_FALSE(got.empty()) << "type " << type;
-    EXPECT_TRUE(same_pixels(got, want)) << "type " << type;
+  // Each filter after each other one; Sub rows followed by rows that do and do not read the row
+  // above (the decoder takes a one-pass path for a Sub row when the next row does not need it).
+  const std::vector<std::vector<int>> patterns{{0, 1, 2, 3, 4},
+                                               {1, 1, 0, 1, 3, 1, 4, 1, 1, 2, 2, 4, 4, 3, 3, 0, 0}};
+  for (const auto& filters : patterns) {
+    for (int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1}) {
+      const cv::Mat image = picture(41, 300, type, 5u + type);  // rows > 64 kB of stored data
+      const std::vector<unsigned char> png = png_with_filters(image, filters);
+      const cv::Mat want = cv::imdecode(png, cv::IMREAD_UNCHANGED);
+      ASSERT_TRUE(same_pixels(want, image)) << "the test's own PNG, type " << type;
+      const cv::Mat got = fast(png);
+      ASSERT_FALSE(got.empty()) << "type " << type;
+      EXPECT_TRUE(same_pixels(got, want))
+          << "type " << type << ", " << filters.size() << " filters";
+    }
   }
 }
 
@@ -170,9 +178,9 @@ TEST(PngFast, SamePixelsAsOpenCvForEveryTypeItTakes) {
       for (int compression : {0, 3, 9}) {
         const cv::Mat image = picture(37, 53, type, 17u + type);
         std::vector<unsigned char> png;
-        ASSERT_TRUE(cv::imencode(".png", image, png,
-                                 {cv::IMWRITE_PNG_STRATEGY, strategy,
-                                  cv::IMWRITE_PNG_COMPRESSION, compression}));
+        ASSERT_TRUE(cv::imencode(
+            ".png", image, png,
+            {cv::IMWRITE_PNG_STRATEGY, strategy, cv::IMWRITE_PNG_COMPRESSION, compression}));
         const cv::Mat got = fast(png);
         ASSERT_FALSE(got.empty()) << "type " << type << " strategy " << strategy;
         EXPECT_TRUE(same_pixels(got, cv::imdecode(png, cv::IMREAD_UNCHANGED)))
@@ -187,9 +195,9 @@ TEST(PngFast, SamePixelsAsOpenCvOnTheRealRecordings) {
   OBJMAP_DATA_OR_SKIP(data, "tum");
   const fs::path ycbv = data.parent_path() / "ycbv_0000_10f";
   std::vector<fs::path> files;
-  for (const fs::path& dir : {data / "fr1_desk_9/rgb", data / "fr1_desk_9/depth",
-                             data / "fr3_cabinet_58kf/depth", ycbv / "rgb", ycbv / "depth",
-                             ycbv / "masks"}) {
+  for (const fs::path& dir :
+       {data / "fr1_desk_9/rgb", data / "fr1_desk_9/depth", data / "fr3_cabinet_58kf/depth",
+        ycbv / "rgb", ycbv / "depth", ycbv / "masks"}) {
     if (!fs::exists(dir)) continue;
     for (const auto& e : fs::directory_iterator(dir))
       if (e.path().extension() == ".png") files.push_back(e.path());
@@ -234,7 +242,7 @@ TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
 
   // Interlaced (Adam7) with a valid IHDR CRC: not decoded here.
   std::vector<unsigned char> interlaced = png;
-  interlaced[8 + 8 + 12] = 1;  // the IHDR's interlace byte
+  interlaced[8 + 8 + 12] = 1;                                   // the IHDR's interlace byte
   const std::uint32_t crc = crc32(interlaced.data() + 12, 17);  // "IHDR" + 13 bytes
   for (int k = 0; k < 4; ++k)
     interlaced[8 + 8 + 13 + k] = static_cast<unsigned char>(crc >> (24 - 8 * k));

@@ -46,7 +46,8 @@ bool unfilter(int filter, unsigned char* row, const unsigned char* prev, std::si
     case 0:  // None
       return true;
     case 1:  // Sub
-      for (std::size_t i = bpp; i < n; ++i) row[i] = static_cast<unsigned char>(row[i] + row[i - bpp]);
+      for (std::size_t i = bpp; i < n; ++i)
+        row[i] = static_cast<unsigned char>(row[i] + row[i - bpp]);
       return true;
     case 2:  // Up
       if (prev)
@@ -69,6 +70,35 @@ bool unfilter(int filter, unsigned char* row, const unsigned char* prev, std::si
       return true;
     default:
       return false;
+  }
+}
+
+// A Sub-filtered row (the filter of every row of TUM RGB-D's PNGs) unfiltered straight into
+// OpenCV's layout, each channel's running sum in a register: one pass, no stores to reload.
+template <int kChannels>
+void sub_row_8bit(const unsigned char* src, unsigned char* dst, std::size_t width) {
+  unsigned char sum[kChannels] = {};
+  for (std::size_t x = 0; x < width; ++x) {
+    for (int c = 0; c < kChannels; ++c) sum[c] = static_cast<unsigned char>(sum[c] + src[c]);
+    if constexpr (kChannels >= 3) {
+      dst[0] = sum[2];
+      dst[1] = sum[1];
+      dst[2] = sum[0];
+      if constexpr (kChannels == 4) dst[3] = sum[3];
+    } else {
+      dst[0] = sum[0];
+    }
+    src += kChannels;
+    dst += kChannels;
+  }
+}
+
+void sub_row_16bit(const unsigned char* src, std::uint16_t* dst, std::size_t width) {
+  unsigned char hi = 0, lo = 0;  // PNG filters work on bytes: no carry from the low byte
+  for (std::size_t x = 0; x < width; ++x) {
+    hi = static_cast<unsigned char>(hi + src[2 * x]);
+    lo = static_cast<unsigned char>(lo + src[2 * x + 1]);
+    dst[x] = static_cast<std::uint16_t>((hi << 8) | lo);
   }
 }
 
@@ -148,10 +178,26 @@ cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
   const unsigned char* prev = nullptr;
   for (std::uint32_t y = 0; y < height; ++y) {
     unsigned char* row = scratch.filtered.data() + std::size_t{y} * (row_bytes + 1);
+    unsigned char* dst = image.ptr<unsigned char>(static_cast<int>(y));
+    // A Sub row whose unfiltered bytes the next row does not need (it is not Up, Average or
+    // Paeth): unfiltered and converted in one pass.
+    const int next_filter = y + 1 < height ? row[row_bytes + 1] : 0;
+    if (row[0] == 1 && next_filter != 2 && next_filter != 3 && next_filter != 4) {
+      const unsigned char* src = row + 1;
+      if (bit_depth == 16)
+        sub_row_16bit(src, reinterpret_cast<std::uint16_t*>(dst), width);
+      else if (channels == 3)
+        sub_row_8bit<3>(src, dst, width);
+      else if (channels == 4)
+        sub_row_8bit<4>(src, dst, width);
+      else
+        sub_row_8bit<1>(src, dst, width);
+      prev = nullptr;  // not needed: the next row does not look up
+      continue;
+    }
     if (!unfilter(row[0], row + 1, prev, row_bytes, bpp)) return {};
     const unsigned char* src = row + 1;
     prev = src;
-    unsigned char* dst = image.ptr<unsigned char>(static_cast<int>(y));
     if (bit_depth == 16) {
       auto* out = reinterpret_cast<std::uint16_t*>(dst);
       for (std::uint32_t x = 0; x < width; ++x)
