@@ -22,6 +22,7 @@
 #include "objmap/fusion/object_map.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/backproject.h"
+#include "objmap/io/png_fast.h"
 
 namespace fs = std::filesystem;
 using namespace objmap;
@@ -118,6 +119,8 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const PointCloud& c) {
 // ---------------------------------------------------------------------------------------------
 // Reference: decoding one frame's PNGs (what `fuse` must read anyway).
 
+// Arg 0: OpenCV (cv::imdecode: libpng, zlib); arg 1: objmap's reader (io/png_fast.h, libdeflate),
+// which `fuse` uses. The same pixels (tests/io/png_fast_test.cpp).
 void BM_DecodeFramePngs(benchmark::State& state) {
   const auto files = real_frames(8);
   if (files.empty()) {
@@ -130,17 +133,23 @@ void BM_DecodeFramePngs(benchmark::State& state) {
     rgb.emplace_back(std::istreambuf_iterator<char>(fr), std::istreambuf_iterator<char>());
     depth.emplace_back(std::istreambuf_iterator<char>(fd), std::istreambuf_iterator<char>());
   }
+  const bool objmap_reader = state.range(0) == 1;
   std::size_t i = 0;
   for (auto _ : state) {
-    cv::Mat a = cv::imdecode(rgb[i % rgb.size()], cv::IMREAD_COLOR);
-    cv::Mat b = cv::imdecode(depth[i % depth.size()], cv::IMREAD_UNCHANGED);
+    const auto& r = rgb[i % rgb.size()];
+    const auto& d = depth[i % depth.size()];
+    cv::Mat a =
+        objmap_reader ? io::decode_png_fast(r.data(), r.size()) : cv::imdecode(r, cv::IMREAD_COLOR);
+    cv::Mat b = objmap_reader ? io::decode_png_fast(d.data(), d.size())
+                              : cv::imdecode(d, cv::IMREAD_UNCHANGED);
     benchmark::DoNotOptimize(a.data);
     benchmark::DoNotOptimize(b.data);
     ++i;
   }
-  state.SetLabel("rgb + depth PNG, 640x480, from memory");
+  state.SetLabel(std::string("rgb + depth PNG, 640x480, from memory, ") +
+                 (objmap_reader ? "objmap (libdeflate)" : "OpenCV (libpng)"));
 }
-BENCHMARK(BM_DecodeFramePngs)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DecodeFramePngs)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Back-projection.

@@ -3,10 +3,11 @@
 
 #include <opencv2/core/mat.hpp>
 
-// Strict image loading (OpenCV imgcodecs). A file that is missing, truncated (a PNG without its
-// IEND chunk, a JPEG without its end marker), undecodable, of another size or of the wrong pixel
-// type is an InputError naming the file and what was expected: OpenCV would otherwise return an
-// empty or silently padded image.
+// Strict image loading: the PNGs of RGB-D recordings by io/png_fast.h (libdeflate, the same
+// pixels), the rest by OpenCV imgcodecs. A file that is missing, truncated (a PNG without its IEND
+// chunk, a JPEG without its end marker), undecodable, of another size or of the wrong pixel type is
+// an InputError naming the file and what was expected: OpenCV would otherwise return an empty or
+// silently padded image.
 namespace objmap::io {
 
 // A colour image as CV_8UC3 BGR. PNG or JPEG, 8-bit; a grey image is expanded to three channels and
