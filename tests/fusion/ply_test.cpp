@@ -45,6 +45,36 @@ TEST(Ply, BinaryRoundTripIsExact) {
   EXPECT_EQ(files, 1);
 }
 
+TEST(Ply, LargeCloudsAndSeparateColoursRoundTrip) {
+  // More points than one piece of the writer's buffer (65536), not a multiple of it.
+  TempDir dir;
+  PointCloud c;
+  std::vector<Rgb> other;
+  for (int i = 0; i < 150001; ++i) {
+    c.push_back(Vec3f(1e-3f * i, -2.0f + 1e-5f * i, 0.5f * (i % 7)),
+                Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(i >> 8), 9});
+    other.push_back(Rgb{1, static_cast<std::uint8_t>(i % 251), static_cast<std::uint8_t>(i)});
+  }
+  write_ply(dir / "big.ply", c);
+  PointCloud back = read_ply(dir / "big.ply");
+  EXPECT_EQ(back.points, c.points);
+  EXPECT_EQ(back.colors, c.colors);
+  // The same points with other colours (the semantic map's way).
+  write_ply(dir / "other.ply", c, other);
+  back = read_ply(dir / "other.ply");
+  EXPECT_EQ(back.points, c.points);
+  EXPECT_EQ(back.colors, other);
+  other.pop_back();
+  try {
+    write_ply(dir / "bad.ply", c, other);
+    ADD_FAILURE() << "no error for a colour count that differs";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (dir / "bad.ply").string());
+    EXPECT_EQ(e.reason(), "write_ply: 150000 colours for 150001 points; expected one per point");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.ply"));
+}
+
 TEST(Ply, HeaderIsTheStandardOne) {
   TempDir dir;
   write_ply(dir / "h.ply", sample(true));

@@ -38,6 +38,26 @@ TEST(WriteFileAtomic, FailureThrowsAndLeavesNothing) {
   EXPECT_EQ(entries(dir.path()), 2u);
 }
 
+TEST(AtomicFile, PiecesThenCommitOrNothing) {
+  TempDir dir;
+  {
+    AtomicFile f(dir / "a.bin");
+    f.write("ab", 2);
+    f.write("cde", 3);
+    EXPECT_FALSE(fs::exists(dir / "a.bin"));  // only the temporary until commit()
+    f.commit();
+    EXPECT_THROW(f.write("x", 1), InputError);
+    EXPECT_THROW(f.commit(), InputError);
+  }
+  EXPECT_EQ(read_text(dir / "a.bin"), "abcde");
+  {
+    AtomicFile f(dir / "b.bin");
+    f.write("half", 4);
+  }  // not committed (as when an exception unwinds): nothing left
+  EXPECT_FALSE(fs::exists(dir / "b.bin"));
+  EXPECT_EQ(entries(dir.path()), 1u);
+}
+
 TEST(StagingDir, CommitReplacesExistingFolder) {
   TempDir dir;
   const fs::path out = dir / "run";

@@ -32,28 +32,51 @@ void make_parent(const fs::path& file) {
 }  // namespace
 
 void write_file_atomic(const fs::path& file, const std::string& bytes) {
+  AtomicFile out(file);
+  out.write(bytes.data(), bytes.size());
+  out.commit();
+}
+
+AtomicFile::AtomicFile(const fs::path& file) : file_(file) {
   require(file.has_filename(), file.string(), "expected a file name, got a folder");
   make_parent(file);
-  const fs::path tmp = with_suffix(file, ".tmp-");
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0)
+  tmp_ = with_suffix(file, ".tmp-");
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0)
     throw InputError(file.string(), std::string("cannot write the file: ") + std::strerror(errno));
-  std::string error;
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ < 0) return;  // committed
+  ::close(fd_);
+  std::error_code ec;
+  fs::remove(tmp_, ec);  // never throws from a destructor
+}
+
+void AtomicFile::write(const char* data, std::size_t size) {
+  require(fd_ >= 0, file_.string(), "AtomicFile written after commit");
   std::size_t done = 0;
-  while (done < bytes.size() && error.empty()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+  while (done < size) {
+    const ssize_t n = ::write(fd_, data + done, size - done);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0)
-      error = std::strerror(errno);
-    else
-      done += static_cast<std::size_t>(n);
+      throw InputError(file_.string(),
+                       std::string("cannot write the file: ") + std::strerror(errno));
+    done += static_cast<std::size_t>(n);
   }
-  if (::close(fd) != 0 && error.empty()) error = std::strerror(errno);
-  if (error.empty() && std::rename(tmp.c_str(), file.c_str()) != 0) error = std::strerror(errno);
+}
+
+void AtomicFile::commit() {
+  require(fd_ >= 0, file_.string(), "AtomicFile committed twice");
+  const int fd = fd_;
+  fd_ = -1;
+  std::string error;
+  if (::close(fd) != 0) error = std::strerror(errno);
+  if (error.empty() && std::rename(tmp_.c_str(), file_.c_str()) != 0) error = std::strerror(errno);
   if (!error.empty()) {
     std::error_code ec;
-    fs::remove(tmp, ec);
-    throw InputError(file.string(), "cannot write the file: " + error);
+    fs::remove(tmp_, ec);
+    throw InputError(file_.string(), "cannot write the file: " + error);
   }
 }
 

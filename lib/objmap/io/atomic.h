@@ -11,6 +11,24 @@ namespace objmap::io {
 // be written; the temporary file is removed then.
 void write_file_atomic(const std::filesystem::path& file, const std::string& bytes);
 
+// A file written atomically piece by piece (large outputs without a buffer of their size): the
+// pieces go to "<file>.tmp-<pid>"; commit() renames it to `file`. Without commit() (an exception),
+// the destructor removes the temporary file. Errors are InputError(file, reason), as above.
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::filesystem::path& file);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  void write(const char* data, std::size_t size);
+  void commit();
+
+ private:
+  std::filesystem::path file_, tmp_;
+  int fd_ = -1;
+};
+
 // A run folder written atomically: files go to "<out>.tmp-<pid>" (created, empty, by the
 // constructor); commit() renames it to `out`, replacing an existing `out` folder. The destructor
 // removes the temporary folder if commit() was not called (e.g. an exception unwound the run).

@@ -1,9 +1,11 @@
 #include "objmap/io/ply.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "objmap/core/error.h"
@@ -13,8 +15,12 @@ namespace objmap::io {
 
 namespace fs = std::filesystem;
 
-void write_ply(const fs::path& path, const PointCloud& cloud, const PlyWriteOptions& options) {
-  const bool colour = cloud.has_colors();
+namespace {
+
+// `colors`: one per point, or nullptr for none.
+void write_ply_points(const fs::path& path, const PointCloud& cloud, const std::vector<Rgb>* colors,
+                      const PlyWriteOptions& options) {
+  const bool colour = colors != nullptr;
   std::ostringstream header;
   header << "ply\nformat binary_little_endian 1.0\n";
   if (!options.comment.empty()) header << "comment " << options.comment << "\n";
@@ -23,29 +29,49 @@ void write_ply(const fs::path& path, const PointCloud& cloud, const PlyWriteOpti
   if (colour) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   header << "end_header\n";
 
-  // Header and body in one buffer (bytes written as the format says, whatever the host order).
+  // The body in pieces of up to 64k points through one reused buffer (bytes written as the format
+  // says, whatever the host order), into a temporary file renamed when complete (io/atomic.h).
   static_assert(sizeof(float) == 4, "PLY float is 4 bytes");
-  std::string bytes = header.str();
-  const std::size_t head = bytes.size();
+  AtomicFile file(path);
+  const std::string head = header.str();
+  file.write(head.data(), head.size());
   const std::size_t stride = 12 + (colour ? 3 : 0);
-  bytes.resize(head + cloud.size() * stride);
-  char* out = bytes.data() + head;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Vec3f& p = cloud.points[i];
-    const float xyz[3] = {p.x(), p.y(), p.z()};
-    for (int a = 0; a < 3; ++a) {
-      std::uint32_t bits;
-      std::memcpy(&bits, &xyz[a], 4);
-      for (int b = 0; b < 4; ++b) *out++ = static_cast<char>((bits >> (8 * b)) & 0xff);
+  constexpr std::size_t kPiece = 65536;
+  std::vector<char> buffer(std::min(cloud.size(), kPiece) * stride);
+  for (std::size_t begin = 0; begin < cloud.size(); begin += kPiece) {
+    const std::size_t end = std::min(cloud.size(), begin + kPiece);
+    char* out = buffer.data();
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3f& p = cloud.points[i];
+      const float xyz[3] = {p.x(), p.y(), p.z()};
+      for (int a = 0; a < 3; ++a) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &xyz[a], 4);
+        for (int b = 0; b < 4; ++b) *out++ = static_cast<char>((bits >> (8 * b)) & 0xff);
+      }
+      if (colour) {
+        *out++ = static_cast<char>((*colors)[i].r);
+        *out++ = static_cast<char>((*colors)[i].g);
+        *out++ = static_cast<char>((*colors)[i].b);
+      }
     }
-    if (colour) {
-      *out++ = static_cast<char>(cloud.colors[i].r);
-      *out++ = static_cast<char>(cloud.colors[i].g);
-      *out++ = static_cast<char>(cloud.colors[i].b);
-    }
+    file.write(buffer.data(), static_cast<std::size_t>(out - buffer.data()));
   }
-  // Temporary name + rename (io/atomic.h).
-  write_file_atomic(path, bytes);
+  file.commit();
+}
+
+}  // namespace
+
+void write_ply(const fs::path& path, const PointCloud& cloud, const PlyWriteOptions& options) {
+  write_ply_points(path, cloud, cloud.has_colors() ? &cloud.colors : nullptr, options);
+}
+
+void write_ply(const fs::path& path, const PointCloud& cloud, const std::vector<Rgb>& colors,
+               const PlyWriteOptions& options) {
+  require(colors.size() == cloud.size(), path.string(),
+          "write_ply: " + std::to_string(colors.size()) + " colours for " +
+              std::to_string(cloud.size()) + " points; expected one per point");
+  write_ply_points(path, cloud, &colors, options);
 }
 
 namespace {

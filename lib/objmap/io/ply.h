@@ -17,6 +17,9 @@ struct PlyWriteOptions {
 // Throws InputError naming the path when the file cannot be written.
 void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
                const PlyWriteOptions& options = {});
+// The same with the points of `cloud` and the colours `colors` (one per point) instead of its own.
+void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
+               const std::vector<Rgb>& colors, const PlyWriteOptions& options = {});
 
 // Reads a PLY point cloud, binary little-endian or ASCII: the `vertex` element's x, y, z (float or
 // double) and red, green, blue (uchar) when present; other vertex properties are skipped; elements

@@ -662,8 +662,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
 
   // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
-  //      map's cloud is made and map_dense.ply written on a second thread meanwhile the objects
-  //      are merged and filtered (they do not depend on each other).
+  //      map's cloud is made on a second thread meanwhile the objects are merged and filtered
+  //      (they do not depend on each other).
   io::StagingDir staging(options.out);
   const fs::path dir = staging.path();
   io::PlyWriteOptions ply;
@@ -672,7 +672,6 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   double dense_seconds = 0.0;
   std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
     DenseCloud cloud = take_dense_cloud(dense, dense_options);
-    io::write_ply(dir / "map_dense.ply", cloud.cloud, ply);
     dense_seconds = seconds_since(t_dense);
     return cloud;
   });
@@ -695,8 +694,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   }
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  // 5. The maps: the semantic map (the dense points with the objects' colours) on a second
-  //    thread, the objects meanwhile.
+  // 5. The maps: map_dense.ply and the semantic map (the dense points with the objects' colours)
+  //    on two more threads, the objects meanwhile.
   t0 = Clock::now();
   DenseCloud dense_cloud = dense_future.get();
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
@@ -705,14 +704,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   std::vector<Rgb> record_color(result.objects.size());
   for (std::size_t i = 0; i < result.objects.size(); ++i)
     record_color[i] = fusion::class_color(result.objects[i].class_name);
+  // Both read dense_cloud; neither changes it.
+  std::future<void> dense_write_future = std::async(
+      std::launch::async, [&] { io::write_ply(dir / "map_dense.ply", dense_cloud.cloud, ply); });
   std::future<void> semantic_future = std::async(std::launch::async, [&] {
-    std::vector<Rgb> colors =
+    const std::vector<Rgb> colors =
         semantic_colors(dense_cloud, options.map_voxel_m, result.objects, record_color);
-    dense_cloud.keys = std::vector<fusion::VoxelKey>();
-    dense_cloud.cloud.colors.swap(colors);
-    colors = std::vector<Rgb>();
-    io::write_ply(dir / "map_semantic.ply", dense_cloud.cloud, ply);
-    dense_cloud.cloud = PointCloud();
+    io::write_ply(dir / "map_semantic.ply", dense_cloud.cloud, colors, ply);
   });
   PointCloud objects_only;
   for (std::size_t i = 0; i < result.objects.size(); ++i) {
@@ -731,7 +729,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     io::write_ply(dir / name, r.cloud, ply);
     objects_json.push_back(object_json(r, name));
   }
+  // Both futures are waited for before either result is used (an exception of the first must
+  // not leave the second running on dense_cloud).
+  dense_write_future.wait();
+  semantic_future.wait();
+  dense_write_future.get();
   semantic_future.get();
+  dense_cloud = DenseCloud();
   ordered_json doc;
   doc["schema_version"] = 1;
   doc["generator"] = std::string("objmap ") + objmap::version();
