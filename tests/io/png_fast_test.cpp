@@ -1,6 +1,7 @@
 #include "objmap/io/png_fast.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +20,12 @@ namespace objmap::io {
 namespace {
 
 namespace fs = std::filesystem;
+
+long peak_rss_kb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
 
 // CRC-32 of PNG chunks (ISO 3309), to forge valid chunks below.
 std::uint32_t crc32(const unsigned char* p, std::size_t n) {
@@ -239,6 +246,36 @@ TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
   std::vector<unsigned char> flipped = png;
   flipped[idat + 10] ^= 0x10;
   EXPECT_TRUE(fast(flipped).empty());
+
+  // An unknown critical chunk (upper-case first letter) before IEND: left to OpenCV.
+  {
+    std::vector<unsigned char> critical(png.begin(), png.end() - 12);
+    put_chunk(critical, "ZZZZ", {1, 2, 3});
+    put_chunk(critical, "IEND", {});
+    EXPECT_TRUE(fast(critical).empty());
+    std::vector<unsigned char> ancillary(png.begin(), png.end() - 12);
+    put_chunk(ancillary, "zzZz", {1, 2, 3});  // ancillary: skipped
+    put_chunk(ancillary, "IEND", {});
+    EXPECT_TRUE(same_pixels(fast(ancillary), depth));
+  }
+
+  // A header that claims 30000 x 30000 pixels over a few bytes of data: refused before any
+  // buffer of that size is made (OpenCV then reports the file).
+  {
+    std::vector<unsigned char> huge{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::vector<unsigned char> ihdr;
+    put32(ihdr, 30000);
+    put32(ihdr, 30000);
+    ihdr.insert(ihdr.end(), {16, 0, 0, 0, 0});
+    put_chunk(huge, "IHDR", ihdr);
+    put_chunk(huge, "IDAT", {0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0, 0, 0, 1});
+    put_chunk(huge, "IEND", {});
+    const long peak_before = peak_rss_kb();
+    EXPECT_TRUE(fast(huge).empty());
+    // 30000 x 30000 x 2 bytes would be 1.8 GB; a peak that grew by more than 100 MB means a
+    // buffer of the claimed size was made.
+    EXPECT_LT(peak_rss_kb() - peak_before, 100 * 1024);
+  }
 
   // Interlaced (Adam7) with a valid IHDR CRC: not decoded here.
   std::vector<unsigned char> interlaced = png;

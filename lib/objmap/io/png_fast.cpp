@@ -141,8 +141,10 @@ cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
       break;
     } else if (std::memcmp(type, "tRNS", 4) == 0 || std::memcmp(type, "PLTE", 4) == 0) {
       return {};  // OpenCV turns transparency into an alpha channel: leave these to it
+    } else if ((type[0] & 0x20) == 0) {
+      return {};  // an unknown critical chunk (upper-case first letter): not ours to skip
     }
-    // Other ancillary chunks (gAMA, pHYs, text, ...) do not change the pixels OpenCV gives.
+    // Ancillary chunks (gAMA, pHYs, text, ...) do not change the pixels OpenCV gives.
   }
   if (!ended || scratch.idat.empty()) return {};
 
@@ -163,7 +165,9 @@ cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
   const std::size_t row_bytes = std::size_t{width} * bpp;
   const std::size_t filtered_bytes = std::size_t{height} * (row_bytes + 1);
 
-  // 3. Inflate (zlib stream, Adler-32 checked) to exactly the expected size.
+  // 3. Inflate (zlib stream, Adler-32 checked) to exactly the expected size. Deflate expands at
+  //    most ~1032:1: a header that claims more than the data can hold is not trusted with memory.
+  if (filtered_bytes / 1032 > scratch.idat.size() + 64) return {};
   scratch.filtered.resize(filtered_bytes);
   std::size_t actual = 0;
   if (libdeflate_zlib_decompress(scratch.inflater.get(), scratch.idat.data(), scratch.idat.size(),
