@@ -14,6 +14,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "objmap/core/error.h"
+#include "objmap/io/image.h"
 #include "support/test_support.h"
 
 namespace objmap::io {
@@ -223,6 +225,36 @@ TEST(PngFast, SamePixelsAsOpenCvOnTheRealRecordings) {
   EXPECT_EQ(decoded_here, static_cast<int>(files.size()));
 }
 
+// A 16-bit grey PNG whose header claims 30000 x 30000 pixels (1.8 GB) over 11 bytes of data.
+std::vector<unsigned char> huge_claim() {
+  std::vector<unsigned char> png{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  std::vector<unsigned char> ihdr;
+  put32(ihdr, 30000);
+  put32(ihdr, 30000);
+  ihdr.insert(ihdr.end(), {16, 0, 0, 0, 0});
+  put_chunk(png, "IHDR", ihdr);
+  put_chunk(png, "IDAT", {0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0, 0, 0, 1});
+  put_chunk(png, "IEND", {});
+  return png;
+}
+
+TEST(PngFast, ImagesOfTheWrongSizeAreRefusedFromTheirHeader) {
+  // read_depth checks the header's size before decoding: one clear line, no 1.8 GB image made
+  // (OpenCV would make it before finding the data short).
+  test::TempDir dir;
+  const std::vector<unsigned char> png = huge_claim();
+  test::write_text(dir / "huge.png", std::string(png.begin(), png.end()));
+  const long peak_before = peak_rss_kb();
+  try {
+    read_depth(dir / "huge.png", 640, 480);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (dir / "huge.png").string());
+    EXPECT_EQ(e.reason(), "image is 30000x30000; expected 640x480 (the camera's width x height)");
+  }
+  EXPECT_LT(peak_rss_kb() - peak_before, 100 * 1024);
+}
+
 TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
   const cv::Mat depth = picture(20, 30, CV_16UC1, 3);
   std::vector<unsigned char> png;
@@ -262,14 +294,7 @@ TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
   // A header that claims 30000 x 30000 pixels over a few bytes of data: refused before any
   // buffer of that size is made (OpenCV then reports the file).
   {
-    std::vector<unsigned char> huge{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    std::vector<unsigned char> ihdr;
-    put32(ihdr, 30000);
-    put32(ihdr, 30000);
-    ihdr.insert(ihdr.end(), {16, 0, 0, 0, 0});
-    put_chunk(huge, "IHDR", ihdr);
-    put_chunk(huge, "IDAT", {0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0, 0, 0, 1});
-    put_chunk(huge, "IEND", {});
+    const std::vector<unsigned char> huge = huge_claim();
     const long peak_before = peak_rss_kb();
     EXPECT_TRUE(fast(huge).empty());
     // 30000 x 30000 x 2 bytes would be 1.8 GB; a peak that grew by more than 100 MB means a

@@ -60,7 +60,18 @@ std::vector<unsigned char> read_bytes(const fs::path& file) {
   return bytes;
 }
 
-cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bool allow_jpeg) {
+void check_size(const fs::path& file, long cols, long rows, int width, int height) {
+  if ((width > 0 && cols != width) || (height > 0 && rows != height))
+    throw InputError(file.string(), "image is " + std::to_string(cols) + "x" +
+                                        std::to_string(rows) + "; expected " +
+                                        std::to_string(width) + "x" + std::to_string(height) +
+                                        " (the camera's width x height)");
+}
+
+// width/height > 0: the size required; a PNG's header is checked before the image is decoded (a
+// header claiming a huge image costs no memory).
+cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bool allow_jpeg,
+               int width, int height) {
   const Format format = format_of(bytes);
   const std::string expected = allow_jpeg ? "a PNG or JPEG image" : "a PNG image";
   if (format == Format::kOther || (format == Format::kJpeg && !allow_jpeg))
@@ -70,6 +81,14 @@ cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bo
                      "truncated PNG (no IEND chunk at the end); expected " + expected);
   if (format == Format::kJpeg && !jpeg_complete(bytes))
     throw InputError(file.string(), "truncated JPEG (no end marker); expected " + expected);
+  if (format == Format::kPng && bytes.size() >= 24 &&
+      std::memcmp(bytes.data() + 12, "IHDR", 4) == 0) {
+    const auto be32 = [&](std::size_t at) {
+      return (static_cast<long>(bytes[at]) << 24) | (static_cast<long>(bytes[at + 1]) << 16) |
+             (static_cast<long>(bytes[at + 2]) << 8) | static_cast<long>(bytes[at + 3]);
+    };
+    check_size(file, be32(16), be32(20), width, height);
+  }
   // The PNGs of RGB-D recordings go through the faster decoder (same pixels); the rest, and any
   // PNG it refuses, through OpenCV.
   cv::Mat image;
@@ -86,14 +105,6 @@ cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bo
   if (image.empty())
     throw InputError(file.string(), "cannot decode the image (corrupt data); expected " + expected);
   return image;
-}
-
-void check_size(const fs::path& file, const cv::Mat& image, int width, int height) {
-  if ((width > 0 && image.cols != width) || (height > 0 && image.rows != height))
-    throw InputError(file.string(), "image is " + std::to_string(image.cols) + "x" +
-                                        std::to_string(image.rows) + "; expected " +
-                                        std::to_string(width) + "x" + std::to_string(height) +
-                                        " (the camera's width x height)");
 }
 
 std::string depth_name(int depth) {
@@ -120,11 +131,11 @@ std::string depth_name(int depth) {
 }  // namespace
 
 cv::Mat read_rgb(const fs::path& file, int width, int height) {
-  const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/true);
+  const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/true, width, height);
   if (image.depth() != CV_8U)
     throw InputError(file.string(),
                      depth_name(image.depth()) + " colour image; expected 8 bits per channel");
-  check_size(file, image, width, height);
+  check_size(file, image.cols, image.rows, width, height);
   if (image.channels() == 3) return image;
   cv::Mat bgr(image.rows, image.cols, CV_8UC3);
   if (image.channels() == 1) {
@@ -141,7 +152,7 @@ cv::Mat read_rgb(const fs::path& file, int width, int height) {
 }
 
 cv::Mat read_depth(const fs::path& file, int width, int height) {
-  const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/false);
+  const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/false, width, height);
   if (image.channels() != 1)
     throw InputError(file.string(), std::to_string(image.channels()) +
                                         "-channel (colour) image; expected a 16-bit single-channel "
@@ -150,7 +161,7 @@ cv::Mat read_depth(const fs::path& file, int width, int height) {
     throw InputError(file.string(), depth_name(image.depth()) +
                                         " image; expected a 16-bit single-channel depth PNG "
                                         "(metres x depth_factor)");
-  check_size(file, image, width, height);
+  check_size(file, image.cols, image.rows, width, height);
   return image;
 }
 
