@@ -28,18 +28,19 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
   const auto pct = [](double before, double after) {
     return before > 0 ? 100.0 * (1.0 - after / before) : 0.0;
   };
-  std::printf("\npoints      dense: %llu back-projected -> %zu in the map (1 voxel = 1 point)\n",
-              static_cast<unsigned long long>(r.dense_points_raw), r.dense_points_map);
+  if (options.dense_map)
+    std::printf("\npoints      dense: %llu back-projected -> %zu in the map (1 voxel = 1 point)\n",
+                static_cast<unsigned long long>(r.dense_points_raw), r.dense_points_map);
+  else
+    std::printf("\npoints      dense: none (--dense-map false)\n");
   std::printf("            objects: %zu -> %zu voxel-filtered -> %zu outlier-filtered (-%.1f%%)\n",
               r.object_points_raw, r.object_points_voxel, r.object_points_filtered,
               pct(r.object_points_raw, r.object_points_filtered));
   const std::size_t kf = r.keyframes.keyframes.size();
   std::printf("time        %.2f s (%.1f ms per keyframe), peak memory %.0f MB\n", r.seconds_total,
               kf ? 1000.0 * r.seconds_total / kf : 0.0, r.peak_rss_kb / 1024.0);
-  std::printf(
-      "written     %s/{objects.json, objects/, map_dense.ply, map_semantic.ply, "
-      "map_objects.ply, run.json}\n",
-      options.out.c_str());
+  std::printf("written     %s/{objects.json, objects/, %smap_objects.ply, run.json}\n",
+              options.out.c_str(), options.dense_map ? "map_dense.ply, map_semantic.ply, " : "");
 }
 
 void setup_fuse(CLI::App& app) {
@@ -52,7 +53,7 @@ void setup_fuse(CLI::App& app) {
       "each instance with an object by track ID, centroid distance and voxel overlap (eq 22), "
       "confirm objects seen >= 3 times, filter outliers (eq 18). Writes OUT/objects.json, "
       "OUT/objects/<id>_<class>.ply, OUT/map_dense.ply, OUT/map_semantic.ply, OUT/map_objects.ply, "
-      "OUT/run.json.");
+      "OUT/run.json (the two dense maps not with --dense-map false).");
   cmd->add_option("--dataset", options->dataset,
                   "TUM RGB-D folder (rgb.txt, depth.txt, rgb/, depth/)")
       ->required();

@@ -272,7 +272,10 @@ void run_report(const ReportOptions& options) {
   }
 
   // 5. The top view with the objects and the camera path (in the map's frame: the run's estimate).
-  const PointCloud map = io::read_ply(options.run / "map_semantic.ply");
+  // A run fused with --dense-map false has no semantic map: the objects-only map is drawn.
+  const bool has_semantic = fs::exists(options.run / "map_semantic.ply");
+  const std::string map_name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
+  const PointCloud map = io::read_ply(options.run / map_name);
   report::TopViewOptions view_options;
   view_options.up_axis = up_axis;
   view_options.pixel_m = options.pixel_m;
@@ -302,10 +305,10 @@ void run_report(const ReportOptions& options) {
   page.topview.height_px = view.image.rows;
   char caption[512];
   std::snprintf(caption, sizeof caption,
-                "map_semantic.ply seen from above (%s up, %.1f mm per pixel, %zu points): each "
+                "%s seen from above (%s up, %.1f mm per pixel, %zu points): each "
                 "object's oriented box outlined in its class colour and labelled \"id class\"%s; "
                 "the bar is 1 m.",
-                options.up.c_str(), view.pixel_m * 1000, map.size(),
+                map_name.c_str(), options.up.c_str(), view.pixel_m * 1000, map.size(),
                 est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;
 

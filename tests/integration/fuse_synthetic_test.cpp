@@ -117,6 +117,44 @@ TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
   }
 }
 
+TEST(FuseSynthetic, WithoutTheDenseMapTheObjectsAreTheSame) {
+  // --dense-map false: no map_dense.ply / map_semantic.ply, every object output byte-identical.
+  const SceneRun& r = default_run();
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  TempDir other;
+  const fs::path out = other.path() / "run";
+  const auto f = run_objmap({"fuse", "--dataset", r.scene.string(), "--trajectory",
+                             (r.scene / "groundtruth.txt").string(), "--segmentation",
+                             (r.scene / "segmentation").string(), "--out", out.string(),
+                             "--dense-map", "false"});
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_NE(f.out.find("dense: none (--dense-map false)"), std::string::npos) << f.out;
+  EXPECT_FALSE(fs::exists(out / "map_dense.ply"));
+  EXPECT_FALSE(fs::exists(out / "map_semantic.ply"));
+  std::size_t compared = 0;
+  for (const auto& e : fs::recursive_directory_iterator(r.out)) {
+    if (!e.is_regular_file()) continue;
+    const auto rel = fs::relative(e.path(), r.out);
+    if (rel == "run.json" || rel == "map_dense.ply" || rel == "map_semantic.ply") continue;
+    EXPECT_EQ(read_text(e.path()), read_text(out / rel)) << rel;
+    ++compared;
+  }
+  EXPECT_GE(compared, 14u);  // objects.json, map_objects.ply, one PLY per object
+  const auto run = read_json(out / "run.json");
+  EXPECT_TRUE(validate_json(run, load_schema("run.schema.json")).empty());
+  EXPECT_EQ(run["points"]["dense_map"].get<std::size_t>(), 0u);
+  EXPECT_EQ(run["points"]["dense_back_projected"].get<std::size_t>(), 0u);
+  EXPECT_FALSE(run["options"]["map"]["dense"].get<bool>());
+  // Table 6 of eval objects says there is no dense map (not a 100% reduction).
+  const auto e = run_objmap({"eval", "objects", "--map", (out / "objects.json").string(),
+                             "--gt-objects", (r.scene / "objects_gt.json").string()});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(e.out.find("  dense map                                  none"), std::string::npos)
+      << e.out;
+  EXPECT_NE(e.out.find("  reduction                                   n/a"), std::string::npos)
+      << e.out;
+}
+
 TEST(FuseSynthetic, ClassConfusionAndIdSwitchesStillGiveRightClasses) {
   const SceneRun r = make_run(
       "seed5-confusion", {"--seed", "5", "--confusion-rate", "0.2", "--id-switch-rate", "0.2"}, {});

@@ -145,6 +145,24 @@ TEST(ReportCli, PageHasOneThumbnailPerObjectAndEveryPictureDecodes) {
   EXPECT_NE(r.out.find(out.string() + "/report.html"), std::string::npos) << r.out;
 }
 
+TEST(ReportCli, ARunWithoutTheDenseMapsShowsTheObjectsMap) {
+  // A run fused with --dense-map false has no map_semantic.ply: the top view is map_objects.ply.
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  const fs::path copy = dir / "run";
+  fs::create_directories(copy);
+  for (const char* name : {"objects.json", "map_objects.ply", "objects", "run.json"})
+    fs::create_symlink(fs::absolute(c.run / name), copy / name);
+  const RunResult r =
+      run_objmap({"report", "--run", copy.string(), "--out", (dir / "rep").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string md = read_text(dir / "rep" / "report.md");
+  EXPECT_NE(md.find("map_objects.ply seen from above"), std::string::npos);
+  EXPECT_EQ(md.find("map_semantic.ply seen from above"), std::string::npos);
+  EXPECT_FALSE(cv::imread((dir / "rep" / "topview.png").string(), cv::IMREAD_COLOR).empty());
+}
+
 TEST(ReportCli, TrajectoriesAgainstTheGroundTruthThenTheCorrectedOne) {
   const Cached& c = cached_run();
   ASSERT_TRUE(fs::exists(c.run)) << c.result.err;

@@ -671,9 +671,13 @@ std::string objects_eval_text(const ObjectEvalReport& report) {
   if (report.points) {
     const PointCounts& p = *report.points;
     out += "\nTable 6: points (" + p.source + ")\n";
-    out += line("  %-34s %12.0f", "dense map", p.dense_map);
+    if (p.dense_map > 0)
+      out += line("  %-34s %12.0f", "dense map", p.dense_map);
+    else
+      out += line("  %-34s %12s", "dense map", "none");
     out += line("  %-34s %12.0f", "objects-only map", p.objects_map);
-    out += line("  %-34s %12s", "reduction", percent(p.reduction()).c_str());
+    out +=
+        line("  %-34s %12s", "reduction", p.dense_map > 0 ? percent(p.reduction()).c_str() : "n/a");
     out += line("  %-34s %12.0f", "dense points back-projected", p.dense_back_projected);
     out += line("  %-34s %12.0f", "object points raw", p.objects_raw);
     out += line("  %-34s %12.0f", "object points voxel-filtered", p.objects_voxel_filtered);

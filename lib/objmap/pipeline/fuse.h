@@ -30,13 +30,14 @@ struct FuseOptions {
   std::string seg_format = "auto";       // segmentation format or auto-detect
   std::string default_class = "object";  // class of box formats without one (fr3_cabinet)
 
-  double max_diff_s = 0.02;               // rgb/depth association window
-  KeyframeOptions keyframes;              // which frames are fused
-  geometry::BackprojectOptions depth;     // depth range [0.1, 4.0] m (the paper's lower bound 0.01)
-  double map_voxel_m = 0.01;              // dense/semantic map voxel (1 cm)
-  int dense_stride = 1;                   // back-project every n-th pixel into the dense map
-  double min_instance_score = 0.0;        // instances below this detector score are ignored
-  segmentation::BoxMaskOptions box_mask;  // masks for instances that have only a box
+  double max_diff_s = 0.02;            // rgb/depth association window
+  KeyframeOptions keyframes;           // which frames are fused
+  geometry::BackprojectOptions depth;  // depth range [0.1, 4.0] m (the paper's lower bound 0.01)
+  double map_voxel_m = 0.01;           // dense/semantic map voxel (1 cm)
+  int dense_stride = 1;                // back-project every n-th pixel into the dense map
+  bool dense_map = true;  // false: objects only, no map_dense.ply / map_semantic.ply (faster)
+  double min_instance_score = 0.0;              // instances below this detector score are ignored
+  segmentation::BoxMaskOptions box_mask;        // masks for instances that have only a box
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
   double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
   fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
