@@ -1,5 +1,6 @@
 #include "objmap/io/image.h"
 
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -81,14 +82,9 @@ cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bo
                      "truncated PNG (no IEND chunk at the end); expected " + expected);
   if (format == Format::kJpeg && !jpeg_complete(bytes))
     throw InputError(file.string(), "truncated JPEG (no end marker); expected " + expected);
-  if (format == Format::kPng && bytes.size() >= 24 &&
-      std::memcmp(bytes.data() + 12, "IHDR", 4) == 0) {
-    const auto be32 = [&](std::size_t at) {
-      return (static_cast<long>(bytes[at]) << 24) | (static_cast<long>(bytes[at + 1]) << 16) |
-             (static_cast<long>(bytes[at + 2]) << 8) | static_cast<long>(bytes[at + 3]);
-    };
-    check_size(file, be32(16), be32(20), width, height);
-  }
+  std::uint32_t header_width = 0, header_height = 0;
+  if (format == Format::kPng && png_size(bytes.data(), bytes.size(), header_width, header_height))
+    check_size(file, header_width, header_height, width, height);
   // The PNGs of RGB-D recordings go through the faster decoder (same pixels); the rest, and any
   // PNG it refuses, through OpenCV.
   cv::Mat image;

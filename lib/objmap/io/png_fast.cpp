@@ -102,10 +102,20 @@ void sub_row_16bit(const unsigned char* src, std::uint16_t* dst, std::size_t wid
   }
 }
 
+const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+
 }  // namespace
 
+bool png_size(const unsigned char* data, std::size_t size, std::uint32_t& width,
+              std::uint32_t& height) {
+  if (size < 24 || std::memcmp(data, kSignature, 8) != 0 || std::memcmp(data + 12, "IHDR", 4) != 0)
+    return false;
+  width = be32(data + 16);
+  height = be32(data + 20);
+  return true;
+}
+
 cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
-  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (size < 8 + 25 || std::memcmp(data, kSignature, 8) != 0) return {};
   thread_local Scratch scratch;
   if (!scratch.inflater) return {};

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstddef>
+#include <cstdint>
 
 #include <opencv2/core/mat.hpp>
 
@@ -12,5 +13,10 @@
 namespace objmap::io {
 
 cv::Mat decode_png_fast(const unsigned char* data, std::size_t size);
+
+// The width and height in a PNG's header (its first chunk, IHDR), read without decoding; false
+// when the bytes do not start with a PNG signature and an IHDR chunk.
+bool png_size(const unsigned char* data, std::size_t size, std::uint32_t& width,
+              std::uint32_t& height);
 
 }  // namespace objmap::io

@@ -674,12 +674,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   ply.comment = std::string("objmap ") + objmap::version();
   auto t_dense = Clock::now();
   double dense_seconds = 0.0;
-  std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
-    if (!options.dense_map) return DenseCloud{};
-    DenseCloud cloud = take_dense_cloud(dense, dense_options);
-    dense_seconds = seconds_since(t_dense);
-    return cloud;
-  });
+  std::future<DenseCloud> dense_future;
+  if (options.dense_map)
+    dense_future = std::async(std::launch::async, [&] {
+      DenseCloud cloud = take_dense_cloud(dense, dense_options);
+      dense_seconds = seconds_since(t_dense);
+      return cloud;
+    });
 
   // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
   t0 = Clock::now();
@@ -702,23 +703,25 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   // 5. The maps: map_dense.ply and the semantic map (the dense points with the objects' colours)
   //    on two more threads, the objects meanwhile.
   t0 = Clock::now();
-  DenseCloud dense_cloud = dense_future.get();
+  DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
   result.dense_points_map = dense_cloud.cloud.size();
   const std::size_t semantic_points = dense_cloud.cloud.size();
   std::vector<Rgb> record_color(result.objects.size());
   for (std::size_t i = 0; i < result.objects.size(); ++i)
     record_color[i] = fusion::class_color(result.objects[i].class_name);
-  // Both read dense_cloud; neither changes it.
-  std::future<void> dense_write_future = std::async(std::launch::async, [&] {
-    if (options.dense_map) io::write_ply(dir / "map_dense.ply", dense_cloud.cloud, ply);
-  });
-  std::future<void> semantic_future = std::async(std::launch::async, [&] {
-    if (!options.dense_map) return;
-    const std::vector<Rgb> colors =
-        semantic_colors(dense_cloud, options.map_voxel_m, result.objects, record_color);
-    io::write_ply(dir / "map_semantic.ply", dense_cloud.cloud, colors, ply);
-  });
+  // Both read dense_cloud and neither changes it; declared after it, they are joined before it
+  // goes, even when an exception unwinds.
+  std::future<void> dense_write_future, semantic_future;
+  if (options.dense_map) {
+    dense_write_future = std::async(
+        std::launch::async, [&] { io::write_ply(dir / "map_dense.ply", dense_cloud.cloud, ply); });
+    semantic_future = std::async(std::launch::async, [&] {
+      const std::vector<Rgb> colors =
+          semantic_colors(dense_cloud, options.map_voxel_m, result.objects, record_color);
+      io::write_ply(dir / "map_semantic.ply", dense_cloud.cloud, colors, ply);
+    });
+  }
   PointCloud objects_only;
   for (std::size_t i = 0; i < result.objects.size(); ++i) {
     if (!result.objects[i].confirmed) continue;
@@ -736,12 +739,10 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     io::write_ply(dir / name, r.cloud, ply);
     objects_json.push_back(object_json(r, name));
   }
-  // Both futures are waited for before either result is used (an exception of the first must
-  // not leave the second running on dense_cloud).
-  dense_write_future.wait();
-  semantic_future.wait();
-  dense_write_future.get();
-  semantic_future.get();
+  if (options.dense_map) {
+    dense_write_future.get();
+    semantic_future.get();
+  }
   dense_cloud = DenseCloud();
   ordered_json doc;
   doc["schema_version"] = 1;
