@@ -45,27 +45,6 @@ TEST(VoxelMap, CountsAndColourAveragesAreExact) {
   EXPECT_EQ(cloud.colors[1], (Rgb{20, 40, 61}));
 }
 
-TEST(VoxelMap, LabelIsTheMajorityAndLabelledExportPaintsIt) {
-  VoxelMap map;
-  PointCloud p;
-  p.push_back(Vec3f(0.005f, 0.005f, 0.005f), Rgb{1, 1, 1});
-  map.insert(p, 7);
-  map.insert(p, 7);
-  map.insert(p, 3);
-  PointCloud q;
-  q.push_back(Vec3f(0.105f, 0.005f, 0.005f), Rgb{9, 9, 9});
-  map.insert(q);
-  EXPECT_EQ(map.find(geometry::pack_voxel(0, 0, 0))->label, 7);
-  EXPECT_EQ(map.find(geometry::pack_voxel(10, 0, 0))->label, kNoLabel);
-
-  const std::map<std::int32_t, Rgb> colours{{7, class_color("cup")}};
-  const PointCloud all = map.to_labelled_cloud(colours, true);
-  ASSERT_EQ(all.size(), 2u);
-  EXPECT_EQ(all.colors[0], class_color("cup"));
-  EXPECT_EQ(all.colors[1], (Rgb{9, 9, 9}));
-  EXPECT_EQ(map.to_labelled_cloud(colours, false).size(), 1u);
-}
-
 // A synthetic "frame": a noisy-looking but deterministic surface of 200k points with colours.
 PointCloud frame(int f) {
   PointCloud c;
@@ -119,8 +98,8 @@ TEST(VoxelMap, IdenticalOutputForOneAndTwoThreads) {
   VoxelMap one({0.01, 1}), two({0.01, 2});
   for (int f = 0; f < 3; ++f) {
     const PointCloud c = frame(f);
-    one.insert(c, f);
-    two.insert(c, f);
+    one.insert(c);
+    two.insert(c);
   }
   EXPECT_EQ(one.size(), two.size());
   const PointCloud a = one.to_cloud(), b = two.to_cloud();
@@ -129,8 +108,12 @@ TEST(VoxelMap, IdenticalOutputForOneAndTwoThreads) {
   for (const auto& [key, v] : one.sorted_voxels()) {
     const VoxelData* w = two.find(key);
     ASSERT_NE(w, nullptr);
-    EXPECT_EQ(v->label, w->label);
     EXPECT_EQ(v->count, w->count);
+    EXPECT_EQ(v->color_count, w->color_count);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(v->offset_sum[a], w->offset_sum[a]);
+      EXPECT_EQ(v->color_sum[a], w->color_sum[a]);
+    }
   }
 }
 

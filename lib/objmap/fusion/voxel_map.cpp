@@ -32,23 +32,6 @@ Rgb VoxelData::mean_color() const {
   return {avg(color_sum[0]), avg(color_sum[1]), avg(color_sum[2])};
 }
 
-namespace {
-
-// `n` votes for `label` on a Boyer-Moore majority counter.
-void vote(VoxelData& v, std::int32_t label, std::int32_t n) {
-  if (label == kNoLabel || n <= 0) return;
-  if (v.label == label) {
-    v.label_votes += n;
-  } else if (v.label_votes >= n) {
-    v.label_votes -= n;
-  } else {
-    v.label = label;
-    v.label_votes = n - v.label_votes;
-  }
-}
-
-}  // namespace
-
 VoxelMap::VoxelMap(const VoxelMapOptions& options) {
   options.check();
   voxel_m_ = options.voxel_m;
@@ -96,7 +79,7 @@ Vec3 VoxelMap::mean_position(VoxelKey key, const VoxelData& v) const {
 // overlap (a random slot of a multi-megabyte table is the cost of the whole insert otherwise). The
 // batch size is fixed, so the sums (and the map) do not depend on anything but the input. Returns
 // the number of points dropped (not finite or out of range).
-std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label) {
+std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud) {
   const bool all = shard == kAllShards;
   const bool colour = cloud.has_colors();
   const bool sharded = !all && shards_.size() > 1;
@@ -226,13 +209,13 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud, s
       }
     }
     // 3. The runs into the table(s), in order, prefetching ahead.
-    write_runs(runs.data(), m, shard, label, run_shard, per_shard);
+    write_runs(runs.data(), m, shard, run_shard, per_shard);
   }
   return dropped;
 }
 
 // No rehash below: prefetched slots stay valid.
-void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard, std::int32_t label,
+void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard,
                           std::vector<std::uint32_t>& run_shard,
                           std::vector<std::size_t>& per_shard) {
   constexpr std::size_t kAhead = 12;  // runs prefetched ahead
@@ -261,25 +244,24 @@ void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard, std
     }
     v.count += add.count;
     v.color_count += add.color_count;
-    vote(v, label, static_cast<std::int32_t>(add.count));
   }
 }
 
-void VoxelMap::insert(const PointCloud& cloud, std::int32_t label) {
+void VoxelMap::insert(const PointCloud& cloud) {
   const std::size_t n = cloud.size();
   if (n == 0) return;
   const std::size_t shards = shards_.size();
   const std::size_t threads = std::min(threads_, shards);
   std::size_t dropped = 0;
   if (shards == 1) {
-    dropped = insert_shard(0, cloud, label);
+    dropped = insert_shard(0, cloud);
   } else if (threads == 1 || n < 4096) {
-    dropped = insert_shard(kAllShards, cloud, label);  // one pass routing runs to their shard
+    dropped = insert_shard(kAllShards, cloud);  // one pass routing runs to their shard
   } else {
     // Every thread scans all points and adds those of its shards (shards in parallel).
     auto work = [&](std::size_t t) {
       std::size_t d = 0;
-      for (std::size_t s = t; s < shards; s += threads) d = insert_shard(s, cloud, label);
+      for (std::size_t s = t; s < shards; s += threads) d = insert_shard(s, cloud);
       return d;
     };
     std::vector<std::thread> pool;
@@ -299,7 +281,6 @@ inline void VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src
   }
   v.count += src.count;
   v.color_count += src.color_count;
-  vote(v, src.label, src.label_votes);
 }
 
 void VoxelMap::merge(const VoxelMap& other) {
@@ -505,21 +486,6 @@ PointCloud VoxelMap::to_cloud() const {
   for (std::size_t i = 0; i < voxels.size(); ++i) {
     cloud.points[i] = voxels[i].point;
     cloud.colors[i] = voxels[i].color();
-  }
-  return cloud;
-}
-
-PointCloud VoxelMap::to_labelled_cloud(const std::map<std::int32_t, Rgb>& color_of_label,
-                                       bool keep_unlabelled) const {
-  PointCloud cloud;
-  const auto voxels = sorted_voxels();
-  cloud.reserve(voxels.size());
-  for (const auto& [key, v] : voxels) {
-    const auto it = v->label == kNoLabel ? color_of_label.end() : color_of_label.find(v->label);
-    if (it != color_of_label.end())
-      cloud.push_back(mean_position(key, *v).cast<float>(), it->second);
-    else if (keep_unlabelled)
-      cloud.push_back(mean_position(key, *v).cast<float>(), v->mean_color());
   }
   return cloud;
 }

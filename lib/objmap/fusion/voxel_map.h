@@ -1,6 +1,5 @@
 #pragma once
 #include <cstdint>
-#include <map>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -9,14 +8,12 @@
 #include "objmap/geometry/voxel_key.h"
 
 // The dense map (paper §3.3): every back-projected point streamed into a voxel hash that keeps, per
-// voxel, the running mean position, mean colour, point count and an optional label (object id).
+// voxel, the running mean position, mean colour and point count.
 // Memory grows with the mapped surface, not with the number of frames; frames are never
 // concatenated.
 namespace objmap::fusion {
 
 using geometry::VoxelKey;
-
-constexpr std::int32_t kNoLabel = -1;
 
 struct VoxelMapOptions {
   double voxel_m = 0.01;  // voxel edge; 1 cm as the paper's map
@@ -33,8 +30,6 @@ struct VoxelData {
   std::uint32_t color_sum[3] = {0, 0, 0};  // Σ r, g, b over the points that had a colour
   std::uint32_t count = 0;                 // points that fell in the voxel
   std::uint32_t color_count = 0;           // of those, points with a colour
-  std::int32_t label = kNoLabel;           // majority label (see VoxelMap::insert)
-  std::int32_t label_votes = 0;            // Boyer-Moore counter of `label`
 
   Rgb mean_color() const;
 };
@@ -43,16 +38,13 @@ class VoxelMap {
  public:
   explicit VoxelMap(const VoxelMapOptions& options = {});
 
-  // Adds the points (world frame). With `label` != kNoLabel the voxels also vote for that label:
-  // the label of a voxel is the streaming majority (Boyer-Moore) of the labels its points were
-  // inserted with — the true majority whenever one label has more than half of the labelled points,
-  // otherwise the last candidate standing. Each voxel sees its points in input order whatever
-  // `threads` is, so the map (and every export) is identical for any thread count. Points that are
-  // not finite or out of the key range (±10 km at 1 cm) are dropped and counted.
-  void insert(const PointCloud& points_in_world, std::int32_t label = kNoLabel);
+  // Adds the points (world frame). Each voxel sees its points in input order whatever `threads` is,
+  // so the map (and every export) is identical for any thread count. Points that are not finite or
+  // out of the key range (±10 km at 1 cm) are dropped and counted.
+  void insert(const PointCloud& points_in_world);
 
-  // Adds every voxel of `other` (same voxel size required): sums, counts; labels vote with the
-  // other voxel's label and votes. Used to join two objects.
+  // Adds every voxel of `other` (same voxel size required): sums and counts. Used to join two
+  // objects.
   void merge(const VoxelMap& other);
 
   // merge() restricted to shard `shard` of both maps (same voxel size and shard count required):
@@ -133,10 +125,6 @@ class VoxelMap {
 
   // One point per voxel at the voxel's mean position with its mean colour, sorted by voxel key.
   PointCloud to_cloud() const;
-  // Same order; voxels whose label is in `color_of_label` get that colour; the others keep their
-  // mean colour (keep_unlabelled) or are left out (an objects-only map).
-  PointCloud to_labelled_cloud(const std::map<std::int32_t, Rgb>& color_of_label,
-                               bool keep_unlabelled) const;
 
   // Voxel-weighted centroid: the mean of the voxels' mean positions (0 when empty).
   Vec3 centroid() const;
@@ -158,10 +146,10 @@ class VoxelMap {
   VoxelPoints sorted_points_impl(bool release);  // release: free each shard once read
   // kAllShards: one pass that fills every shard (single-threaded insert of a sharded map).
   static constexpr std::size_t kAllShards = ~std::size_t{0};
-  std::size_t insert_shard(std::size_t shard, const PointCloud& cloud, std::int32_t label);
+  std::size_t insert_shard(std::size_t shard, const PointCloud& cloud);
   // Adds a batch's m runs (in order) to shard `shard`'s table, or with kAllShards each to its own
   // (run_shard: scratch), prefetching ahead.
-  void write_runs(const Run* runs, std::size_t m, std::size_t shard, std::int32_t label,
+  void write_runs(const Run* runs, std::size_t m, std::size_t shard,
                   std::vector<std::uint32_t>& run_shard, std::vector<std::size_t>& per_shard);
   void add_voxel(Table& table, VoxelKey key, const VoxelData& src);
 
