@@ -45,6 +45,40 @@ TEST(VoxelMap, CountsAndColourAveragesAreExact) {
   EXPECT_EQ(cloud.colors[1], (Rgb{20, 40, 61}));
 }
 
+// sorted_points() buckets by x slice, then by y, then sorts each (x, y) row: the result must be the
+// order of a plain sort of the keys, for short rows (a floor), long rows (a wall along z, > 32
+// voxels per row), sparse slices (< 64 voxels) and both thread counts, with each point's data.
+TEST(VoxelMap, SortedPointsAreInKeyOrder) {
+  PointCloud cloud;
+  std::uint32_t state = 12345;
+  const auto next = [&] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+  };
+  for (int i = 0; i < 60000; ++i)  // a thick floor, 1 m x 1 m x 5 cm: rows of ~4 voxels
+    cloud.push_back(Vec3f(-1.0f + next(), -1.0f + next(), 0.05f * next()),
+                    Rgb{static_cast<std::uint8_t>(i), 7, 9});
+  for (int i = 0; i < 40000; ++i)  // a wall along z at x ~ 1.2 m: rows of ~150 voxels
+    cloud.push_back(Vec3f(1.2f + 0.004f * next(), -0.5f + next(), 1.5f * next()), Rgb{1, 2, 3});
+  for (int i = 0; i < 20; ++i)  // a few far voxels: slices with fewer than 64 voxels
+    cloud.push_back(Vec3f(-3.0f - 0.1f * i, 0.5f * next(), next()), Rgb{4, 5, 6});
+  for (int threads : {1, 2}) {
+    VoxelMap map({0.01, threads, 16});
+    map.insert(cloud);
+    const VoxelMap::VoxelPoints points = map.sorted_points();
+    ASSERT_EQ(points.size(), map.size());
+    std::vector<VoxelKey> keys;
+    map.for_each([&](VoxelKey key, const VoxelData&) { keys.push_back(key); });
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      ASSERT_EQ(points[i].key, keys[i]) << "at " << i << " with " << threads << " threads";
+      const VoxelData* v = map.find(keys[i]);
+      EXPECT_EQ(points[i].point, map.mean_position(keys[i], *v).cast<float>());
+      EXPECT_EQ(points[i].color(), v->mean_color());
+    }
+  }
+}
+
 // A synthetic "frame": a noisy-looking but deterministic surface of 200k points with colours.
 PointCloud frame(int f) {
   PointCloud c;

@@ -469,11 +469,53 @@ VoxelMap::VoxelPoints VoxelMap::sorted_points_impl(bool release) {
       if (release) shards_[s].clear();  // this shard is read: free its memory
     }
   });
+  // Within a slice: bucketed by y (a counting sort into a scratch list), then each (x, y) row —
+  // a few dozen voxels — sorted by key (= by z). Keys are unique, so the order is the one a
+  // comparison sort of the whole list gives.
   run([&](std::size_t t) {
-    for (std::size_t i = t; i < slices; i += threads)
-      std::sort(out.begin() + static_cast<std::ptrdiff_t>(start[i]),
-                out.begin() + static_cast<std::ptrdiff_t>(start[i + 1]),
-                [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; });
+    constexpr VoxelKey kAxis = (VoxelKey{1} << 21) - 1;
+    std::vector<VoxelPoint> scratch;
+    std::vector<std::uint32_t> row;
+    const auto by_key = [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; };
+    for (std::size_t i = t; i < slices; i += threads) {
+      VoxelPoint* const first = out.data() + start[i];
+      const std::size_t m = start[i + 1] - start[i];
+      if (m < 64) {
+        std::sort(first, first + m, by_key);
+        continue;
+      }
+      VoxelKey y0 = kAxis, y1 = 0;
+      for (std::size_t j = 0; j < m; ++j) {
+        const VoxelKey y = (first[j].key >> 21) & kAxis;
+        y0 = std::min(y0, y);
+        y1 = std::max(y1, y);
+      }
+      row.assign(static_cast<std::size_t>(y1 - y0) + 2, 0);
+      for (std::size_t j = 0; j < m; ++j) ++row[((first[j].key >> 21) & kAxis) - y0 + 1];
+      for (std::size_t r = 1; r < row.size(); ++r) row[r] += row[r - 1];
+      scratch.resize(m);
+      for (std::size_t j = 0; j < m; ++j)
+        scratch[row[((first[j].key >> 21) & kAxis) - y0]++] = first[j];
+      // row[r] is now the end of row r (the start of row r + 1).
+      std::size_t begin = 0;
+      for (std::size_t r = 0; r + 1 < row.size(); ++r) {
+        const std::size_t end = row[r];
+        if (end - begin > 32) {  // a long row (a wall along z)
+          std::sort(scratch.begin() + static_cast<std::ptrdiff_t>(begin),
+                    scratch.begin() + static_cast<std::ptrdiff_t>(end), by_key);
+          begin = end;
+          continue;
+        }
+        for (std::size_t j = begin + 1; j < end; ++j) {  // insertion sort: rows are short
+          const VoxelPoint v = scratch[j];
+          std::size_t k = j;
+          for (; k > begin && v.key < scratch[k - 1].key; --k) scratch[k] = scratch[k - 1];
+          scratch[k] = v;
+        }
+        begin = end;
+      }
+      std::copy(scratch.begin(), scratch.end(), first);
+    }
   });
   return out;
 }
