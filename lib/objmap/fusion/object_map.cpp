@@ -137,8 +137,14 @@ struct ObjectMap::Object {
   void dilate(const std::vector<VoxelKey>& keys) {
     const auto& offsets = neighbourhood_offsets();
     near.reserve(near.size() + keys.size() * 4);
-    for (VoxelKey k : keys)
-      for (VoxelKey off : offsets) near[k + off];  // inserted as 0 when absent
+    // The 27 slots of a key two keys ahead are prefetched, so that the cache misses of a large
+    // table overlap (the slots, not the values, depend on the order: the table ends the same).
+    constexpr std::size_t kAhead = 2;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (i + kAhead < keys.size())
+        for (VoxelKey off : offsets) near.prefetch(keys[i + kAhead] + off);
+      for (VoxelKey off : offsets) near[keys[i] + off];  // inserted as 0 when absent
+    }
   }
   // Bounds, voxel-weighted centroid and RMS radius in one pass over the voxels.
   void refresh() {
@@ -207,8 +213,20 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
     if (t == 0) {
       common = static_cast<double>(common_voxels(a, b.voxels));
     } else {
-      std::size_t n = 0;
-      a.for_each([&](VoxelKey key, const VoxelData&) { n += b.near.contains(key); });
+      // Each key's slot in b.near is prefetched kAhead keys before it is looked up (a ring of
+      // the keys seen), so that the cache misses of a large table overlap.
+      constexpr std::size_t kAhead = 8;
+      VoxelKey ring[kAhead];
+      std::size_t n = 0, seen = 0;
+      a.for_each([&](VoxelKey key, const VoxelData&) {
+        VoxelKey& slot = ring[seen % kAhead];
+        if (seen >= kAhead) n += b.near.contains(slot);
+        b.near.prefetch(key);
+        slot = key;
+        ++seen;
+      });
+      for (std::size_t i = seen > kAhead ? seen - kAhead : 0; i < seen; ++i)
+        n += b.near.contains(ring[i % kAhead]);
       common = static_cast<double>(n);
     }
     s.overlap = iou ? common / std::max(na, na + nb - common) : common / na;
@@ -267,11 +285,24 @@ AddResult ObjectMap::add(const Observation& obs) {
   std::vector<VoxelKey> new_keys;
   new_keys.reserve(obs_voxels.size());
   o.near.reserve(o.near.size() + obs_voxels.size());
-  obs_voxels.for_each([&](VoxelKey key, const VoxelData&) {
+  const auto count_hit = [&](VoxelKey key) {
     std::uint8_t& hits = o.near[key];
     if (hits == 0) new_keys.push_back(key);
     if (hits < 255) ++hits;
+  };
+  // In the voxels' order, each slot prefetched kAhead voxels before (as in score()).
+  constexpr std::size_t kAhead = 8;
+  VoxelKey ring[kAhead];
+  std::size_t seen = 0;
+  obs_voxels.for_each([&](VoxelKey key, const VoxelData&) {
+    VoxelKey& slot = ring[seen % kAhead];
+    if (seen >= kAhead) count_hit(slot);
+    o.near.prefetch(key);
+    slot = key;
+    ++seen;
   });
+  for (std::size_t i = seen > kAhead ? seen - kAhead : 0; i < seen; ++i)
+    count_hit(ring[i % kAhead]);
   o.voxels.merge(obs_voxels);
   o.dilate(new_keys);
   o.add_frame(obs.timestamp);
