@@ -7,17 +7,22 @@ groundtruth.txt), every map object is matched to a ground-truth object of its cl
 the tolerance max(2 cm, 10% of the object's largest dimension). Several position estimates from
 the object's PLY and the cameras that saw it are scored side by side:
 
-  position     objects.json's `position` (middle of the points' 5-95% box, objmap's estimate)
+  position     objects.json's `position` (objmap's estimate: middle of the points' 1-99% box
+               since session 6, 5-95% before)
   mean         the mean of the points (objects.json's `centroid`)
   box_xy_mean_z  the 5-95% box in x and y, the mean height
   front_half   the box, moved along the mean horizontal viewing direction so that its centre is
                half the object's width (across the view) behind its front
   circle       a circle fitted to the points in x-y (Kasa), the box height
+  box_q01      the middle of the points' 1-99% box
+  aabb         the middle of the points' full box (objects.json's `aabb`)
 
 It also prints, per class, how far the ground truth's volume centroid is from its box centre.
+With --gt box the estimates are scored against the ground truth's box centre (`obb.center`, what
+the real data's references are: fr3_cabinet's cuboid, the YCB-Video model origins) instead.
 Pure Python (no numpy):
 
-  python3 scripts/centroid_tolerance.py S1:R1 S2:R2 ...
+  python3 scripts/centroid_tolerance.py [--gt centroid|box] S1:R1 S2:R2 ...
 """
 import json
 import math
@@ -74,6 +79,9 @@ def estimates(points, cameras, position):
     mean = [sum(p[a] for p in points) / n for a in range(3)]
     box = [(percentile([p[a] for p in points], 0.05) + percentile([p[a] for p in points], 0.95)) / 2
            for a in range(3)]
+    box01 = [(percentile([p[a] for p in points], 0.01) + percentile([p[a] for p in points], 0.99)) /
+             2 for a in range(3)]
+    aabb = [(min(p[a] for p in points) + max(p[a] for p in points)) / 2 for a in range(3)]
     # Mean horizontal viewing direction from the cameras to the mean point.
     vx = vy = 0.0
     for c in cameras:
@@ -103,11 +111,17 @@ def estimates(points, cameras, position):
         "box_xy_mean_z": [box[0], box[1], mean[2]],
         "front_half": [box[0] + shift * vx, box[1] + shift * vy, box[2]],
         "circle": [cx2 / 2, cy2 / 2, box[2]],
+        "box_q01": box01,
+        "aabb": aabb,
     }
 
 
-def main(pairs):
+def main(pairs, reference="centroid"):
     beyond, total, offsets = {}, 0, {}
+
+    def truth(g):
+        return g["centroid"] if reference == "centroid" else g["obb"]["center"]
+
     for pair in pairs:
         scene, run = pair.split(":")
         gt = json.load(open(scene + "/objects_gt.json"))["objects"]
@@ -134,12 +148,13 @@ def main(pairs):
             cameras = [cams[round(ob["timestamp"], 4)] for ob in o["observations"]]
             total += 1
             for name, p in estimates(points, cameras, pos).items():
-                err = math.dist(p, g["centroid"])
+                err = math.dist(p, truth(g))
                 if err > tol:
                     beyond.setdefault(name, []).append(
                         "%s:%s %.1f/%.1f cm" % (scene, g["class"], 100 * err, 100 * tol))
-    print("objects matched: %d" % total)
-    for name in ("position", "mean", "box_xy_mean_z", "front_half", "circle"):
+    print("objects matched: %d; ground truth: %s" % (
+        total, "volume centroid" if reference == "centroid" else "box centre (obb.center)"))
+    for name in ("position", "mean", "box_xy_mean_z", "front_half", "circle", "box_q01", "aabb"):
         misses = beyond.get(name, [])
         print("%-14s beyond the tolerance: %d/%d" % (name, len(misses), total))
         for m in misses:
@@ -150,6 +165,11 @@ def main(pairs):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) < 2:
-        sys.exit("usage: centroid_tolerance.py SCENE:RUN [SCENE:RUN ...]")
-    main(sys.argv[1:])
+    args = sys.argv[1:]
+    reference = "centroid"
+    if len(args) >= 2 and args[0] == "--gt":
+        reference = args[1]
+        args = args[2:]
+    if reference not in ("centroid", "box") or not args:
+        sys.exit("usage: centroid_tolerance.py [--gt centroid|box] SCENE:RUN [SCENE:RUN ...]")
+    main(args, reference)

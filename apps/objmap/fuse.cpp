@@ -16,8 +16,11 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
   std::printf("keyframes   %zu of %zu frames (%zu with a pose; mode %s)\n",
               r.keyframes.keyframes.size(), r.frames, r.keyframes.frames_with_pose,
               r.keyframes.mode.c_str());
-  std::printf("instances   %zu (format %s; %zu masks from boxes, %zu without usable points)\n",
-              r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_empty);
+  std::printf(
+      "instances   %zu (format %s; %zu masks from boxes, %zu given masks refined (-%llu pixels), "
+      "%zu without usable points)\n",
+      r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_refined,
+      static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_empty);
   std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass)\n", r.objects.size(),
               r.objects_total, r.merges.size());
   std::printf("\n  %4s  %-16s %9s %9s %9s  %8s  %5s\n", "id", "class", "x", "y", "z", "points",

@@ -44,7 +44,32 @@ const SceneRun& default_run() {
   return run;
 }
 
-TEST(FuseSynthetic, EveryObjectFoundOnceNearItsCentroid) {
+// The position criterion: within max(2 cm, 10% of the object's largest dimension) of the
+// ground truth. The reference is the ground-truth object's box centre (objects_gt.json obb.center),
+// what the real data's references are (fr3_cabinet's cuboid, the YCB-Video model origins) and
+// what a surface sensor can observe; the volume centroid (objects_gt.json centroid) is not: a
+// chair's lies 12.6 cm from its box centre, inside the seat (docs/benchmarks.md).
+double position_tolerance(const GtObject& g) { return std::max(0.02, 0.1 * g.largest_dimension()); }
+
+TEST(FuseSynthetic, DefaultSceneEveryObjectFoundOnceAtItsBoxCentre) {
+  // `objmap synth` with its defaults (seed 1, orbit 20°/s: each object seen over 60°), default mask
+  // noise, ground-truth poses: the criterion as it stands.
+  const SceneRun r = make_run("default", {}, {});
+  ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  const auto gt = read_gt_objects(r.scene / "objects_gt.json");
+  const auto fused = read_fused_objects(r.out / "objects.json");
+  EXPECT_EQ(fused.size(), gt.size()) << r.fuse.out;  // count error 0
+  const auto matches = match_objects(gt, fused, 0.3, /*same_class=*/true);
+  EXPECT_EQ(matches.size(), gt.size()) << r.fuse.out;
+  for (const auto& [i, j] : matches) {
+    const double error = (gt[i].center - fused[j].position).norm();
+    EXPECT_LE(error, position_tolerance(gt[i]))
+        << gt[i].cls << " " << gt[i].id << " (fused " << fused[j].id << ")";
+  }
+}
+
+TEST(FuseSynthetic, EveryObjectFoundOnceNearItsBoxCentre) {
   const SceneRun& r = default_run();
   ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
@@ -53,18 +78,15 @@ TEST(FuseSynthetic, EveryObjectFoundOnceNearItsCentroid) {
   EXPECT_EQ(fused.size(), gt.size()) << r.fuse.out;
   const auto matches = match_objects(gt, fused, 0.3, /*same_class=*/true);
   EXPECT_EQ(matches.size(), gt.size()) << r.fuse.out;
-  // The criterion: within max(2 cm, 10% of the largest dimension). Measured over seeds 1,
-  // 2, 3, 5, 7 (docs/benchmarks.md) 55 of 60 objects meet it and the others miss by at most 2 mm,
-  // so this asserts what holds: all within 1.1x the tolerance, at most one object of 12 beyond 1x.
+  // 60°/s: 180° of every object seen. Measured over seeds 1, 2, 3, 5, 7 (docs/benchmarks.md): 59
+  // of 60 objects within the tolerance; the other is this scene's cup, 2.3 cm for 2.0. So: all
+  // within 1.2x, at most one of 12 beyond 1x.
   int beyond = 0;
   for (const auto& [i, j] : matches) {
-    // objmap's position (the middle of the points' 5-95% box), not the mean of the seen surface,
-    // which leans toward the side the camera saw; objects_gt centroids are volume centroids.
-    const double error = (gt[i].centroid - fused[j].position).norm();
-    const double tolerance = std::max(0.02, 0.1 * gt[i].largest_dimension());
-    EXPECT_LE(error, 1.1 * tolerance)
+    const double error = (gt[i].center - fused[j].position).norm();
+    EXPECT_LE(error, 1.2 * position_tolerance(gt[i]))
         << gt[i].cls << " " << gt[i].id << " (fused " << fused[j].id << ")";
-    beyond += error > tolerance;
+    beyond += error > position_tolerance(gt[i]);
   }
   EXPECT_LE(beyond, 1);
 }

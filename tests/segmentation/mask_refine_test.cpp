@@ -114,7 +114,8 @@ TEST(MaskRefine, BadInputNamesTheField) {
     refine_mask(mask, cv::Rect(10, 10, 5, 5), depth, camera(), options);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("MaskRefineOptions.rim_px"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("MaskRefineOptions.rim_px"), std::string::npos)
+        << e.what();
   }
   options = MaskRefineOptions{};
   options.min_part_share = 1.5;

@@ -236,40 +236,112 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
   return s;
 }
 
-AddResult ObjectMap::add(const Observation& obs) {
-  AddResult result;
-  if (obs.points_in_world.size() < static_cast<std::size_t>(options_.min_points)) return result;
-
-  // 1. The observation's voxel set and centroid at the map resolution.
-  VoxelMap obs_voxels(VoxelMapOptions{options_.voxel_m, 1});
-  obs_voxels.insert(obs.points_in_world);
+struct ObjectMap::Prepared {
+  VoxelMap voxels;
   Eigen::Vector3i lo, hi;
-  if (!obs_voxels.key_bounds(lo, hi)) return result;  // no finite point
-  const Vec3 obs_centroid = obs_voxels.centroid();
+  Vec3 centroid = Vec3::Zero();
+  explicit Prepared(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
+};
+
+bool ObjectMap::prepare(const Observation& obs, Prepared& out) const {
+  if (obs.points_in_world.size() < static_cast<std::size_t>(options_.min_points)) return false;
+  out.voxels.insert(obs.points_in_world);
+  if (!out.voxels.key_bounds(out.lo, out.hi)) return false;  // no finite point
+  out.centroid = out.voxels.centroid();
+  return true;
+}
+
+bool ObjectMap::candidate(const Observation& obs, const Prepared& prep, const Object& object,
+                          double threshold, Scores& s) const {
+  if (!object.alive) return false;
+  if (options_.one_observation_per_frame && object.has_frame(obs.timestamp)) return false;
+  if (options_.require_same_class && segmentation::canonical_class(voted_class(object)) !=
+                                         segmentation::canonical_class(obs.class_name))
+    return false;
+  const bool same_id = obs.track_id && object.track_ids.count(*obs.track_id) > 0;
+  // P <= w_id·P_ID + w_d + w_m: no need to score an object that cannot beat the threshold.
+  const double ceiling = options_.weight_id * (same_id ? 1.0 : 0.0) + options_.weight_distance +
+                         options_.weight_overlap;
+  if (ceiling <= threshold) return false;
+  s = score(same_id, prep.centroid, 0.0, prep.voxels, prep.lo, prep.hi, object, threshold);
+  return s.score_p > threshold;
+}
+
+AddResult ObjectMap::add(const Observation& obs) {
+  // 1. The observation's voxel set and centroid at the map resolution.
+  Prepared prep(options_.voxel_m);
+  if (!prepare(obs, prep)) return AddResult{};
 
   // 2. Eq 22 against every live object; the best P > K wins (ties: the lower id).
   Object* best = nullptr;
   Scores best_scores;
   for (auto& object : objects_) {
-    if (!object->alive) continue;
-    if (options_.one_observation_per_frame && object->has_frame(obs.timestamp)) continue;
-    if (options_.require_same_class && segmentation::canonical_class(voted_class(*object)) !=
-                                           segmentation::canonical_class(obs.class_name))
-      continue;
-    const bool same_id = obs.track_id && object->track_ids.count(*obs.track_id) > 0;
-    // P <= w_id·P_ID + w_d + w_m: no need to score an object that cannot beat the best so far.
-    const double ceiling = options_.weight_id * (same_id ? 1.0 : 0.0) + options_.weight_distance +
-                           options_.weight_overlap;
-    if (best && ceiling <= best_scores.score_p) continue;
-    const Scores s = score(same_id, obs_centroid, 0.0, obs_voxels, lo, hi, *object,
-                           best ? best_scores.score_p : options_.match_threshold);
-    if (s.score_p > options_.match_threshold && (!best || s.score_p > best_scores.score_p)) {
+    Scores s;
+    if (candidate(obs, prep, *object, best ? best_scores.score_p : options_.match_threshold, s)) {
       best = object.get();
       best_scores = s;
     }
   }
+  // 3. No match: a new object (fuse with nullptr).
+  return fuse(obs, prep, best, best_scores);
+}
 
-  // 3. No match: a new object.
+std::vector<AddResult> ObjectMap::add_frame(const std::vector<Observation>& observations) {
+  const std::size_t n = observations.size();
+  std::vector<AddResult> results(n);
+  std::vector<std::unique_ptr<Prepared>> prep(n);
+  std::vector<bool> open(n, false);  // prepared and not fused yet
+  for (std::size_t i = 0; i < n; ++i) {
+    prep[i] = std::make_unique<Prepared>(options_.voxel_m);
+    open[i] = prepare(observations[i], *prep[i]);
+  }
+  // Every candidate pair with P > K, scored once: a fused object takes no more observation of
+  // this frame (one_observation_per_frame) or is scored again.
+  struct Pair {
+    std::size_t obs;
+    int object;
+    Scores s;
+  };
+  std::vector<Pair> pairs;
+  const auto score_object = [&](std::size_t i, Object& object) {
+    Scores s;
+    if (candidate(observations[i], *prep[i], object, options_.match_threshold, s))
+      pairs.push_back({i, object.id, s});
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    if (open[i])
+      for (auto& object : objects_) score_object(i, *object);
+  while (true) {
+    const Pair* best = nullptr;
+    for (const Pair& p : pairs) {
+      if (!open[p.obs]) continue;
+      if (!best || p.s.score_p > best->s.score_p ||
+          (p.s.score_p == best->s.score_p &&
+           std::make_pair(p.obs, p.object) < std::make_pair(best->obs, best->object)))
+        best = &p;
+    }
+    if (!best) break;
+    const Pair chosen = *best;
+    Object& object = *objects_[static_cast<std::size_t>(chosen.object)];
+    results[chosen.obs] = fuse(observations[chosen.obs], *prep[chosen.obs], &object, chosen.s);
+    open[chosen.obs] = false;
+    // The object changed: its pairs are scored again (none left with one observation per frame).
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&](const Pair& p) { return p.object == chosen.object; }),
+                pairs.end());
+    for (std::size_t i = 0; i < n; ++i)
+      if (open[i]) score_object(i, object);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (open[i]) results[i] = fuse(observations[i], *prep[i], nullptr, Scores{});
+  return results;
+}
+
+AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* best,
+                          const Scores& best_scores) {
+  AddResult result;
+  const VoxelMap& obs_voxels = prep.voxels;
+  const Vec3& obs_centroid = prep.centroid;
   if (!best) {
     objects_.push_back(std::make_unique<Object>(options_.voxel_m));
     best = objects_.back().get();

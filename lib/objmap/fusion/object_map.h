@@ -129,10 +129,12 @@ struct ObjectRecord {
   std::map<std::string, ClassVote> class_histogram;
   double mean_score = 0.0;       // mean detector score of its observations
   Vec3 centroid = Vec3::Zero();  // mean of the filtered points: the paper's position
-  // Centre of the box spanned by the 5th and 95th percentiles of the filtered points along each
-  // world axis: the estimate of the object's (solid) centre. The point mean is biased toward the
-  // seen side (only the surface facing the camera is fused); the extent is not, as long as the
-  // views cover the object's outline; the percentiles ignore the last stray points.
+  // Centre of the box spanned by the 1st and 99th percentiles of the filtered points along each
+  // world axis: the estimate of the centre of the object's box. The point mean is biased toward
+  // the seen side (only the surface facing the camera is fused) and toward the parts with most
+  // surface (a chair's seat and back, not its legs); the extent is not, as long as the views cover
+  // the object's outline; the percentiles ignore the last stray points. (5th/95th until session 6:
+  // thin parts such as chair legs fell below the 5th percentile; docs/benchmarks.md.)
   Vec3 position = Vec3::Zero();
   Aabb aabb;                        // of the filtered points
   Obb obb;                          // PCA box of the filtered points
@@ -150,7 +152,7 @@ struct ObjectRecord {
 };
 
 struct RecordOptions {
-  double position_percentile = 0.05;  // ObjectRecord::position: centre of [q, 1 − q] per axis
+  double position_percentile = 0.01;  // ObjectRecord::position: centre of [q, 1 − q] per axis
   bool confirmed_only = true;         // leave out objects with < min_observations
   bool outlier_filter = true;         // apply eq 18 to each object's voxel cloud
   // Before eq 18: keep only voxels that were in at least max(1, this × observations) of the
@@ -181,6 +183,14 @@ class ObjectMap {
   // result depends on the order of add() calls, never on anything else.
   AddResult add(const Observation& observation);
 
+  // Associates the observations of one keyframe together (all with the same timestamp): the
+  // (observation, object) pair with the highest P > K is fused first, then the best among the
+  // rest, and so on (with one_observation_per_frame an object takes one observation of the frame),
+  // so that an observation's object does not depend on which instance the segmentation listed
+  // first. Ties: the earlier observation, then the lower id. The observations that match nothing
+  // start objects, in their order. Results in the order of `observations`.
+  std::vector<AddResult> add_frame(const std::vector<Observation>& observations);
+
   // The final merge pass (ID-switch repair): repeatedly joins the pair of objects with the highest
   // P > merge_threshold (P_ID = the two share a track id; D and M between the two objects), the
   // higher id into the lower. Returns the merges made. Calling it again finds nothing new.
@@ -210,6 +220,15 @@ class ObjectMap {
                const Eigen::Vector3i& a_lo, const Eigen::Vector3i& a_hi, const Object& b,
                double threshold) const;
   static std::string voted_class(const Object& object);
+  // An observation's voxel set at the map resolution, its bounds and centroid (add() step 1).
+  struct Prepared;
+  bool prepare(const Observation& obs, Prepared& out) const;
+  // May `object` take `obs` (alive, class, one per frame), and with which scores; false when P <=
+  // `threshold` or the object is not a candidate.
+  bool candidate(const Observation& obs, const Prepared& prep, const Object& object,
+                 double threshold, Scores& s) const;
+  // add() step 4: fuses the observation into `target` (nullptr: a new object).
+  AddResult fuse(const Observation& obs, const Prepared& prep, Object* target, const Scores& s);
 
   ObjectMapOptions options_;
   std::vector<std::unique_ptr<Object>>

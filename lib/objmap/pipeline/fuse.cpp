@@ -116,6 +116,14 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "box masks: remove the supporting table/floor plane", &b.remove_support_plane},
       {"box_mask.support_inlier_m", "--box-support-inlier", "box masks: plane inlier distance, m",
        &b.support_inlier_m},
+      {"mask_refine.enabled", "--mask-refine",
+       "given masks: remove the parts across a depth edge from the rest (spill onto the "
+       "background); false: masks as given (the paper)",
+       &o.mask_refine.enabled},
+      {"mask_refine.min_part_share", "--mask-min-part",
+       "given masks: a smooth-depth part within 3 px of the outline (a rim) with fewer pixels "
+       "than this share of the largest part is removed",
+       &o.mask_refine.min_part_share},
   };
 }
 
@@ -134,6 +142,7 @@ void FuseOptions::check() const {
   require(std::isfinite(min_instance_score) && min_instance_score >= 0 && min_instance_score <= 1,
           "segmentation.min_score", "must be in [0, 1]");
   box_mask.check();
+  mask_refine.check();
   objects.check();
   fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
@@ -290,7 +299,8 @@ class FrameMapPool {
 struct FrameWork {
   std::vector<fusion::Observation> observations;
   std::uint64_t dense_points = 0;
-  std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0;
+  std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
+  std::uint64_t mask_pixels_removed = 0;
 };
 
 // Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so that
@@ -332,7 +342,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
       ++work.skipped_score;
       continue;
     }
-    segmentation::Mask box_mask;
+    segmentation::Mask box_mask, refined;
     const segmentation::Mask* mask = instance.mask ? &*instance.mask : nullptr;
     cv::Rect bounds;
     if (!mask) {
@@ -347,6 +357,20 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
       bounds = made.bounds;  // what mask_bounds() finds, known without a scan of the image
     } else {
       bounds = geometry::mask_bounds(*mask);
+      if (options.mask_refine.enabled) {
+        // The mask's parts across a depth edge from the rest go (mask_refine.h).
+        segmentation::MaskRefineOptions refine = options.mask_refine;
+        refine.min_depth_m = options.depth.min_depth_m;
+        refine.max_depth_m = options.depth.max_depth_m;
+        auto made = segmentation::refine_mask(*mask, bounds, depth, camera, refine);
+        if (made.removed_pixels > 0) {
+          ++work.refined;
+          work.mask_pixels_removed += made.removed_pixels;
+          refined = std::move(made.mask);
+          mask = &refined;
+          bounds = made.bounds;
+        }
+      }
     }
     const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, mask, bounds);
     if (instance_frame.roi.empty()) {
@@ -650,9 +674,12 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       result.instances_seen += work.instances;
       result.instances_skipped_score += work.skipped_score;
       result.instances_from_box += work.from_box;
+      result.instances_refined += work.refined;
+      result.mask_pixels_removed += work.mask_pixels_removed;
       result.instances_empty += work.empty;
-      for (const auto& obs : work.observations) {
-        if (objects.add(obs).object_id >= 0)
+      // The keyframe's observations are associated together, best match first.
+      for (const auto& added : objects.add_frame(work.observations)) {
+        if (added.object_id >= 0)
           ++result.observations;
         else
           ++result.instances_empty;
@@ -783,6 +810,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
                    {"instances", result.instances_seen},
                    {"instances_below_min_score", result.instances_skipped_score},
                    {"instances_mask_from_box", result.instances_from_box},
+                   {"instances_mask_refined", result.instances_refined},
+                   {"mask_pixels_removed", result.mask_pixels_removed},
                    {"instances_without_points", result.instances_empty},
                    {"observations", result.observations},
                    {"objects_before_confirmation", result.objects_total},

@@ -11,6 +11,7 @@
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/keyframes.h"
 #include "objmap/segmentation/box_mask.h"
+#include "objmap/segmentation/mask_refine.h"
 
 // `objmap fuse`: the object-oriented semantic map (paper §3.2–3.3). Keyframes with their poses are
 // back-projected into a dense voxel map; each instance of each keyframe becomes an observation that
@@ -38,6 +39,7 @@ struct FuseOptions {
   bool dense_map = true;  // false: objects only, no map_dense.ply / map_semantic.ply (faster)
   double min_instance_score = 0.0;              // instances below this detector score are ignored
   segmentation::BoxMaskOptions box_mask;        // masks for instances that have only a box
+  segmentation::MaskRefineOptions mask_refine;  // given masks: parts across depth edges removed
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
   double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
   fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
@@ -60,7 +62,9 @@ struct FuseResult {
   KeyframeSelection keyframes;
   std::size_t instances_seen = 0;  // instances on keyframes
   std::size_t instances_skipped_score = 0;
-  std::size_t instances_from_box = 0;  // masks made from boxes
+  std::size_t instances_from_box = 0;     // masks made from boxes
+  std::size_t instances_refined = 0;      // given masks that lost pixels in refine_mask
+  std::uint64_t mask_pixels_removed = 0;  // pixels those masks lost
   std::size_t instances_empty = 0;  // no usable pixels (box mask empty, no depth, too few points)
   std::size_t observations = 0;     // added to the object map
   std::size_t objects_total = 0;    // objects before the confirmation rule

@@ -41,10 +41,10 @@ void MaskRefineOptions::check() const {
           "must be finite and >= 0, got " + num(min_depth_m));
   require(std::isfinite(max_depth_m) && max_depth_m > min_depth_m, "MaskRefineOptions.max_depth_m",
           "must be finite and > min_depth_m, got " + num(max_depth_m));
-  require(std::isfinite(smooth_max_slope_deg) && smooth_max_slope_deg >= 0 &&
-              smooth_max_slope_deg < 90,
-          "MaskRefineOptions.smooth_max_slope_deg",
-          "must be in [0, 90) degrees, got " + num(smooth_max_slope_deg));
+  require(
+      std::isfinite(smooth_max_slope_deg) && smooth_max_slope_deg >= 0 && smooth_max_slope_deg < 90,
+      "MaskRefineOptions.smooth_max_slope_deg",
+      "must be in [0, 90) degrees, got " + num(smooth_max_slope_deg));
   require(std::isfinite(smooth_noise_m_per_m2) && smooth_noise_m_per_m2 >= 0,
           "MaskRefineOptions.smooth_noise_m_per_m2",
           "must be finite and >= 0, got " + num(smooth_noise_m_per_m2));
@@ -58,9 +58,10 @@ MaskRefineResult refine_mask(const Mask& mask, const cv::Rect& bounds, const cv:
                              const Camera& camera, const MaskRefineOptions& options) {
   options.check();
   const int width = mask.width, height = mask.height;
-  require(width > 0 && height > 0 &&
-              mask.data.size() == static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
-          "refine_mask: mask", "data size does not match its width x height");
+  require(
+      width > 0 && height > 0 &&
+          mask.data.size() == static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
+      "refine_mask: mask", "data size does not match its width x height");
   require(depth.type() == CV_16UC1 && depth.cols == width && depth.rows == height,
           "refine_mask: depth",
           "expected a 16-bit single-channel image of the mask's size " + std::to_string(width) +
@@ -98,9 +99,8 @@ MaskRefineResult refine_mask(const Mask& mask, const cv::Rect& bounds, const cv:
 
   // 2. Parts of smooth depth: 8-neighbours join when their depths differ by at most the step of
   //    the nearer one (a symmetric rule, so the parts do not depend on the visiting order).
-  const float slope_per_m =
-      static_cast<float>(std::tan(options.smooth_max_slope_deg * kPi / 180) * 2 /
-                         (camera.fx + camera.fy));
+  const float slope_per_m = static_cast<float>(std::tan(options.smooth_max_slope_deg * kPi / 180) *
+                                               2 / (camera.fx + camera.fy));
   const float noise_per_m2 = static_cast<float>(options.smooth_noise_m_per_m2);
   static constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
   static constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
