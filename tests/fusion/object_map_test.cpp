@@ -47,6 +47,48 @@ RecordOptions no_outlier_filter() {
   return r;
 }
 
+// add_frame() fuses the best (observation, object) pair of a keyframe first; add() takes the
+// observations in their order. Object 0: a box seen with track 1. Next keyframe: first the box 1 cm
+// over, also with track 1 (P = 0.3 + 0.2 · 0.95 + 0.5 = 0.99), then the box itself (P = 1).
+TEST(ObjectMap, AddFrameFusesTheBestMatchOfAKeyframeFirst) {
+  const Vec3 a(0.505, 0.205, 1.005);
+  const auto first_frame = [&](ObjectMap& map) { map.add(obs(0, 1, "book", 0.9, box(a, 5))); };
+  const std::vector<Observation> frame{obs(1, 1, "book", 0.9, box(a + Vec3(0.01, 0, 0), 5)),
+                                       obs(1, 1, "book", 0.9, box(a, 5))};
+
+  ObjectMap in_order;
+  first_frame(in_order);
+  const AddResult r0 = in_order.add(frame[0]);
+  const AddResult r1 = in_order.add(frame[1]);
+  EXPECT_EQ(r0.object_id, 0);  // the offset box takes the object: listed first
+  EXPECT_NEAR(r0.score_p, 0.99, 1e-9);
+  EXPECT_TRUE(r1.created);  // and the box itself starts a second one
+
+  ObjectMap best_first;
+  first_frame(best_first);
+  const std::vector<AddResult> r = best_first.add_frame(frame);
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[1].object_id, 0);          // the box itself (P = 1) goes first
+  EXPECT_NEAR(r[1].score_p, 1.0, 1e-6);  // centroids to float precision
+  EXPECT_FALSE(r[1].created);
+  EXPECT_TRUE(r[0].created);  // one observation per keyframe: the other starts an object
+  EXPECT_EQ(r[0].object_id, 1);
+  EXPECT_EQ(best_first.size(), 2u);
+
+  // A keyframe of one observation: add_frame() is add().
+  ObjectMap single_a, single_b;
+  first_frame(single_a);
+  first_frame(single_b);
+  const AddResult x = single_a.add(frame[0]);
+  const std::vector<AddResult> y = single_b.add_frame({frame[0]});
+  ASSERT_EQ(y.size(), 1u);
+  EXPECT_EQ(x.object_id, y[0].object_id);
+  EXPECT_EQ(x.score_p, y[0].score_p);
+  // Too few points: ignored, as by add().
+  ObjectMap small;
+  EXPECT_EQ(small.add_frame({obs(0, 1, "book", 0.9, PointCloud{})})[0].object_id, -1);
+}
+
 TEST(ObjectMap, TwoSeparateBoxesGiveTwoConfirmedObjectsWithExactCentroids) {
   ObjectMap map;
   const Vec3 a(0.505, 0.205, 1.005), b(1.505, -0.195, 1.205);
