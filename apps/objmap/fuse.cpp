@@ -18,9 +18,10 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
               r.keyframes.mode.c_str());
   std::printf(
       "instances   %zu (format %s; %zu masks from boxes, %zu given masks refined (-%llu pixels), "
-      "%zu without usable points)\n",
+      "%zu duplicates dropped, %zu without usable points)\n",
       r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_refined,
-      static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_empty);
+      static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_duplicate,
+      r.instances_empty);
   std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass)\n", r.objects.size(),
               r.objects_total, r.merges.size());
   std::printf("\n  %4s  %-16s %9s %9s %9s  %8s  %5s\n", "id", "class", "x", "y", "z", "points",

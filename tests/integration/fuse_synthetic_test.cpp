@@ -1,6 +1,8 @@
 // objmap synth -> objmap fuse on synthetic scenes whose objects are known exactly.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "fuse_helpers.h"
 #include "objmap/io/ply.h"
 #include "support/schema_check.h"
@@ -175,6 +177,67 @@ TEST(FuseSynthetic, WithoutTheDenseMapTheObjectsAreTheSame) {
       << e.out;
   EXPECT_NE(e.out.find("  reduction                                   n/a"), std::string::npos)
       << e.out;
+}
+
+// Every instance of the default scene listed twice, the copy with a lower score and another track
+// id (a detector that boxes each object twice): the copies are dropped as duplicates and the
+// objects are those of the original run, byte for byte. Without the rule (--duplicate-overlap 1)
+// the copies keep objects of their own.
+TEST(FuseSynthetic, InstancesListedTwiceAreOneObject) {
+  const SceneRun r = make_run("default", {}, {});
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  TempDir tmp;
+  const fs::path seg = tmp.path() / "segmentation";
+  fs::create_directories(seg);
+  std::size_t copies = 0;
+  for (const auto& e : fs::directory_iterator(r.scene / "segmentation")) {
+    nlohmann::json doc = read_json(e.path());
+    nlohmann::json twice = nlohmann::json::array();
+    for (const auto& instance : doc["instances"]) {
+      twice.push_back(instance);
+      nlohmann::json copy = instance;
+      copy["score"] = instance["score"].get<double>() * 0.9;
+      if (instance.contains("track_id") && instance["track_id"].is_number_integer())
+        copy["track_id"] = instance["track_id"].get<int>() + 1000;
+      twice.push_back(copy);
+      ++copies;
+    }
+    doc["instances"] = twice;
+    std::ofstream(seg / e.path().filename()) << doc.dump();
+  }
+  ASSERT_GT(copies, 100u);
+  const auto fuse = [&](const fs::path& out, const std::vector<std::string>& extra) {
+    std::vector<std::string> args{"fuse",
+                                  "--dataset",
+                                  r.scene.string(),
+                                  "--trajectory",
+                                  (r.scene / "groundtruth.txt").string(),
+                                  "--segmentation",
+                                  seg.string(),
+                                  "--out",
+                                  out.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_objmap(args);
+  };
+  const fs::path out = tmp.path() / "run";
+  const auto f = fuse(out, {});
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  const auto run = read_json(out / "run.json");
+  const auto before = read_json(r.out / "run.json");
+  // Every copy is dropped (the copies of instances that give no observation too).
+  EXPECT_EQ(run["counts"]["instances_duplicate"].get<std::size_t>(),
+            before["counts"]["instances"].get<std::size_t>());
+  EXPECT_EQ(read_text(out / "objects.json"), read_text(r.out / "objects.json"));
+  for (const auto& e : fs::directory_iterator(r.out / "objects"))
+    EXPECT_EQ(read_text(e.path()), read_text(out / "objects" / e.path().filename()))
+        << e.path().filename();
+
+  const fs::path all = tmp.path() / "all";
+  const auto g = fuse(all, {"--duplicate-overlap", "1"});
+  ASSERT_EQ(g.exit_code, 0) << g.err;
+  EXPECT_EQ(read_json(all / "run.json")["counts"]["instances_duplicate"].get<std::size_t>(), 0u);
+  EXPECT_GT(read_fused_objects(all / "objects.json").size(),
+            read_fused_objects(r.out / "objects.json").size());
 }
 
 TEST(FuseSynthetic, ClassConfusionAndIdSwitchesStillGiveRightClasses) {

@@ -23,6 +23,7 @@
 #include "objmap/io/ply.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/io/tum_dataset.h"
+#include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/read.h"
 #include "objmap/version.h"
 
@@ -65,6 +66,11 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        &o.default_class},
       {"segmentation.min_score", "--min-score", "instances below this detector score are ignored",
        &o.min_instance_score},
+      {"segmentation.duplicate_overlap", "--duplicate-overlap",
+       "two instances of one class in a keyframe whose smaller box and smaller mask lie at least "
+       "this much inside the other's are one object boxed twice: the lower score is dropped (1: "
+       "keep all)",
+       &o.duplicate_overlap},
       {"objects.voxel_m", "--object-voxel", "object voxel sets and overlap M (eq 21), m",
        &m.voxel_m},
       {"objects.distance_gate_m", "--distance-gate", "centroid gate D (eq 17), m",
@@ -141,6 +147,8 @@ void FuseOptions::check() const {
   require(dense_stride >= 1 && dense_stride <= 64, "map.dense_stride", "must be in [1, 64]");
   require(std::isfinite(min_instance_score) && min_instance_score >= 0 && min_instance_score <= 1,
           "segmentation.min_score", "must be in [0, 1]");
+  require(std::isfinite(duplicate_overlap) && duplicate_overlap > 0 && duplicate_overlap <= 1,
+          "segmentation.duplicate_overlap", "must be in (0, 1]");
   box_mask.check();
   mask_refine.check();
   objects.check();
@@ -300,8 +308,19 @@ struct FrameWork {
   std::vector<fusion::Observation> observations;
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
+  std::size_t duplicates = 0;
   std::uint64_t mask_pixels_removed = 0;
 };
+
+// Non-zero pixels of `mask` inside `bounds`.
+std::size_t mask_pixels(const segmentation::Mask& mask, const cv::Rect& bounds) {
+  std::size_t n = 0;
+  for (int v = bounds.y; v < bounds.y + bounds.height; ++v) {
+    const std::uint8_t* row = mask.data.data() + static_cast<std::size_t>(v) * mask.width;
+    for (int u = bounds.x; u < bounds.x + bounds.width; ++u) n += row[u] != 0;
+  }
+  return n;
+}
 
 // Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so that
 // voxels are merged, not pixels) merged into `dense` in keyframe order, and each instance's pixels
@@ -336,43 +355,116 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
 
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
   if (!seg) return work;
+  // 3a. Each instance's mask and its bounds.
+  struct Made {
+    const segmentation::Instance* instance = nullptr;
+    segmentation::Mask owned;  // a mask made from the box, or a refined given mask
+    const segmentation::Mask* mask = nullptr;
+    cv::Rect bounds;
+    std::size_t pixels = 0;
+  };
+  std::vector<Made> made;
+  made.reserve(seg->instances.size());
   for (const auto& instance : seg->instances) {
     ++work.instances;
     if (instance.score < options.min_instance_score) {
       ++work.skipped_score;
       continue;
     }
-    segmentation::Mask box_mask, refined;
-    const segmentation::Mask* mask = instance.mask ? &*instance.mask : nullptr;
-    cv::Rect bounds;
-    if (!mask) {
+    Made m;
+    m.instance = &instance;
+    if (!instance.mask) {
       ++work.from_box;
-      auto made = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
-      if (made.status != segmentation::BoxMaskStatus::kOk) {
+      auto box = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
+      if (box.status != segmentation::BoxMaskStatus::kOk) {
         ++work.empty;
         continue;
       }
-      box_mask = std::move(made.mask);
-      mask = &box_mask;
-      bounds = made.bounds;  // what mask_bounds() finds, known without a scan of the image
+      m.owned = std::move(box.mask);
+      m.mask = &m.owned;
+      m.bounds = box.bounds;  // what mask_bounds() finds, known without a scan of the image
     } else {
-      bounds = geometry::mask_bounds(*mask);
+      m.mask = &*instance.mask;
+      m.bounds = geometry::mask_bounds(*m.mask);
       if (options.mask_refine.enabled) {
         // The mask's parts across a depth edge from the rest go (mask_refine.h).
         segmentation::MaskRefineOptions refine = options.mask_refine;
         refine.min_depth_m = options.depth.min_depth_m;
         refine.max_depth_m = options.depth.max_depth_m;
-        auto made = segmentation::refine_mask(*mask, bounds, depth, camera, refine);
-        if (made.removed_pixels > 0) {
+        auto refined = segmentation::refine_mask(*m.mask, m.bounds, depth, camera, refine);
+        if (refined.removed_pixels > 0) {
           ++work.refined;
-          work.mask_pixels_removed += made.removed_pixels;
-          refined = std::move(made.mask);
-          mask = &refined;
-          bounds = made.bounds;
+          work.mask_pixels_removed += refined.removed_pixels;
+          m.owned = std::move(refined.mask);
+          m.mask = &m.owned;
+          m.bounds = refined.bounds;
         }
       }
     }
-    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, mask, bounds);
+    if (m.bounds.empty()) {
+      ++work.empty;
+      continue;
+    }
+    m.pixels = mask_pixels(*m.mask, m.bounds);
+    const bool owned = m.mask == &m.owned;
+    made.push_back(std::move(m));  // no reallocation (reserved): only `owned` moves
+    if (owned) made.back().mask = &made.back().owned;
+  }
+
+  // 3b. Duplicates: a detector that boxes one object twice (the keyboard, and the keyboard with
+  //     the desk around it) gives two instances of one class; one object takes one instance of a
+  //     keyframe, so the second would keep an object of its own. Two instances of one class are
+  //     one object when the smaller box lies mostly inside the larger and the smaller mask mostly
+  //     inside the larger mask (both shares >= duplicate_overlap); the higher score (then the one
+  //     listed first) is kept.
+  std::vector<bool> keep(made.size(), true);
+  const auto shared_pixels = [](const Made& a, const Made& b) {
+    const cv::Rect both = a.bounds & b.bounds;
+    std::size_t n = 0;
+    for (int v = both.y; v < both.y + both.height; ++v) {
+      const std::size_t row = static_cast<std::size_t>(v) * a.mask->width;
+      for (int u = both.x; u < both.x + both.width; ++u)
+        n += a.mask->data[row + u] != 0 && b.mask->data[row + u] != 0;
+    }
+    return n;
+  };
+  const auto box_share = [](const segmentation::Box& a, const segmentation::Box& b) {
+    const double w = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
+    const double h = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
+    const double smaller = std::min(a.w * a.h, b.w * b.h);
+    return w > 0 && h > 0 && smaller > 0 ? w * h / smaller : 0.0;
+  };
+  if (options.duplicate_overlap < 1.0) {
+    std::vector<std::size_t> order(made.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return made[a].instance->score > made[b].instance->score;
+    });
+    std::vector<std::size_t> kept;
+    for (std::size_t i : order) {
+      const std::string cls = segmentation::canonical_class(made[i].instance->class_name);
+      for (std::size_t k : kept) {
+        if (segmentation::canonical_class(made[k].instance->class_name) != cls) continue;
+        if (box_share(made[i].instance->bbox, made[k].instance->bbox) < options.duplicate_overlap)
+          continue;
+        const std::size_t smaller = std::min(made[i].pixels, made[k].pixels);
+        if (smaller > 0 && static_cast<double>(shared_pixels(made[i], made[k])) >=
+                               options.duplicate_overlap * static_cast<double>(smaller)) {
+          keep[i] = false;
+          ++work.duplicates;
+          break;
+        }
+      }
+      if (keep[i]) kept.push_back(i);
+    }
+  }
+
+  // 3c. The kept instances' pixels in the world, in the segmentation's order.
+  for (std::size_t i = 0; i < made.size(); ++i) {
+    if (!keep[i]) continue;
+    const Made& m = made[i];
+    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, m.mask,
+                                              m.bounds);
     if (instance_frame.roi.empty()) {
       ++work.empty;
       continue;
@@ -384,9 +476,9 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     }
     fusion::Observation obs;
     obs.timestamp = keyframe.timestamp;
-    obs.track_id = instance.track_id;
-    obs.class_name = instance.class_name;
-    obs.score = instance.score;
+    obs.track_id = m.instance->track_id;
+    obs.class_name = m.instance->class_name;
+    obs.score = m.instance->score;
     obs.points_in_world = std::move(points.points_in_world);
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;
@@ -675,6 +767,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       result.instances_skipped_score += work.skipped_score;
       result.instances_from_box += work.from_box;
       result.instances_refined += work.refined;
+      result.instances_duplicate += work.duplicates;
       result.mask_pixels_removed += work.mask_pixels_removed;
       result.instances_empty += work.empty;
       // The keyframe's observations are associated together, best match first.
@@ -811,6 +904,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
                    {"instances_below_min_score", result.instances_skipped_score},
                    {"instances_mask_from_box", result.instances_from_box},
                    {"instances_mask_refined", result.instances_refined},
+                   {"instances_duplicate", result.instances_duplicate},
                    {"mask_pixels_removed", result.mask_pixels_removed},
                    {"instances_without_points", result.instances_empty},
                    {"observations", result.observations},

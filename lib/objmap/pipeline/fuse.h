@@ -37,7 +37,8 @@ struct FuseOptions {
   double map_voxel_m = 0.01;           // dense/semantic map voxel (1 cm)
   int dense_stride = 1;                // back-project every n-th pixel into the dense map
   bool dense_map = true;  // false: objects only, no map_dense.ply / map_semantic.ply (faster)
-  double min_instance_score = 0.0;              // instances below this detector score are ignored
+  double min_instance_score = 0.0;  // instances below this detector score are ignored
+  double duplicate_overlap = 0.5;   // same class, box and mask this much inside another: one kept
   segmentation::BoxMaskOptions box_mask;        // masks for instances that have only a box
   segmentation::MaskRefineOptions mask_refine;  // given masks: parts across depth edges removed
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
@@ -64,6 +65,7 @@ struct FuseResult {
   std::size_t instances_skipped_score = 0;
   std::size_t instances_from_box = 0;     // masks made from boxes
   std::size_t instances_refined = 0;      // given masks that lost pixels in refine_mask
+  std::size_t instances_duplicate = 0;    // dropped as a second instance of an object (keyframe)
   std::uint64_t mask_pixels_removed = 0;  // pixels those masks lost
   std::size_t instances_empty = 0;  // no usable pixels (box mask empty, no depth, too few points)
   std::size_t observations = 0;     // added to the object map
