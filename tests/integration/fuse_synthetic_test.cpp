@@ -16,25 +16,34 @@ struct SceneRun {
   RunResult synth, fuse;
 };
 
+// `objmap fuse` of a synthetic scene with its ground-truth trajectory: `segmentation` (default: the
+// scene's own) into `out`, then `extra`.
+std::vector<std::string> fuse_args(const fs::path& scene, const std::string& out,
+                                   const std::vector<std::string>& extra = {},
+                                   const fs::path& segmentation = {}) {
+  std::vector<std::string> args{
+      "fuse",
+      "--dataset",
+      scene.string(),
+      "--trajectory",
+      (scene / "groundtruth.txt").string(),
+      "--segmentation",
+      (segmentation.empty() ? scene / "segmentation" : segmentation).string(),
+      "--out",
+      out};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
 SceneRun make_run(const std::string& key, const std::vector<std::string>& synth_args,
-                  const std::vector<std::string>& fuse_args) {
+                  const std::vector<std::string>& extra_fuse_args) {
   SceneRun r;
   std::vector<std::string> s{"synth", "--out", "{OUT}"};
   s.insert(s.end(), synth_args.begin(), synth_args.end());
   r.scene = cached_output(key + "-scene", s, &r.synth);
   if (!fs::exists(r.scene)) return r;
   r.synth.exit_code = 0;
-  std::vector<std::string> f{"fuse",
-                             "--dataset",
-                             r.scene.string(),
-                             "--trajectory",
-                             (r.scene / "groundtruth.txt").string(),
-                             "--segmentation",
-                             (r.scene / "segmentation").string(),
-                             "--out",
-                             "{OUT}"};
-  f.insert(f.end(), fuse_args.begin(), fuse_args.end());
-  r.out = cached_output(key + "-fuse", f, &r.fuse);
+  r.out = cached_output(key + "-fuse", fuse_args(r.scene, "{OUT}", extra_fuse_args), &r.fuse);
   if (fs::exists(r.out)) r.fuse.exit_code = 0;
   return r;
 }
@@ -120,10 +129,8 @@ TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
   const SceneRun& r = default_run();
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   TempDir other;
-  const auto f = run_objmap({"fuse", "--dataset", r.scene.string(), "--trajectory",
-                             (r.scene / "groundtruth.txt").string(), "--segmentation",
-                             (r.scene / "segmentation").string(), "--out",
-                             (other.path() / "run").string(), "--threads", "1"});
+  const auto f =
+      run_objmap(fuse_args(r.scene, (other.path() / "run").string(), {"--threads", "1"}));
   ASSERT_EQ(f.exit_code, 0) << f.err;
   for (const auto& e : fs::recursive_directory_iterator(r.out)) {
     if (!e.is_regular_file()) continue;
@@ -147,10 +154,7 @@ TEST(FuseSynthetic, WithoutTheDenseMapTheObjectsAreTheSame) {
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
   TempDir other;
   const fs::path out = other.path() / "run";
-  const auto f = run_objmap({"fuse", "--dataset", r.scene.string(), "--trajectory",
-                             (r.scene / "groundtruth.txt").string(), "--segmentation",
-                             (r.scene / "segmentation").string(), "--out", out.string(),
-                             "--dense-map", "false"});
+  const auto f = run_objmap(fuse_args(r.scene, out.string(), {"--dense-map", "false"}));
   ASSERT_EQ(f.exit_code, 0) << f.err;
   EXPECT_NE(f.out.find("dense: none (--dense-map false)"), std::string::npos) << f.out;
   EXPECT_FALSE(fs::exists(out / "map_dense.ply"));
@@ -207,17 +211,7 @@ TEST(FuseSynthetic, InstancesListedTwiceAreOneObject) {
   }
   ASSERT_GT(copies, 100u);
   const auto fuse = [&](const fs::path& out, const std::vector<std::string>& extra) {
-    std::vector<std::string> args{"fuse",
-                                  "--dataset",
-                                  r.scene.string(),
-                                  "--trajectory",
-                                  (r.scene / "groundtruth.txt").string(),
-                                  "--segmentation",
-                                  seg.string(),
-                                  "--out",
-                                  out.string()};
-    args.insert(args.end(), extra.begin(), extra.end());
-    return run_objmap(args);
+    return run_objmap(fuse_args(r.scene, out.string(), extra, seg));
   };
   const fs::path out = tmp.path() / "run";
   const auto f = fuse(out, {});

@@ -356,12 +356,14 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
   if (!seg) return work;
   // 3a. Each instance's mask and its bounds.
+  constexpr std::size_t kUnknown = ~std::size_t{0};
   struct Made {
     const segmentation::Instance* instance = nullptr;
     segmentation::Mask owned;  // a mask made from the box, or a refined given mask
     const segmentation::Mask* mask = nullptr;
     cv::Rect bounds;
-    std::size_t pixels = 0;
+    std::string cls;                // canonical class (for the duplicate rule)
+    std::size_t pixels = kUnknown;  // of the mask, counted when the duplicate rule needs it
   };
   std::vector<Made> made;
   made.reserve(seg->instances.size());
@@ -383,6 +385,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
       m.owned = std::move(box.mask);
       m.mask = &m.owned;
       m.bounds = box.bounds;  // what mask_bounds() finds, known without a scan of the image
+      m.pixels = box.pixels;
     } else {
       m.mask = &*instance.mask;
       m.bounds = geometry::mask_bounds(*m.mask);
@@ -405,7 +408,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
       ++work.empty;
       continue;
     }
-    m.pixels = mask_pixels(*m.mask, m.bounds);
+    m.cls = segmentation::canonical_class(instance.class_name);
     const bool owned = m.mask == &m.owned;
     made.push_back(std::move(m));  // no reallocation (reserved): only `owned` moves
     if (owned) made.back().mask = &made.back().owned;
@@ -441,13 +444,16 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
       return made[a].instance->score > made[b].instance->score;
     });
     std::vector<std::size_t> kept;
+    const auto pixels = [&](Made& m) {
+      if (m.pixels == kUnknown) m.pixels = mask_pixels(*m.mask, m.bounds);
+      return m.pixels;
+    };
     for (std::size_t i : order) {
-      const std::string cls = segmentation::canonical_class(made[i].instance->class_name);
       for (std::size_t k : kept) {
-        if (segmentation::canonical_class(made[k].instance->class_name) != cls) continue;
+        if (made[k].cls != made[i].cls) continue;
         if (box_share(made[i].instance->bbox, made[k].instance->bbox) < options.duplicate_overlap)
           continue;
-        const std::size_t smaller = std::min(made[i].pixels, made[k].pixels);
+        const std::size_t smaller = std::min(pixels(made[i]), pixels(made[k]));
         if (smaller > 0 && static_cast<double>(shared_pixels(made[i], made[k])) >=
                                options.duplicate_overlap * static_cast<double>(smaller)) {
           keep[i] = false;
