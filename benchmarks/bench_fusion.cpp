@@ -19,6 +19,7 @@
 
 #include "objmap/filters/outlier.h"
 #include "objmap/filters/voxel.h"
+#include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/backproject.h"
@@ -192,18 +193,23 @@ void BM_VoxelMapInsertFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The first n real frames, decoded (empty without the data).
+std::vector<Frame> decoded_real_frames(std::size_t n) {
+  std::vector<Frame> frames;
+  for (const auto& [r, d] : real_frames(n))
+    frames.push_back(
+        {cv::imread(r.string(), cv::IMREAD_COLOR), cv::imread(d.string(), cv::IMREAD_UNCHANGED)});
+  return frames;
+}
+
 // Back-projection + insertion, the whole per-frame dense-map work, on real consecutive frames
 // (poses identity: the worst case for voxel reuse is a moving camera, the best a static one).
 void BM_DenseMapRealFrames(benchmark::State& state) {
-  const auto files = real_frames(16);
-  if (files.empty()) {
+  const std::vector<Frame> frames = decoded_real_frames(16);
+  if (frames.empty()) {
     state.SkipWithError("real data missing (OBJMAP_DATA)");
     return;
   }
-  std::vector<Frame> frames;
-  for (const auto& [r, d] : files)
-    frames.push_back(
-        {cv::imread(r.string(), cv::IMREAD_COLOR), cv::imread(d.string(), cv::IMREAD_UNCHANGED)});
   fusion::VoxelMap map({0.01, static_cast<int>(state.range(0))});
   std::size_t i = 0;
   for (auto _ : state) {
@@ -215,6 +221,28 @@ void BM_DenseMapRealFrames(benchmark::State& state) {
   state.counters["MB"] = static_cast<double>(map.memory_bytes()) / 1e6;
 }
 BENCHMARK(BM_DenseMapRealFrames)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same frames as fuse sums them (fusion/frame_voxels.h: back-projection and voxel sums in one
+// pass over the depth image, no point cloud, no per-frame hash table), added to a 16-shard map.
+void BM_FrameVoxelsRealFrames(benchmark::State& state) {
+  const std::vector<Frame> frames = decoded_real_frames(16);
+  if (frames.empty()) {
+    state.SkipWithError("real data missing (OBJMAP_DATA)");
+    return;
+  }
+  fusion::VoxelMap map({0.01, 1, 16});
+  fusion::FrameVoxels voxels;
+  std::size_t i = 0, entries = 0;
+  for (auto _ : state) {
+    const Frame& f = frames[i++ % frames.size()];
+    fusion::frame_voxels(rays(), {f.depth, f.world_from_cam, &f.bgr}, {}, map, voxels);
+    if (state.range(0) == 1) map.add(voxels);  // 0: the frame's sums only
+    entries = voxels.entries();
+  }
+  state.counters["entries"] = static_cast<double>(entries);
+  state.counters["voxels"] = static_cast<double>(map.size());
+}
+BENCHMARK(BM_FrameVoxelsRealFrames)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // ---------------------------------------------------------------------------------------------
 // Filters on 100k points: objmap's (PCL kd-tree, own statistics) against PCL's classes.

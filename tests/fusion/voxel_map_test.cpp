@@ -210,42 +210,6 @@ TEST(VoxelMap, ShardedMapsMergeShardByShardLikeOneMap) {
   }
 }
 
-TEST(VoxelMap, TakeShardMergesLikeMergeShardAndEmptiesTheSource) {
-  // One reused frame map, taken shard by shard into `taken`, against fresh frame maps merged into
-  // `merged`: the same voxels with bit-equal sums, and the frame map is left empty each time.
-  VoxelMapOptions sharded{0.01, 1, 16};
-  VoxelMap merged(sharded), taken(sharded), reused(sharded);
-  for (int f = 0; f < 3; ++f) {
-    const PointCloud c = frame(f);
-    VoxelMap fresh(sharded);
-    fresh.insert(c);
-    reused.insert(c);
-    ASSERT_GT(reused.size(), 0u);
-    for (std::size_t k = 0; k < 16; ++k) {
-      merged.merge_shard(fresh, k);
-      taken.take_shard(reused, k);
-    }
-    EXPECT_EQ(reused.size(), 0u);
-    EXPECT_EQ(reused.find(geometry::pack_voxel(0, 0, 0)), nullptr);
-    reused.reset();  // what fuse does next: the counters only
-  }
-  const auto a = merged.sorted_voxels(), b = taken.sorted_voxels();
-  ASSERT_EQ(a.size(), b.size());
-  ASSERT_GT(a.size(), 1000u);
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    ASSERT_EQ(a[i].first, b[i].first);
-    EXPECT_EQ(a[i].second->count, b[i].second->count);
-    EXPECT_EQ(a[i].second->color_count, b[i].second->color_count);
-    for (int k = 0; k < 3; ++k) {
-      EXPECT_EQ(a[i].second->offset_sum[k], b[i].second->offset_sum[k]);
-      EXPECT_EQ(a[i].second->color_sum[k], b[i].second->color_sum[k]);
-    }
-  }
-  VoxelMap four({0.01, 1, 4});
-  EXPECT_THROW(taken.take_shard(four, 0), InputError);
-  EXPECT_THROW(taken.take_shard(taken, 0), InputError);
-}
-
 TEST(Palette, CocoNamesAndFixedColours) {
   const auto& names = segmentation::coco80_names();
   ASSERT_EQ(names.size(), 80u);

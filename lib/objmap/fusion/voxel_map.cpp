@@ -5,11 +5,9 @@
 #include <string>
 #include <thread>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "objmap/core/error.h"
+#include "objmap/fusion/frame_voxels.h"
+#include "objmap/geometry/voxel_key_sse.h"
 
 namespace objmap::fusion {
 
@@ -109,13 +107,7 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud) {
 #if defined(__SSE2__)
     {
       const float* src = cloud.points[begin].data();  // Vec3f: 3 packed floats per point
-      const __m128 inv = _mm_set1_ps(inv_voxel_m_), lo = _mm_set1_ps(-lim), hi = _mm_set1_ps(lim);
-      const auto floor4 = [](__m128 v, __m128i& cell4) {  // fast_floor on 4 lanes; returns offset
-        const __m128i t = _mm_cvttps_epi32(v);
-        const __m128i below = _mm_castps_si128(_mm_cmplt_ps(v, _mm_cvtepi32_ps(t)));
-        cell4 = _mm_add_epi32(t, below);  // t - 1 where v < t
-        return _mm_sub_ps(v, _mm_cvtepi32_ps(cell4));
-      };
+      const __m128 inv = _mm_set1_ps(inv_voxel_m_);
       for (; j + 4 <= count; j += 4) {
         const __m128 a = _mm_loadu_ps(src + 3 * j);                       // x0 y0 z0 x1
         const __m128 b = _mm_loadu_ps(src + 3 * j + 4);                   // y1 z1 x2 y2
@@ -123,24 +115,17 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud) {
         const __m128 bc = _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2));  // x2 y2 z2 x3
         const __m128 ab = _mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
         const __m128 cd = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3));  // y2 y2 y3 y3
-        __m128 sx = _mm_mul_ps(_mm_shuffle_ps(a, bc, _MM_SHUFFLE(3, 0, 3, 0)), inv);
-        __m128 sy = _mm_mul_ps(_mm_shuffle_ps(ab, cd, _MM_SHUFFLE(2, 0, 2, 0)), inv);
-        __m128 sz = _mm_mul_ps(_mm_shuffle_ps(ab, c, _MM_SHUFFLE(3, 0, 3, 1)), inv);
-        // In range (NaN fails every ordered compare); the others become 0 as in the scalar loop.
-        __m128 ok = _mm_and_ps(_mm_cmpge_ps(sx, lo), _mm_cmplt_ps(sx, hi));
-        ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(sy, lo), _mm_cmplt_ps(sy, hi)));
-        ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(sz, lo), _mm_cmplt_ps(sz, hi)));
-        sx = _mm_and_ps(sx, ok);
-        sy = _mm_and_ps(sy, ok);
-        sz = _mm_and_ps(sz, ok);
-        __m128i ix, iy, iz;
-        _mm_storeu_ps(fx + j, floor4(sx, ix));
-        _mm_storeu_ps(fy + j, floor4(sy, iy));
-        _mm_storeu_ps(fz + j, floor4(sz, iz));
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cx + j), ix);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cy + j), iy);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cz + j), iz);
-        const int bits = _mm_movemask_ps(ok);
+        const geometry::VoxelCoords4 v4 = geometry::voxel_coords4(
+            _mm_mul_ps(_mm_shuffle_ps(a, bc, _MM_SHUFFLE(3, 0, 3, 0)), inv),
+            _mm_mul_ps(_mm_shuffle_ps(ab, cd, _MM_SHUFFLE(2, 0, 2, 0)), inv),
+            _mm_mul_ps(_mm_shuffle_ps(ab, c, _MM_SHUFFLE(3, 0, 3, 1)), inv));
+        _mm_storeu_ps(fx + j, v4.fx);
+        _mm_storeu_ps(fy + j, v4.fy);
+        _mm_storeu_ps(fz + j, v4.fz);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cx + j), v4.ix);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cy + j), v4.iy);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cz + j), v4.iz);
+        const int bits = _mm_movemask_ps(v4.ok);
         for (int k = 0; k < 4; ++k) valid[j + k] = static_cast<std::uint8_t>((bits >> k) & 1);
       }
     }
@@ -320,25 +305,30 @@ void VoxelMap::merge_shard(const VoxelMap& other, std::size_t shard) {
   }
 }
 
-void VoxelMap::take_shard(VoxelMap& other, std::size_t shard) {
-  require(other.voxel_m_ == voxel_m_ && other.shards_.size() == shards_.size() &&
-              shard < shards_.size() && &other != this,
-          "VoxelMap::take_shard",
-          "maps differ in voxel size or shard count, are the same map, or no shard " +
-              std::to_string(shard) + "; expected two equal maps and a shard below " +
-              std::to_string(shards_.size()));
+void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
+  require(frame.shard_count() == shards_.size() && frame.voxel_m() == voxel_m_ &&
+              shard < shards_.size(),
+          "VoxelMap::add_shard",
+          "the frame's voxels were made for " + std::to_string(frame.shard_count()) +
+              " shards of " + std::to_string(frame.voxel_m()) + " m voxels, or no shard " +
+              std::to_string(shard) + "; expected this map's " + std::to_string(shards_.size()) +
+              " shards of " + std::to_string(voxel_m_) + " m and a shard below that");
   constexpr std::size_t kAhead = 12;  // as merge_shard
-  Table& src = other.shards_[shard];
+  const FrameVoxels::Entry* const first = frame.shard_begin(shard);
+  const std::size_t n = static_cast<std::size_t>(frame.shard_end(shard) - first);
   Table& dst = shards_[shard];
-  thread_local std::vector<Run> todo;  // the voxels, copied out of the slots being emptied
-  todo.clear();
-  src.drain([&](VoxelKey key, const VoxelData& v) { todo.push_back(Run{key, v}); });
-  dst.reserve(dst.size() + todo.size());  // no rehash below: prefetched slots stay valid
-  for (std::size_t r = 0; r < std::min(todo.size(), kAhead); ++r) dst.prefetch(todo[r].key);
-  for (std::size_t r = 0; r < todo.size(); ++r) {
-    if (r + kAhead < todo.size()) dst.prefetch(todo[r + kAhead].key);
-    add_voxel(dst, todo[r].key, todo[r].sum);
+  dst.reserve(dst.size() + n);  // no rehash below: prefetched slots stay valid
+  for (std::size_t r = 0; r < std::min(n, kAhead); ++r) dst.prefetch(first[r].key);
+  for (std::size_t r = 0; r < n; ++r) {
+    if (r + kAhead < n) dst.prefetch(first[r + kAhead].key);
+    add_voxel(dst, first[r].key, first[r].sum);
   }
+}
+
+void VoxelMap::add(const FrameVoxels& frame) {
+  for (std::size_t s = 0; s < shards_.size(); ++s) add_shard(frame, s);
+  points_inserted_ += frame.points() - frame.dropped();
+  points_dropped_ += frame.dropped();
 }
 
 void VoxelMap::merge_counts(const VoxelMap& other) {

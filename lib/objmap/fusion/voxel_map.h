@@ -14,6 +14,7 @@
 namespace objmap::fusion {
 
 using geometry::VoxelKey;
+class FrameVoxels;
 
 struct VoxelMapOptions {
   double voxel_m = 0.01;  // voxel edge; 1 cm as the paper's map
@@ -52,13 +53,20 @@ class VoxelMap {
   // merge_counts). Each voxel of `other` is added once, so the result equals merge() of the same
   // maps in the same order.
   void merge_shard(const VoxelMap& other, std::size_t shard);
-  // merge_shard() that also empties shard `shard` of `other` (keeping its memory), in the same pass
-  // over its slots: what a later other.reset() would write is done while the slots are in cache.
-  // The values added and their order are merge_shard()'s.
-  void take_shard(VoxelMap& other, std::size_t shard);
+  // Adds a frame's voxel sums (frame_voxels.h, made for a map of this map's voxel size and shard
+  // count) in their order: add_shard() one shard of them (no point counters; shards may be added
+  // concurrently), add() all of them and the frame's point counters.
+  void add_shard(const FrameVoxels& frame, std::size_t shard);
+  void add(const FrameVoxels& frame);
   // Adds `other`'s points_inserted and points_dropped (the part of merge() merge_shard leaves out).
   void merge_counts(const VoxelMap& other);
   std::size_t shard_count() const { return shards_.size(); }
+  // The shard of a voxel: by its x index (no second hash of the key): a frame spans many x slices,
+  // so its voxels spread over the shards. A mask when the shard count is a power of two.
+  std::size_t shard_of(VoxelKey key) const {
+    const std::size_t x = static_cast<std::size_t>(key >> 42);
+    return shard_mask_ != kNoMask ? x & shard_mask_ : x % shards_.size();
+  }
 
   // Removes every voxel and zeroes the counters, keeping the tables' memory for reuse.
   void reset();
@@ -136,12 +144,6 @@ class VoxelMap {
   };
   static constexpr std::size_t kBatch = 1024;  // points per batch of runs (see insert_shard)
   using Table = geometry::VoxelHashTable<VoxelData>;
-  // By the voxel's x index (no second hash of the key): a frame spans many x slices, so its voxels
-  // spread over the shards. A mask when the shard count is a power of two (no division per run).
-  std::size_t shard_of(VoxelKey key) const {
-    const std::size_t x = static_cast<std::size_t>(key >> 42);
-    return shard_mask_ != kNoMask ? x & shard_mask_ : x % shards_.size();
-  }
   static constexpr std::size_t kNoMask = ~std::size_t{0};
   VoxelPoints sorted_points_impl(bool release);  // release: free each shard once read
   // kAllShards: one pass that fills every shard (single-threaded insert of a sharded map).

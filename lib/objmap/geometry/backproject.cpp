@@ -81,9 +81,7 @@ namespace {
 std::string size_text(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 }  // namespace
 
-BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
-                              const BackprojectOptions& options) {
-  options.check();
+void check_depth_frame(const RayTable& rays, const DepthFrame& frame) {
   require(!rays.empty(), "backproject", "empty ray table; expected make_ray_table(camera)");
   require(frame.depth != nullptr && frame.depth->type() == CV_16UC1, "backproject: depth",
           "expected a 16-bit single-channel (CV_16UC1) depth image");
@@ -105,6 +103,38 @@ BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
             "mask is " + size_text(frame.mask->width, frame.mask->height) + "; expected " +
                 size_text(rays.width, rays.height) + " like the depth image");
   }
+}
+
+PixelTransform::PixelTransform(const RayTable& rays, const DepthFrame& frame,
+                               const BackprojectOptions& options) {
+  // value / factor in [min_depth_m, max_depth_m] (eq 11 and the validity test of §3.2).
+  const double f = rays.depth_factor;
+  raw_min =
+      std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::ceil(options.min_depth_m * f)));
+  const double raw_max_d = std::floor(options.max_depth_m * f);
+  raw_max = raw_max_d >= 65535.0 ? 65535u : static_cast<std::uint32_t>(raw_max_d);
+  inv_factor = static_cast<float>(1.0 / f);
+  const Eigen::Matrix3f R = frame.world_from_cam.linear().cast<float>();
+  const Eigen::Vector3f tr = frame.world_from_cam.translation().cast<float>();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r[3 * i + j] = R(i, j);
+    t[i] = tr[i];
+  }
+}
+
+FrameRow::FrameRow(const RayTable& rays, const DepthFrame& frame, int v) {
+  const std::size_t row0 = static_cast<std::size_t>(v) * rays.width;
+  depth = frame.depth->ptr<std::uint16_t>(v);
+  bgr = frame.bgr ? frame.bgr->ptr<cv::Vec3b>(v) : nullptr;
+  mask = frame.mask ? frame.mask->data.data() + row0 : nullptr;
+  x_over_z = rays.x_over_z.data() + row0;
+  y_over_z = rays.y_over_z.data() + row0;
+}
+
+BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
+                              const BackprojectOptions& options) {
+  options.check();
+  check_depth_frame(rays, frame);
 
   cv::Rect roi(0, 0, rays.width, rays.height);
   if (!frame.roi.empty()) roi &= frame.roi;
@@ -124,33 +154,22 @@ BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
   std::uint32_t* out_i = options.pixel_indices ? result.pixel_index.data() : nullptr;
   std::size_t n = 0;
 
-  // Depth range as raw image values, so the per-pixel test is on integers: value / factor in
-  // [min_depth_m, max_depth_m] (eq 11 and the validity test of §3.2).
-  const double f = rays.depth_factor;
-  // 0 means "no depth" whatever min_depth_m is.
-  const std::uint32_t raw_min =
-      std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::ceil(options.min_depth_m * f)));
-  const double raw_max_d = std::floor(options.max_depth_m * f);
-  const std::uint32_t raw_max =
-      raw_max_d >= 65535.0 ? 65535u : static_cast<std::uint32_t>(raw_max_d);
-  const float inv_factor = static_cast<float>(1.0 / f);
-
-  // Eq 15: the rigid transform, in float (points are stored as float).
-  const Eigen::Matrix3f R = frame.world_from_cam.linear().cast<float>();
-  const Eigen::Vector3f t = frame.world_from_cam.translation().cast<float>();
-  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1),
-              r12 = R(1, 2), r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  // Depth range as raw image values, so the per-pixel test is on integers; eq 15 in float (points
+  // are stored as float).
+  const PixelTransform T(rays, frame, options);
+  const std::uint32_t raw_min = T.raw_min, raw_max = T.raw_max;
+  const float inv_factor = T.inv_factor;
   double sx = 0.0, sy = 0.0, sz = 0.0;
   std::size_t considered = 0, no_depth = 0;
 
   for (int v = roi.y; v < roi.y + roi.height; v += s) {
-    const std::uint16_t* drow = depth.ptr<std::uint16_t>(v);
-    const cv::Vec3b* crow = colour ? frame.bgr->ptr<cv::Vec3b>(v) : nullptr;
-    const std::uint8_t* mrow =
-        frame.mask ? frame.mask->data.data() + static_cast<std::size_t>(v) * rays.width : nullptr;
+    const FrameRow row(rays, frame, v);
+    const std::uint16_t* drow = row.depth;
+    const cv::Vec3b* crow = row.bgr;
+    const std::uint8_t* mrow = row.mask;
+    const float* rx = row.x_over_z;
+    const float* ry = row.y_over_z;
     const std::size_t row0 = static_cast<std::size_t>(v) * rays.width;
-    const float* rx = rays.x_over_z.data() + row0;
-    const float* ry = rays.y_over_z.data() + row0;
     // Per-row sums in float (short, exact enough), accumulated in double per row.
     float rsx = 0.f, rsy = 0.f, rsz = 0.f;
     for (int u = roi.x; u < roi.x + roi.width; u += s) {
@@ -168,8 +187,7 @@ BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
       rsx += x;
       rsy += y;
       rsz += z;
-      out_p[n] = Vec3f(r00 * x + r01 * y + r02 * z + t.x(), r10 * x + r11 * y + r12 * z + t.y(),
-                       r20 * x + r21 * y + r22 * z + t.z());
+      out_p[n] = Vec3f(T.world_x(x, y, z), T.world_y(x, y, z), T.world_z(x, y, z));
       if (out_c) {
         const cv::Vec3b& c = crow[u];
         out_c[n] = Rgb{c[2], c[1], c[0]};

@@ -76,6 +76,36 @@ struct BackprojectResult {
 BackprojectResult backproject(const RayTable& rays, const DepthFrame& frame,
                               const BackprojectOptions& options = {});
 
+// What backproject() checks before it starts: the images match the ray table (type, size).
+// Throws InputError naming the image.
+void check_depth_frame(const RayTable& rays, const DepthFrame& frame);
+
+// The per-pixel constants of eqs 11-15 in float, as backproject() uses them: the depth range of
+// `options` as raw depth-image values (a pixel is back-projected when its value is in
+// [raw_min, raw_max]; raw_min >= 1: 0 means no depth, whatever min_depth_m is), 1 / depth factor,
+// and world_from_cam.
+struct PixelTransform {
+  PixelTransform(const RayTable& rays, const DepthFrame& frame, const BackprojectOptions& options);
+  std::uint32_t raw_min = 1, raw_max = 65535;
+  float inv_factor = 0;
+  float r[9] = {};  // rotation, row-major
+  float t[3] = {};
+  // Eq 15: R · (x, y, z) + t, in float (the same operations wherever a point is made).
+  float world_x(float x, float y, float z) const { return r[0] * x + r[1] * y + r[2] * z + t[0]; }
+  float world_y(float x, float y, float z) const { return r[3] * x + r[4] * y + r[5] * z + t[1]; }
+  float world_z(float x, float y, float z) const { return r[6] * x + r[7] * y + r[8] * z + t[2]; }
+};
+
+// Row v of a frame's images and of the ray table, as the back-projection loops read them.
+struct FrameRow {
+  FrameRow(const RayTable& rays, const DepthFrame& frame, int v);
+  const std::uint16_t* depth;  // raw depth values
+  const cv::Vec3b* bgr;        // nullptr without a colour image
+  const std::uint8_t* mask;    // nullptr without a mask
+  const float* x_over_z;       // the rays
+  const float* y_over_z;
+};
+
 // The bounding rectangle of a mask's non-zero pixels (empty rect for an empty mask).
 cv::Rect mask_bounds(const segmentation::Mask& mask);
 

@@ -114,18 +114,6 @@ class VoxelHashTable {
     size_ = 0;
   }
 
-  // f(key, value) for every entry, in slot order, each slot emptied once visited: for_each() and
-  // reset() in one pass over the slots.
-  template <typename F>
-  void drain(F&& f) {
-    for (Slot& s : slots_) {
-      if (s.key == kNoVoxel) continue;
-      f(s.key, s.value);
-      s = Slot{};
-    }
-    size_ = 0;
-  }
-
   void clear() {
     slots_.clear();
     slots_.shrink_to_fit();

@@ -15,6 +15,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/core/parallel.h"
+#include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/io/atomic.h"
@@ -279,28 +280,25 @@ class ShardedMergeOrder {
   bool failed_ = false;
 };
 
-// Per-frame voxel maps for reuse: a map's tables stay allocated from one keyframe to the next (no
-// fresh, page-faulting megabytes per keyframe). At most one map per worker in flight.
-class FrameMapPool {
+// Per-frame voxel sums for reuse: their buffers stay allocated from one keyframe to the next (no
+// fresh, page-faulting megabytes per keyframe). At most one per worker in flight.
+class FrameVoxelsPool {
  public:
-  explicit FrameMapPool(const fusion::VoxelMapOptions& options) : options_(options) {}
-  std::unique_ptr<fusion::VoxelMap> take() {
+  std::unique_ptr<fusion::FrameVoxels> take() {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (free_.empty()) return std::make_unique<fusion::VoxelMap>(options_);
-    auto map = std::move(free_.back());
+    if (free_.empty()) return std::make_unique<fusion::FrameVoxels>();
+    auto frame = std::move(free_.back());
     free_.pop_back();
-    return map;
+    return frame;
   }
-  void give_back(std::unique_ptr<fusion::VoxelMap> map) {
-    map->reset();
+  void give_back(std::unique_ptr<fusion::FrameVoxels> frame) {
     std::lock_guard<std::mutex> lock(mutex_);
-    free_.push_back(std::move(map));
+    free_.push_back(std::move(frame));
   }
 
  private:
-  fusion::VoxelMapOptions options_;
   std::mutex mutex_;
-  std::vector<std::unique_ptr<fusion::VoxelMap>> free_;
+  std::vector<std::unique_ptr<fusion::FrameVoxels>> free_;
 };
 
 // What a worker hands back for one keyframe (its dense voxels are already in the dense map).
@@ -322,14 +320,14 @@ std::size_t mask_pixels(const segmentation::Mask& mask, const cv::Rect& bounds) 
   return n;
 }
 
-// Back-projects one keyframe: the dense cloud into a per-frame voxel map (pre-aggregated, so that
-// voxels are merged, not pixels) merged into `dense` in keyframe order, and each instance's pixels
+// Back-projects one keyframe: the dense points summed by voxel (frame_voxels.h, so that voxels are
+// merged, not pixels) and added to `dense` in keyframe order, and each instance's pixels
 // into an observation. Without `dense` (and `order`, `pool`), the observations only.
 FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
                            const geometry::RayTable& rays, const io::FramePair& frame,
                            const Keyframe& keyframe, int keyframe_index,
                            const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
-                           ShardedMergeOrder* order, FrameMapPool* pool) {
+                           ShardedMergeOrder* order, FrameVoxelsPool* pool) {
   FrameWork work;
 
   // 1. The images (checked: size, type).
@@ -341,16 +339,12 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   dense_options.stride = options.dense_stride;
   const geometry::DepthFrame dense_frame(depth, keyframe.world_from_cam, &bgr);
   if (dense) {
-    std::unique_ptr<fusion::VoxelMap> frame_map = pool->take();
-    {
-      const auto points = geometry::backproject(rays, dense_frame, dense_options);
-      work.dense_points = points.points_in_world.size();
-      frame_map->reserve(points.points_in_world.size() / 8);  // ~1 voxel per 4-15 points here
-      frame_map->insert(points.points_in_world);
-    }
+    std::unique_ptr<fusion::FrameVoxels> frame_voxels = pool->take();
+    fusion::frame_voxels(rays, dense_frame, dense_options, *dense, *frame_voxels);
+    work.dense_points = frame_voxels->points();
     order->merge_in_order(static_cast<std::size_t>(keyframe_index),
-                          [&](std::size_t shard) { dense->take_shard(*frame_map, shard); });
-    pool->give_back(std::move(frame_map));
+                          [&](std::size_t shard) { dense->add_shard(*frame_voxels, shard); });
+    pool->give_back(std::move(frame_voxels));
   }
 
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
@@ -731,9 +725,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   dense_options.shards = kDenseShards;
   fusion::VoxelMap dense(dense_options);
   ShardedMergeOrder merge_order(kDenseShards);
-  fusion::VoxelMapOptions frame_map_options = dense_options;
-  frame_map_options.threads = 1;
-  FrameMapPool frame_maps(frame_map_options);
+  FrameVoxelsPool frame_voxels;
   fusion::ObjectMapOptions object_options = options.objects;
   object_options.overlap_measure =
       fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
@@ -751,7 +743,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
         const segmentation::FrameSegmentation* seg_frame = keyframe_segmentation(inputs, i, lazy);
         return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
                                 keyframes[i], static_cast<int>(i), seg_frame,
-                                options.dense_map ? &dense : nullptr, &merge_order, &frame_maps);
+                                options.dense_map ? &dense : nullptr, &merge_order, &frame_voxels);
       } catch (...) {
         merge_order.fail();  // later keyframes must not wait for this one's merge
         throw;
