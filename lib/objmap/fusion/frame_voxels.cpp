@@ -32,6 +32,17 @@ void frame_voxels(const geometry::RayTable& rays, const geometry::DepthFrame& fr
   float* const off_x = out.row_offset_.data();
   float* const off_y = off_x + cols;
   float* const off_z = off_y + cols;
+  const std::size_t cols1 = static_cast<std::size_t>(cols) + 1;
+  out.row_start_.resize(cols1);
+  out.row_prefix_.resize(3 * cols1);
+  out.row_color_prefix_.resize(3 * cols1);
+  std::uint32_t* const starts = out.row_start_.data();
+  double* const prefix_x = out.row_prefix_.data();
+  double* const prefix_y = prefix_x + cols1;
+  double* const prefix_z = prefix_y + cols1;
+  std::uint32_t* const prefix_r = out.row_color_prefix_.data();
+  std::uint32_t* const prefix_g = prefix_r + cols1;
+  std::uint32_t* const prefix_b = prefix_g + cols1;
 
   // As geometry::backproject: the depth range on raw values, eqs 11-15 in float.
   const geometry::PixelTransform T(rays, frame, options);
@@ -92,12 +103,13 @@ void frame_voxels(const geometry::RayTable& rays, const geometry::DepthFrame& fr
           return _mm_mul_ps(_mm_add_ps(_mm_add_ps(w, _mm_mul_ps(Rm[3 * i + 2], z)), Tv[i]), inv_v);
         };
         const geometry::VoxelCoords4 v4 = geometry::voxel_coords4(scaled(0), scaled(1), scaled(2));
-        _mm_storeu_ps(off_x + c, v4.fx);
-        _mm_storeu_ps(off_y + c, v4.fy);
-        _mm_storeu_ps(off_z + c, v4.fz);
         const __m128i ix = _mm_add_epi32(v4.ix, bias), iy = _mm_add_epi32(v4.iy, bias),
                       iz = _mm_add_epi32(v4.iz, bias);
         const __m128i valid = _mm_and_si128(depth_ok, _mm_castps_si128(v4.ok));
+        const __m128 valid_ps = _mm_castsi128_ps(valid);  // offsets of invalid pixels: 0
+        _mm_storeu_ps(off_x + c, _mm_and_ps(v4.fx, valid_ps));
+        _mm_storeu_ps(off_y + c, _mm_and_ps(v4.fy, valid_ps));
+        _mm_storeu_ps(off_z + c, _mm_and_ps(v4.fz, valid_ps));
         const auto keys = [&](__m128i a, __m128i b, __m128i cc, __m128i v) {  // 2 lanes
           const __m128i k =
               _mm_or_si128(_mm_or_si128(_mm_slli_epi64(a, 42), _mm_slli_epi64(b, 21)), cc);
@@ -123,6 +135,7 @@ void frame_voxels(const geometry::RayTable& rays, const geometry::DepthFrame& fr
     for (int c = c0_scalar; c < cols; ++c) {
       const int u = roi.x + c * s;
       key_now[c] = kNoVoxel;
+      off_x[c] = off_y[c] = off_z[c] = 0.f;
       if (mrow && !mrow[u]) continue;
       ++row_considered;
       const std::uint32_t raw = drow[u];
@@ -147,56 +160,75 @@ void frame_voxels(const geometry::RayTable& rays, const geometry::DepthFrame& fr
     points += row_points;
     dropped += row_dropped;
 
-    // 2. The row's runs, each added to its voxel's entry: the one the cache holds for the voxel, or
+    // 2. The row's runs: the columns where the key changes, found without a branch per pixel, and
+    //    prefix sums of the offsets (in double: a difference is exact to ~1e-13) and colours, so
+    //    that a run's sums are subtractions.
+    int runs = 0;
+    {
+      VoxelKey prev = cols > 0 ? key_now[0] ^ 1 : 0;  // column 0 starts a run
+      double ax = 0, ay = 0, az = 0;
+      std::uint32_t ar = 0, ag = 0, ab = 0;
+      for (int c = 0; c < cols; ++c) {
+        const VoxelKey key = key_now[c];
+        starts[runs] = c;
+        runs += key != prev;
+        prev = key;
+        prefix_x[c] = ax;
+        prefix_y[c] = ay;
+        prefix_z[c] = az;
+        ax += off_x[c];
+        ay += off_y[c];
+        az += off_z[c];
+        if (colour) {
+          prefix_r[c] = ar;
+          prefix_g[c] = ag;
+          prefix_b[c] = ab;
+          const cv::Vec3b& bgr = crow[roi.x + c * s];
+          ar += bgr[2];
+          ag += bgr[1];
+          ab += bgr[0];
+        }
+      }
+      starts[runs] = cols;
+      prefix_x[cols] = ax;
+      prefix_y[cols] = ay;
+      prefix_z[cols] = az;
+      prefix_r[cols] = ar;
+      prefix_g[cols] = ag;
+      prefix_b[cols] = ab;
+    }
+    // 3. Each run of a voxel added to the voxel's entry: the one the cache holds for the voxel, or
     //    a new one (the cache slot then points to it).
-    VoxelKey run_key = kNoVoxel;
-    float s0 = 0.f, s1 = 0.f, s2 = 0.f;
-    std::uint32_t c0 = 0, c1 = 0, c2 = 0, run_points = 0;
-    const auto close_run = [&] {
-      FrameVoxels::CacheSlot& slot = cache[FrameVoxels::cache_slot(run_key)];
+    for (int r = 0; r < runs; ++r) {
+      const int first = starts[r], end = starts[r + 1];
+      const VoxelKey key = key_now[first];
+      if (key == kNoVoxel) continue;
+      FrameVoxels::CacheSlot& slot = cache[FrameVoxels::cache_slot(key)];
       FrameVoxels::Entry* e;
-      if (slot.key == run_key) {
+      if (slot.key == key) {
         e = &out.shards_[slot.shard][slot.index];
       } else {
-        const std::size_t sh = map.shard_of(run_key);
+        const std::size_t sh = map.shard_of(key);
         std::vector<FrameVoxels::Entry>& entries = out.shards_[sh];
-        slot.key = run_key;
+        slot.key = key;
         slot.shard = static_cast<std::uint32_t>(sh);
         slot.index = static_cast<std::uint32_t>(entries.size());
         e = &entries.emplace_back();
-        e->key = run_key;
+        e->key = key;
       }
       VoxelData& sum = e->sum;
-      sum.offset_sum[0] += s0;
-      sum.offset_sum[1] += s1;
-      sum.offset_sum[2] += s2;
-      sum.color_sum[0] += c0;  // 0 without colours
-      sum.color_sum[1] += c1;
-      sum.color_sum[2] += c2;
+      sum.offset_sum[0] += static_cast<float>(prefix_x[end] - prefix_x[first]);
+      sum.offset_sum[1] += static_cast<float>(prefix_y[end] - prefix_y[first]);
+      sum.offset_sum[2] += static_cast<float>(prefix_z[end] - prefix_z[first]);
+      const auto run_points = static_cast<std::uint32_t>(end - first);
       sum.count += run_points;
-      sum.color_count += colour ? run_points : 0;
-    };
-    for (int c = 0; c < cols; ++c) {
-      const VoxelKey key = key_now[c];
-      if (key != run_key) {
-        if (run_key != kNoVoxel) close_run();
-        run_key = key;
-        s0 = s1 = s2 = 0.f;
-        c0 = c1 = c2 = run_points = 0;
-      }
-      if (key == kNoVoxel) continue;
-      s0 += off_x[c];
-      s1 += off_y[c];
-      s2 += off_z[c];
-      ++run_points;
       if (colour) {
-        const cv::Vec3b& bgr = crow[roi.x + c * s];
-        c0 += bgr[2];
-        c1 += bgr[1];
-        c2 += bgr[0];
+        sum.color_sum[0] += prefix_r[end] - prefix_r[first];
+        sum.color_sum[1] += prefix_g[end] - prefix_g[first];
+        sum.color_sum[2] += prefix_b[end] - prefix_b[first];
+        sum.color_count += run_points;
       }
     }
-    if (run_key != kNoVoxel) close_run();
   }
   out.points_ = points;
   out.dropped_ = dropped;
