@@ -142,18 +142,20 @@ Plane fit_plane(const std::vector<Eigen::Vector3f>& pts, float inlier_m, int ite
   return best;
 }
 
-// The object's depth: the nearest peak of the centre-weighted histogram (3-bin sums) holding at
-// least `min_share` of the largest peak, over the valid pixels without `exclude` flags (`skip` > 0:
-// the next such peaks, farther away). Returns the weighted mean depth of the pixels in that peak's
-// three bins, or 0 when there is none.
-double near_mode(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin_m,
-                 double min_share, std::uint8_t exclude, int skip = 0) {
-  auto& hist = ws.hist;      // centre weight per bin
-  auto& hist_z = ws.hist_z;  // centre-weighted depth sum per bin
+// The centre-weighted depth histogram of the valid pixels without `exclude` flags, into ws.hist
+// (weight per bin) and ws.hist_z (weighted depth sum per bin); false when no pixel counts.
+bool depth_histogram(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin_m,
+                     std::uint8_t exclude) {
+  auto& hist = ws.hist;
+  auto& hist_z = ws.hist_z;
   hist.assign(static_cast<std::size_t>(bins), 0.0);
   hist_z.assign(static_cast<std::size_t>(bins), 0.0);
   const float inv_bin = static_cast<float>(1.0 / bin_m);
   bool any = false;
+  // Neighbouring pixels mostly fall in one bin: that bin's sums are kept in registers until the bin
+  // changes (the same additions in the same order as hist[b] += w, without a store-to-load chain).
+  int open = -1;
+  double open_w = 0, open_z = 0;
   for (int y = 0; y < bh; ++y) {
     const std::size_t row = static_cast<std::size_t>(y) * bw;
     const float wv = ws.weight_v[y];
@@ -163,12 +165,33 @@ double near_mode(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin
       const float z = ws.z_m[row + x];
       const int b = std::min(bins - 1, static_cast<int>((z - z_lo) * inv_bin));
       const float w = wv * ws.weight_u[x];
-      hist[b] += w;
-      hist_z[b] += w * z;
+      if (b != open) {
+        if (open >= 0) {
+          hist[open] = open_w;
+          hist_z[open] = open_z;
+        }
+        open = b;
+        open_w = hist[b];
+        open_z = hist_z[b];
+      }
+      open_w += w;
+      open_z += w * z;
       any = true;
     }
   }
-  if (!any) return 0.0;
+  if (open >= 0) {
+    hist[open] = open_w;
+    hist_z[open] = open_z;
+  }
+  return any;
+}
+
+// The object's depth in ws's histogram (depth_histogram): the nearest peak (3-bin sums) holding at
+// least `min_share` of the largest peak (`skip` > 0: the next such peaks, farther away). Returns
+// the weighted mean depth of the pixels in that peak's three bins, or 0 when there is none.
+double histogram_peak(const Workspace& ws, int bins, double min_share, int skip) {
+  const auto& hist = ws.hist;
+  const auto& hist_z = ws.hist_z;
   const auto sum3 = [&](const std::vector<double>& h, int b) {
     return h[b] + (b > 0 ? h[b - 1] : 0.0) + (b + 1 < bins ? h[b + 1] : 0.0);
   };
@@ -184,6 +207,14 @@ double near_mode(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin
     }
   }
   return 0.0;
+}
+
+// The object's depth: histogram_peak of the histogram of the valid pixels without `exclude` flags;
+// 0 when there is none.
+double near_mode(Workspace& ws, int bw, int bh, float z_lo, int bins, double bin_m,
+                 double min_share, std::uint8_t exclude) {
+  if (!depth_histogram(ws, bw, bh, z_lo, bins, bin_m, exclude)) return 0.0;
+  return histogram_peak(ws, bins, min_share, 0);
 }
 
 // Separable square dilation (grow = true) or erosion of `bits` (0/1) in place, radius r. Outside
@@ -558,6 +589,15 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     double leak() const { return touching ? static_cast<double>(continuing) / touching : 0.0; }
   };
   float band_lo = 0, band_hi = 0;
+  // The queues of the floods and of the region growing: room for every box pixel (a pixel joins
+  // each at most once), written through raw pointers.
+  if (ws.queue.size() < area) {
+    ws.queue.resize(area);
+    ws.seed_queue.resize(area);
+  }
+  Workspace::Px* const queue = ws.queue.data();
+  Workspace::Px* const seed_queue = ws.seed_queue.data();
+  std::size_t queued = 0;
   const auto grow = [&](double mode_m) {
     Grown g;
     constexpr std::uint8_t kPerMode = kBand | kInMask | kChecked | kSeed;
@@ -577,7 +617,6 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     // Seeds: central pixels at the mode depth (the whole box when the centre has none), and of
     // those only the smooth-connected component with the most centre weight: an occluder's
     // surface that crosses the mode depth elsewhere in the centre is not seeded.
-    ws.queue.clear();
     std::size_t candidates = 0;
     Window win{};
     for (int pass = 0; pass < 2 && candidates == 0; ++pass) {
@@ -594,12 +633,12 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     }
     // Flood one component of the seed candidates from `start`; returns its centre weight.
     const auto flood_seeds = [&](Workspace::Px start) {
-      ws.queue.clear();
-      ws.queue.push_back(start);
+      queued = 0;
+      queue[queued++] = start;
       ws.flags[static_cast<std::size_t>(start.y) * bw + start.x] |= kInMask;
       double weight = 0;
-      for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-        const int xi = ws.queue[head].x, yi = ws.queue[head].y;
+      for (std::size_t head = 0; head < queued; ++head) {
+        const int xi = queue[head].x, yi = queue[head].y;
         const std::int32_t i = yi * bw + xi;
         weight += static_cast<double>(ws.weight_u[xi]) * ws.weight_v[yi];
         const float z = ws.z_m[i];
@@ -611,7 +650,7 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
           const std::uint8_t f = ws.flags[j];
           if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
           ws.flags[j] = f | kInMask;
-          ws.queue.push_back({xx, yy});
+          queue[queued++] = {xx, yy};
         }
       }
       return weight;
@@ -636,18 +675,18 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     }
     // The seeds: the components holding at least seed_component_min_share of the best one's
     // weight (an object cut in two by a thin occluder keeps both halves; specks do not count).
-    ws.seed_queue.clear();
+    std::size_t seeds = 0;
     for (const auto& [start, weight] : starts) {
       if (weight < options.seed_component_min_share * best_weight) continue;
       flood_seeds(start);
-      ws.seed_queue.insert(ws.seed_queue.end(), ws.queue.begin(), ws.queue.end());
+      std::copy(queue, queue + queued, seed_queue + seeds);
+      seeds += queued;
     }
-    ws.queue.swap(ws.seed_queue);
-    g.seeds = ws.queue.size();
+    g.seeds = seeds;
 
     // Region growing across smooth depth inside the band.
-    for (std::size_t head = 0; head < ws.queue.size(); ++head) {
-      const int x = ws.queue[head].x, y = ws.queue[head].y;
+    for (std::size_t head = 0; head < seeds; ++head) {
+      const int x = seed_queue[head].x, y = seed_queue[head].y;
       const std::int32_t i = y * bw + x;
       const float z = ws.z_m[i];
       const float step = step_at(z);
@@ -667,10 +706,10 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
           }
         }
         ws.flags[j] = f | kInMask;
-        ws.queue.push_back({xx, yy});
+        seed_queue[seeds++] = {xx, yy};
       }
     }
-    g.pixels = ws.queue.size();
+    g.pixels = seeds;
 
     // Border leak: the region's pixels on each box side that lies inside the image, and those whose
     // surface continues just outside (an occluder or background cut by the box goes on; the object
@@ -702,9 +741,10 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     // nearest candidate's region is kept as its flags rather than grown again if every one leaks.
     const Grown first = grown;
     bool found = false, regrown = false;
-    for (int k = 1; k < options.depth_candidates && !found; ++k) {
-      const double next =
-          near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share, exclude, k);
+    // The farther candidates: peaks of one histogram (grow() does not change what it counts).
+    const bool counted = depth_histogram(ws, bw, bh, z_lo, bins, options.bin_m, exclude);
+    for (int k = 1; k < options.depth_candidates && !found && counted; ++k) {
+      const double next = histogram_peak(ws, bins, options.near_mode_min_share, k);
       if (next <= 0) break;
       if (!regrown) ws.saved_flags = ws.flags;
       regrown = true;
