@@ -45,5 +45,34 @@ TEST(Camera, CheckNamesTheBadField) {
   }
 }
 
+// undistort_pixel stops when a step returns its input; the result must be the 20 full steps' (the
+// iteration of OpenCV's cvUndistortPoints) bit for bit, at every pixel of the distorted presets.
+TEST(Camera, UndistortStopsEarlyWithTheSameBits) {
+  for (const char* name : {"fr1", "fr2"}) {
+    const Camera c = camera_preset(name);
+    ASSERT_TRUE(c.has_distortion()) << name;
+    const double k1 = c.distortion[0], k2 = c.distortion[1], p1 = c.distortion[2],
+                 p2 = c.distortion[3], k3 = c.distortion[4];
+    std::size_t differ = 0;
+    for (int v = -20; v < c.height + 20; ++v) {
+      for (int u = -20; u < c.width + 20; ++u) {
+        const double xd = (u - c.cx) / c.fx, yd = (v - c.cy) / c.fy;
+        double x = xd, y = yd;
+        for (int i = 0; i < 20; ++i) {
+          const double r2 = x * x + y * y;
+          const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+          const double dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+          const double dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+          x = (xd - dx) / radial;
+          y = (yd - dy) / radial;
+        }
+        const Eigen::Vector2d got = c.undistort_pixel(u, v);
+        differ += got.x() != x || got.y() != y;
+      }
+    }
+    EXPECT_EQ(differ, 0u) << name;
+  }
+}
+
 }  // namespace
 }  // namespace objmap

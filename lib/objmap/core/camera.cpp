@@ -30,15 +30,19 @@ Eigen::Vector2d Camera::undistort_pixel(double u, double v) const {
   if (!has_distortion()) return {xd, yd};
   const double k1 = distortion[0], k2 = distortion[1], p1 = distortion[2], p2 = distortion[3],
                k3 = distortion[4];
-  // Fixed-point iteration as in OpenCV's cvUndistortPoints.
+  // Fixed-point iteration as in OpenCV's cvUndistortPoints, 20 steps. A step is a function of
+  // (x, y) alone, so once a step returns its input exactly the remaining steps would too: stopping
+  // there gives the same bits, in about half the steps for TUM's fr1/fr2 lenses.
   double x = xd, y = yd;
   for (int i = 0; i < 20; ++i) {
     const double r2 = x * x + y * y;
     const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
     const double dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
     const double dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-    x = (xd - dx) / radial;
-    y = (yd - dy) / radial;
+    const double nx = (xd - dx) / radial, ny = (yd - dy) / radial;
+    if (nx == x && ny == y) break;
+    x = nx;
+    y = ny;
   }
   return {x, y};
 }
