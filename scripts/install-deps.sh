@@ -8,7 +8,8 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
-          libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev)
+          libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev
+          libpng-dev libjpeg-dev)
 bench_required=(python3)
 bench_optional=(python3-open3d)
 bench=0

@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "io/image_checks.h"
 #include "objmap/core/error.h"
 #include "support/test_support.h"
 
@@ -17,25 +18,11 @@ using test::TempDir;
 using test::write_text;
 
 std::string rgb_error(const fs::path& file, int w = 640, int h = 480) {
-  try {
-    read_rgb(file, w, h);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), file.string());
-    return e.reason();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return "";
+  return image_checks::error_reason(file, [&] { read_rgb(file, w, h); });
 }
 
 std::string depth_error(const fs::path& file, int w = 640, int h = 480) {
-  try {
-    read_depth(file, w, h);
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), file.string());
-    return e.reason();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return "";
+  return image_checks::error_reason(file, [&] { read_depth(file, w, h); });
 }
 
 TEST(ReadImage, RealFr1Desk9) {

@@ -1,7 +1,6 @@
 #include "objmap/io/png_fast.h"
 
 #include <gtest/gtest.h>
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "io/image_checks.h"
 #include "objmap/core/error.h"
 #include "objmap/io/image.h"
 #include "support/test_support.h"
@@ -22,12 +22,9 @@ namespace objmap::io {
 namespace {
 
 namespace fs = std::filesystem;
-
-long peak_rss_kb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss;
-}
+using image_checks::peak_rss_kb;
+using image_checks::picture;
+using image_checks::same_pixels;
 
 // CRC-32 of PNG chunks (ISO 3309), to forge valid chunks below.
 std::uint32_t crc32(const unsigned char* p, std::size_t n) {
@@ -43,37 +40,6 @@ std::vector<unsigned char> bytes_of(const std::string& s) { return {s.begin(), s
 
 cv::Mat fast(const std::vector<unsigned char>& png) {
   return decode_png_fast(png.data(), png.size());
-}
-
-// Same type, size and every byte.
-::testing::AssertionResult same_pixels(const cv::Mat& a, const cv::Mat& b) {
-  if (a.type() != b.type() || a.size() != b.size())
-    return ::testing::AssertionFailure()
-           << "type/size " << a.type() << " " << a.size() << " vs " << b.type() << " " << b.size();
-  for (int y = 0; y < a.rows; ++y)
-    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0)
-      return ::testing::AssertionFailure() << "row " << y << " differs";
-  return ::testing::AssertionSuccess();
-}
-
-// A smooth, noisy picture: libpng's adaptive filter choice (OpenCV's encoder) then picks among all
-// five row filters, None, Sub, Up, Average and Paeth, row by row.
-cv::Mat picture(int rows, int cols, int type, std::uint64_t seed) {
-  cv::Mat m(rows, cols, type);
-  cv::RNG rng(seed);
-  const int channels = m.channels();
-  const double scale = m.depth() == CV_16U ? 60000.0 : 250.0;
-  for (int y = 0; y < rows; ++y)
-    for (int x = 0; x < cols; ++x)
-      for (int c = 0; c < channels; ++c) {
-        const double v = 0.5 + 0.4 * std::sin(0.05 * x * (c + 1) + 0.03 * y) + rng.gaussian(0.03);
-        const double clamped = std::min(1.0, std::max(0.0, v)) * scale;
-        if (m.depth() == CV_16U)
-          m.ptr<std::uint16_t>(y)[x * channels + c] = static_cast<std::uint16_t>(clamped);
-        else
-          m.ptr<std::uint8_t>(y)[x * channels + c] = static_cast<std::uint8_t>(clamped);
-      }
-  return m;
 }
 
 void put32(std::vector<unsigned char>& out, std::uint32_t v) {
@@ -217,7 +183,7 @@ TEST(PngFast, SamePixelsAsOpenCvOnTheRealRecordings) {
     const auto png = bytes_of(test::read_text(f));
     const cv::Mat got = fast(png);
     const cv::Mat want = cv::imdecode(png, cv::IMREAD_UNCHANGED);
-    if (got.empty()) continue;  // left to OpenCV: allowed, counted below
+    if (got.empty()) continue;  // left to libpng (io/codecs.h): allowed, counted below
     ++decoded_here;
     EXPECT_TRUE(same_pixels(got, want)) << f;
   }
@@ -255,7 +221,7 @@ TEST(PngFast, ImagesOfTheWrongSizeAreRefusedFromTheirHeader) {
   EXPECT_LT(peak_rss_kb() - peak_before, 100 * 1024);
 }
 
-TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
+TEST(PngFast, LeavesOtherPngsAndDamageToLibpng) {
   const cv::Mat depth = picture(20, 30, CV_16UC1, 3);
   std::vector<unsigned char> png;
   ASSERT_TRUE(cv::imencode(".png", depth, png));
@@ -279,7 +245,7 @@ TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
   flipped[idat + 10] ^= 0x10;
   EXPECT_TRUE(fast(flipped).empty());
 
-  // An unknown critical chunk (upper-case first letter) before IEND: left to OpenCV.
+  // An unknown critical chunk (upper-case first letter) before IEND: left to libpng.
   {
     std::vector<unsigned char> critical(png.begin(), png.end() - 12);
     put_chunk(critical, "ZZZZ", {1, 2, 3});
@@ -292,7 +258,7 @@ TEST(PngFast, LeavesOtherPngsAndDamageToOpenCv) {
   }
 
   // A header that claims 30000 x 30000 pixels over a few bytes of data: refused before any
-  // buffer of that size is made (OpenCV then reports the file).
+  // buffer of that size is made (libpng then reports the file).
   {
     const std::vector<unsigned char> huge = huge_claim();
     const long peak_before = peak_rss_kb();

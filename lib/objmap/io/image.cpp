@@ -9,9 +9,9 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "objmap/core/error.h"
+#include "objmap/io/codecs.h"
 #include "objmap/io/png_fast.h"
 
 namespace objmap::io {
@@ -85,21 +85,18 @@ cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bo
   std::uint32_t header_width = 0, header_height = 0;
   if (format == Format::kPng && png_size(bytes.data(), bytes.size(), header_width, header_height))
     check_size(file, header_width, header_height, width, height);
-  // The PNGs of RGB-D recordings go through the faster decoder (same pixels); the rest, and any
-  // PNG it refuses, through OpenCV.
-  cv::Mat image;
+  // The PNGs of RGB-D recordings go through the faster decoder (same pixels); the other PNGs, and
+  // any PNG it refuses (also a damaged one: libpng then says what is wrong), through libpng.
   if (format == Format::kPng) {
-    image = decode_png_fast(bytes.data(), bytes.size());
+    cv::Mat image = decode_png_fast(bytes.data(), bytes.size());
     if (!image.empty()) return image;
   }
-  try {
-    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw InputError(file.string(),
-                     "cannot decode the image (" + e.msg + "); expected " + expected);
-  }
+  std::string error;
+  cv::Mat image = format == Format::kPng ? decode_png(bytes.data(), bytes.size(), error)
+                                         : decode_jpeg(bytes.data(), bytes.size(), error);
   if (image.empty())
-    throw InputError(file.string(), "cannot decode the image (corrupt data); expected " + expected);
+    throw InputError(file.string(),
+                     "cannot decode the image (" + error + "); expected " + expected);
   return image;
 }
 
@@ -125,6 +122,10 @@ std::string depth_name(int depth) {
 }
 
 }  // namespace
+
+cv::Mat read_image(const fs::path& file, bool allow_jpeg) {
+  return decode(file, read_bytes(file), allow_jpeg, 0, 0);
+}
 
 cv::Mat read_rgb(const fs::path& file, int width, int height) {
   const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/true, width, height);

@@ -150,7 +150,7 @@ cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
       ended = true;
       break;
     } else if (std::memcmp(type, "tRNS", 4) == 0 || std::memcmp(type, "PLTE", 4) == 0) {
-      return {};  // OpenCV turns transparency into an alpha channel: leave these to it
+      return {};  // OpenCV turns transparency into an alpha channel: left to io/codecs.h
     } else if ((type[0] & 0x20) == 0) {
       return {};  // an unknown critical chunk (upper-case first letter): not ours to skip
     }

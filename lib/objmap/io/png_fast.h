@@ -9,7 +9,8 @@
 // 8-bit grey, RGB and RGBA and 16-bit grey without a tRNS chunk, and gives exactly the pixels of
 // cv::imdecode(IMREAD_UNCHANGED) (BGR(A) order, 16-bit in host order). Anything else, and any
 // damage it finds (bad chunk CRC, bad zlib stream or Adler-32, wrong data size, unknown row
-// filter), gives an empty Mat: the caller then decodes with OpenCV, which reports the error.
+// filter), gives an empty Mat: the caller then decodes with libpng (io/codecs.h), which reports
+// the error.
 namespace objmap::io {
 
 cv::Mat decode_png_fast(const unsigned char* data, std::size_t size);
