@@ -473,6 +473,16 @@ TEST(ReadPng, MalformedYcbvCopy) {
             (tmp / "classes.txt").string() + ":2: label value is 'fourteen'; expected an integer");
   // a colour image in place of a label image
   fs::remove(tmp / "classes.txt");
+  // not an image, a damaged one: io's strict reader names the file
+  write_text(tmp / "0.100000.png", "not an image");
+  EXPECT_EQ(error_of([&] { read_segmentation(tmp.path()); }),
+            (tmp / "0.100000.png").string() + ": not a PNG image");
+  std::string png = test::read_text(tmp / "0.000000.png");
+  png[png.size() - 13] ^= 1;  // the last IDAT chunk's CRC
+  write_text(tmp / "0.100000.png", png);
+  EXPECT_EQ(error_of([&] { read_segmentation(tmp.path()); }),
+            (tmp / "0.100000.png").string() +
+                ": cannot decode the image (libpng: IDAT: CRC error); expected a PNG image");
   ASSERT_TRUE(
       cv::imwrite((tmp / "0.100000.png").string(), cv::Mat(4, 4, CV_8UC3, cv::Scalar(1, 2, 3))));
   EXPECT_ERROR_HAS(read_segmentation(tmp.path()),

@@ -5,9 +5,9 @@
 // then the value is also the track id), else ReadOptions.default_class with track id = value.
 #include <map>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "objmap/core/error.h"
+#include "objmap/io/image.h"
 #include "objmap/io/text_lines.h"
 #include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/read_internal.h"
@@ -142,9 +142,7 @@ std::vector<FrameSegmentation> read_png_frames(const fs::path& dir, const Folder
     FrameSegmentation frame;
     frame.timestamp = entry.timestamp;
     frame.source = where;
-    const cv::Mat labels = cv::imread(entry.path.string(), cv::IMREAD_UNCHANGED);
-    if (labels.empty())
-      throw InputError(where, "cannot read as an image; expected a PNG label image");
+    const cv::Mat labels = io::read_image(entry.path, /*allow_jpeg=*/false);
     if (labels.channels() != 1 || (labels.depth() != CV_8U && labels.depth() != CV_16U)) {
       throw InputError(where, std::to_string(labels.channels()) + " channel(s) of " +
                                   (labels.depth() == CV_8U    ? std::string("8")
