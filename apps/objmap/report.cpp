@@ -8,7 +8,6 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 
 #include "command.h"
@@ -24,6 +23,7 @@
 #include "objmap/report/plots.h"
 #include "objmap/report/thumbnail.h"
 #include "objmap/report/topview.h"
+#include "objmap/sim/png.h"
 
 namespace objmap::app {
 namespace {
@@ -59,9 +59,10 @@ json read_json(const fs::path& file) {
   }
 }
 
+// The pictures are CV_8UC3; objmap's PNG encoder (also that of `objmap synth`) writes them.
 std::string png_bytes(const cv::Mat& image) {
-  std::vector<unsigned char> png;
-  cv::imencode(".png", image, png);
+  std::vector<std::uint8_t> png;
+  sim::encode_png(image, &png);
   return std::string(png.begin(), png.end());
 }
 
