@@ -30,6 +30,23 @@ Rgb VoxelData::mean_color() const {
   return {avg(color_sum[0]), avg(color_sum[1]), avg(color_sum[2])};
 }
 
+namespace {
+
+// Calls add(r) for r = 0 .. n-1 in order, the table slot of the voxel kAhead later prefetched
+// (prefetch(r)) first, so that the cache misses of a large table overlap. The caller reserves
+// room beforehand: no rehash may move the prefetched slots.
+template <typename Prefetch, typename Add>
+void add_in_order(std::size_t n, Prefetch&& prefetch, Add&& add) {
+  constexpr std::size_t kAhead = 12;
+  for (std::size_t r = 0; r < std::min(n, kAhead); ++r) prefetch(r);
+  for (std::size_t r = 0; r < n; ++r) {
+    if (r + kAhead < n) prefetch(r + kAhead);
+    add(r);
+  }
+}
+
+}  // namespace
+
 VoxelMap::VoxelMap(const VoxelMapOptions& options) {
   options.check();
   voxel_m_ = options.voxel_m;
@@ -203,7 +220,6 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud) {
 void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard,
                           std::vector<std::uint32_t>& run_shard,
                           std::vector<std::size_t>& per_shard) {
-  constexpr std::size_t kAhead = 12;  // runs prefetched ahead
   const bool all = shard == kAllShards;
   if (all) {
     run_shard.resize(m);
@@ -218,18 +234,9 @@ void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard,
     shards_[shard].reserve(shards_[shard].size() + m);
   }
   auto table_of = [&](std::size_t r) -> Table& { return shards_[all ? run_shard[r] : shard]; };
-  for (std::size_t r = 0; r < std::min(m, kAhead); ++r) table_of(r).prefetch(runs[r].key);
-  for (std::size_t r = 0; r < m; ++r) {
-    if (r + kAhead < m) table_of(r + kAhead).prefetch(runs[r + kAhead].key);
-    const VoxelData& add = runs[r].sum;
-    VoxelData& v = table_of(r)[runs[r].key];
-    for (int a = 0; a < 3; ++a) {
-      v.offset_sum[a] += add.offset_sum[a];
-      v.color_sum[a] += add.color_sum[a];
-    }
-    v.count += add.count;
-    v.color_count += add.color_count;
-  }
+  add_in_order(
+      m, [&](std::size_t r) { table_of(r).prefetch(runs[r].key); },
+      [&](std::size_t r) { add_voxel(table_of(r), runs[r].key, runs[r].sum); });
 }
 
 void VoxelMap::insert(const PointCloud& cloud) {
@@ -290,19 +297,15 @@ void VoxelMap::merge_shard(const VoxelMap& other, std::size_t shard) {
           "VoxelMap::merge_shard",
           "maps differ in voxel size or shard count, or no shard " + std::to_string(shard) +
               "; expected equal maps and a shard below " + std::to_string(shards_.size()));
-  // The slot of a later voxel is prefetched, so that the cache misses of a large table overlap.
-  constexpr std::size_t kAhead = 12;
   const Table& src = other.shards_[shard];
   Table& dst = shards_[shard];
   std::vector<std::pair<VoxelKey, const VoxelData*>> todo;
   todo.reserve(src.size());
   src.for_each([&](VoxelKey key, const VoxelData& v) { todo.emplace_back(key, &v); });
-  dst.reserve(dst.size() + todo.size());  // no rehash below: prefetched slots stay valid
-  for (std::size_t r = 0; r < std::min(todo.size(), kAhead); ++r) dst.prefetch(todo[r].first);
-  for (std::size_t r = 0; r < todo.size(); ++r) {
-    if (r + kAhead < todo.size()) dst.prefetch(todo[r + kAhead].first);
-    add_voxel(dst, todo[r].first, *todo[r].second);
-  }
+  dst.reserve(dst.size() + todo.size());
+  add_in_order(
+      todo.size(), [&](std::size_t r) { dst.prefetch(todo[r].first); },
+      [&](std::size_t r) { add_voxel(dst, todo[r].first, *todo[r].second); });
 }
 
 void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
@@ -313,16 +316,13 @@ void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
               " shards of " + std::to_string(frame.voxel_m()) + " m voxels, or no shard " +
               std::to_string(shard) + "; expected this map's " + std::to_string(shards_.size()) +
               " shards of " + std::to_string(voxel_m_) + " m and a shard below that");
-  constexpr std::size_t kAhead = 12;  // as merge_shard
   const FrameVoxels::Entry* const first = frame.shard_begin(shard);
   const std::size_t n = static_cast<std::size_t>(frame.shard_end(shard) - first);
   Table& dst = shards_[shard];
-  dst.reserve(dst.size() + n);  // no rehash below: prefetched slots stay valid
-  for (std::size_t r = 0; r < std::min(n, kAhead); ++r) dst.prefetch(first[r].key);
-  for (std::size_t r = 0; r < n; ++r) {
-    if (r + kAhead < n) dst.prefetch(first[r + kAhead].key);
-    add_voxel(dst, first[r].key, first[r].sum);
-  }
+  dst.reserve(dst.size() + n);
+  add_in_order(
+      n, [&](std::size_t r) { dst.prefetch(first[r].key); },
+      [&](std::size_t r) { add_voxel(dst, first[r].key, first[r].sum); });
 }
 
 void VoxelMap::add(const FrameVoxels& frame) {
