@@ -533,12 +533,14 @@ std::vector<Rgb> semantic_colors(const DenseCloud& dense, double voxel_m,
       slot = static_cast<std::uint32_t>(i + 1);
     }
   }
+  // The owned voxels (tens of thousands) are looked up in the dense keys (sorted, unique), rather
+  // than each of the millions of dense voxels in `owner`.
   std::vector<Rgb> colors = dense.cloud.colors;
-  if (owner.empty()) return colors;
-  for (std::size_t i = 0; i < colors.size(); ++i) {
-    const std::uint32_t* slot = owner.find(dense.keys[i]);
-    if (slot) colors[i] = record_color[*slot - 1];
-  }
+  owner.for_each([&](fusion::VoxelKey key, std::uint32_t slot) {
+    const auto it = std::lower_bound(dense.keys.begin(), dense.keys.end(), key);
+    if (it != dense.keys.end() && *it == key)
+      colors[static_cast<std::size_t>(it - dense.keys.begin())] = record_color[slot - 1];
+  });
   return colors;
 }
 
