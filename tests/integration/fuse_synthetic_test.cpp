@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 
 #include "fuse_helpers.h"
+#include "objmap/fusion/palette.h"
+#include "objmap/geometry/voxel_key.h"
 #include "objmap/io/ply.h"
 #include "support/schema_check.h"
 
@@ -123,6 +126,50 @@ TEST(FuseSynthetic, OutputsValidateAndReadBack) {
   const auto run = read_json(r.out / "run.json");
   EXPECT_TRUE(validate_json(run, load_schema("run.schema.json")).empty());
   EXPECT_EQ(run["points"]["dense_map"].get<std::size_t>(), dense.size());
+}
+
+TEST(FuseSynthetic, SemanticMapIsTheDenseMapWithTheObjectsInClassColours) {
+  // map_semantic.ply: the dense points in the same order; a voxel holding a point of an object
+  // takes its class colour (the object with more observations, then the lower id, when several);
+  // every other voxel keeps its mean colour.
+  const SceneRun& r = default_run();
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  const PointCloud dense = io::read_ply(r.out / "map_dense.ply");
+  const PointCloud semantic = io::read_ply(r.out / "map_semantic.ply");
+  ASSERT_EQ(semantic.points, dense.points);
+  ASSERT_TRUE(dense.has_colors() && semantic.has_colors());
+  // The dense points are their voxels' means, sorted by voxel key (1 cm, the default).
+  const float inv_voxel = static_cast<float>(1.0 / 0.01);
+  std::map<geometry::VoxelKey, std::size_t> index;
+  geometry::VoxelKey last = 0;
+  for (std::size_t i = 0; i < dense.size(); ++i) {
+    const geometry::VoxelKey key = geometry::voxel_key(dense.points[i], inv_voxel);
+    ASSERT_TRUE(i == 0 || key > last) << "dense point " << i << " not in its own voxel";
+    last = key;
+    index.emplace_hint(index.end(), key, i);
+  }
+  std::vector<Rgb> expected = dense.colors;
+  std::vector<std::pair<long, int>> owner(dense.size(), {-1, 0});  // (observations, -id) of owner
+  const auto doc = read_json(r.out / "objects.json");
+  std::size_t claimed = 0;
+  for (const auto& o : doc.at("objects")) {
+    const long observations = o["observation_count"].get<long>();
+    const int id = o["id"].get<int>();
+    const Rgb colour = fusion::class_color(o["class"].get<std::string>());
+    for (const Vec3f& p : io::read_ply(r.out / o["ply"].get<std::string>()).points) {
+      const auto it = index.find(geometry::voxel_key(p, inv_voxel));
+      if (it == index.end()) continue;
+      const std::pair<long, int> rank{observations, -id};
+      if (owner[it->second].first >= 0 && rank <= owner[it->second]) continue;
+      claimed += owner[it->second].first < 0;
+      owner[it->second] = rank;
+      expected[it->second] = colour;
+    }
+  }
+  EXPECT_GT(claimed, 1000u);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < dense.size(); ++i) differ += !(semantic.colors[i] == expected[i]);
+  EXPECT_EQ(differ, 0u) << "of " << dense.size() << " voxels, " << claimed << " of objects";
 }
 
 TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
