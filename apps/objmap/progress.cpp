@@ -20,6 +20,11 @@ ProgressBar::~ProgressBar() {
 void ProgressBar::update(std::size_t done) {
   if (finished_ || total_ == 0) return;
   const auto now = std::chrono::steady_clock::now();
+  if (!have_first_) {
+    have_first_ = true;
+    first_done_ = done;
+    first_time_ = now;
+  }
   if (tty_) {
     if (now - last_draw_ < std::chrono::milliseconds(100) && done < total_) return;
     last_draw_ = now;
@@ -44,17 +49,26 @@ void ProgressBar::finish() {
 }
 
 void ProgressBar::draw(std::size_t done, bool final_line) {
+  const auto now = std::chrono::steady_clock::now();
+  // From the first update when there has been progress since; else from the bar's start.
+  const bool since_first = have_first_ && done > first_done_;
   const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  const double rate = seconds > 0 ? done / seconds : 0.0;
+      std::chrono::duration<double>(now - (since_first ? first_time_ : start_)).count();
+  const std::size_t counted = since_first ? done - first_done_ : done;
+  const bool known = counted > 0 && seconds > 1e-3;
+  const double rate = known ? counted / seconds : 0.0;
   const double eta = rate > 0 ? (total_ - done) / rate : 0.0;
   constexpr int kWidth = 24;
   const int filled = total_ ? static_cast<int>(kWidth * done / total_) : kWidth;
   std::string bar(filled, '#');
   bar.resize(kWidth, '.');
-  std::fprintf(stderr, "%s%-8s [%s] %zu/%zu  %.1f %s/s  ETA %.0f s%s", final_line ? "" : "\r",
-               label_.c_str(), bar.c_str(), done, total_, rate, unit_.c_str(), eta,
-               final_line ? "\n" : "   ");
+  char speed[64];
+  if (known)
+    std::snprintf(speed, sizeof speed, "%.1f %s/s  ETA %.0f s", rate, unit_.c_str(), eta);
+  else
+    std::snprintf(speed, sizeof speed, "-- %s/s", unit_.c_str());
+  std::fprintf(stderr, "%s%-8s [%s] %zu/%zu  %s%s", final_line ? "" : "\r", label_.c_str(),
+               bar.c_str(), done, total_, speed, final_line ? "\n" : "   ");
   std::fflush(stderr);
 }
 

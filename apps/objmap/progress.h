@@ -23,6 +23,11 @@ class ProgressBar {
   int last_decile_ = -1;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_{};
+  // The rate is measured from the first update on (a bar made when the first item is done would
+  // otherwise divide by almost no time): none is shown before a second update.
+  std::size_t first_done_ = 0;
+  std::chrono::steady_clock::time_point first_time_{};
+  bool have_first_ = false;
   void draw(std::size_t done, bool final_line);
 };
 
