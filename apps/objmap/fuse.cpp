@@ -13,9 +13,15 @@ namespace {
 
 void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseResult& r) {
   std::printf("camera      %s (%s)\n", r.camera.name.c_str(), r.camera_reason.c_str());
-  std::printf("keyframes   %zu of %zu frames (%zu with a pose; mode %s)\n",
-              r.keyframes.keyframes.size(), r.frames, r.keyframes.frames_with_pose,
-              r.keyframes.mode.c_str());
+  const auto& kf = r.keyframes;
+  std::printf("keyframes   %zu of %zu frames (%zu with a pose; mode %s%s%s)\n", kf.keyframes.size(),
+              r.frames, kf.frames_with_pose, kf.mode.c_str(), kf.reason.empty() ? "" : ": ",
+              kf.reason.c_str());
+  if (kf.keyframes.size() < static_cast<std::size_t>(options.objects.min_observations))
+    std::printf(
+        "            only %zu keyframe(s): an object needs %d observations to be "
+        "confirmed (--keyframes all, or a smaller --kf-translation / --kf-rotation)\n",
+        kf.keyframes.size(), options.objects.min_observations);
   std::printf(
       "instances   %zu (format %s; %zu masks from boxes, %zu given masks refined (-%llu pixels), "
       "%zu duplicates dropped, %zu without usable points)\n",
@@ -40,9 +46,9 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
   std::printf("            objects: %zu -> %zu voxel-filtered -> %zu outlier-filtered (-%.1f%%)\n",
               r.object_points_raw, r.object_points_voxel, r.object_points_filtered,
               pct(r.object_points_raw, r.object_points_filtered));
-  const std::size_t kf = r.keyframes.keyframes.size();
+  const std::size_t n_kf = kf.keyframes.size();
   std::printf("time        %.2f s (%.1f ms per keyframe), peak memory %.0f MB\n", r.seconds_total,
-              kf ? 1000.0 * r.seconds_total / kf : 0.0, r.peak_rss_kb / 1024.0);
+              n_kf ? 1000.0 * r.seconds_total / n_kf : 0.0, r.peak_rss_kb / 1024.0);
   std::printf("written     %s/{objects.json, objects/, %smap_objects.ply, run.json}\n",
               options.out.c_str(), options.dense_map ? "map_dense.ply, map_semantic.ply, " : "");
 }

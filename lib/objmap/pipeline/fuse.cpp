@@ -41,8 +41,8 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
       {"max_diff_s", "--max-diff", "rgb/depth and frame/pose association window, s", &o.max_diff_s},
       {"threads", "--threads", "worker threads; outputs are identical for any count", &o.threads},
       {"keyframes.mode", "--keyframes",
-       "auto|all|motion|stride (auto: all frames of a keyframe "
-       "trajectory, else by motion)",
+       "auto|all|motion|stride (auto: all frames of a keyframe trajectory, else by motion; "
+       "all when motion keeps fewer keyframes than --min-observations)",
        &k.mode},
       {"keyframes.min_translation_m", "--kf-translation",
        "motion keyframes: new after this "
@@ -669,6 +669,7 @@ FuseInputs load_inputs(const FuseOptions& options, FuseResult& result) {
   t0 = Clock::now();
   KeyframeOptions kf = options.keyframes;
   kf.max_diff_s = options.max_diff_s;
+  kf.min_keyframes = static_cast<std::size_t>(std::max(1, options.objects.min_observations));
   result.keyframes = select_keyframes(dataset, trajectory, kf);
   const auto& keyframes = result.keyframes.keyframes;
 
@@ -898,6 +899,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   run["counts"] = {{"frames", result.frames},
                    {"frames_with_pose", result.keyframes.frames_with_pose},
                    {"keyframe_mode", result.keyframes.mode},
+                   {"keyframe_mode_reason", result.keyframes.reason},
                    {"keyframes", keyframes.size()},
                    {"keyframes_with_segmentation", inputs.with_seg},
                    {"instances", result.instances_seen},

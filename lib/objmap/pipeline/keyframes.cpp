@@ -47,11 +47,16 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
 
   // 2. The mode: a keyframe trajectory is used as it is.
   result.mode = options.mode;
-  if (result.mode == "auto")
-    result.mode = 2 * posed.size() <= dataset.frames.size() ? "all" : "motion";
+  if (result.mode == "auto") {
+    const bool keyframe_file = 2 * posed.size() <= dataset.frames.size();
+    result.mode = keyframe_file ? "all" : "motion";
+    result.reason = "a pose for " + std::string(keyframe_file ? "only " : "") +
+                    std::to_string(posed.size()) + " of " + std::to_string(dataset.frames.size()) +
+                    " frames: " + (keyframe_file ? "a keyframe trajectory" : "thinned by motion");
+  }
 
   if (result.mode == "all") {
-    result.keyframes = std::move(posed);
+    result.keyframes = posed;
   } else if (result.mode == "stride") {
     for (std::size_t i = 0; i < posed.size(); i += options.stride)
       result.keyframes.push_back(posed[i]);
@@ -65,6 +70,16 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
       const double turned_rad = Eigen::AngleAxisd(last_from_this.rotation()).angle();
       if (moved_m >= options.min_translation_m || turned_rad >= min_rotation_rad)
         result.keyframes.push_back(posed[i]);
+    }
+    // auto: a camera that hardly moves over a short clip leaves too few keyframes to confirm
+    // anything; every posed frame is used then.
+    if (options.mode == "auto" && result.keyframes.size() < options.min_keyframes &&
+        result.keyframes.size() < posed.size()) {
+      result.reason = "motion kept " + std::to_string(result.keyframes.size()) + " of the " +
+                      std::to_string(posed.size()) + " posed frames, fewer than the " +
+                      std::to_string(options.min_keyframes) + " needed: every posed frame";
+      result.mode = "all";
+      result.keyframes = posed;
     }
   }
   return result;

@@ -18,7 +18,10 @@ struct KeyframeOptions {
   double min_translation_m = 0.05;  // motion: a new keyframe after this much translation ...
   double min_rotation_deg = 5.0;    // ... or this much rotation since the last keyframe
   int stride = 1;                   // stride: every stride-th frame that has a pose
-  void check() const;               // throws InputError naming the bad field
+  // auto: when motion keeps fewer keyframes than this (a short clip of a camera that hardly
+  // moves), every frame that has a pose is a keyframe. fuse: the observations an object needs.
+  std::size_t min_keyframes = 1;
+  void check() const;  // throws InputError naming the bad field
 };
 
 struct Keyframe {
@@ -30,7 +33,8 @@ struct Keyframe {
 struct KeyframeSelection {
   std::vector<Keyframe> keyframes;
   std::size_t frames_with_pose = 0;
-  std::string mode;  // the mode used (auto resolved)
+  std::string mode;    // the mode used (auto resolved)
+  std::string reason;  // auto: why that mode, e.g. "a pose for 58 of 1227 frames"
 };
 
 // Throws InputError naming the trajectory when no frame has a pose.
