@@ -29,12 +29,26 @@ GtObject read_cabinet(const fs::path& file) {
   return g;
 }
 
+// `objmap fuse` of a real sequence with its groundtruth.txt and the segmentation folder `seg`.
+RunResult fuse_real(const fs::path& data, const std::string& seg, const fs::path& out,
+                    const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args{"fuse",
+                                "--dataset",
+                                data.string(),
+                                "--trajectory",
+                                (data / "groundtruth.txt").string(),
+                                "--segmentation",
+                                (data / seg).string(),
+                                "--out",
+                                out.string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return run_objmap(args);
+}
+
 TEST(FuseReal, Fr3CabinetGivesOneObjectInsideTheGroundTruthCuboid) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr3_cabinet_58kf");
   TempDir dir;
-  const auto r = run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
-                             (data / "groundtruth.txt").string(), "--segmentation",
-                             (data / "boxes_yolov2").string(), "--out", (dir / "run").string()});
+  const auto r = fuse_real(data, "boxes_yolov2", dir / "run");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto fused = read_fused_objects(dir / "run" / "objects.json");
   ASSERT_EQ(fused.size(), 1u) << r.out;
@@ -56,9 +70,7 @@ TEST(FuseReal, YcbVideoClipWithDefaultsFindsItsThreeObjects) {
   // uses every posed frame, and the three objects are found at their model origins.
   OBJMAP_DATA_OR_SKIP(data, "ycbv_0000_10f");
   TempDir dir;
-  const auto r = run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
-                             (data / "groundtruth.txt").string(), "--segmentation",
-                             (data / "masks").string(), "--out", (dir / "run").string()});
+  const auto r = fuse_real(data, "masks", dir / "run");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto run = read_json(dir / "run" / "run.json");
   EXPECT_EQ(run["counts"]["keyframes"].get<int>(), 10);
