@@ -24,6 +24,9 @@
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/backproject.h"
 #include "objmap/io/png_fast.h"
+#include "objmap/io/tum_dataset.h"
+#include "objmap/segmentation/box_mask.h"
+#include "objmap/segmentation/read.h"
 
 namespace fs = std::filesystem;
 using namespace objmap;
@@ -295,6 +298,81 @@ void BM_VoxelFilterPclVoxelGrid100k(benchmark::State& state) {
   state.counters["kept"] = static_cast<double>(kept);
 }
 BENCHMARK(BM_VoxelFilterPclVoxelGrid100k)->Unit(benchmark::kMillisecond);
+
+// ---------------------------------------------------------------------------------------------
+// Segmentation: masks from boxes, and reading a long box sequence.
+
+// segmentation::mask_from_box for every detector box (detections_yolofastest) of the first 16
+// frames of fr1_rpy_every4 on their depth images, as fuse makes the masks of box-only instances.
+void BM_MaskFromBoxReal(benchmark::State& state) {
+  struct Job {
+    cv::Mat depth;
+    std::vector<segmentation::Box> boxes;
+  };
+  static const std::vector<Job> jobs = [] {
+    std::vector<Job> out;
+    const fs::path dir = data_dir() / "tum" / "fr1_rpy_every4";
+    if (!fs::exists(dir / "detections_yolofastest")) return out;
+    const io::TumDataset dataset = io::read_tum_dataset(dir);
+    segmentation::ReadOptions read;
+    read.image_width = 640;
+    read.image_height = 480;
+    const segmentation::Segmentation seg =
+        segmentation::read_segmentation(dir / "detections_yolofastest", read);
+    for (const auto& frame : seg.frames) {
+      if (out.size() == 16) break;
+      for (const auto& pair : dataset.frames) {
+        if (std::abs(pair.rgb_timestamp - frame.timestamp) > 1e-3 || frame.instances.empty())
+          continue;
+        Job job{cv::imread(pair.depth_file.string(), cv::IMREAD_UNCHANGED), {}};
+        for (const auto& instance : frame.instances) job.boxes.push_back(instance.bbox);
+        out.push_back(std::move(job));
+        break;
+      }
+    }
+    return out;
+  }();
+  if (jobs.empty()) {
+    state.SkipWithError("real data missing (OBJMAP_DATA)");
+    return;
+  }
+  const Camera camera = camera_preset("fr1");
+  std::size_t boxes = 0;
+  double area = 0;
+  for (const Job& job : jobs)
+    for (const auto& box : job.boxes) {
+      ++boxes;
+      area += box.w * box.h;
+    }
+  for (auto _ : state)
+    for (const Job& job : jobs)
+      for (const auto& box : job.boxes)
+        benchmark::DoNotOptimize(segmentation::mask_from_box(box, job.depth, camera, {}).pixels);
+  state.counters["boxes"] = static_cast<double>(boxes);
+  state.counters["px/box"] = area / static_cast<double>(boxes);
+  // Milliseconds per box (Google Benchmark prints an inverted rate with an "s" after it).
+  state.counters["ms/box"] =
+      benchmark::Counter(static_cast<double>(boxes) * state.iterations() * 1e-3,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_MaskFromBoxReal)->Unit(benchmark::kMillisecond);
+
+// Reading fr3_long_office_household's 2585 box files (17,225 boxes, COCO ids).
+void BM_ReadBoxSegmentationFr3LongOffice(benchmark::State& state) {
+  const fs::path dir =
+      data_dir() / "tum" / "fr3_long_office_household_annotations" / "detections_yolo";
+  if (!fs::exists(dir)) {
+    state.SkipWithError("real data missing (OBJMAP_DATA)");
+    return;
+  }
+  segmentation::ReadOptions read;
+  read.image_width = 640;
+  read.image_height = 480;
+  std::size_t frames = 0;
+  for (auto _ : state) frames = segmentation::read_segmentation(dir, read).frames.size();
+  state.counters["frames"] = static_cast<double>(frames);
+}
+BENCHMARK(BM_ReadBoxSegmentationFr3LongOffice)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Object map: one observation (a masked 160×120 region: ~19k points) against 20 objects.

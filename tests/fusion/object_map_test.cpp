@@ -2,8 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <random>
 
@@ -479,10 +477,9 @@ TEST(ObjectMap, PositionIsTheCentreOfTheSeenExtentNotThePointMean) {
   EXPECT_LT((r[0].position - c).norm(), 1e-5);
 }
 
-TEST(ObjectMap, AddStaysFastForALargeObservation) {
+TEST(ObjectMap, LargeObservationsJoinTheirObject) {
   // ~20k points (a chair at 2 m: 4 mm pixel footprint, ~3k voxels) added to an object fused from
-  // earlier views, next to 10 other objects: the cost the fuse loop pays for every instance of
-  // every keyframe.
+  // earlier views, next to 10 other objects: every view joins the chair.
   std::mt19937 rng(7);
   std::normal_distribution<float> noise(0.f, 0.003f);
   auto view = [&](float shift) {
@@ -500,14 +497,12 @@ TEST(ObjectMap, AddStaysFastForALargeObservation) {
   for (int f = 0; f < 3; ++f) map.add(obs(f, 1, "chair", 0.9, view(0.01f * f)));
   std::vector<PointCloud> views;
   for (int f = 0; f < 10; ++f) views.push_back(view(0.01f * f));
-  const auto t0 = std::chrono::steady_clock::now();
   for (int f = 0; f < 10; ++f) map.add(obs(10 + f, 2, "chair", 0.9, views[f]));
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / 10;
-  EXPECT_EQ(map.size(), 11u);
-  RecordProperty("add_ms", std::to_string(ms));
-  std::printf("add(): %.2f ms\n", ms);
-  EXPECT_LT(ms, 10.0);  // loose: the machine is shared
+  EXPECT_EQ(map.size(), 11u);  // the later views of the chair joined it (speed: BM_ObjectMapAdd)
+  int chair_observations = 0;
+  for (const auto& r : map.records(no_outlier_filter()))
+    if (r.class_name == "chair") chair_observations = r.observations;
+  EXPECT_EQ(chair_observations, 13);
 }
 
 TEST(ObjectMap, OverlapMeasureNames) {

@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -89,13 +88,9 @@ TEST(ReadReal, Fr1RpyBoxesNamedWithEmptyFrames) {
 TEST(ReadReal, Fr3LongOfficeBoxesCoco) {
   OBJMAP_DATA_OR_SKIP(dir, "tum/fr3_long_office_household_annotations/detections_yolo");
   EXPECT_EQ(detect_format(dir), "boxes-coco");
-  const auto start = std::chrono::steady_clock::now();
-  const Segmentation seg = read_segmentation(dir, vga());
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const Segmentation seg = read_segmentation(dir, vga());  // speed: bench_fusion
   ASSERT_EQ(seg.frames.size(), 2585u);
   EXPECT_EQ(count_instances(seg), 17225u);
-  EXPECT_LT(seconds, 5.0);
   // First line of 1341847980.722988.txt: "73 173 138 46 70 0.578918", (x, y) the top-left corner.
   const Instance& book = seg.frames[0].instances.at(0);
   EXPECT_DOUBLE_EQ(seg.frames[0].timestamp, 1341847980.722988);

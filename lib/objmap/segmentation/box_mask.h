@@ -29,10 +29,10 @@
 //   6. a 3×3 morphological closing; a mask below the minimum area is returned empty.
 //
 // Cost: O(box area) with buffers reused per thread (no allocation per pixel, a full-image mask per
-// call): 0.7–0.9 ms CPU for a 152×133 box, 1–2 ms for the 170×190 YCB boxes, measured on the
-// shared 2-core build machine (see docs/_parts/boxmask.md). Pixel rays use the pinhole model (fx,
-// fy, cx, cy); lens distortion is neglected, which only bends the support plane slightly near the
-// image border.
+// call): 0.7–0.9 ms CPU for a 152×133 box, 1–2 ms for the 170×190 YCB boxes, ~1.2 ms for
+// fr1's detector boxes (bench_fusion BM_MaskFromBoxReal; docs/fusion.md). Pixel rays use the
+// pinhole model (fx, fy, cx, cy); lens distortion is neglected, which only bends the support plane
+// slightly near the image border.
 namespace objmap::segmentation {
 
 struct BoxMaskOptions {
