@@ -134,7 +134,8 @@ void setup_correct(CLI::App& app) {
       ->required();
   cmd->add_option("--out", options->out, "output run folder (replaced when complete)")->required();
   add_correction_flags(cmd, *options);
-  cmd->add_option("--threads", options->threads, "threads of the re-fuse")->capture_default_str();
+  cmd->add_option("--threads", options->threads, "threads of the re-fuse (0 = all cores)")
+      ->capture_default_str();
   cmd->callback([options] {
     std::unique_ptr<ProgressBar> bar;
     const auto result = pipeline::run_correct(*options, [&](std::size_t done, std::size_t total) {

@@ -77,5 +77,15 @@ TEST(FuseCli, UnknownConfigKeyIsNamed) {
   EXPECT_NE(r.err.find("objects.weight_idd"), std::string::npos) << r.err;
 }
 
+TEST(FuseCli, ThreadCountOutOfRangeIsNamed) {
+  TempDir dir;
+  const auto r = run_objmap({"fuse", "--dataset", "x", "--trajectory", "t", "--segmentation", "s",
+                             "--out", (dir / "o").string(), "--threads", "65"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("threads: must be in [0, 64] (0: all cores), got 65"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "o"));
+}
+
 }  // namespace
 }  // namespace objmap::test

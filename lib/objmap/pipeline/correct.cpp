@@ -298,7 +298,8 @@ void CorrectOptions::check() const {
           "CorrectOptions.link_max_translation_per_m", "must be >= 0");
   require(std::isfinite(link_max_rotation_deg_per_m) && link_max_rotation_deg_per_m >= 0,
           "CorrectOptions.link_max_rotation_deg_per_m", "must be >= 0");
-  require(threads >= 1, "CorrectOptions.threads", "must be >= 1");
+  require(threads >= 0 && threads <= 64, "CorrectOptions.threads",
+          "must be in [0, 64] (0: all cores), got " + std::to_string(threads));
   visibility.check();
   correction.check();
 }

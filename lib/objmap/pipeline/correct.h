@@ -63,7 +63,7 @@ struct CorrectOptions {
   // After the re-fuse, the map's own consistency (median object scatter of the new run) must not
   // exceed the input run's, else the whole result is refused.
   bool check_map = true;
-  int threads = 2;     // for the re-fuse
+  int threads = 0;     // for the re-fuse and the observations' ICP; 0 = all cores
   void check() const;  // throws InputError naming the bad field
 };
 

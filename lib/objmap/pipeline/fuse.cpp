@@ -39,7 +39,8 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
   auto& b = o.box_mask;
   return {
       {"max_diff_s", "--max-diff", "rgb/depth and frame/pose association window, s", &o.max_diff_s},
-      {"threads", "--threads", "worker threads; outputs are identical for any count", &o.threads},
+      {"threads", "--threads",
+       "worker threads (0 = all cores); outputs are identical for any count", &o.threads},
       {"keyframes.mode", "--keyframes",
        "auto|all|motion|stride (auto: all frames of a keyframe trajectory, else by motion; "
        "all when motion keeps fewer keyframes than --min-observations)",
@@ -157,7 +158,8 @@ void FuseOptions::check() const {
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
           "objects.min_voxel_support", "must be in [0, 1]");
   outlier.check();
-  require(threads >= 1 && threads <= 64, "threads", "must be in [1, 64]");
+  require(threads >= 0 && threads <= 64, "threads",
+          "must be in [0, 64] (0: all cores), got " + std::to_string(threads));
 }
 
 namespace {
@@ -714,6 +716,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const FuseInputs inputs = load_inputs(options, result);
   const io::TumDataset& dataset = inputs.dataset;
   const Camera& camera = result.camera;
+  const int threads = std::min(64, resolve_threads(options.threads));
+  result.threads = threads;
   const auto& keyframes = result.keyframes.keyframes;
   auto t0 = Clock::now();
 
@@ -721,10 +725,10 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   //    thread merges their results strictly in keyframe order, so the maps do not depend on the
   //    thread count.
   t0 = Clock::now();
-  const geometry::RayTable rays = geometry::make_ray_table(camera, options.threads);
+  const geometry::RayTable rays = geometry::make_ray_table(camera, threads);
   fusion::VoxelMapOptions dense_options;
   dense_options.voxel_m = options.map_voxel_m;
-  dense_options.threads = options.threads;  // for sorting on export; voxels come via merge_shard
+  dense_options.threads = threads;  // for sorting on export; voxels come via merge_shard
   dense_options.shards = kDenseShards;
   fusion::VoxelMap dense(dense_options);
   ShardedMergeOrder merge_order(kDenseShards);
@@ -734,7 +738,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
   fusion::ObjectMap objects(object_options);
 
-  const std::size_t window = static_cast<std::size_t>(std::max(1, options.threads));
+  const std::size_t window = static_cast<std::size_t>(threads);
   std::deque<std::future<FrameWork>> pending;
   std::size_t next = 0;
   auto launch = [&](std::size_t i) {
@@ -811,7 +815,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   record_options.confirmed_only = true;
   record_options.outlier_filter = options.outlier_filter;
   record_options.outlier = options.outlier;
-  record_options.outlier.threads = options.threads;
+  record_options.outlier.threads = threads;
   record_options.min_voxel_support = options.min_voxel_support;
   result.objects = objects.records(record_options);
   for (const auto& r : result.objects) {
@@ -935,7 +939,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   perf["ms_per_keyframe"] =
       keyframes.empty() ? 0.0 : 1000.0 * result.seconds_total / keyframes.size();
   perf["peak_rss_mb"] = result.peak_rss_kb / 1024.0;
-  perf["threads"] = options.threads;
+  perf["threads"] = result.threads;
   run["performance"] = perf;
   io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
   staging.commit();
@@ -957,9 +961,10 @@ std::vector<fusion::Observation> remake_observations(const FuseOptions& options,
             "keyframe " + std::to_string(i) + " does not exist (" +
                 std::to_string(keyframes.size()) +
                 " keyframes); expected the inputs and options the run was fused with");
-  const geometry::RayTable rays = geometry::make_ray_table(result.camera, options.threads);
+  const int threads = std::min(64, resolve_threads(options.threads));
+  const geometry::RayTable rays = geometry::make_ray_table(result.camera, threads);
   std::vector<std::vector<fusion::Observation>> per_keyframe(keyframe_indices.size());
-  parallel_for(keyframe_indices.size(), options.threads, [&](std::size_t j) {
+  parallel_for(keyframe_indices.size(), threads, [&](std::size_t j) {
     const std::size_t i = static_cast<std::size_t>(keyframe_indices[j]);
     segmentation::FrameSegmentation lazy;
     const segmentation::FrameSegmentation* seg = keyframe_segmentation(inputs, i, lazy);

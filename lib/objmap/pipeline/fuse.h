@@ -46,8 +46,8 @@ struct FuseOptions {
   fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
   bool outlier_filter = true;        // eq 18 on each object's cloud
   filters::OutlierOptions outlier;   // K = 20, k = 1.0
-  int threads = 2;                   // worker threads; outputs are identical for any count
-  void check() const;                // throws InputError naming the bad field
+  int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
+  void check() const;  // throws InputError naming the bad field
 };
 
 struct StageTime {
@@ -81,6 +81,7 @@ struct FuseResult {
   std::vector<StageTime> times;
   double seconds_total = 0.0;
   long peak_rss_kb = 0;
+  int threads = 1;  // worker threads used (--threads, 0 resolved to the cores)
 };
 
 // Every tunable field of FuseOptions (not the input/output paths) with its JSON key, flag and help.
