@@ -159,12 +159,18 @@ void FuseOptions::check() const {
           "objects.min_voxel_support", "must be in [0, 1]");
   outlier.check();
   require(threads >= 0 && threads <= 64, "threads",
-          "must be in [0, 64] (0: all cores), got " + std::to_string(threads));
+          "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
 }
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The worker threads of `requested` (0: the cores, at most 8: the objects are associated on one
+// thread, ~15% of the work, so more workers would add memory, not speed).
+int fuse_threads(int requested) {
+  return requested > 0 ? requested : std::min(8, resolve_threads(0));
+}
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -716,7 +722,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const FuseInputs inputs = load_inputs(options, result);
   const io::TumDataset& dataset = inputs.dataset;
   const Camera& camera = result.camera;
-  const int threads = std::min(64, resolve_threads(options.threads));
+  const int threads = fuse_threads(options.threads);
   result.threads = threads;
   const auto& keyframes = result.keyframes.keyframes;
   auto t0 = Clock::now();
@@ -961,7 +967,7 @@ std::vector<fusion::Observation> remake_observations(const FuseOptions& options,
             "keyframe " + std::to_string(i) + " does not exist (" +
                 std::to_string(keyframes.size()) +
                 " keyframes); expected the inputs and options the run was fused with");
-  const int threads = std::min(64, resolve_threads(options.threads));
+  const int threads = fuse_threads(options.threads);
   const geometry::RayTable rays = geometry::make_ray_table(result.camera, threads);
   std::vector<std::vector<fusion::Observation>> per_keyframe(keyframe_indices.size());
   parallel_for(keyframe_indices.size(), threads, [&](std::size_t j) {
