@@ -1,6 +1,7 @@
 #include "objmap/pipeline/keyframes.h"
 
 #include <cmath>
+#include <utility>
 
 #include "objmap/core/error.h"
 #include "objmap/io/trajectory.h"
@@ -56,7 +57,7 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
   }
 
   if (result.mode == "all") {
-    result.keyframes = posed;
+    result.keyframes = std::move(posed);
   } else if (result.mode == "stride") {
     for (std::size_t i = 0; i < posed.size(); i += options.stride)
       result.keyframes.push_back(posed[i]);
@@ -79,7 +80,7 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
                       std::to_string(posed.size()) + " posed frames, fewer than the " +
                       std::to_string(options.min_keyframes) + " needed: every posed frame";
       result.mode = "all";
-      result.keyframes = posed;
+      result.keyframes = std::move(posed);
     }
   }
   return result;
