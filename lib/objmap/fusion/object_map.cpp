@@ -621,15 +621,15 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
   return out;
 }
 
-SemanticMaps make_semantic_maps(const VoxelMap& dense, const std::vector<ObjectRecord>& records) {
-  SemanticMaps maps;
-  // Which confirmed record each voxel belongs to (stored as index + 1).
+geometry::VoxelHashTable<std::uint32_t> voxel_owners(const std::vector<ObjectRecord>& records,
+                                                     double voxel_m) {
+  const float inv_voxel_m = static_cast<float>(1.0 / voxel_m);  // as VoxelMap::key_of
   geometry::VoxelHashTable<std::uint32_t> owner;
   for (std::size_t i = 0; i < records.size(); ++i) {
     const ObjectRecord& r = records[i];
     if (!r.confirmed) continue;
     for (const Vec3f& p : r.cloud.points) {
-      const VoxelKey key = dense.key_of(p);
+      const VoxelKey key = geometry::voxel_key(p, inv_voxel_m);
       if (key == geometry::kNoVoxel) continue;
       std::uint32_t& slot = owner[key];
       if (slot != 0) {
@@ -641,6 +641,12 @@ SemanticMaps make_semantic_maps(const VoxelMap& dense, const std::vector<ObjectR
       slot = static_cast<std::uint32_t>(i + 1);
     }
   }
+  return owner;
+}
+
+SemanticMaps make_semantic_maps(const VoxelMap& dense, const std::vector<ObjectRecord>& records) {
+  SemanticMaps maps;
+  const geometry::VoxelHashTable<std::uint32_t> owner = voxel_owners(records, dense.voxel_m());
   const auto voxels = dense.sorted_voxels();
   maps.semantic.reserve(voxels.size());
   for (const auto& [key, v] : voxels) {

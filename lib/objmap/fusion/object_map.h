@@ -246,4 +246,10 @@ struct SemanticMaps {
 };
 SemanticMaps make_semantic_maps(const VoxelMap& dense, const std::vector<ObjectRecord>& records);
 
+// The confirmed record each voxel (of `voxel_m`, keys as VoxelMap::key_of) holds a point of, as
+// record index + 1; a voxel claimed by two goes to the one with more observations, then the lower
+// id. The semantic maps' rule (make_semantic_maps, and fuse's map_semantic.ply).
+geometry::VoxelHashTable<std::uint32_t> voxel_owners(const std::vector<ObjectRecord>& records,
+                                                     double voxel_m);
+
 }  // namespace objmap::fusion

@@ -518,29 +518,12 @@ DenseCloud take_dense_cloud(fusion::VoxelMap& dense, const fusion::VoxelMapOptio
 }
 
 // The semantic colours of the dense points (map_semantic.ply), as fusion::make_semantic_maps: a
-// voxel holding a point of a confirmed object takes that object's class colour (the object with
-// more observations, then the lower id, when several), the others keep their mean colour.
+// voxel holding a point of a confirmed object takes that object's class colour (its owner in
+// fusion::voxel_owners), the others keep their mean colour.
 std::vector<Rgb> semantic_colors(const DenseCloud& dense, double voxel_m,
                                  const std::vector<fusion::ObjectRecord>& records,
                                  const std::vector<Rgb>& record_color) {
-  const float inv_voxel_m = static_cast<float>(1.0 / voxel_m);  // as VoxelMap::key_of
-  geometry::VoxelHashTable<std::uint32_t> owner;                // record index + 1 per voxel
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    const fusion::ObjectRecord& r = records[i];
-    if (!r.confirmed) continue;
-    for (const Vec3f& p : r.cloud.points) {
-      const fusion::VoxelKey key = geometry::voxel_key(p, inv_voxel_m);
-      if (key == geometry::kNoVoxel) continue;
-      std::uint32_t& slot = owner[key];
-      if (slot != 0) {
-        const fusion::ObjectRecord& other = records[slot - 1];
-        const bool better = r.observations > other.observations ||
-                            (r.observations == other.observations && r.id < other.id);
-        if (!better) continue;
-      }
-      slot = static_cast<std::uint32_t>(i + 1);
-    }
-  }
+  const geometry::VoxelHashTable<std::uint32_t> owner = fusion::voxel_owners(records, voxel_m);
   // The owned voxels (tens of thousands) are looked up in the dense keys (sorted, unique), rather
   // than each of the millions of dense voxels in `owner`.
   std::vector<Rgb> colors = dense.cloud.colors;
