@@ -28,6 +28,14 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
       r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_refined,
       static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_duplicate,
       r.instances_empty);
+  // A run that cannot have objects says why, rather than leaving an empty table to puzzle over.
+  if (r.instances_seen == 0)
+    std::printf(
+        "            none in the keyframes' segmentation frames: no objects, the dense map "
+        "only\n");
+  else if (r.instances_skipped_score == r.instances_seen)
+    std::printf("            all %zu below --min-score %g: no objects, the dense map only\n",
+                r.instances_seen, options.min_instance_score);
   std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass)\n", r.objects.size(),
               r.objects_total, r.merges.size());
   std::printf("\n  %4s  %-16s %9s %9s %9s  %8s  %5s\n", "id", "class", "x", "y", "z", "points",

@@ -62,6 +62,36 @@ TEST_F(FuseBadInput, NoFrameWithAPose) {
 
 TEST_F(FuseBadInput, EmptySegmentation) { expect_rejected(fuse(), "seg"); }
 
+TEST_F(FuseBadInput, BoxFilesWithoutABoxNameTheFormatFlag) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".txt"), "");
+  expect_rejected(fuse(), "--seg-format");
+}
+
+// With the layout given, box files without a box are a segmentation with no instance: the run
+// makes the dense map and says why there are no objects.
+TEST_F(FuseBadInput, NoInstanceWithTheFormatGivenSaysWhyThereAreNoObjects) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".txt"), "");
+  const auto r =
+      run_objmap({"fuse", "--dataset", data_.string(), "--trajectory",
+                  (data_ / "groundtruth.txt").string(), "--segmentation", (dir_ / "seg").string(),
+                  "--seg-format", "boxes-named", "--out", (dir_ / "run").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("none in the keyframes' segmentation frames: no objects"), std::string::npos)
+      << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "run" / "map_dense.ply"));
+}
+
+TEST_F(FuseBadInput, EveryInstanceBelowTheMinScoreSaysWhyThereAreNoObjects) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".txt"),
+             "66 keyboard 0.3 20 218 401 433\n62 tvmonitor 0.45 14 0 231 233\n");
+  const auto r =
+      run_objmap({"fuse", "--dataset", data_.string(), "--trajectory",
+                  (data_ / "groundtruth.txt").string(), "--segmentation", (dir_ / "seg").string(),
+                  "--min-score", "0.5", "--out", (dir_ / "run").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("all 2 below --min-score 0.5: no objects"), std::string::npos) << r.out;
+}
+
 TEST(FuseCli, MissingRequiredFlagIsAUsageError) {
   const auto r = run_objmap({"fuse", "--dataset", "x"});
   EXPECT_EQ(r.exit_code, 2);

@@ -385,9 +385,10 @@ std::string detect_format(const fs::path& dir) {
   const int kinds =
       !scan.json.empty() + !scan.png.empty() + !scan.txt.empty() + !scan.folders.empty();
   if (kinds > 1) {
-    throw InputError(dir.string(), detail::describe(scan) +
-                                       "; cannot tell which is the segmentation, expected one kind "
-                                       "(or choose one with the format option)");
+    throw InputError(dir.string(),
+                     detail::describe(scan) +
+                         "; cannot tell which is the segmentation, expected one kind "
+                         "(or choose one with --seg-format, config segmentation.format)");
   }
   if (!scan.png.empty()) return "png";
   if (!scan.json.empty()) return "json";

@@ -135,7 +135,7 @@ std::string detect_box_layout(const FolderScan& scan) {
   throw InputError(scan.txt.front().path.parent_path().string(),
                    std::to_string(scan.txt.size()) +
                        " <timestamp>.txt files without a data line; cannot tell the box layout "
-                       "(choose one with the format option)");
+                       "(choose one with --seg-format, config segmentation.format)");
 }
 
 std::vector<FrameSegmentation> read_box_frames(const FolderScan& scan, const std::string& format,
