@@ -52,6 +52,7 @@ std::vector<std::string> split_classes(const std::string& list) {
 void run_detect(DetectCommand& cmd) {
   // OpenCV's dnn may log warnings on stderr; the user sees objmap's lines only.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+  io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
   segmentation::DetectOptions& o = cmd.options;
   o.model = cmd.model;
   o.config = cmd.config;
@@ -89,7 +90,7 @@ void run_detect(DetectCommand& cmd) {
       });
   if (bar) bar->finish();
 
-  io::StagingDir staging(cmd.out);
+  io::StagingDir staging(cmd.out, io::kSegmentationFolder);
   segmentation::write_segmentation(staging.path(), result.segmentation);
   staging.commit();
 

@@ -102,6 +102,8 @@ void run_report(const ReportOptions& options) {
           "'" + options.up + "'; expected x, y or z");
   require(options.thumbnail_px >= 32 && options.thumbnail_px <= 1024, "--thumbnail",
           std::to_string(options.thumbnail_px) + "; expected 32 to 1024 pixels");
+  io::require_replaceable(options.out.empty() ? options.run / "report" : options.out,
+                          io::kReportFolder);
   const int up_axis = options.up[0] - 'x';
   report::PageContent page;
   page.title = "objmap report: " + fs::absolute(options.run).lexically_normal().filename().string();
@@ -353,7 +355,7 @@ void run_report(const ReportOptions& options) {
 
   // 7. The files: the page, the summary and every picture beside them.
   const fs::path out = options.out.empty() ? options.run / "report" : options.out;
-  io::StagingDir staging(out);
+  io::StagingDir staging(out, io::kReportFolder);
   io::write_file_atomic(staging.path() / page.topview.file, page.topview.bytes);
   for (const report::PagePicture* p : {&page.trajectory_plot, &page.ate_plot})
     if (!p->bytes.empty()) io::write_file_atomic(staging.path() / p->file, p->bytes);

@@ -42,6 +42,7 @@ void run_track(TrackCommand& cmd) {
   o.tracker.same_class_only = cmd.same_class;
   o.label_tentative_history = !cmd.online_output;
   o.check();
+  io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
   require(fs::is_directory(cmd.dataset), cmd.dataset,
           "no such folder; expected a TUM RGB-D folder with rgb.txt");
   segmentation::ReadOptions read;
@@ -72,7 +73,7 @@ void run_track(TrackCommand& cmd) {
       positions);
   if (bar) bar->finish();
 
-  io::StagingDir staging(cmd.out);
+  io::StagingDir staging(cmd.out, io::kSegmentationFolder);
   segmentation::write_segmentation(staging.path(), result.tracked);
   io::write_file_atomic(staging.path() / "tracks.json", track::tracks_json(result));
   staging.commit();

@@ -92,6 +92,42 @@ TEST_F(FuseBadInput, EveryInstanceBelowTheMinScoreSaysWhyThereAreNoObjects) {
   EXPECT_NE(r.out.find("all 2 below --min-score 0.5: no objects"), std::string::npos) << r.out;
 }
 
+// --out naming a folder that is not an earlier run (here the dataset itself, copied): exit 2 before
+// any work, the folder as it was; an earlier run is replaced.
+TEST_F(FuseBadInput, OutThatIsNotAnEarlierRunIsNeverReplaced) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".json"),
+             R"({"instances":[{"class":"cup","score":0.9,"bbox":[10,10,50,50]}]})");
+  const fs::path data = dir_ / "data";
+  fs::copy(data_, data, fs::copy_options::recursive);
+  auto fuse_into = [&](const fs::path& out) {
+    return run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
+                       (data / "groundtruth.txt").string(), "--segmentation",
+                       (dir_ / "seg").string(), "--out", out.string()});
+  };
+  const RunResult r = fuse_into(data);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(data.string() +
+                       ": exists and is not an earlier objmap fuse run (it holds depth, depth.txt, "
+                       "detections_yolofastest and 3 more; no run.json), so it is not replaced"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(fs::exists(data / "rgb.txt"));
+  EXPECT_FALSE(fs::exists(data / "run.json"));
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_.path())) ++entries;
+  EXPECT_EQ(entries, 2u);  // seg, data: no temporary folder
+
+  // An earlier run is replaced: its extra file goes.
+  const fs::path run = dir_ / "run";
+  ASSERT_EQ(fuse_into(run).exit_code, 0);
+  write_text(run / "extra.txt", "x");
+  const RunResult again = fuse_into(run);
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_TRUE(fs::exists(run / "run.json"));
+  EXPECT_FALSE(fs::exists(run / "extra.txt"));
+}
+
 TEST(FuseCli, MissingRequiredFlagIsAUsageError) {
   const auto r = run_objmap({"fuse", "--dataset", "x"});
   EXPECT_EQ(r.exit_code, 2);

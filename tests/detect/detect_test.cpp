@@ -17,6 +17,7 @@
 namespace objmap::segmentation {
 namespace {
 
+using test::error_of;
 using test::fs::path;
 
 const char* const kModels = "../models/yolo-fastest-1.1_coco";
@@ -26,17 +27,6 @@ double iou(const Box& a, const Box& b) {
   const double x2 = std::min(a.x + a.w, b.x + b.w), y2 = std::min(a.y + a.h, b.y + b.h);
   const double inter = std::max(0.0, x2 - x1) * std::max(0.0, y2 - y1);
   return inter / (a.w * a.h + b.w * b.h - inter);
-}
-
-// The message of the InputError that `f` throws ("" when it throws none).
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(DetectClasses, TablesAgreeWithCoco) {

@@ -9,6 +9,7 @@ namespace objmap::io {
 namespace {
 
 namespace fs = std::filesystem;
+using test::error_of;
 using test::read_text;
 using test::TempDir;
 using test::write_text;
@@ -62,9 +63,10 @@ TEST(StagingDir, CommitReplacesExistingFolder) {
   TempDir dir;
   const fs::path out = dir / "run";
   fs::create_directory(out);
+  write_text(out / "run.json", "old");
   write_text(out / "old.txt", "old");
   {
-    StagingDir staging(out);
+    StagingDir staging(out, kRunFolder);
     EXPECT_NE(staging.path(), out);
     EXPECT_TRUE(fs::is_directory(staging.path()));
     write_file_atomic(staging.path() / "new.txt", "new");
@@ -82,21 +84,96 @@ TEST(StagingDir, NotCommittedLeavesNoTraceAndKeepsOldOutput) {
   const fs::path out = dir / "run";
   fs::create_directory(out);
   write_text(out / "old.txt", "old");
+  write_text(out / "run.json", "old");
   try {
-    StagingDir staging(out);
+    StagingDir staging(out, kRunFolder);
     write_file_atomic(staging.path() / "half.txt", "half");
     throw std::runtime_error("stage failed");
   } catch (const std::runtime_error&) {
   }
   EXPECT_EQ(read_text(out / "old.txt"), "old");
   EXPECT_EQ(entries(dir.path()), 1u);
-  EXPECT_EQ(entries(out), 1u);
+  EXPECT_EQ(entries(out), 2u);
 }
 
 TEST(StagingDir, RefusesAFileAsOutput) {
   TempDir dir;
   write_text(dir / "run", "x");
-  EXPECT_THROW(StagingDir(dir / "run"), InputError);
+  EXPECT_THROW(StagingDir(dir / "run", kRunFolder), InputError);
+}
+
+// A dataset given as --out by mistake: refused before any work and at commit, left as it was.
+TEST(StagingDir, NeverReplacesAFolderThatIsNotAnEarlierOutput) {
+  TempDir dir;
+  const fs::path data = dir / "fr1_desk";
+  fs::create_directories(data / "rgb");
+  fs::create_directories(data / "depth");
+  write_text(data / "rgb.txt", "# rgb");
+  write_text(data / "depth.txt", "# depth");
+  write_text(data / "groundtruth.txt", "# poses");
+  const std::string message = error_of([&] { require_replaceable(data, kRunFolder); });
+  EXPECT_NE(message.find(data.string() + ": exists and is not an earlier objmap fuse run (it "
+                                         "holds depth, depth.txt, groundtruth.txt and 2 more; "
+                                         "no run.json), so it is not replaced"),
+            std::string::npos)
+      << message;
+  EXPECT_THROW(StagingDir(data, kRunFolder), InputError);
+  EXPECT_THROW(StagingDir(data / "", kRunFolder), InputError);  // "fr1_desk/"
+  EXPECT_EQ(entries(data), 5u);
+  EXPECT_EQ(entries(dir.path()), 1u);  // no .tmp- left
+
+  // The folder appears (or changes) while the run works: commit() checks again.
+  const fs::path out = dir / "run";
+  {
+    StagingDir staging(out, kRunFolder);
+    write_text(staging.path() / "run.json", "new");
+    fs::create_directories(out);
+    write_text(out / "notes.txt", "mine");
+    EXPECT_THROW(staging.commit(), InputError);
+  }
+  EXPECT_EQ(read_text(out / "notes.txt"), "mine");
+  EXPECT_EQ(entries(out), 1u);
+  EXPECT_EQ(entries(dir.path()), 2u);  // fr1_desk, run
+}
+
+TEST(StagingDir, ReplacesAnEmptyFolderAndEarlierOutputsOfItsKind) {
+  TempDir dir;
+  fs::create_directories(dir / "empty");
+  EXPECT_NO_THROW(require_replaceable(dir / "empty", kReportFolder));
+  EXPECT_NO_THROW(require_replaceable(dir / "absent", kReportFolder));
+  write_text(dir / "synth" / "synth.json", "{}");
+  write_text(dir / "synth" / "rgb.txt", "# rgb");
+  EXPECT_NO_THROW(require_replaceable(dir / "synth", kSyntheticSequence));
+  EXPECT_THROW(require_replaceable(dir / "synth", kRunFolder), InputError);
+  // A marker that is a folder does not count.
+  fs::create_directories(dir / "odd" / "run.json");
+  EXPECT_THROW(require_replaceable(dir / "odd", kRunFolder), InputError);
+  // A segmentation: only <timestamp>.json frame files (detect), or with tracks.json (track).
+  write_text(dir / "seg" / "1305031453.359684.json", "{}");
+  write_text(dir / "seg" / "1305031453.391690.json", "{}");
+  EXPECT_NO_THROW(require_replaceable(dir / "seg", kSegmentationFolder));
+  write_text(dir / "seg" / "tracks.json", "{}");
+  EXPECT_NO_THROW(require_replaceable(dir / "seg", kSegmentationFolder));
+  write_text(dir / "seg_with_notes" / "1305031453.359684.json", "{}");
+  write_text(dir / "seg_with_notes" / "notes.json", "{}");
+  EXPECT_NE(error_of([&] {
+              require_replaceable(dir / "seg_with_notes", kSegmentationFolder);
+            }).find("no tracks.json or only frame files"),
+            std::string::npos);
+  EXPECT_THROW(require_replaceable(dir / "seg", kRunFolder), InputError);
+}
+
+// "." names the folder it stands for: the current folder, a dataset here, is refused by name.
+TEST(StagingDir, DotIsTheFolderItNames) {
+  TempDir dir;
+  write_text(dir / "rgb.txt", "# rgb");
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir.path());
+  const std::string message = error_of([] { StagingDir(".", kRunFolder); });
+  fs::current_path(cwd);
+  EXPECT_NE(message.find(fs::weakly_canonical(dir.path()).string() + ": exists and is not"),
+            std::string::npos)
+      << message;
 }
 
 }  // namespace

@@ -14,17 +14,9 @@ namespace objmap::segmentation {
 namespace {
 
 namespace fs = std::filesystem;
+using test::error_of;
 using test::TempDir;
 using test::write_text;
-
-std::string error_of(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 #define EXPECT_ERROR_HAS(call, text) \
   EXPECT_NE(error_of([&] { call; }).find(text), std::string::npos) << error_of([&] { call; })

@@ -5,9 +5,12 @@
 #include <random>
 
 #include "objmap/core/error.h"
+#include "support/test_support.h"
 
 namespace objmap::segmentation {
 namespace {
+
+using test::error_of;
 
 // A mask from rows of '0'/'1' (row-major, top row first).
 Mask from_rows(const std::vector<std::string>& rows) {
@@ -18,15 +21,6 @@ Mask from_rows(const std::vector<std::string>& rows) {
     for (char c : row) mask.data.push_back(c == '1' ? 1 : 0);
   }
   return mask;
-}
-
-std::string error_of(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 // 3x3, column-major order reads col 0: 0 0 0, col 1: 1 1 1, col 2: 0 0 1

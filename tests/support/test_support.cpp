@@ -11,6 +11,8 @@
 #include <random>
 #include <sstream>
 
+#include "objmap/core/error.h"
+
 extern char** environ;
 
 namespace objmap::test {
@@ -25,6 +27,15 @@ bool has_data(const std::string& relative) { return fs::exists(data_dir() / rela
 bool data_required() {
   const char* env = std::getenv("OBJMAP_REQUIRE_DATA");
   return env && std::string(env) == "1";
+}
+
+std::string error_of(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
 }
 
 TempDir::TempDir() {

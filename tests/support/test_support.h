@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ bool has_data(const std::string& relative);
 
 // With OBJMAP_REQUIRE_DATA=1 (CI sets it) a missing data folder is a failure, not a skip.
 bool data_required();
+
+// The message of the objmap::InputError that `call` throws, or "(no error)" when it throws none.
+std::string error_of(const std::function<void()>& call);
 
 // A fresh empty folder under the system temp dir, removed with the object.
 class TempDir {

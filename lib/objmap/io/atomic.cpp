@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <system_error>
@@ -80,14 +81,88 @@ void AtomicFile::commit() {
   }
 }
 
-StagingDir::StagingDir(const fs::path& out) : out_(out) {
-  if (!out_.has_filename()) out_ = out_.parent_path();
-  require(!out_.empty(), out.string(), "expected an output folder name");
+const OutputKind kRunFolder{"objmap fuse run", {"run.json"}, false};
+const OutputKind kSyntheticSequence{"objmap synth sequence", {"synth.json"}, false};
+const OutputKind kSegmentationFolder{
+    "segmentation (<timestamp>.json files)", {"tracks.json"}, true};
+const OutputKind kReportFolder{"objmap report", {"report.html"}, false};
+
+namespace {
+
+// "out", "out/" -> "out"; "." and ".." (which cannot be renamed) -> the folder they name.
+fs::path output_path(const fs::path& out) {
+  fs::path p = out;
+  if (!p.has_filename()) p = p.parent_path();
+  if (p.filename() == "." || p.filename() == "..") {
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(fs::absolute(p, ec), ec);
+    if (!ec && resolved.has_filename()) p = resolved;
+  }
+  return p;
+}
+
+// "<number>.json", the name of a canonical segmentation frame.
+bool is_frame_file(const std::string& name) {
+  const std::size_t dot = name.size() >= 5 ? name.size() - 5 : std::string::npos;
+  if (dot == std::string::npos || dot == 0 || name.compare(dot, 5, ".json") != 0) return false;
+  bool digit = false;
+  for (std::size_t i = 0; i < dot; ++i) {
+    const char c = name[i];
+    if (c >= '0' && c <= '9')
+      digit = true;
+    else if (c != '.')
+      return false;
+  }
+  return digit;
+}
+
+}  // namespace
+
+void require_replaceable(const fs::path& out_given, const OutputKind& kind) {
+  const fs::path out = output_path(out_given);
+  require(!out.empty(), out_given.string(), "expected an output folder name");
   std::error_code ec;
-  if (fs::exists(out_, ec) && !fs::is_directory(out_, ec))
-    throw InputError(out_.string(), "exists and is not a folder; expected a folder (or nothing)");
+  const fs::file_status status = fs::symlink_status(out, ec);
+  if (!fs::exists(status)) return;
+  if (fs::is_symlink(status) || !fs::is_directory(status))
+    throw InputError(out.string(), std::string("exists and is not a folder") +
+                                       (fs::is_symlink(status) ? " (a symbolic link)" : "") +
+                                       "; expected a folder (or nothing)");
+  std::vector<std::string> names;
+  bool marker = false, only_frames = kind.frame_files;
+  for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    names.push_back(name);
+    const bool is_marker =
+        std::find(kind.markers.begin(), kind.markers.end(), name) != kind.markers.end();
+    marker = marker || (is_marker && it->is_regular_file());
+    if (!is_marker && !(is_frame_file(name) && it->is_regular_file())) only_frames = false;
+  }
+  if (ec) throw InputError(out.string(), "cannot list the folder: " + ec.message());
+  if (names.empty() || marker || only_frames) return;
+  std::sort(names.begin(), names.end());
+  std::string held;
+  for (std::size_t i = 0; i < names.size() && i < 3; ++i) held += (i ? ", " : "") + names[i];
+  if (names.size() > 3) held += " and " + std::to_string(names.size() - 3) + " more";
+  std::string expected;
+  for (std::size_t i = 0; i < kind.markers.size(); ++i)
+    expected += (i ? " or " : "") + kind.markers[i];
+  if (kind.frame_files)
+    expected += std::string(expected.empty() ? "" : " or ") + "only frame files";
+  throw InputError(out.string(),
+                   "exists and is not an earlier " + kind.name + " (it holds " + held + "; no " +
+                       expected +
+                       "), so it is not replaced; expected a new or empty folder, or an "
+                       "earlier output to replace");
+}
+
+StagingDir::StagingDir(const fs::path& out, const OutputKind& kind)
+    : out_(output_path(out)), kind_(kind) {
+  require(!out_.empty(), out.string(), "expected an output folder name");
+  require_replaceable(out_, kind_);
   make_parent(out_);
   staging_ = with_suffix(out_, ".tmp-");
+  std::error_code ec;
   fs::remove_all(staging_, ec);  // a stale one from a crashed run with the same pid
   if (!fs::create_directory(staging_, ec) || ec)
     throw InputError(staging_.string(), "cannot create the folder: " + ec.message());
@@ -101,6 +176,7 @@ StagingDir::~StagingDir() {
 
 void StagingDir::commit() {
   require(!committed_, out_.string(), "StagingDir committed twice");
+  require_replaceable(out_, kind_);  // again: the folder may have come meanwhile
   std::error_code ec;
   fs::path aside;
   if (fs::exists(out_, ec)) {

@@ -1,6 +1,7 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <vector>
 
 // Atomic outputs: a file or a run folder is written under a temporary name in the same folder and
 // renamed into place, so a failed or interrupted run never leaves a half-written output behind.
@@ -29,18 +30,39 @@ class AtomicFile {
   int fd_ = -1;
 };
 
+// What an existing output folder must hold for objmap to replace it: nothing, or an earlier output
+// of the same kind. A folder that holds anything else (a dataset given as --out by mistake, a home
+// folder, the parent of the inputs) is never replaced.
+struct OutputKind {
+  std::string name;                  // for messages: "fuse run", "synthetic sequence", ...
+  std::vector<std::string> markers;  // an earlier output holds one of these files
+  bool frame_files = false;          // ... or only <timestamp>.json files (a segmentation)
+};
+
+extern const OutputKind kRunFolder;           // fuse, correct: run.json
+extern const OutputKind kSyntheticSequence;   // synth: synth.json
+extern const OutputKind kSegmentationFolder;  // detect, track: <timestamp>.json, tracks.json
+extern const OutputKind kReportFolder;        // report: report.html
+
+// Throws InputError(out, ...) when `out` exists and is not a folder, or is a folder that is neither
+// empty nor an earlier output of `kind` (the message names what it holds). Commands call it before
+// their work, so that a refused --out costs nothing.
+void require_replaceable(const std::filesystem::path& out, const OutputKind& kind);
+
 // A run folder written atomically: files go to "<out>.tmp-<pid>" (created, empty, by the
-// constructor); commit() renames it to `out`, replacing an existing `out` folder. The destructor
-// removes the temporary folder if commit() was not called (e.g. an exception unwound the run).
+// constructor); commit() renames it to `out`, replacing an existing `out` folder if it is an
+// earlier output of `kind` (require_replaceable, checked by the constructor and again by commit).
+// The destructor removes the temporary folder if commit() was not called (e.g. an exception
+// unwound the run).
 //
-//   io::StagingDir staging(out);
+//   io::StagingDir staging(out, io::kRunFolder);
 //   write_file_atomic(staging.path() / "objects.json", json);
 //   staging.commit();
 class StagingDir {
  public:
-  // Throws InputError when `out` exists and is not a folder, or the temporary folder cannot be
+  // Throws InputError when `out` cannot be replaced (above), or the temporary folder cannot be
   // made.
-  explicit StagingDir(const std::filesystem::path& out);
+  StagingDir(const std::filesystem::path& out, const OutputKind& kind);
   ~StagingDir();
   StagingDir(const StagingDir&) = delete;
   StagingDir& operator=(const StagingDir&) = delete;
@@ -55,6 +77,7 @@ class StagingDir {
  private:
   std::filesystem::path out_;
   std::filesystem::path staging_;
+  OutputKind kind_;
   bool committed_ = false;
 };
 

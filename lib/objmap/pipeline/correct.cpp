@@ -663,6 +663,7 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
 
 CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progress) {
   given.check();
+  io::require_replaceable(given.out, io::kRunFolder);  // before the work, not after it
   CorrectOptions options = given;
   if (options.view_model_thresholds) {
     const bool icp = options.view_model == "icp";
@@ -761,7 +762,7 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
   if (!result.accepted) {
     // Refused: OUT is the input run, the trajectory unchanged.
     corrected = trajectory;
-    io::StagingDir staging(options.out);
+    io::StagingDir staging(options.out, io::kRunFolder);
     copy_run(options.run, staging.path());
     staging.commit();
   }
@@ -786,6 +787,7 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
 CorrectResult run_fuse_and_correct(const FuseOptions& fuse, const CorrectOptions& correct,
                                    const FuseProgress& progress) {
   fuse.check();
+  io::require_replaceable(fuse.out, io::kRunFolder);  // before the two fuses, not after them
   ScratchDir first(fuse.out, "first-fuse");
   FuseOptions fo = fuse;
   fo.out = first.path() / "run";

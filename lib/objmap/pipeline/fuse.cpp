@@ -700,6 +700,7 @@ const segmentation::FrameSegmentation* keyframe_segmentation(
 
 FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   options.check();
+  io::require_replaceable(options.out, io::kRunFolder);  // before the work, not after it
   const auto t_start = Clock::now();
   FuseResult result;
   const FuseInputs inputs = load_inputs(options, result);
@@ -782,7 +783,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
   //      map's cloud is made on a second thread meanwhile the objects are merged and filtered
   //      (they do not depend on each other).
-  io::StagingDir staging(options.out);
+  io::StagingDir staging(options.out, io::kRunFolder);
   const fs::path dir = staging.path();
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();

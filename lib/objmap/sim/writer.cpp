@@ -193,7 +193,7 @@ void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
 }  // namespace
 
 void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
-  io::StagingDir staging(out);
+  io::StagingDir staging(out, io::kSyntheticSequence);
   make_folders(staging.path());
   parallel_for(s.frames.size(), threads, [&](std::size_t i) {
     const SynthFrame& f = s.frames[i];
@@ -208,7 +208,7 @@ void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
 SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& options,
                                        const SynthProgress& progress) {
   SynthSequence seq = prepare_sequence(options);
-  io::StagingDir staging(out);
+  io::StagingDir staging(out, io::kSyntheticSequence);
   make_folders(staging.path());
   const fs::path& dir = staging.path();
   const std::size_t total = seq.groundtruth.size();
