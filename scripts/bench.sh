@@ -44,6 +44,13 @@ objmap="$bindir/$(basename "$objmap")"
 case "$out" in
   "" | / | . | ..) echo "bench: refusing BENCH_OUT='$out'" >&2; exit 2 ;;
 esac
+# Only an earlier bench folder (it has features.txt) or an empty one is deleted: never a folder
+# that BENCH_OUT names by mistake.
+if [ -d "$out" ] && [ -n "$(ls -A "$out")" ] && [ ! -f "$out/features.txt" ]; then
+  echo "bench: $out: exists and is not an earlier bench folder (no features.txt); expected a new" \
+    "or empty folder (BENCH_OUT)" >&2
+  exit 2
+fi
 rm -rf "$out"
 mkdir -p "$out"
 out=$(cd "$out" && pwd)

@@ -6,7 +6,8 @@
 set -euo pipefail
 objmap=${1:-build/bin/objmap}
 out=${2:-out/demo}
-rm -rf "$out"
+# Each command below replaces its own folder under $out (an earlier output of its kind only, never
+# anything else), so nothing here deletes a folder that DEMO names by mistake.
 mkdir -p "$out"
 scene="$out/scene"
 run="$out/run"
