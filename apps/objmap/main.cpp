@@ -1,15 +1,24 @@
 // objmap: turns a finished RGB-D SLAM run into an object map. One binary, subcommands in the order
 // of the pipeline. Exit codes: 0 success, 2 bad input or usage (one line on stderr), 1 internal
 // error.
+#include <pthread.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
+
 #include <algorithm>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <map>
+#include <thread>
 #include <vector>
 
 #include "command.h"
 #include "objmap/core/error.h"
+#include "objmap/io/atomic.h"
 #include "objmap/version.h"
 
 namespace objmap::app {
@@ -31,6 +40,40 @@ bool register_command(int order, const std::string& name, SetupFn setup) {
   return true;
 }
 
+namespace {
+
+// SIGINT (Ctrl-C), SIGTERM and SIGHUP are blocked in every thread (the workers inherit the mask
+// from main) and taken by one thread of their own. It removes the unfinished outputs (temporary
+// files and folders), says so in one line, and ends the process by the same signal, so that the
+// shell sees an interrupted command (exit status 128 + the signal) and nothing half-written is
+// left.
+void take_interrupts() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&set, sig);
+  if (pthread_sigmask(SIG_BLOCK, &set, nullptr) != 0) return;
+  std::thread([set] {
+    int sig = 0;
+    if (sigwait(&set, &sig) != 0) return;
+    const std::vector<std::filesystem::path> removed = io::remove_unfinished_outputs();
+    std::string line = std::string(isatty(STDERR_FILENO) ? "\n" : "") + "objmap: interrupted (" +
+                       strsignal(sig) + ")";
+    for (std::size_t i = 0; i < removed.size(); ++i)
+      line += (i ? ", " : "; removed the unfinished ") + removed[i].string();
+    line += "\n";
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, line.data(), line.size());
+    std::signal(sig, SIG_DFL);
+    sigset_t one;
+    sigemptyset(&one);
+    sigaddset(&one, sig);
+    pthread_sigmask(SIG_UNBLOCK, &one, nullptr);
+    std::raise(sig);
+    std::_Exit(128 + sig);  // not reached
+  }).detach();
+}
+
+}  // namespace
+
 void setup_all(CLI::App& app) {
   auto entries = registry();
   std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
@@ -42,6 +85,7 @@ void setup_all(CLI::App& app) {
 }  // namespace objmap::app
 
 int main(int argc, char** argv) {
+  objmap::app::take_interrupts();  // first: before any thread starts
   CLI::App app{
       "objmap: object-oriented semantic maps from a finished RGB-D SLAM run.\n"
       "Pipeline: synth | validate -> detect -> track -> fuse -> correct -> eval -> report.\n"

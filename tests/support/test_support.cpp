@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <csignal>
 #include <cstdlib>
 #include <fstream>
 #include <random>
@@ -91,6 +92,11 @@ void copy_tree(const fs::path& from, const fs::path& to) {
 }
 
 RunResult run_objmap(const std::vector<std::string>& args) {
+  return run_objmap_interrupted(args, nullptr, 0);
+}
+
+RunResult run_objmap_interrupted(const std::vector<std::string>& args,
+                                 const std::function<bool()>& ready, int signal) {
   TempDir dir;
   const std::string out_path = (dir.path() / "stdout").string();
   const std::string err_path = (dir.path() / "stderr").string();
@@ -111,7 +117,21 @@ RunResult run_objmap(const std::vector<std::string>& args) {
   RunResult result;
   if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) == 0) {
     int status = 0;
-    waitpid(pid, &status, 0);
+    if (ready) {
+      // Poll until ready() (or the process ended, or 60 s), then signal.
+      bool ended = false;
+      for (int i = 0; i < 12000 && !ended; ++i) {
+        if (ready()) break;
+        ended = waitpid(pid, &status, WNOHANG) == pid;
+        if (!ended) usleep(5000);
+      }
+      if (!ended) {
+        kill(pid, signal);
+        waitpid(pid, &status, 0);
+      }
+    } else {
+      waitpid(pid, &status, 0);
+    }
     result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
   posix_spawn_file_actions_destroy(&actions);

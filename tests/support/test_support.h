@@ -45,6 +45,12 @@ struct RunResult {
 // Runs the built objmap binary with `args` (no shell interpretation of the arguments).
 RunResult run_objmap(const std::vector<std::string>& args);
 
+// As run_objmap, but once `ready()` is true (polled every 5 ms) the process gets `signal`. A
+// process that ends before that is not signalled. exit_code is 128 + the signal when it ended by
+// one.
+RunResult run_objmap_interrupted(const std::vector<std::string>& args,
+                                 const std::function<bool()>& ready, int signal);
+
 // The output folder of `objmap <args>` where the argument "{OUT}" stands for the folder, made once
 // and kept under <build>/test-cache/<stamp of the objmap binary>/<key> (a rebuilt binary starts a
 // new cache), so that several test processes share one synthetic scene or one fuse run. Tests that

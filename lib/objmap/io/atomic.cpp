@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <mutex>
 #include <system_error>
 
 #include "objmap/core/error.h"
@@ -30,7 +31,55 @@ void make_parent(const fs::path& file) {
   if (ec) throw InputError(parent.string(), "cannot create the folder: " + ec.message());
 }
 
+// The unfinished outputs of the process. Never destroyed: the signal thread may use it while the
+// process exits.
+struct Registry {
+  std::mutex mutex;
+  std::vector<fs::path> paths;
+  bool closed = false;  // remove_unfinished_outputs() ran: the process is ending
+};
+
+Registry& registry() {
+  static Registry* r = new Registry;
+  return *r;
+}
+
 }  // namespace
+
+UnfinishedOutput::UnfinishedOutput(fs::path path) : path_(std::move(path)) {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.closed) return;
+  r.paths.push_back(path_);
+  registered_ = true;
+}
+
+void UnfinishedOutput::release() {
+  if (!registered_) return;
+  std::lock_guard<std::mutex> lock(registry().mutex);
+  release_locked();
+}
+
+void UnfinishedOutput::release_locked() {
+  if (!registered_) return;
+  registered_ = false;
+  auto& paths = registry().paths;
+  const auto it = std::find(paths.begin(), paths.end(), path_);
+  if (it != paths.end()) paths.erase(it);
+}
+
+std::vector<fs::path> remove_unfinished_outputs() {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  r.closed = true;
+  std::vector<fs::path> removed;
+  for (const fs::path& p : r.paths) {
+    std::error_code ec;
+    if (fs::exists(fs::symlink_status(p, ec)) && fs::remove_all(p, ec) > 0) removed.push_back(p);
+  }
+  r.paths.clear();
+  return removed;
+}
 
 void write_file_atomic(const fs::path& file, const std::string& bytes) {
   AtomicFile out(file);
@@ -38,10 +87,10 @@ void write_file_atomic(const fs::path& file, const std::string& bytes) {
   out.commit();
 }
 
-AtomicFile::AtomicFile(const fs::path& file) : file_(file) {
+AtomicFile::AtomicFile(const fs::path& file)
+    : file_(file), tmp_(with_suffix(file, ".tmp-")), unfinished_(tmp_) {
   require(file.has_filename(), file.string(), "expected a file name, got a folder");
   make_parent(file);
-  tmp_ = with_suffix(file, ".tmp-");
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0)
     throw InputError(file.string(), std::string("cannot write the file: ") + std::strerror(errno));
@@ -157,11 +206,13 @@ void require_replaceable(const fs::path& out_given, const OutputKind& kind) {
 }
 
 StagingDir::StagingDir(const fs::path& out, const OutputKind& kind)
-    : out_(output_path(out)), kind_(kind) {
+    : out_(output_path(out)),
+      staging_(with_suffix(out_, ".tmp-")),
+      unfinished_(staging_),
+      kind_(kind) {
   require(!out_.empty(), out.string(), "expected an output folder name");
   require_replaceable(out_, kind_);
   make_parent(out_);
-  staging_ = with_suffix(out_, ".tmp-");
   std::error_code ec;
   fs::remove_all(staging_, ec);  // a stale one from a crashed run with the same pid
   if (!fs::create_directory(staging_, ec) || ec)
@@ -179,21 +230,30 @@ void StagingDir::commit() {
   require_replaceable(out_, kind_);  // again: the folder may have come meanwhile
   std::error_code ec;
   fs::path aside;
-  if (fs::exists(out_, ec)) {
-    aside = with_suffix(out_, ".old-");
+  {
+    // An interrupt waits for the swap: it never finds the old output aside and the new one gone.
+    std::lock_guard<std::mutex> lock(registry().mutex);
+    if (fs::exists(out_, ec)) {
+      aside = with_suffix(out_, ".old-");
+      fs::remove_all(aside, ec);
+      fs::rename(out_, aside, ec);
+      if (ec)
+        throw InputError(out_.string(), "cannot replace the existing folder: " + ec.message());
+    }
+    fs::rename(staging_, out_, ec);
+    if (ec) {
+      std::error_code ignored;
+      if (!aside.empty()) fs::rename(aside, out_, ignored);  // put the old one back
+      throw InputError(out_.string(),
+                       "cannot move " + staging_.string() + " into place: " + ec.message());
+    }
+    committed_ = true;
+    unfinished_.release_locked();
+  }
+  if (!aside.empty()) {
+    const UnfinishedOutput old(aside);  // an interrupt now removes the rest of it
     fs::remove_all(aside, ec);
-    fs::rename(out_, aside, ec);
-    if (ec) throw InputError(out_.string(), "cannot replace the existing folder: " + ec.message());
   }
-  fs::rename(staging_, out_, ec);
-  if (ec) {
-    std::error_code ignored;
-    if (!aside.empty()) fs::rename(aside, out_, ignored);  // put the old one back
-    throw InputError(out_.string(),
-                     "cannot move " + staging_.string() + " into place: " + ec.message());
-  }
-  committed_ = true;
-  if (!aside.empty()) fs::remove_all(aside, ec);
 }
 
 }  // namespace objmap::io

@@ -7,6 +7,31 @@
 // renamed into place, so a failed or interrupted run never leaves a half-written output behind.
 namespace objmap::io {
 
+// An unfinished output (a temporary file or folder) that must go if the process is interrupted:
+// registered for the object's lifetime, or until release() (it became the finished output, or is
+// gone). The command-line tool takes SIGINT, SIGTERM and SIGHUP on a thread of its own, which calls
+// remove_unfinished_outputs() before it ends the process, so that Ctrl-C leaves nothing
+// half-written. StagingDir, AtomicFile and the correct stage's scratch folder use it.
+class UnfinishedOutput {
+ public:
+  explicit UnfinishedOutput(std::filesystem::path path);
+  ~UnfinishedOutput() { release(); }
+  UnfinishedOutput(const UnfinishedOutput&) = delete;
+  UnfinishedOutput& operator=(const UnfinishedOutput&) = delete;
+  void release();
+
+ private:
+  friend class StagingDir;
+  void release_locked();  // with the registry's mutex held
+  std::filesystem::path path_;
+  bool registered_ = false;
+};
+
+// Removes every registered unfinished output (files, and folders with their contents) and returns
+// those that existed. For the signal thread; safe against a StagingDir::commit() in progress (it
+// waits for the commit to end). Afterwards nothing more is registered.
+std::vector<std::filesystem::path> remove_unfinished_outputs();
+
 // Writes `bytes` to "<file>.tmp-<pid>" and renames it to `file` (replacing an existing
 // file). Creates the parent folders if needed. Throws InputError(file, reason) when the file cannot
 // be written; the temporary file is removed then.
@@ -27,6 +52,7 @@ class AtomicFile {
 
  private:
   std::filesystem::path file_, tmp_;
+  UnfinishedOutput unfinished_;
   int fd_ = -1;
 };
 
@@ -77,6 +103,7 @@ class StagingDir {
  private:
   std::filesystem::path out_;
   std::filesystem::path staging_;
+  UnfinishedOutput unfinished_;
   OutputKind kind_;
   bool committed_ = false;
 };

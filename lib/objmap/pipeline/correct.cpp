@@ -98,12 +98,13 @@ void copy_run(const fs::path& from, const fs::path& to) {
   }
 }
 
-// A temporary folder beside `out`, removed with the object.
+// A temporary folder beside `out`, removed with the object (or when the process is interrupted).
 class ScratchDir {
  public:
-  ScratchDir(const fs::path& out, const std::string& tag) {
-    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    path_ = parent / (out.filename().string() + "." + tag + "-tmp-" + std::to_string(::getpid()));
+  ScratchDir(const fs::path& out, const std::string& tag)
+      : path_((out.has_parent_path() ? out.parent_path() : fs::path(".")) /
+              (out.filename().string() + "." + tag + "-tmp-" + std::to_string(::getpid()))),
+        unfinished_(path_) {
     std::error_code ec;
     fs::remove_all(path_, ec);
     fs::create_directories(path_, ec);
@@ -119,6 +120,7 @@ class ScratchDir {
 
  private:
   fs::path path_;
+  io::UnfinishedOutput unfinished_;
 };
 
 std::string correction_json(const CorrectOptions& options, const CorrectResult& result,
