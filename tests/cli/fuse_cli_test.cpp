@@ -60,6 +60,18 @@ TEST_F(FuseBadInput, NoFrameWithAPose) {
   expect_rejected(fuse(dir_ / "traj.txt"), "traj.txt");
 }
 
+TEST_F(FuseBadInput, TrajectoryInNanosecondsIsNamedSo) {
+  write_text(dir_ / "seg" / (std::string(kFirstFrame) + ".json"),
+             R"({"instances":[{"class":"cup","score":0.9,"bbox":[10,10,50,50]}]})");
+  write_text(dir_ / "traj_ns.txt",
+             "1305031453359684000 0 0 0 0 0 0 1\n1305031453659684000 0 0 0 0 0 0 1\n");
+  expect_rejected(fuse(dir_ / "traj_ns.txt"),
+                  "traj_ns.txt: no pose within 0.02 s of any of the 9 frames (poses 1.30503e+18 "
+                  ".. 1.30503e+18, frames 1305031453.359684 .. 1305031453.627706); expected the "
+                  "trajectory of this sequence, timestamps in seconds (these look like "
+                  "nanoseconds)");
+}
+
 TEST_F(FuseBadInput, EmptySegmentation) { expect_rejected(fuse(), "seg"); }
 
 TEST_F(FuseBadInput, BoxFilesWithoutABoxNameTheFormatFlag) {

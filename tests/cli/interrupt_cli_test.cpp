@@ -29,8 +29,7 @@ TEST(Interrupt, SynthRemovesItsUnfinishedFolderAndKeepsTheEarlierOne) {
         [&] { return holds(dir.path(), "scene.tmp-"); }, sig);
     EXPECT_EQ(r.exit_code, 128 + sig) << r.err;
     EXPECT_NE(r.err.find("objmap: interrupted ("), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("; removed the unfinished " + scene.string() + ".tmp-"),
-              std::string::npos)
+    EXPECT_NE(r.err.find("; removed the unfinished " + scene.string() + ".tmp-"), std::string::npos)
         << r.err;
     EXPECT_FALSE(holds(dir.path(), "scene.")) << "a temporary folder is left";
     EXPECT_EQ(read_text(scene / "synth.json"), "{\"earlier\": true}");

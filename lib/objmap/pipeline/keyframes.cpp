@@ -1,6 +1,7 @@
 #include "objmap/pipeline/keyframes.h"
 
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "objmap/core/error.h"
@@ -20,6 +21,51 @@ void KeyframeOptions::check() const {
   require(stride >= 1, "keyframes.stride", "must be >= 1, got " + std::to_string(stride));
 }
 
+namespace {
+
+std::string time_text(double t) {
+  char text[64];
+  std::snprintf(text, sizeof text, std::abs(t) < 1e11 ? "%.6f" : "%.6g", t);
+  return text;
+}
+
+// No frame has a pose: the two time spans side by side, and a hint when the trajectory's
+// timestamps look like another unit than seconds (nanoseconds, as many ROS tools write them).
+InputError no_pose_error(const io::TumDataset& dataset, const Trajectory& trajectory,
+                         double max_diff_s) {
+  char window[32];
+  std::snprintf(window, sizeof window, "%g", max_diff_s);
+  std::string text = "no pose within " + std::string(window) + " s of any of the " +
+                     std::to_string(dataset.frames.size()) + " frames (";
+  if (trajectory.empty()) {
+    text += "no pose";
+  } else {
+    text += "poses " + time_text(trajectory.poses.front().timestamp) + " .. " +
+            time_text(trajectory.poses.back().timestamp);
+  }
+  std::string hint;
+  if (!dataset.frames.empty()) {
+    const double first = dataset.frames.front().rgb_timestamp;
+    text +=
+        ", frames " + time_text(first) + " .. " + time_text(dataset.frames.back().rgb_timestamp);
+    if (!trajectory.empty() && first > 0) {
+      const double ratio = trajectory.poses.front().timestamp / first;
+      for (const auto& [scale, unit] : {std::pair<double, const char*>{1e9, "nanoseconds"},
+                                        {1e6, "microseconds"},
+                                        {1e3, "milliseconds"}})
+        if (ratio > scale / 3 && ratio < scale * 3) {
+          hint = std::string(" in seconds (these look like ") + unit + ")";
+          break;
+        }
+    }
+  }
+  return InputError(trajectory.source,
+                    text + "); expected the trajectory of this sequence, timestamps" +
+                        (hint.empty() ? " in seconds as in rgb.txt" : hint));
+}
+
+}  // namespace
+
 KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajectory& trajectory,
                                    const KeyframeOptions& options) {
   options.check();
@@ -35,16 +81,7 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
   }
   KeyframeSelection result;
   result.frames_with_pose = posed.size();
-  if (posed.empty()) {
-    const std::string span = trajectory.empty()
-                                 ? std::string("no pose")
-                                 : std::to_string(trajectory.poses.front().timestamp) + " .. " +
-                                       std::to_string(trajectory.poses.back().timestamp);
-    throw InputError(trajectory.source,
-                     "no pose within " + std::to_string(options.max_diff_s) + " s of any of the " +
-                         std::to_string(dataset.frames.size()) + " frames (poses span " + span +
-                         "); expected the trajectory of this sequence");
-  }
+  if (posed.empty()) throw no_pose_error(dataset, trajectory, options.max_diff_s);
 
   // 2. The mode: a keyframe trajectory is used as it is.
   result.mode = options.mode;
