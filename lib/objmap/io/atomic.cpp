@@ -75,7 +75,12 @@ std::vector<fs::path> remove_unfinished_outputs() {
   std::vector<fs::path> removed;
   for (const fs::path& p : r.paths) {
     std::error_code ec;
-    if (fs::exists(fs::symlink_status(p, ec)) && fs::remove_all(p, ec) > 0) removed.push_back(p);
+    if (!fs::exists(fs::symlink_status(p, ec))) continue;
+    // The other threads still run: a file they make in a folder meanwhile fails its removal
+    // (not empty), so a few passes.
+    for (int pass = 0; pass < 5 && fs::exists(fs::symlink_status(p, ec)); ++pass)
+      fs::remove_all(p, ec);
+    removed.push_back(p);
   }
   r.paths.clear();
   return removed;
