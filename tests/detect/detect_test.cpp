@@ -244,27 +244,60 @@ TEST(Detect, ModelErrors) {
                 ": no such file; expected a Darknet YOLO model: .weights with its .cfg");
 }
 
+// A Darknet model of one 1x1 convolution from 3 channels to 1 (a bias and 3 weights, no detector):
+// DIR/conv.cfg, and DIR/conv.weights holding `values`, then the bytes `tail`, after a version 0.2
+// header.
+void write_conv_model(const path& dir, const std::vector<float>& values,
+                      const std::string& tail = "") {
+  test::write_text(dir / "conv.cfg",
+                   "[net]\nwidth=32\nheight=32\nchannels=3\n\n[convolutional]\nfilters=1\nsize=1\n"
+                   "stride=1\npad=0\nactivation=linear\n");
+  std::ofstream out(dir / "conv.weights", std::ios::binary);
+  const std::int32_t version[3] = {0, 2, 0};
+  const std::uint64_t seen = 0;
+  out.write(reinterpret_cast<const char*>(version), sizeof version);
+  out.write(reinterpret_cast<const char*>(&seen), sizeof seen);
+  out.write(reinterpret_cast<const char*>(values.data()),
+            static_cast<std::streamsize>(values.size() * sizeof(float)));
+  out.write(tail.data(), static_cast<std::streamsize>(tail.size()));
+}
+
 // A Darknet network that is not a detector (one 1x1 convolution, valid weights): no YOLO layer.
 TEST(Detect, DarknetNetworkWithoutYoloLayerIsTheWrongKind) {
   test::TempDir tmp;
-  test::write_text(tmp / "conv.cfg",
-                   "[net]\nwidth=32\nheight=32\nchannels=3\n\n[convolutional]\nfilters=1\nsize=1\n"
-                   "stride=1\npad=0\nactivation=linear\n");
-  {
-    std::ofstream out(tmp / "conv.weights", std::ios::binary);
-    const std::int32_t version[3] = {0, 2, 0};
-    const std::uint64_t seen = 0;
-    const float values[4] = {0.f, 1.f, 1.f, 1.f};  // bias, then 3 weights
-    out.write(reinterpret_cast<const char*>(version), sizeof version);
-    out.write(reinterpret_cast<const char*>(&seen), sizeof seen);
-    out.write(reinterpret_cast<const char*>(values), sizeof values);
-  }
+  write_conv_model(tmp.path(), {0.f, 1.f, 1.f, 1.f});  // bias, then 3 weights
   DetectOptions o;
   o.model = tmp / "conv.weights";
   EXPECT_EQ(error_of([&] { Detector d(o); }),
             (tmp / "conv.cfg").string() +
                 ": the network has no [yolo] or [region] output layer; expected a Darknet YOLO "
                 "detector");
+}
+
+// OpenCV loads a .weights file that holds fewer or more weights than its cfg asks for without a
+// word (and the detector then finds nothing): objmap compares the counts.
+TEST(Detect, WeightsThatDoNotFitTheCfgAreNamed) {
+  test::TempDir tmp;
+  write_conv_model(tmp.path(), {0.f, 1.f, 1.f});  // bias and 2 of the 3 weights
+  DetectOptions o;
+  o.model = tmp / "conv.weights";
+  EXPECT_EQ(error_of([&] { Detector d(o); }),
+            (tmp / "conv.weights").string() +
+                ": holds 3 weights, fewer than the 4 that conv.cfg asks for (truncated, or made "
+                "for another cfg); expected the .weights trained with this .cfg");
+  write_conv_model(tmp.path(), {}, "abcdef");  // not whole float32 values
+  EXPECT_NE(error_of([&] { Detector d(o); }).find(": not a Darknet weights file"),
+            std::string::npos)
+      << error_of([&] { Detector d(o); });
+
+  // The real model's xl weights with the smaller model's cfg.
+  OBJMAP_DATA_OR_SKIP(models, kModels);
+  o.model = models / "yolo-fastest-1.1-xl.weights";
+  o.config = models / "yolo-fastest-1.1.cfg";
+  EXPECT_EQ(error_of([&] { Detector d(o); }),
+            o.model.string() +
+                ": holds 923486 weights, more than the 346062 that yolo-fastest-1.1.cfg asks for "
+                "(made for another cfg); expected the .weights trained with this .cfg");
 }
 
 // A class file that does not fit the model, and a class the model does not have.

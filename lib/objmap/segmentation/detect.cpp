@@ -58,6 +58,33 @@ const char* const kDarknetExpected = "a Darknet YOLO model: .weights with its .c
 const char* const kTfExpected =
     "a TensorFlow Mask R-CNN frozen_inference_graph.pb with its .pbtxt text graph (--config)";
 
+// The parameters a Darknet .weights file holds after its header (major, minor, revision: int32;
+// images seen: int64 from version 0.2 on, else int32), in float32; -1 when the header is short or
+// the rest is not whole floats.
+long long darknet_weight_count(const fs::path& weights) {
+  std::ifstream in(weights, std::ios::binary);
+  std::int32_t version[3] = {0, 0, 0};
+  if (!in.read(reinterpret_cast<char*>(version), sizeof version)) return -1;
+  const std::uintmax_t header = 12 + (version[0] * 10 + version[1] >= 2 ? 8 : 4);
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(weights, ec);
+  if (ec || size < header || (size - header) % 4 != 0) return -1;
+  return static_cast<long long>((size - header) / 4);
+}
+
+// The parameters of a loaded Darknet network that come from its .weights file: the elements of the
+// layers' blobs (convolution weights and biases; batch-norm scales, biases, means and variances),
+// before any fusion, without the [yolo]/[region] layers' anchors (from the cfg).
+long long network_weight_count(cv::dnn::Net& net) {
+  long long n = 0;
+  for (const std::string& name : net.getLayerNames()) {
+    const cv::Ptr<cv::dnn::Layer> layer = net.getLayer(net.getLayerId(name));
+    if (layer->type == "Region") continue;
+    for (const cv::Mat& blob : layer->blobs) n += static_cast<long long>(blob.total());
+  }
+  return n;
+}
+
 // width= and height= of the [net] section of a Darknet cfg; 0 when absent.
 void darknet_input_size(const fs::path& cfg, int& width, int& height) {
   std::ifstream in(cfg);
@@ -249,6 +276,22 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
   }
   require(!d.net.empty(), info.model.string(),
           "OpenCV loaded an empty network; expected " + expected);
+  if (info.kind == ModelKind::kDarknetYolo) {
+    // OpenCV reads as many weights as the cfg asks for and says nothing of a file that holds fewer
+    // (truncated) or more (another cfg): either detects nothing. The counts must agree.
+    const long long in_file = darknet_weight_count(info.model);
+    const long long in_net = network_weight_count(d.net);
+    require(in_file >= 0, info.model.string(),
+            "not a Darknet weights file (a header of 3 or 4 integers, then float32 values); "
+            "expected " +
+                expected);
+    require(in_file == in_net, info.model.string(),
+            "holds " + std::to_string(in_file) + " weights, " +
+                (in_file < in_net ? "fewer" : "more") + " than the " + std::to_string(in_net) +
+                " that " + info.config.filename().string() + " asks for (" +
+                (in_file < in_net ? "truncated, or made for another cfg" : "made for another cfg") +
+                "); expected the .weights trained with this .cfg");
+  }
   d.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   d.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
 
