@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "objmap/core/error.h"
 #include "objmap/pipeline/config.h"
 
 namespace objmap::app {
@@ -51,6 +52,19 @@ class ConfigFlags {
   template <typename Options>
   void apply_config(const std::string& file, Options& options) {
     if (!file.empty()) apply_(file, &options);
+  }
+
+  // options.check(); an error naming a field by its config key names its flag too:
+  // "objects.weight_id (--weight-id): must be >= 0, got -1".
+  template <typename Options>
+  void check(const Options& options) const {
+    try {
+      options.check();
+    } catch (const InputError& e) {
+      for (const auto& f : fields_)
+        if (f.key == e.where()) throw InputError(f.key + " (" + f.flag + ")", e.reason());
+      throw;
+    }
   }
 
  private:

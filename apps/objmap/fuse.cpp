@@ -104,6 +104,7 @@ void setup_fuse(CLI::App& app) {
       cmd, [](pipeline::FuseOptions& o) { return pipeline::fuse_config_fields(o); }, *options);
   cmd->callback([options, config, flags, correct, correct_method] {
     flags->apply_config(*config, *options);
+    flags->check(*options);
     std::unique_ptr<ProgressBar> bar;
     std::size_t last = 0;
     const auto progress = [&](std::size_t done, std::size_t total) {

@@ -160,10 +160,35 @@ TEST(FuseCli, ThreadCountOutOfRangeIsNamed) {
   const auto r = run_objmap({"fuse", "--dataset", "x", "--trajectory", "t", "--segmentation", "s",
                              "--out", (dir / "o").string(), "--threads", "65"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("threads: must be in [0, 64] (0: the cores, at most 8), got 65"),
+  EXPECT_NE(r.err.find("threads (--threads): must be in [0, 64] (0: the cores, at most 8), got 65"),
             std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(dir / "o"));
+}
+
+// An option of a part of fuse (the object map, the depth range) is named as the user wrote it: its
+// config key and flag, not the library struct's member.
+TEST(FuseCli, BadOptionNamesItsKeyAndFlag) {
+  TempDir dir;
+  const auto fuse_with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args{"fuse",           "--dataset", "x",     "--trajectory",      "t",
+                                  "--segmentation", "s",         "--out", (dir / "o").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_objmap(args);
+  };
+  auto r = fuse_with({"--weight-id", "-1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("objmap: error: objects.weight_id (--weight-id): must be >= 0", 0), 0u)
+      << r.err;
+  r = fuse_with({"--min-depth", "5", "--max-depth", "1"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("objmap: error: depth.max_m (--max-depth): must be finite and > ", 0), 0u)
+      << r.err;
+  write_text(dir / "c.json", R"({"outlier":{"neighbours":0}})");
+  r = fuse_with({"--config", (dir / "c.json").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("objmap: error: outlier.neighbours (--outlier-k): must be >= 1", 0), 0u)
+      << r.err;
 }
 
 }  // namespace

@@ -117,4 +117,19 @@ std::string config_to_json(const std::vector<ConfigField>& fields, int indent) {
   return j.dump(indent);
 }
 
+void check_part(const std::function<void()>& check, const std::string& part_name,
+                const std::string& prefix,
+                const std::vector<std::pair<std::string, std::string>>& renames) {
+  try {
+    check();
+  } catch (const InputError& e) {
+    const std::string head = part_name + ".";
+    if (e.where().compare(0, head.size(), head) != 0) throw;
+    const std::string member = e.where().substr(head.size());
+    for (const auto& [from, key] : renames)
+      if (from == member) throw InputError(key, e.reason());
+    throw InputError(prefix + "." + member, e.reason());
+  }
+}
+
 }  // namespace objmap::pipeline

@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -24,5 +25,13 @@ void apply_config_file(const std::filesystem::path& file, const std::vector<Conf
 
 // The fields' current values as a nested JSON object text (pretty, keys in table order).
 std::string config_to_json(const std::vector<ConfigField>& fields, int indent = 2);
+
+// Runs `check` (the check() of a part of a command's options, e.g. ObjectMapOptions); an InputError
+// that names a member of the part as "<part_name>.<member>" is thrown again naming the member's
+// config key: the key `renames` gives it (member -> key), else "<prefix>.<member>". So the user
+// reads "objects.weight_id", what they wrote, not a library struct's name.
+void check_part(const std::function<void()>& check, const std::string& part_name,
+                const std::string& prefix,
+                const std::vector<std::pair<std::string, std::string>>& renames = {});
 
 }  // namespace objmap::pipeline

@@ -143,7 +143,8 @@ void FuseOptions::check() const {
   require(std::isfinite(max_diff_s) && max_diff_s > 0 && max_diff_s < 1, "max_diff_s",
           "must be in (0, 1) s");
   keyframes.check();
-  depth.check();
+  check_part([&] { depth.check(); }, "BackprojectOptions", "depth",
+             {{"min_depth_m", "depth.min_m"}, {"max_depth_m", "depth.max_m"}});
   require(std::isfinite(map_voxel_m) && map_voxel_m >= 0.001 && map_voxel_m <= 1.0, "map.voxel_m",
           "must be in [0.001, 1] m");
   require(dense_stride >= 1 && dense_stride <= 64, "map.dense_stride", "must be in [1, 64]");
@@ -151,13 +152,13 @@ void FuseOptions::check() const {
           "segmentation.min_score", "must be in [0, 1]");
   require(std::isfinite(duplicate_overlap) && duplicate_overlap > 0 && duplicate_overlap <= 1,
           "segmentation.duplicate_overlap", "must be in (0, 1]");
-  box_mask.check();
-  mask_refine.check();
-  objects.check();
+  check_part([&] { box_mask.check(); }, "BoxMaskOptions", "box_mask");
+  check_part([&] { mask_refine.check(); }, "MaskRefineOptions", "mask_refine");
+  check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
   fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
           "objects.min_voxel_support", "must be in [0, 1]");
-  outlier.check();
+  check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
 }
