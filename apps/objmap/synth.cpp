@@ -68,7 +68,14 @@ void setup_synth(CLI::App& app) {
       "classes) with exact ground truth: groundtruth.txt, objects_gt.json, segmentation_gt/, and a "
       "noisy segmentation/ and drifting estimated.txt. Same seed and options: identical files.");
   c->add_option("--out", cmd->out, "output folder (replaced if it exists)")->required();
-  c->add_option("--seed", o.seed, "random seed")->capture_default_str();
+  c->add_option("--seed", o.seed, "random seed")
+      ->check([](const std::string& text) {
+        // CLI11 wraps "-1" round to 2^64 - 1 for an unsigned option.
+        return text.find_first_not_of("0123456789") == std::string::npos && !text.empty()
+                   ? std::string()
+                   : "must be a whole number >= 0, got '" + text + "'";
+      })
+      ->capture_default_str();
   c->add_option("--frames", o.frames, "number of frames (30 Hz)")->capture_default_str();
   c->add_option("--orbit-speed", o.orbit_speed_deg_per_s,
                 "camera azimuth rate around the table, deg/s (0: the preset's, 20 for tabletop)")

@@ -64,7 +64,7 @@ TEST(FuseOptions, EveryErrorOfAFieldNamesItsConfigKey) {
       }
     }
   }
-  EXPECT_GT(refused, 60);          // most fields have a range
+  EXPECT_GT(refused, 60);         // most fields have a range
   EXPECT_GE(named, refused - 2);  // depth.min_m = 1e9: "depth.max_m must be > depth.min_m"
 }
 
@@ -75,8 +75,8 @@ TEST(CheckPart, NamesTheConfigKeyAndLeavesOtherErrorsAlone) {
             }),
             "part.gain: must be > 0");
   EXPECT_EQ(error_of([] {
-              check_part([] { require(false, "PartOptions.gain_m", "must be > 0"); },
-                         "PartOptions", "part", {{"gain_m", "part.gain"}});
+              check_part([] { require(false, "PartOptions.gain_m", "must be > 0"); }, "PartOptions",
+                         "part", {{"gain_m", "part.gain"}});
             }),
             "part.gain: must be > 0");
   EXPECT_EQ(error_of([] {
