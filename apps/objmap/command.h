@@ -2,6 +2,8 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
 // Each subcommand lives in its own file: an options struct, a `setup_<name>(CLI::App&)` that
 // declares the flags and a `run_<name>(const Options&)` that does the work and returns the exit
@@ -15,6 +17,12 @@ bool register_command(int order, const std::string& name, SetupFn setup);
 
 // Calls every registered setup in order.
 void setup_all(CLI::App& app);
+
+// Runs `check` (an options struct's check()); an InputError naming a library option
+// ("TrackerOptions.max_age") is thrown again naming the flag bound to it ("--max-age"), the name
+// the user wrote.
+void check_naming_flags(const std::function<void()>& check,
+                        const std::vector<std::pair<std::string, std::string>>& option_to_flag);
 
 }  // namespace objmap::app
 

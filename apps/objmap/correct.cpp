@@ -137,6 +137,28 @@ void setup_correct(CLI::App& app) {
   cmd->add_option("--threads", options->threads, "threads of the re-fuse (0 = all cores)")
       ->capture_default_str();
   cmd->callback([options] {
+    check_naming_flags(
+        [&] { options->check(); },
+        {{"CorrectOptions.icp_max_view_angle_deg", "--icp-max-view-angle"},
+         {"CorrectOptions.icp_links", "--icp-links"},
+         {"CorrectOptions.icp_link_max_view_angle_deg", "--icp-link-max-view-angle"},
+         {"CorrectOptions.threads", "--threads"},
+         {"IcpOptions.inlier_distance_m", "--icp-inlier-distance"},
+         {"IcpOptions.min_inlier_share", "--icp-min-overlap"},
+         {"CorrectionOptions.link_sigma_m", "--link-sigma"},
+         {"CorrectionOptions.link_sigma_deg", "--link-sigma-deg"},
+         {"CorrectionOptions.min_held_out_link_improvement", "--held-out-link-improvement"},
+         {"CorrectionOptions.min_pairs", "--min-pairs"},
+         {"CorrectionOptions.observation_sigma_m", "--observation-sigma"},
+         {"CorrectionOptions.odometry_sigma_fraction", "--odometry-sigma-fraction"},
+         {"CorrectionOptions.ray_sigma_factor", "--ray-sigma-factor"},
+         {"CorrectionOptions.max_translation_m", "--max-translation"},
+         {"CorrectionOptions.max_translation_fraction", "--max-translation-per-m"},
+         {"CorrectionOptions.max_rotation_deg", "--max-rotation"},
+         {"CorrectionOptions.max_rotation_deg_per_m", "--max-rotation-per-m"},
+         {"CorrectionOptions.min_held_out_improvement", "--held-out-improvement"},
+         {"CorrectionOptions.reweight_rounds", "--reweight-rounds"},
+         {"CorrectionOptions.min_improvement", "--min-improvement"}});
     std::unique_ptr<ProgressBar> bar;
     const auto result = pipeline::run_correct(*options, [&](std::size_t done, std::size_t total) {
       if (!bar) bar = std::make_unique<ProgressBar>("re-fuse", total, "keyframes");

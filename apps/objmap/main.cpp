@@ -74,6 +74,17 @@ void take_interrupts() {
 
 }  // namespace
 
+void check_naming_flags(const std::function<void()>& check,
+                        const std::vector<std::pair<std::string, std::string>>& option_to_flag) {
+  try {
+    check();
+  } catch (const InputError& e) {
+    for (const auto& [option, flag] : option_to_flag)
+      if (e.where() == option) throw InputError(flag, e.reason());
+    throw;
+  }
+}
+
 void setup_all(CLI::App& app) {
   auto entries = registry();
   std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {

@@ -37,34 +37,22 @@ struct TrackCommand {
   track::Position3dOptions position;
 };
 
-// The tracker's option checks name its members; the user gave these flags.
-void check_naming_flags(const track::TrackOptions& o) {
-  static const std::pair<const char*, const char*> kFlags[] = {
-      {"TrackerOptions.gate_3d_m", "--gate-3d-m"},
-      {"TrackerOptions.gate_3d_speed_mps", "--gate-3d-speed"},
-      {"TrackerOptions.gate_3d_history", "--gate-3d-history"},
-      {"TrackerOptions.max_age", "--max-age"},
-      {"TrackerOptions.n_init", "--n-init"},
-      {"TrackerOptions.max_cosine_distance", "--max-cosine-distance"},
-      {"TrackerOptions.lambda", "--lambda"},
-      {"TrackerOptions.max_iou_distance", "--max-iou-distance"},
-      {"TrackerOptions.min_score", "--min-score"},
-      {"KalmanOptions.std_weight_position", "--std-position"},
-      {"KalmanOptions.std_weight_velocity", "--std-velocity"}};
-  try {
-    o.check();
-  } catch (const InputError& e) {
-    for (const auto& [member, flag] : kFlags)
-      if (e.where() == member) throw InputError(flag, e.reason());
-    throw;
-  }
-}
-
 void run_track(TrackCommand& cmd) {
   track::TrackOptions& o = cmd.options;
   o.tracker.same_class_only = cmd.same_class;
   o.label_tentative_history = !cmd.online_output;
-  check_naming_flags(o);
+  check_naming_flags([&] { o.check(); },
+                     {{"TrackerOptions.gate_3d_m", "--gate-3d-m"},
+                      {"TrackerOptions.gate_3d_speed_mps", "--gate-3d-speed"},
+                      {"TrackerOptions.gate_3d_history", "--gate-3d-history"},
+                      {"TrackerOptions.max_age", "--max-age"},
+                      {"TrackerOptions.n_init", "--n-init"},
+                      {"TrackerOptions.max_cosine_distance", "--max-cosine-distance"},
+                      {"TrackerOptions.lambda", "--lambda"},
+                      {"TrackerOptions.max_iou_distance", "--max-iou-distance"},
+                      {"TrackerOptions.min_score", "--min-score"},
+                      {"KalmanOptions.std_weight_position", "--std-position"},
+                      {"KalmanOptions.std_weight_velocity", "--std-velocity"}});
   io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
   require(fs::is_directory(cmd.dataset), cmd.dataset,
           "no such folder; expected a TUM RGB-D folder with rgb.txt");

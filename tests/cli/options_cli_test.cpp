@@ -1,5 +1,5 @@
-// A bad option of track or synth is named by the flag the user gave (not a library struct member),
-// and a negative number for an unsigned one is refused, not wrapped round.
+// A bad option of track, correct or synth is named by the flag the user gave (not a library struct
+// member), and a negative number for an unsigned one is refused, not wrapped round.
 #include <gtest/gtest.h>
 
 #include "support/test_support.h"
@@ -7,29 +7,68 @@
 namespace objmap::test {
 namespace {
 
-TEST(TrackCli, BadOptionNamesItsFlag) {
-  TempDir dir;
-  const std::pair<std::string, std::string> cases[] = {
-      {"--max-age", "-1"},           {"--n-init", "0"},         {"--lambda", "2"},
-      {"--gate-3d-m", "-1"},         {"--gate-3d-speed", "-1"}, {"--gate-3d-history", "0"},
-      {"--max-cosine-distance", "3"}, {"--max-iou-distance", "5"}, {"--std-position", "0"},
-      {"--std-velocity", "0"},       {"--min-score", "nan"}};
+// Each flag with a value out of its range: exit 2, one line that starts with the flag.
+void expect_flags_named(const std::vector<std::string>& command,
+                        const std::vector<std::pair<std::string, std::string>>& cases) {
   for (const auto& [flag, value] : cases) {
-    const RunResult r =
-        run_objmap({"track", "--dataset", (dir / "d").string(), "--segmentation",
-                    (dir / "s").string(), "--out", (dir / "o").string(), flag, value});
+    std::vector<std::string> args = command;
+    args.insert(args.end(), {flag, value});
+    const RunResult r = run_objmap(args);
     EXPECT_EQ(r.exit_code, 2) << flag;
     EXPECT_EQ(r.err.rfind("objmap: error: " + flag + ": must be ", 0), 0u) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
 }
 
+TEST(CorrectCli, BadOptionNamesItsFlag) {
+  TempDir dir;
+  expect_flags_named({"correct", "--run", (dir / "run").string(), "--out", (dir / "o").string()},
+                     {{"--icp-max-view-angle", "-5"},
+                      {"--icp-link-max-view-angle", "0"},
+                      {"--link-sigma", "0"},
+                      {"--link-sigma-deg", "-1"},
+                      {"--held-out-link-improvement", "5"},
+                      {"--icp-inlier-distance", "0"},
+                      {"--icp-min-overlap", "2"},
+                      {"--min-pairs", "0"},
+                      {"--observation-sigma", "0"},
+                      {"--odometry-sigma-fraction", "-1"},
+                      {"--ray-sigma-factor", "0"},
+                      {"--max-translation", "-1"},
+                      {"--max-translation-per-m", "-1"},
+                      {"--max-rotation", "-1"},
+                      {"--max-rotation-per-m", "-1"},
+                      {"--held-out-improvement", "5"},
+                      {"--reweight-rounds", "-1"},
+                      {"--min-improvement", "5"},
+                      {"--threads", "99"}});
+}
+
+TEST(TrackCli, BadOptionNamesItsFlag) {
+  TempDir dir;
+  const std::pair<std::string, std::string> cases[] = {{"--max-age", "-1"},
+                                                       {"--n-init", "0"},
+                                                       {"--lambda", "2"},
+                                                       {"--gate-3d-m", "-1"},
+                                                       {"--gate-3d-speed", "-1"},
+                                                       {"--gate-3d-history", "0"},
+                                                       {"--max-cosine-distance", "3"},
+                                                       {"--max-iou-distance", "5"},
+                                                       {"--std-position", "0"},
+                                                       {"--std-velocity", "0"},
+                                                       {"--min-score", "nan"}};
+  expect_flags_named({"track", "--dataset", (dir / "d").string(), "--segmentation",
+                      (dir / "s").string(), "--out", (dir / "o").string()},
+                     {std::begin(cases), std::end(cases)});
+}
+
 TEST(SynthCli, NegativeSeedIsRefused) {
   TempDir dir;
   const RunResult r = run_objmap({"synth", "--out", (dir / "s").string(), "--seed", "-1"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err, "objmap: usage error: --seed: must be a whole number >= 0, got '-1' (see "
-                   "'objmap --help')\n");
+  EXPECT_EQ(r.err,
+            "objmap: usage error: --seed: must be a whole number >= 0, got '-1' (see "
+            "'objmap --help')\n");
   EXPECT_FALSE(fs::exists(dir / "s"));
 }
 

@@ -291,6 +291,8 @@ void CorrectOptions::check() const {
   const auto in = [](double v, double lo, double hi) {
     return std::isfinite(v) && v > lo && v <= hi;
   };
+  require(in(icp_max_view_angle_deg, 0.0, 180.0), "CorrectOptions.icp_max_view_angle_deg",
+          "must be in (0, 180]");
   require(in(icp_link_max_view_angle_deg, 0.0, 180.0), "CorrectOptions.icp_link_max_view_angle_deg",
           "must be in (0, 180]");
   require(in(icp_link_sigma_scale, 0.0, 1e6), "CorrectOptions.icp_link_sigma_scale", "must be > 0");
