@@ -69,13 +69,13 @@ void run_detect(DetectCommand& cmd) {
   // The model first (its errors before any progress output), then the frames.
   const auto load_start = std::chrono::steady_clock::now();
   std::unique_ptr<segmentation::Detector> detector;
-  try {
-    detector = std::make_unique<segmentation::Detector>(o);
-  } catch (const InputError& e) {
-    // The library names the option by its field; the user knows it by its flag.
-    if (e.where() == "DetectOptions.classes") throw InputError("--classes", e.reason());
-    throw;
-  }
+  // The library names an option by its field; the user knows it by its flag.
+  check_naming_flags([&] { detector = std::make_unique<segmentation::Detector>(o); },
+                     {{"DetectOptions.classes", "--classes"},
+                      {"DetectOptions.score_threshold", "--score-threshold"},
+                      {"DetectOptions.nms_threshold", "--nms-threshold"},
+                      {"DetectOptions.mask_threshold", "--mask-threshold"},
+                      {"DetectOptions.input_width/input_height", "--input-width/--input-height"}});
   const double load_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count();
   const std::vector<segmentation::DetectFrame> frames = segmentation::list_rgb_frames(cmd.dataset);
