@@ -60,6 +60,9 @@ struct EvalAteArgs {
 };
 
 void run_eval_ate(const EvalAteArgs& args) {
+  check_naming_flags(
+      [&] { args.options.check(); },  // bad options before reading the files
+      {{"AteOptions.max_diff_s", "--max-diff"}, {"AteOptions.offset_s", "--offset"}});
   const Trajectory gt = io::read_trajectory(args.gt_file);
   const Trajectory est = io::read_trajectory(args.est_file);
   const eval::AteResult result = eval::evaluate_ate(gt, est, args.options);
@@ -124,7 +127,10 @@ struct EvalRpeArgs {
 void run_eval_rpe(EvalRpeArgs args) {
   args.options.delta_unit = eval::parse_delta_unit(args.delta_unit);
   if (args.max_diff_given) args.options.max_diff_s = args.max_diff_s;
-  args.options.check();  // bad options before reading the files
+  check_naming_flags([&] { args.options.check(); },  // bad options before reading the files
+                     {{"RpeOptions.delta", "--delta"},
+                      {"RpeOptions.offset_s", "--offset"},
+                      {"RpeOptions.max_diff_s", "--max-diff"}});
   const Trajectory gt = io::read_trajectory(args.gt_file);
   const Trajectory est = io::read_trajectory(args.est_file);
   const eval::RpeResult result = eval::evaluate_rpe(gt, est, args.options);
@@ -185,7 +191,7 @@ void run_eval_objects(const EvalObjectsArgs& args) {
   if (args.gt_objects_file.empty() == args.reference_file.empty())
     throw CLI::ValidationError("eval objects",
                                "give one of --gt-objects F or --reference RUN_GT/objects.json");
-  args.options.check();
+  check_naming_flags([&] { args.options.check(); }, {{"ObjectEvalOptions.gate_m", "--gate"}});
   eval::ObjectEvalReport report;
   report.options = args.options;
   report.map_source = args.map_file;

@@ -1,5 +1,5 @@
-// A bad option of detect, track, correct or synth is named by the flag the user gave (not a library
-// struct member), and a negative number for an unsigned one is refused, not wrapped round.
+// A bad option of detect, track, correct, eval or synth is named by the flag the user gave (not a
+// library struct member), and a negative number for an unsigned one is refused, not wrapped round.
 #include <gtest/gtest.h>
 
 #include "support/test_support.h"
@@ -27,6 +27,16 @@ TEST(DetectCli, BadOptionNamesItsFlag) {
   expect_flags_named({"detect", "--dataset", (dir / "d").string(), "--model",
                       (dir / "m.weights").string(), "--out", (dir / "o").string()},
                      {{"--score-threshold", "2"}, {"--nms-threshold", "-1"}});
+}
+
+TEST(EvalFlagsCli, BadOptionNamesItsFlag) {
+  TempDir dir;
+  const std::string t = (dir / "t.txt").string();
+  expect_flags_named({"eval", "ate", "--gt", t, "--est", t},
+                     {{"--max-diff", "-1"}, {"--offset", "nan"}});
+  expect_flags_named({"eval", "rpe", "--gt", t, "--est", t},
+                     {{"--delta", "0"}, {"--offset", "nan"}, {"--max-diff", "-1"}});
+  expect_flags_named({"eval", "objects", "--map", t, "--reference", t}, {{"--gate", "-1"}});
 }
 
 TEST(CorrectCli, BadOptionNamesItsFlag) {
