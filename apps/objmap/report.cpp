@@ -102,6 +102,8 @@ void run_report(const ReportOptions& options) {
           "'" + options.up + "'; expected x, y or z");
   require(options.thumbnail_px >= 32 && options.thumbnail_px <= 1024, "--thumbnail",
           std::to_string(options.thumbnail_px) + "; expected 32 to 1024 pixels");
+  require(std::isfinite(options.pixel_m) && options.pixel_m >= 0.0005 && options.pixel_m <= 1,
+          "--pixel", std::to_string(options.pixel_m) + "; expected 0.0005 to 1 metres per pixel");
   io::require_replaceable(options.out.empty() ? options.run / "report" : options.out,
                           io::kReportFolder);
   const int up_axis = options.up[0] - 'x';

@@ -1,5 +1,6 @@
-// A bad option of detect, track, correct, eval or synth is named by the flag the user gave (not a
-// library struct member), and a negative number for an unsigned one is refused, not wrapped round.
+// A bad option of detect, track, correct, eval, report or synth is named by the flag the user gave
+// (not a library struct member), and a negative number for an unsigned one is refused, not wrapped
+// round.
 #include <gtest/gtest.h>
 
 #include "support/test_support.h"
@@ -37,6 +38,12 @@ TEST(EvalFlagsCli, BadOptionNamesItsFlag) {
   expect_flags_named({"eval", "rpe", "--gt", t, "--est", t},
                      {{"--delta", "0"}, {"--offset", "nan"}, {"--max-diff", "-1"}});
   expect_flags_named({"eval", "objects", "--map", t, "--reference", t}, {{"--gate", "-1"}});
+}
+
+TEST(ReportFlagsCli, BadOptionNamesItsFlag) {
+  TempDir dir;
+  expect_flags_named({"report", "--run", (dir / "run").string()},
+                     {{"--pixel", "0"}, {"--pixel", "nan"}, {"--thumbnail", "5"}, {"--up", "w"}});
 }
 
 TEST(CorrectCli, BadOptionNamesItsFlag) {
