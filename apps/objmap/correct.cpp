@@ -132,7 +132,10 @@ void setup_correct(CLI::App& app) {
       "written. A refused correction keeps the input poses and says why.");
   cmd->add_option("--run", options->run, "fuse run folder (run.json, objects.json, objects/)")
       ->required();
-  cmd->add_option("--out", options->out, "output run folder (replaced when complete)")->required();
+  cmd->add_option("--out", options->out,
+                  "output run folder (an earlier run there is replaced when complete; any other "
+                  "folder is refused)")
+      ->required();
   add_correction_flags(cmd, *options);
   cmd->add_option("--threads", options->threads, "threads of the re-fuse (0 = all cores)")
       ->capture_default_str();

@@ -160,7 +160,9 @@ void setup_detect(CLI::App& app) {
   c->add_option("--mask-threshold", o.mask_threshold,
                 "Mask R-CNN: mask value above which a pixel is the object's")
       ->capture_default_str();
-  c->add_option("--out", cmd->out, "output segmentation folder (replaced if it exists)")
+  c->add_option("--out", cmd->out,
+                "output segmentation folder (an earlier segmentation there is replaced; any other "
+                "folder is refused)")
       ->required();
   c->callback([cmd] { run_detect(*cmd); });
 }

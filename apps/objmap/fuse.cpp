@@ -83,7 +83,9 @@ void setup_fuse(CLI::App& app) {
   cmd->add_option("--segmentation", options->segmentation,
                   "segmentation folder (canonical JSON, PNG instance images, paper txt, box txt)")
       ->required();
-  cmd->add_option("--out", options->out, "run folder to write (replaced when complete)")
+  cmd->add_option("--out", options->out,
+                  "run folder to write (an earlier run there is replaced when complete; any other "
+                  "folder is refused)")
       ->required();
   cmd->add_option(
       "--camera", options->camera,

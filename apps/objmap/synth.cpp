@@ -67,7 +67,10 @@ void setup_synth(CLI::App& app) {
       "Write a synthetic TUM RGB-D sequence (ray-cast room, table(s) and the paper's eight object "
       "classes) with exact ground truth: groundtruth.txt, objects_gt.json, segmentation_gt/, and a "
       "noisy segmentation/ and drifting estimated.txt. Same seed and options: identical files.");
-  c->add_option("--out", cmd->out, "output folder (replaced if it exists)")->required();
+  c->add_option("--out", cmd->out,
+                "output folder (an earlier synthetic sequence there is replaced; any other folder "
+                "is refused)")
+      ->required();
   c->add_option("--seed", o.seed, "random seed")
       ->check([](const std::string& text) {
         // CLI11 wraps "-1" round to 2^64 - 1 for an unsigned option.

@@ -141,7 +141,9 @@ void setup_track(CLI::App& app) {
   c->add_option("--segmentation", cmd->segmentation,
                 "segmentation folder (any supported format; input track ids are ignored)")
       ->required();
-  c->add_option("--out", cmd->out, "output segmentation folder (replaced if it exists)")
+  c->add_option("--out", cmd->out,
+                "output segmentation folder (an earlier segmentation there is replaced; any other "
+                "folder is refused)")
       ->required();
   c->add_option("--seg-format", cmd->seg_format,
                 "auto|json|png|txt-paper|boxes-named|boxes-coco|boxes-xywh")
