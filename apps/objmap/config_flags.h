@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "objmap/core/error.h"
+#include "command.h"
 #include "objmap/pipeline/config.h"
 
 namespace objmap::app {
@@ -58,13 +58,9 @@ class ConfigFlags {
   // "objects.weight_id (--weight-id): must be >= 0, got -1".
   template <typename Options>
   void check(const Options& options) const {
-    try {
-      options.check();
-    } catch (const InputError& e) {
-      for (const auto& f : fields_)
-        if (f.key == e.where()) throw InputError(f.key + " (" + f.flag + ")", e.reason());
-      throw;
-    }
+    std::vector<std::pair<std::string, std::string>> key_to_name;
+    for (const auto& f : fields_) key_to_name.emplace_back(f.key, f.key + " (" + f.flag + ")");
+    check_naming_flags([&] { options.check(); }, key_to_name);
   }
 
  private:

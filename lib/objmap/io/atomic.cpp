@@ -215,8 +215,7 @@ StagingDir::StagingDir(const fs::path& out, const OutputKind& kind)
       staging_(with_suffix(out_, ".tmp-")),
       unfinished_(staging_),
       kind_(kind) {
-  require(!out_.empty(), out.string(), "expected an output folder name");
-  require_replaceable(out_, kind_);
+  require_replaceable(out_, kind_);  // also refuses an empty name
   make_parent(out_);
   std::error_code ec;
   fs::remove_all(staging_, ec);  // a stale one from a crashed run with the same pid
