@@ -7,8 +7,7 @@ groundtruth.txt), every map object is matched to a ground-truth object of its cl
 the tolerance max(2 cm, 10% of the object's largest dimension). Several position estimates from
 the object's PLY and the cameras that saw it are scored side by side:
 
-  position     objects.json's `position` (objmap's estimate: middle of the points' 1-99% box
-               since session 6, 5-95% before)
+  position     objects.json's `position` (objmap's estimate: middle of the points' 1-99% box)
   mean         the mean of the points (objects.json's `centroid`)
   box_xy_mean_z  the 5-95% box in x and y, the mean height
   front_half   the box, moved along the mean horizontal viewing direction so that its centre is

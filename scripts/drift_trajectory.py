@@ -10,7 +10,7 @@ The drifted pose is est_i = D_i * gt_i with D_0 = identity (world frame, as objm
   - yaw drift: a rotation about the vertical axis (z of the first camera's world) through the
     first position, growing at a rate of `yaw-deg-per-m` (sign from the seed) per metre travelled.
 Same input, seed and options: byte-identical output. Used for the real-image test of
-`objmap correct` on fr3_cabinet_58kf (docs/_parts/pose.md).
+`objmap correct` on fr3_cabinet_58kf (docs/benchmarks.md, "Pose correction (Table 7)").
 """
 import argparse
 import math

@@ -76,7 +76,7 @@ TEST(CorrectSynthetic, GraphCutsTheDriftByAFifthAndTheObjectErrorToo) {
   ASSERT_TRUE(fs::exists(s.graph)) << s.why.err;
   const double before = ate_rmse(s.scene / "groundtruth.txt", s.scene / "estimated.txt");
   const double after = ate_rmse(s.scene / "groundtruth.txt", s.graph / "trajectory_corrected.txt");
-  // Measured: 6.33 -> 3.06 mm (docs/_parts/pose.md).
+  // Measured: 6.33 -> 3.06 mm.
   EXPECT_LT(after, 0.8 * before) << before << " -> " << after;
   const double object_before = centroid_error_m(s.fused, s.scene / "objects_gt.json");
   const double object_after = centroid_error_m(s.graph, s.scene / "objects_gt.json");

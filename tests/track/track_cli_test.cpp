@@ -17,7 +17,7 @@ using test::run_objmap;
 using test::fs::path;
 
 // The real detection stream: 2585 frames of boxes. Measured: 242 confirmed tracks of 966 started,
-// mean length 67.5 frames (docs/_parts/track.md); asserted with margin.
+// mean length 67.5 frames (docs/cli.md, "Tracking"); asserted with margin.
 TEST(TrackCli, RealYoloStreamWithoutImages) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr3_long_office_household_annotations");
   test::TempDir tmp;

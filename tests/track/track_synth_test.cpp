@@ -1,7 +1,7 @@
 // The tracker measured on the synthetic scene of `objmap synth --frames 60` (noisy segmentation:
 // misses, false positives, class confusion, id switches; exact segmentation_gt): input track ids
 // are ignored, the output is scored against segmentation_gt with CLEAR-MOT and IDF1. The figures
-// are in docs/_parts/track.md; the thresholds below leave a margin under them.
+// are in docs/cli.md, "Tracking"; the thresholds below leave a margin under them.
 #include <gtest/gtest.h>
 
 #include <cstdio>

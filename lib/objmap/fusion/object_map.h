@@ -37,7 +37,7 @@ enum class OverlapMeasure {
   // |A∩B| / |A| with |A| ≤ |B| (A = the observation in add(); the smaller object in merge_pass()):
   // the share of A that lies on B. 1 for any partial view of the object, whatever the object's
   // size; small for a neighbour (only A's boundary touches it). The default: it measured best
-  // (docs/_parts/assoc.md).
+  // (docs/fusion.md, "Object map").
   kContainment,
 };
 const char* to_string(OverlapMeasure measure);
@@ -133,8 +133,9 @@ struct ObjectRecord {
   // world axis: the estimate of the centre of the object's box. The point mean is biased toward
   // the seen side (only the surface facing the camera is fused) and toward the parts with most
   // surface (a chair's seat and back, not its legs); the extent is not, as long as the views cover
-  // the object's outline; the percentiles ignore the last stray points. (5th/95th until session 6:
-  // thin parts such as chair legs fell below the 5th percentile; docs/benchmarks.md.)
+  // the object's outline; the percentiles ignore the last stray points. The 1st/99th, not the
+  // 5th/95th: thin parts such as chair legs fall below the 5th percentile (docs/fusion.md,
+  // "Records").
   Vec3 position = Vec3::Zero();
   Aabb aabb;                        // of the filtered points
   Obb obb;                          // PCA box of the filtered points

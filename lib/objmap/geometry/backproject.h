@@ -27,8 +27,8 @@ struct RayTable {
 };
 
 // Throws InputError when the camera is invalid (Camera::check). `threads` threads share the rows
-// (the iterative undistortion takes ~65 ms for 640x480 on one core); the table is the same for any
-// count.
+// (the iterative undistortion of fr1's 640x480 pixels takes ~37 ms on one core); the table is the
+// same for any count.
 RayTable make_ray_table(const Camera& camera, int threads = 1);
 
 struct BackprojectOptions {

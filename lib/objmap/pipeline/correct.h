@@ -21,12 +21,12 @@ namespace objmap::pipeline {
 struct CorrectOptions {
   std::filesystem::path run;  // a fuse run folder (run.json, objects.json, objects/)
   std::filesystem::path out;  // output run folder (replaced when complete)
-  // How an observed centroid is compared with its object: "visible" (default) with the centroid of
-  // the part of the object model visible from the keyframe (partial-view bias removed), or
-  // "centroid" with the whole model's centroid (the paper).
-  // "icp": each observation's points (re-made from the run's inputs) aligned to the object model
-  // (point-to-plane ICP): the model's centroid where that alignment puts it in the camera frame;
-  // observations that do not align fall back to "visible".
+  // How an observed centroid is compared with its object (docs/pose.md):
+  // "icp" (default): each observation's points (re-made from the run's inputs) aligned by
+  // point-to-plane ICP to the first view of its object (the anchor): the anchor's centroid where
+  // that alignment puts it in the camera frame; observations that do not align fall back to
+  // "visible". "visible": the centroid of the part of the object model visible from the keyframe
+  // (partial-view bias removed). "centroid": the whole model's centroid (the paper).
   std::string view_model = "icp";
   pose::VisibilityOptions visibility;     // z-buffer rendering of the models
   pose::IcpOptions icp;                   // view_model icp

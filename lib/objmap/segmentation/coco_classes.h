@@ -7,7 +7,7 @@
 namespace objmap::segmentation {
 
 // The canonical spelling of a class name: lower case, '_' -> ' ', blanks trimmed and collapsed to
-// one space, then the documented aliases (docs/_parts/seg.md) mapped to one name:
+// one space, then the documented aliases (docs/formats.md, "Class names") mapped to one name:
 //   "tv", "tvmonitor", "tv monitor"                -> "tv monitor"
 //   "motorbike" -> "motorcycle", "aeroplane" -> "airplane", "sofa" -> "couch",
 //   "pottedplant" -> "potted plant", "diningtable" -> "dining table",

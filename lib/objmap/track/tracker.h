@@ -41,7 +41,7 @@ struct TrackerOptions {
   // A detection only joins a track of the same class (the track's majority class). DeepSORT has no
   // classes; off by default because detectors flip classes from frame to frame (teddy bear /
   // person, mouse / cup) and each flip would then break the track: on the synthetic scene
-  // (docs/_parts/track.md) turning it on lowers IDF1 from 0.81 to 0.76. The track's class is the
+  // (docs/cli.md, "Tracking") turning it on lowers IDF1 from 0.81 to 0.76. The track's class is the
   // majority vote of its detections either way.
   bool same_class_only = false;
   // Detections below this score are not tracked (kept in the output without a track id).
@@ -58,8 +58,8 @@ struct TrackerOptions {
   bool use_gate_3d = false;
   // Base radius, metres. The robust centroid of a static object moves with the view (another side,
   // the mask's bleed, depth noise, pose error): measured on the synthetic scene and fr1_rpy
-  // (docs/_parts/track3d.md), 0.3 m keeps the true pairs and separates objects a box apart in
-  // depth.
+  // (docs/benchmarks.md, "The tracker's 3D gate"), 0.3 m keeps the true pairs and separates
+  // objects a box apart in depth.
   double gate_3d_m = 0.3;
   // Speed bound of an object, m/s: a track lost for longer may have moved (a person walking, a cup
   // carried). 0.5 m/s: the radius grows beyond the base after 0.6 s without a 3D update.
@@ -67,7 +67,8 @@ struct TrackerOptions {
   // The gate passes when the detection is within the radius of ANY of the track's last this many
   // 3D positions (each with its own elapsed time). 1 = the last position only. More lets a track
   // come back to an earlier position after one outlier (a box mask that took what stands behind
-  // the object for a frame); measured, it changes little (docs/_parts/track3d.md).
+  // the object for a frame); measured, it changes little (docs/benchmarks.md, "The tracker's 3D
+  // gate").
   int gate_3d_history = 1;
 
   void check() const;  // throws InputError naming the bad field
