@@ -34,7 +34,7 @@ OutlierResult remove_outliers(const PointCloud& cloud, const OutlierOptions& opt
 
   // FLANN's single kd-tree (the one PCL's KdTreeFLANN builds: leaves of 15 points, exact search,
   // neighbours sorted by distance), queried a block of points at a time: PCL's one-point
-  // nearestKSearch costs an OpenMP region and allocations per query (docs/fusion.md).
+  // nearestKSearch costs an OpenMP region and allocations per query (docs/fusion.md, "Filters").
   static_assert(sizeof(Vec3f) == 3 * sizeof(float), "points must be packed xyz floats");
   flann::Matrix<float> data(const_cast<float*>(cloud.points.front().data()), n, 3);
   flann::Index<flann::L2_Simple<float>> tree(data, flann::KDTreeSingleIndexParams(15));
