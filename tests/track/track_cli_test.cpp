@@ -134,10 +134,11 @@ using test::run_objmap;
 using test::fs::path;
 
 // The 3D gate on real frames: fr1_rpy_every4's Yolo-Fastest boxes with the rgb images, the depth
-// and groundtruth.txt. Measured (docs/_parts/track3d.md): every frame has a pose, 520 of 521 boxes
-// get a 3D position through box masks (one box gives no mask); 41 tracks confirmed of 226 started,
-// 306 of 521 boxes tracked (without the gate: 46 of 190, 347). The gate splits tracks whose box
-// centroid jumps between objects, so it starts more tracks and labels fewer boxes.
+// and groundtruth.txt. Measured (docs/benchmarks.md, "The tracker's 3D gate"): every frame has a
+// pose, 520 of 521 boxes get a 3D position through box masks (one box gives no mask); 41 tracks
+// confirmed of 226 started, 306 of 521 boxes tracked (without the gate: 46 of 190, 347). The gate
+// splits tracks whose box centroid jumps between objects, so it starts more tracks and labels
+// fewer boxes.
 TEST(TrackCli, RealRpyWithDepthAndThe3dGate) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
   test::TempDir tmp;

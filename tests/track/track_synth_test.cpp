@@ -97,7 +97,7 @@ using test::fs::path;
 
 // The 3D gate measured on the integration scene (`synth --seed 3 --orbit-speed 60`: 90 frames
 // orbiting the table at 60 deg/s, misses, false positives and class confusion on), tracked with
-// and without --trajectory groundtruth.txt. Figures in docs/_parts/track3d.md.
+// and without --trajectory groundtruth.txt. Figures in docs/benchmarks.md, "The tracker's 3D gate".
 class TrackGate3dSynthetic : public ::testing::Test {
  protected:
   static path scene() {
