@@ -23,7 +23,9 @@ build: deps configure
 test: deps build
 	cd $(BUILD) && OBJMAP_DATA=$(DATA) ctest --output-on-failure -j$(JOBS)
 
-demo: deps build
+# The demo needs only the objmap binary: it is built first, without the tests and benchmarks.
+demo: deps configure
+	cmake --build $(BUILD) -j$(JOBS) --target objmap_app
 	@bash scripts/demo.sh $(OBJMAP) $(DEMO)
 
 # make bench [DATA=DIR]: every table of docs/benchmarks.md on the sequences under DATA plus three

@@ -24,9 +24,10 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
         kf.keyframes.size(), options.objects.min_observations);
   std::printf(
       "instances   %zu (format %s; %zu masks from boxes, %zu given masks refined (-%llu pixels), "
-      "%zu duplicates dropped, %zu without usable points)\n",
+      "%zu depth-gated (-%llu pixels), %zu duplicates dropped, %zu without usable points)\n",
       r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_refined,
-      static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_duplicate,
+      static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_depth_gated,
+      static_cast<unsigned long long>(r.depth_gate_pixels_removed), r.instances_duplicate,
       r.instances_empty);
   // A run that cannot have objects says why, rather than leaving an empty table to puzzle over.
   if (r.instances_seen == 0)

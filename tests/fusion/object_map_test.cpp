@@ -526,6 +526,118 @@ TEST(ObjectMap, OverlapMeasureNames) {
   }
 }
 
+// A camera pose at `x` metres along the world's x axis, turned `yaw_deg` about its y axis.
+Pose camera_at(double x, double yaw_deg = 0.0) {
+  Pose p = Pose::Identity();
+  p.translate(Vec3(x, 0, 0));
+  p.rotate(Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Vec3::UnitY()));
+  return p;
+}
+
+Observation posed(double t, std::optional<int> id, const std::string& cls, PointCloud points,
+                  const Pose& world_from_cam) {
+  Observation o = obs(t, id, cls, 0.9, std::move(points));
+  o.world_from_cam = world_from_cam;
+  return o;
+}
+
+TEST(ObjectMap, ConfirmationCountsViewsNotFrames) {
+  // A false positive in five consecutive frames of a 30 Hz video (the camera moves 1 cm per
+  // frame) is one view; the object seen from three places 5 cm apart is three.
+  const Vec3 c(0.305, 0.105, 0.905);
+  ObjectMap map;
+  for (int f = 0; f < 5; ++f) map.add(posed(f, 1, "cup", box(c, 3), camera_at(0.01 * f)));
+  const Vec3 d(1.305, 0.105, 0.905);
+  for (int f = 0; f < 3; ++f) map.add(posed(10 + f, 2, "book", box(d, 3), camera_at(0.05 * f)));
+  ASSERT_EQ(map.size(), 2u);
+  EXPECT_EQ(map.confirmed_count(), 1u);
+  auto all = no_outlier_filter();
+  all.confirmed_only = false;
+  const auto records = map.records(all);
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(records[0].observations, 5);
+  EXPECT_EQ(records[0].views, 1);  // 0.04 m from the first: not a new view
+  EXPECT_FALSE(records[0].confirmed);
+  EXPECT_EQ(records[1].views, 3);
+  EXPECT_TRUE(records[1].confirmed);
+
+  // A turn is a view too; without a pose every observation is; 0 and 0: the paper's count.
+  std::vector<ObservationLink> links(3);
+  links[0].world_from_cam = camera_at(0.0, 0.0);
+  links[1].world_from_cam = camera_at(0.0, 4.0);
+  links[2].world_from_cam = camera_at(0.0, 6.0);
+  EXPECT_EQ(count_views(links, ObjectMapOptions{}), 2);
+  links[1].world_from_cam.reset();
+  EXPECT_EQ(count_views(links, ObjectMapOptions{}), 3);
+  ObjectMapOptions paper;
+  paper.view_min_translation_m = paper.view_min_rotation_deg = 0.0;
+  ObjectMap counted(paper);
+  for (int f = 0; f < 5; ++f) counted.add(posed(f, 1, "cup", box(c, 3), camera_at(0.01 * f)));
+  EXPECT_EQ(counted.confirmed_count(), 1u);
+}
+
+TEST(ObjectMap, AClassConfusionJoinsTheObjectItLiesOn) {
+  // A keyboard seen from 12 places; in 3 of them the detector also boxed it as "book" (the same
+  // surface, a second instance of the frame, so it cannot join the keyboard there).
+  const Vec3 keyboard(0.005, 0.005, 0.765);
+  ObjectMap map;
+  for (int f = 0; f < 12; ++f) {
+    std::vector<Observation> frame{
+        posed(f, 1, "keyboard", slab(keyboard, 22, 1), camera_at(0.1 * f))};
+    if (f % 4 == 0) frame.push_back(posed(f, 2, "book", slab(keyboard, 20, 1), camera_at(0.1 * f)));
+    map.add_frame(frame);
+  }
+  EXPECT_EQ(map.confirmed_count(), 2u) << "before the merge pass: a keyboard and a book";
+  const auto merges = map.merge_pass();
+  ASSERT_EQ(merges.size(), 1u);
+  EXPECT_TRUE(merges[0].class_confusion);
+  EXPECT_EQ(merges[0].into, 0);
+  EXPECT_NEAR(merges[0].overlap, 1.0, 1e-9);
+  const auto records = map.records(no_outlier_filter());
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].class_name, "keyboard");
+  EXPECT_EQ(records[0].observations, 15);
+
+  // Seen about as often as the larger object (a cup on a table), or switched off: it stays.
+  ObjectMap often;
+  for (int f = 0; f < 12; ++f)
+    often.add_frame({posed(f, 1, "keyboard", slab(keyboard, 22, 1), camera_at(0.1 * f)),
+                     posed(f, 2, "book", slab(keyboard, 20, 1), camera_at(0.1 * f))});
+  EXPECT_TRUE(often.merge_pass().empty());
+  ObjectMapOptions off;
+  off.merge_class_confusions = false;
+  ObjectMap kept(off);
+  for (int f = 0; f < 12; ++f) {
+    std::vector<Observation> frame{
+        posed(f, 1, "keyboard", slab(keyboard, 22, 1), camera_at(0.1 * f))};
+    if (f % 4 == 0) frame.push_back(posed(f, 2, "book", slab(keyboard, 20, 1), camera_at(0.1 * f)));
+    kept.add_frame(frame);
+  }
+  EXPECT_TRUE(kept.merge_pass().empty());
+}
+
+TEST(ObjectMap, AMouseOnAKeyboardsBleedIsNoClassConfusion) {
+  // The keyboard's masks took the mouse beside it in 1 of its 12 views: the mouse's voxels lie on
+  // the keyboard's voxels, but not on its surface (voxels in >= 10% of its observations).
+  const Vec3 keyboard(0.005, 0.005, 0.765), mouse(0.305, 0.005, 0.775);
+  ObjectMap map;
+  for (int f = 0; f < 12; ++f) {
+    PointCloud seen = slab(keyboard, 22, 1);
+    if (f == 0) {
+      const PointCloud bleed = box(mouse, 3);
+      for (std::size_t i = 0; i < bleed.size(); ++i)
+        seen.push_back(bleed.points[i], bleed.colors[i]);
+    }
+    std::vector<Observation> frame{posed(f, 1, "keyboard", seen, camera_at(0.1 * f))};
+    if (f % 3 == 0) frame.push_back(posed(f, 2, "mouse", box(mouse, 3), camera_at(0.1 * f)));
+    map.add_frame(frame);
+  }
+  map.merge_pass();
+  const auto records = map.records(no_outlier_filter());
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(records[1].class_name, "mouse");
+}
+
 TEST(ObjectMap, BadOptionsAreNamed) {
   ObjectMapOptions o;
   o.distance_gate_m = 0.0;

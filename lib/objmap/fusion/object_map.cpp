@@ -52,6 +52,43 @@ void ObjectMapOptions::check() const {
           "must be >= 1, got " + std::to_string(min_observations));
   require(min_points >= 1, "ObjectMapOptions.min_points",
           "must be >= 1, got " + std::to_string(min_points));
+  require(std::isfinite(confusion_min_containment) && confusion_min_containment > 0.0 &&
+              confusion_min_containment <= 1.0,
+          "ObjectMapOptions.confusion_min_containment",
+          "must be in (0, 1], got " + std::to_string(confusion_min_containment));
+  require(std::isfinite(confusion_min_view_ratio) && confusion_min_view_ratio >= 1.0,
+          "ObjectMapOptions.confusion_min_view_ratio",
+          "must be >= 1, got " + std::to_string(confusion_min_view_ratio));
+  require(std::isfinite(confusion_min_support) && confusion_min_support >= 0.0 &&
+              confusion_min_support <= 1.0,
+          "ObjectMapOptions.confusion_min_support",
+          "must be in [0, 1], got " + std::to_string(confusion_min_support));
+  require(finite_nonneg(view_min_translation_m), "ObjectMapOptions.view_min_translation_m",
+          "must be >= 0, got " + std::to_string(view_min_translation_m));
+  require(finite_nonneg(view_min_rotation_deg) && view_min_rotation_deg <= 180.0,
+          "ObjectMapOptions.view_min_rotation_deg",
+          "must be in [0, 180], got " + std::to_string(view_min_rotation_deg));
+}
+
+int count_views(const std::vector<ObservationLink>& provenance, const ObjectMapOptions& options) {
+  const double min_rotation_rad = options.view_min_rotation_deg * M_PI / 180.0;
+  int views = 0;
+  const Pose* last = nullptr;  // the pose of the last view
+  for (const ObservationLink& link : provenance) {
+    if (!link.world_from_cam) {
+      ++views;
+      continue;
+    }
+    if (last) {
+      const Pose last_from_this = last->inverse() * *link.world_from_cam;
+      const double moved_m = last_from_this.translation().norm();
+      const double turned_rad = Eigen::AngleAxisd(last_from_this.rotation()).angle();
+      if (moved_m < options.view_min_translation_m && turned_rad < min_rotation_rad) continue;
+    }
+    ++views;
+    last = &*link.world_from_cam;
+  }
+  return views;
 }
 
 const char* to_string(OverlapMeasure measure) {
@@ -209,31 +246,31 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
   const bool disjoint =
       ((a_hi.array() + t) < b.lo.array()).any() || ((b.hi.array() + t) < a_lo.array()).any();
   if (!disjoint && na > 0 && partial + o.weight_overlap * bound > threshold) {
-    double common = 0.0;
-    if (t == 0) {
-      common = static_cast<double>(common_voxels(a, b.voxels));
-    } else {
-      // Each key's slot in b.near is prefetched kAhead keys before it is looked up (a ring of
-      // the keys seen), so that the cache misses of a large table overlap.
-      constexpr std::size_t kAhead = 8;
-      VoxelKey ring[kAhead];
-      std::size_t n = 0, seen = 0;
-      a.for_each([&](VoxelKey key, const VoxelData&) {
-        VoxelKey& slot = ring[seen % kAhead];
-        if (seen >= kAhead) n += b.near.contains(slot);
-        b.near.prefetch(key);
-        slot = key;
-        ++seen;
-      });
-      for (std::size_t i = seen > kAhead ? seen - kAhead : 0; i < seen; ++i)
-        n += b.near.contains(ring[i % kAhead]);
-      common = static_cast<double>(n);
-    }
+    const double common = static_cast<double>(shared_voxels(a, b));
     s.overlap = iou ? common / std::max(na, na + nb - common) : common / na;
   }
   // Eq 22.
   s.score_p = partial + o.weight_overlap * s.overlap;
   return s;
+}
+
+std::size_t ObjectMap::shared_voxels(const VoxelMap& a, const Object& b) const {
+  if (options_.overlap_tolerance_voxels == 0) return fusion::common_voxels(a, b.voxels);
+  // Each key's slot in b.near is prefetched kAhead keys before it is looked up (a ring of the keys
+  // seen), so that the cache misses of a large table overlap.
+  constexpr std::size_t kAhead = 8;
+  VoxelKey ring[kAhead];
+  std::size_t n = 0, seen = 0;
+  a.for_each([&](VoxelKey key, const VoxelData&) {
+    VoxelKey& slot = ring[seen % kAhead];
+    if (seen >= kAhead) n += b.near.contains(slot);
+    b.near.prefetch(key);
+    slot = key;
+    ++seen;
+  });
+  for (std::size_t i = seen > kAhead ? seen - kAhead : 0; i < seen; ++i)
+    n += b.near.contains(ring[i % kAhead]);
+  return n;
 }
 
 struct ObjectMap::Prepared {
@@ -395,6 +432,7 @@ AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* 
   link.score = obs.score;
   link.keyframe_index = obs.keyframe_index;
   link.centroid_in_cam = obs.centroid_in_cam;
+  link.world_from_cam = obs.world_from_cam;
   link.centroid_in_world = obs_centroid;
   link.points = obs.points_in_world.size();
   link.created = result.created;
@@ -426,6 +464,45 @@ std::vector<double> class_frames(const ObjectT& o, const std::string& canonical)
   return t;
 }
 }  // namespace
+
+void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const MergeLink& link) {
+  Object* into = &into_object;
+  Object* absorbed = &absorbed_object;
+  into->voxels.merge(absorbed->voxels);
+  // `near` is the 3×3×3 dilation of the voxels (with each voxel's hits), so the joined object's
+  // is the union of the two, the hits added: absorbed's entries are added as they are (its
+  // neighbour-only entries with 0), rather than its new voxels dilated again (27 lookups each).
+  into->near.reserve(into->near.size() + absorbed->near.size());
+  absorbed->near.for_each([&](VoxelKey key, std::uint8_t hits) {
+    std::uint8_t& h = into->near[key];
+    h = static_cast<std::uint8_t>(std::min(255, h + hits));
+  });
+  for (double t : absorbed->frames) into->add_frame(t);
+  into->refresh();
+  for (const auto& [name, vote] : absorbed->histogram) {
+    into->histogram[name].score_sum += vote.score_sum;
+    into->histogram[name].count += vote.count;
+  }
+  into->score_sum += absorbed->score_sum;
+  into->observations += absorbed->observations;
+  into->track_ids.insert(absorbed->track_ids.begin(), absorbed->track_ids.end());
+  into->first_seen = std::min(into->first_seen, absorbed->first_seen);
+  into->last_seen = std::max(into->last_seen, absorbed->last_seen);
+  into->provenance.insert(into->provenance.end(), absorbed->provenance.begin(),
+                          absorbed->provenance.end());
+  std::stable_sort(
+      into->provenance.begin(), into->provenance.end(),
+      [](const ObservationLink& x, const ObservationLink& y) { return x.timestamp < y.timestamp; });
+  into->merges.push_back(link);
+  into->merges.insert(into->merges.end(), absorbed->merges.begin(), absorbed->merges.end());
+  absorbed->alive = false;
+  absorbed->absorbed_into = into->id;
+  absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
+  absorbed->near.clear();
+  absorbed->frames.clear();
+  absorbed->provenance.clear();
+  absorbed->merges.clear();
+}
 
 std::vector<MergeLink> ObjectMap::merge_pass() {
   std::vector<MergeLink> made;
@@ -485,41 +562,7 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
 
     // Join `absorbed` into `into` (the lower id).
     MergeLink link{into->id, absorbed->id, best.p_id, best.distance_m, best.overlap, best.score_p};
-    into->voxels.merge(absorbed->voxels);
-    // `near` is the 3×3×3 dilation of the voxels (with each voxel's hits), so the joined object's
-    // is the union of the two, the hits added: absorbed's entries are added as they are (its
-    // neighbour-only entries with 0), rather than its new voxels dilated again (27 lookups each).
-    into->near.reserve(into->near.size() + absorbed->near.size());
-    absorbed->near.for_each([&](VoxelKey key, std::uint8_t hits) {
-      std::uint8_t& h = into->near[key];
-      h = static_cast<std::uint8_t>(std::min(255, h + hits));
-    });
-    for (double t : absorbed->frames) into->add_frame(t);
-    into->refresh();
-    for (const auto& [name, vote] : absorbed->histogram) {
-      into->histogram[name].score_sum += vote.score_sum;
-      into->histogram[name].count += vote.count;
-    }
-    into->score_sum += absorbed->score_sum;
-    into->observations += absorbed->observations;
-    into->track_ids.insert(absorbed->track_ids.begin(), absorbed->track_ids.end());
-    into->first_seen = std::min(into->first_seen, absorbed->first_seen);
-    into->last_seen = std::max(into->last_seen, absorbed->last_seen);
-    into->provenance.insert(into->provenance.end(), absorbed->provenance.begin(),
-                            absorbed->provenance.end());
-    std::stable_sort(into->provenance.begin(), into->provenance.end(),
-                     [](const ObservationLink& x, const ObservationLink& y) {
-                       return x.timestamp < y.timestamp;
-                     });
-    into->merges.push_back(link);
-    into->merges.insert(into->merges.end(), absorbed->merges.begin(), absorbed->merges.end());
-    absorbed->alive = false;
-    absorbed->absorbed_into = into->id;
-    absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
-    absorbed->near.clear();
-    absorbed->frames.clear();
-    absorbed->provenance.clear();
-    absorbed->merges.clear();
+    absorb(*into, *absorbed, link);
     made.push_back(link);
 
     // The pairs of `into` change, those of `absorbed` are gone.
@@ -539,7 +582,76 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
       return std::make_pair(x.i, x.j) < std::make_pair(y.i, y.j);
     });
   }
+  if (options_.merge_class_confusions) merge_class_confusions(made);
   return made;
+}
+
+double ObjectMap::supported_share(const Object& a, const Object& b) const {
+  // b's voxels that were in at least confusion_min_support of its observations: its surface, not
+  // what its masks bled onto in a few views (a mouse beside a keyboard's box).
+  const double need =
+      std::min(255.0, std::max(1.0, options_.confusion_min_support * b.observations));
+  const auto& offsets = neighbourhood_offsets();
+  const int reach = options_.overlap_tolerance_voxels;
+  std::size_t shared = 0;
+  a.voxels.for_each([&](VoxelKey key, const VoxelData&) {
+    if (reach == 0) {
+      const std::uint8_t* hits = b.near.find(key);
+      shared += hits && *hits >= need;
+      return;
+    }
+    for (VoxelKey off : offsets) {
+      const std::uint8_t* hits = b.near.find(key + off);
+      if (hits && *hits >= need) {
+        ++shared;
+        return;
+      }
+    }
+  });
+  return static_cast<double>(shared) /
+         static_cast<double>(std::max<std::size_t>(1, a.voxels.size()));
+}
+
+void ObjectMap::merge_class_confusions(std::vector<MergeLink>& made) {
+  while (true) {
+    // The pair (smaller, larger) with the highest containment of the smaller in the larger (ties:
+    // the lower ids), among objects of different voted classes where the larger has enough views.
+    Object* best_small = nullptr;
+    Object* best_large = nullptr;
+    Scores best;
+    for (const auto& a : objects_) {
+      if (!a->alive) continue;
+      const std::string class_a = segmentation::canonical_class(voted_class(*a));
+      const double views_a = count_views(a->provenance, options_);
+      for (const auto& b : objects_) {
+        if (!b->alive || a == b || a->voxels.size() > b->voxels.size()) continue;
+        if (a->voxels.size() == b->voxels.size() && a->id > b->id) continue;
+        if (count_views(b->provenance, options_) < options_.confusion_min_view_ratio * views_a)
+          continue;
+        if (segmentation::canonical_class(voted_class(*b)) == class_a) continue;
+        // The containment of a in b (whatever the configured measure of eq 21); P is no
+        // criterion here.
+        const int t = options_.overlap_tolerance_voxels;
+        if (((a->hi.array() + t) < b->lo.array()).any() ||
+            ((b->hi.array() + t) < a->lo.array()).any())
+          continue;
+        Scores s;
+        s.distance_m = (a->centroid - b->centroid).norm();
+        s.overlap = supported_share(*a, *b);
+        if (s.overlap < options_.confusion_min_containment) continue;
+        if (!best_small || s.overlap > best.overlap) {
+          best_small = a.get();
+          best_large = b.get();
+          best = s;
+        }
+      }
+    }
+    if (!best_small) return;
+    MergeLink link{best_large->id, best_small->id, best.p_id, best.distance_m,
+                   best.overlap,   best.score_p,   true};
+    absorb(*best_large, *best_small, link);
+    made.push_back(link);
+  }
 }
 
 std::size_t ObjectMap::size() const {
@@ -550,7 +662,8 @@ std::size_t ObjectMap::size() const {
 
 std::size_t ObjectMap::confirmed_count() const {
   std::size_t n = 0;
-  for (const auto& o : objects_) n += o->alive && o->observations >= options_.min_observations;
+  for (const auto& o : objects_)
+    n += o->alive && count_views(o->provenance, options_) >= options_.min_observations;
   return n;
 }
 
@@ -571,7 +684,8 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
   for (const auto& op : objects_) {
     const Object& o = *op;
     if (!o.alive) continue;
-    const bool confirmed = o.observations >= options_.min_observations;
+    const int views = count_views(o.provenance, options_);
+    const bool confirmed = views >= options_.min_observations;
     if (options.confirmed_only && !confirmed) continue;
     ObjectRecord r;
     r.id = o.id;
@@ -579,6 +693,7 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     r.class_histogram = o.histogram;
     r.mean_score = o.observations > 0 ? o.score_sum / o.observations : 0.0;
     r.observations = o.observations;
+    r.views = views;
     r.confirmed = confirmed;
     r.first_seen = o.first_seen;
     r.last_seen = o.last_seen;

@@ -25,6 +25,7 @@ struct Observation {
   PointCloud points_in_world;           // back-projected instance pixels (colours optional)
   std::optional<int> keyframe_index;    // index of the keyframe, for the pose correction
   std::optional<Vec3> centroid_in_cam;  // the observation's centroid in the camera frame (ditto)
+  std::optional<Pose> world_from_cam;   // the keyframe's pose: views are counted with it
 };
 
 // How M (eq 21) compares two voxel sets A (the observation, or the smaller object in the merge
@@ -87,8 +88,31 @@ struct ObjectMapOptions {
   // keyframes than its object). 1: no such rule.
   bool one_observation_per_frame = true;
   double merge_max_shared_frames = 0.3;
-  int min_observations = 3;  // an object is confirmed after this many observations
-  int min_points = 10;       // observations with fewer points (after depth checks) are ignored
+  // Class confusion (after the same-class merges): an object whose voxels lie almost all on
+  // another object of another class that has several times its views is that object, named
+  // otherwise by the detector in some frames (a keyboard boxed as "book", a monitor's screen as
+  // "laptop"). With one observation per object and frame, the odd name's observations cannot
+  // join the object in the frames where it was also named rightly, so they keep an object of their
+  // own — one more object for every few frames of such confusion, and more of them the more
+  // frames are fused. It joins the larger; the class vote decides the name. Two distinct objects
+  // share only their touching boundary (containment far below 0.9), and an object on a larger one
+  // (a cup on a table) is seen about as often as it.
+  bool merge_class_confusions = true;
+  double confusion_min_containment = 0.9;  // share of the smaller's voxels on the larger's
+  double confusion_min_view_ratio = 2.0;   // the larger has at least this many times the views
+  double confusion_min_support = 0.1;  // the larger's voxels that count: in >= this share of its
+                                       // observations (its surface, not a bleed of a few views)
+  int min_observations = 3;            // an object is confirmed once it has this many views (below)
+  // Confirmation counts views, not observations, so that more frames of the same scene do not
+  // confirm more objects: an observation is a new view of its object when its camera moved at
+  // least view_min_translation_m or turned at least view_min_rotation_deg since the object's last
+  // view (the keyframe selection's motion rule, applied per object). A detector's false positive
+  // that lasts three consecutive frames of a 30 Hz video is then one view, as it is among motion
+  // keyframes. Observations without a pose each count as a view. 0 and 0: every observation is a
+  // view (the paper's count).
+  double view_min_translation_m = 0.05;
+  double view_min_rotation_deg = 5.0;
+  int min_points = 10;  // observations with fewer points (after depth checks) are ignored
   bool require_same_class = false;  // only match observations to objects of the voted class
   void check() const;               // throws InputError naming the bad field
 };
@@ -101,6 +125,7 @@ struct ObservationLink {
   double score = 0.0;
   std::optional<int> keyframe_index;
   std::optional<Vec3> centroid_in_cam;
+  std::optional<Pose> world_from_cam;
   Vec3 centroid_in_world = Vec3::Zero();  // the observation's voxel-weighted centroid
   std::size_t points = 0;                 // points of the observation
   bool created = false;                   // it started the object (the scores below are then 0)
@@ -115,6 +140,7 @@ struct MergeLink {
   int into = -1;
   int absorbed = -1;
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
+  bool class_confusion = false;  // joined by the class-confusion rule (overlap = containment)
 };
 
 struct ClassVote {
@@ -144,7 +170,8 @@ struct ObjectRecord {
   std::size_t points_filtered = 0;  // after the outlier filter (eq 18)
   double outlier_threshold = 0.0;   // t of eq 18 for this object
   int observations = 0;
-  bool confirmed = false;                    // observations >= min_observations
+  int views = 0;                             // observations from distinct viewpoints (above)
+  bool confirmed = false;                    // views >= min_observations
   double first_seen = 0.0, last_seen = 0.0;  // timestamps
   std::vector<int> track_ids;                // ascending
   std::vector<ObservationLink> provenance;   // by timestamp, then insertion order
@@ -164,6 +191,11 @@ struct RecordOptions {
   double min_voxel_support = 0.1;
   filters::OutlierOptions outlier;  // K, k, threads
 };
+
+// How many of an object's observations (its provenance, in time order) are views by the rule of
+// options.view_min_translation_m / view_min_rotation_deg: the first, and each one whose camera
+// moved or turned that much from the last view; an observation without a pose is a view.
+int count_views(const std::vector<ObservationLink>& provenance, const ObjectMapOptions& options);
 
 // What add() did with an observation.
 struct AddResult {
@@ -221,6 +253,9 @@ class ObjectMap {
                const Eigen::Vector3i& a_lo, const Eigen::Vector3i& a_hi, const Object& b,
                double threshold) const;
   static std::string voted_class(const Object& object);
+  // |A ∩ B| of eq 21: voxels of `a` that `b` has (overlap_tolerance_voxels 0) or has within one
+  // voxel (1).
+  std::size_t shared_voxels(const VoxelMap& a, const Object& b) const;
   // An observation's voxel set at the map resolution, its bounds and centroid (add() step 1).
   struct Prepared;
   bool prepare(const Observation& obs, Prepared& out) const;
@@ -230,6 +265,12 @@ class ObjectMap {
                  double threshold, Scores& s) const;
   // add() step 4: fuses the observation into `target` (nullptr: a new object).
   AddResult fuse(const Observation& obs, const Prepared& prep, Object* target, const Scores& s);
+  // Joins `absorbed` into `into` (voxels, votes, provenance, merges); `absorbed` dies.
+  void absorb(Object& into, Object& absorbed, const MergeLink& link);
+  // The share of a's voxels within reach of b's supported voxels (class confusion).
+  double supported_share(const Object& a, const Object& b) const;
+  // The class-confusion merges (ObjectMapOptions::merge_class_confusions), appended to `made`.
+  void merge_class_confusions(std::vector<MergeLink>& made);
 
   ObjectMapOptions options_;
   std::vector<std::unique_ptr<Object>>

@@ -91,6 +91,20 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
       {"objects.merge_min_overlap", "--merge-min-overlap",
        "merge pass: containment of the smaller object in the larger at least this",
        &m.merge_min_overlap},
+      {"objects.merge_class_confusions", "--merge-class-confusions",
+       "after the merge pass, an object lying almost all on an object of another class with "
+       "several times its views joins it (the detector's other name for it)",
+       &m.merge_class_confusions},
+      {"objects.confusion_min_containment", "--confusion-containment",
+       "class confusion: share of the smaller object's voxels on the larger's",
+       &m.confusion_min_containment},
+      {"objects.confusion_min_view_ratio", "--confusion-view-ratio",
+       "class confusion: the larger object has at least this many times the smaller's views",
+       &m.confusion_min_view_ratio},
+      {"objects.confusion_min_support", "--confusion-support",
+       "class confusion: the larger object's voxels that count were in at least this share of "
+       "its observations",
+       &m.confusion_min_support},
       {"objects.merge_max_shared_frames", "--merge-max-shared-frames",
        "merge pass: never join two objects both labelled their class in more than this share of "
        "the smaller one's keyframes (stacked books)",
@@ -105,8 +119,14 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        &m.match_threshold},
       {"objects.merge_threshold", "--merge-threshold", "K of the final merge pass",
        &m.merge_threshold},
-      {"objects.min_observations", "--min-observations", "observations to confirm an object",
-       &m.min_observations},
+      {"objects.min_observations", "--min-observations",
+       "views to confirm an object (observations from distinct viewpoints)", &m.min_observations},
+      {"objects.view_min_translation_m", "--view-translation",
+       "an observation is a new view of its object after this much camera motion, m (or the "
+       "rotation below; 0 and 0: every observation is a view)",
+       &m.view_min_translation_m},
+      {"objects.view_min_rotation_deg", "--view-rotation",
+       "... or after this much camera rotation, degrees", &m.view_min_rotation_deg},
       {"objects.min_points", "--min-points", "observations with fewer points are ignored",
        &m.min_points},
       {"objects.require_same_class", "--same-class", "match only objects of the same voted class",
@@ -132,6 +152,15 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "given masks: a smooth-depth part within 3 px of the outline (a rim) with fewer pixels "
        "than this share of the largest part is removed",
        &o.mask_refine.min_part_share},
+      {"depth_gate.enabled", "--depth-gate",
+       "given masks: remove the pixels whose depth is off the object's band |z - median| <= "
+       "size factor x object size (bleed onto a far background, occluders in front); false: masks "
+       "as given (the paper)",
+       &o.depth_gate.enabled},
+      {"depth_gate.size_factor", "--depth-gate-size",
+       "given masks: half-width of the depth band in object sizes (the mask's box at its median "
+       "depth)",
+       &o.depth_gate.size_factor},
   };
 }
 
@@ -154,6 +183,7 @@ void FuseOptions::check() const {
           "segmentation.duplicate_overlap", "must be in (0, 1]");
   check_part([&] { box_mask.check(); }, "BoxMaskOptions", "box_mask");
   check_part([&] { mask_refine.check(); }, "MaskRefineOptions", "mask_refine");
+  check_part([&] { depth_gate.check(); }, "DepthGateOptions", "depth_gate");
   check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
   fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
@@ -315,8 +345,8 @@ struct FrameWork {
   std::vector<fusion::Observation> observations;
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
-  std::size_t duplicates = 0;
-  std::uint64_t mask_pixels_removed = 0;
+  std::size_t duplicates = 0, depth_gated = 0;
+  std::uint64_t mask_pixels_removed = 0, depth_gate_pixels_removed = 0;
 };
 
 // Non-zero pixels of `mask` inside `bounds`.
@@ -327,6 +357,148 @@ std::size_t mask_pixels(const segmentation::Mask& mask, const cv::Rect& bounds) 
     for (int u = bounds.x; u < bounds.x + bounds.width; ++u) n += row[u] != 0;
   }
   return n;
+}
+
+// One instance of a keyframe with its mask: given (refined, depth-gated) or made from its box.
+constexpr std::size_t kUnknown = ~std::size_t{0};
+struct InstanceMask {
+  const segmentation::Instance* instance = nullptr;
+  segmentation::Mask owned;  // a mask made from the box, or a refined / gated given mask
+  const segmentation::Mask* mask = nullptr;
+  cv::Rect bounds;
+  std::string cls;                // canonical class (for the duplicate rule)
+  std::size_t pixels = kUnknown;  // of the mask, counted when the duplicate rule needs it
+};
+
+// The mask of a given-mask instance after refine_mask (the parts across a depth edge from the
+// rest go, mask_refine.h) and the depth gate (pixels whose depth disagrees with the rest of the
+// observation go, depth_gate.h), each counted in `work`.
+void clean_given_mask(const FuseOptions& options, const Camera& camera, const cv::Mat& depth,
+                      InstanceMask& m, FrameWork& work) {
+  if (options.mask_refine.enabled) {
+    segmentation::MaskRefineOptions refine = options.mask_refine;
+    refine.min_depth_m = options.depth.min_depth_m;
+    refine.max_depth_m = options.depth.max_depth_m;
+    auto refined = segmentation::refine_mask(*m.mask, m.bounds, depth, camera, refine);
+    if (refined.removed_pixels > 0) {
+      ++work.refined;
+      work.mask_pixels_removed += refined.removed_pixels;
+      m.owned = std::move(refined.mask);
+      m.mask = &m.owned;
+      m.bounds = refined.bounds;
+    }
+  }
+  if (options.depth_gate.enabled && !m.bounds.empty()) {
+    segmentation::DepthGateOptions gate = options.depth_gate;
+    gate.min_depth_m = options.depth.min_depth_m;
+    gate.max_depth_m = options.depth.max_depth_m;
+    auto gated = segmentation::gate_mask_depth(*m.mask, m.bounds, depth, camera, gate);
+    if (gated.removed_pixels > 0) {
+      ++work.depth_gated;
+      work.depth_gate_pixels_removed += gated.removed_pixels;
+      m.owned = std::move(gated.mask);
+      m.mask = &m.owned;
+      m.bounds = gated.bounds;
+    }
+  }
+}
+
+// Step 3a of a keyframe: each instance's mask (given, or from the box and the depth) and its
+// bounds, in the segmentation's order; instances below the score or without a mask are counted.
+std::vector<InstanceMask> instance_masks(const FuseOptions& options, const Camera& camera,
+                                         const cv::Mat& depth,
+                                         const segmentation::FrameSegmentation& seg,
+                                         FrameWork& work) {
+  std::vector<InstanceMask> made;
+  made.reserve(seg.instances.size());
+  for (const auto& instance : seg.instances) {
+    ++work.instances;
+    if (instance.score < options.min_instance_score) {
+      ++work.skipped_score;
+      continue;
+    }
+    InstanceMask m;
+    m.instance = &instance;
+    if (!instance.mask) {
+      ++work.from_box;
+      auto box = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
+      if (box.status != segmentation::BoxMaskStatus::kOk) {
+        ++work.empty;
+        continue;
+      }
+      m.owned = std::move(box.mask);
+      m.mask = &m.owned;
+      m.bounds = box.bounds;  // what mask_bounds() finds, known without a scan of the image
+      m.pixels = box.pixels;
+    } else {
+      m.mask = &*instance.mask;
+      m.bounds = geometry::mask_bounds(*m.mask);
+      clean_given_mask(options, camera, depth, m, work);
+    }
+    if (m.bounds.empty()) {
+      ++work.empty;
+      continue;
+    }
+    m.cls = segmentation::canonical_class(instance.class_name);
+    const bool owned = m.mask == &m.owned;
+    made.push_back(std::move(m));  // no reallocation (reserved): only `owned` moves
+    if (owned) made.back().mask = &made.back().owned;
+  }
+  return made;
+}
+
+// Step 3b: duplicates. A detector that boxes one object twice (the keyboard, and the keyboard with
+// the desk around it) gives two instances of one class; one object takes one instance of a
+// keyframe, so the second would keep an object of its own. Two instances of one class are one
+// object when the smaller box lies mostly inside the larger and the smaller mask mostly inside the
+// larger mask (both shares >= duplicate_overlap); the higher score (then the one listed first) is
+// kept. Returns one flag per instance: kept.
+std::vector<bool> drop_duplicates(const FuseOptions& options, std::vector<InstanceMask>& made,
+                                  FrameWork& work) {
+  std::vector<bool> keep(made.size(), true);
+  if (options.duplicate_overlap >= 1.0) return keep;
+  const auto shared_pixels = [](const InstanceMask& a, const InstanceMask& b) {
+    const cv::Rect both = a.bounds & b.bounds;
+    std::size_t n = 0;
+    for (int v = both.y; v < both.y + both.height; ++v) {
+      const std::size_t row = static_cast<std::size_t>(v) * a.mask->width;
+      for (int u = both.x; u < both.x + both.width; ++u)
+        n += a.mask->data[row + u] != 0 && b.mask->data[row + u] != 0;
+    }
+    return n;
+  };
+  const auto box_share = [](const segmentation::Box& a, const segmentation::Box& b) {
+    const double w = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
+    const double h = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
+    const double smaller = std::min(a.w * a.h, b.w * b.h);
+    return w > 0 && h > 0 && smaller > 0 ? w * h / smaller : 0.0;
+  };
+  const auto pixels = [&](InstanceMask& m) {
+    if (m.pixels == kUnknown) m.pixels = mask_pixels(*m.mask, m.bounds);
+    return m.pixels;
+  };
+  std::vector<std::size_t> order(made.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return made[a].instance->score > made[b].instance->score;
+  });
+  std::vector<std::size_t> kept;
+  for (std::size_t i : order) {
+    for (std::size_t k : kept) {
+      if (made[k].cls != made[i].cls) continue;
+      if (box_share(made[i].instance->bbox, made[k].instance->bbox) < options.duplicate_overlap)
+        continue;
+      const std::size_t smaller = std::min(pixels(made[i]), pixels(made[k]));
+      if (smaller > 0 && static_cast<double>(shared_pixels(made[i], made[k])) >=
+                             options.duplicate_overlap * static_cast<double>(smaller)) {
+        keep[i] = false;
+        ++work.duplicates;
+        break;
+      }
+    }
+    if (keep[i]) kept.push_back(i);
+  }
+  return keep;
 }
 
 // Back-projects one keyframe: the dense points summed by voxel (frame_voxels.h, so that voxels are
@@ -359,119 +531,13 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
   if (!seg) return work;
   // 3a. Each instance's mask and its bounds.
-  constexpr std::size_t kUnknown = ~std::size_t{0};
-  struct Made {
-    const segmentation::Instance* instance = nullptr;
-    segmentation::Mask owned;  // a mask made from the box, or a refined given mask
-    const segmentation::Mask* mask = nullptr;
-    cv::Rect bounds;
-    std::string cls;                // canonical class (for the duplicate rule)
-    std::size_t pixels = kUnknown;  // of the mask, counted when the duplicate rule needs it
-  };
-  std::vector<Made> made;
-  made.reserve(seg->instances.size());
-  for (const auto& instance : seg->instances) {
-    ++work.instances;
-    if (instance.score < options.min_instance_score) {
-      ++work.skipped_score;
-      continue;
-    }
-    Made m;
-    m.instance = &instance;
-    if (!instance.mask) {
-      ++work.from_box;
-      auto box = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
-      if (box.status != segmentation::BoxMaskStatus::kOk) {
-        ++work.empty;
-        continue;
-      }
-      m.owned = std::move(box.mask);
-      m.mask = &m.owned;
-      m.bounds = box.bounds;  // what mask_bounds() finds, known without a scan of the image
-      m.pixels = box.pixels;
-    } else {
-      m.mask = &*instance.mask;
-      m.bounds = geometry::mask_bounds(*m.mask);
-      if (options.mask_refine.enabled) {
-        // The mask's parts across a depth edge from the rest go (mask_refine.h).
-        segmentation::MaskRefineOptions refine = options.mask_refine;
-        refine.min_depth_m = options.depth.min_depth_m;
-        refine.max_depth_m = options.depth.max_depth_m;
-        auto refined = segmentation::refine_mask(*m.mask, m.bounds, depth, camera, refine);
-        if (refined.removed_pixels > 0) {
-          ++work.refined;
-          work.mask_pixels_removed += refined.removed_pixels;
-          m.owned = std::move(refined.mask);
-          m.mask = &m.owned;
-          m.bounds = refined.bounds;
-        }
-      }
-    }
-    if (m.bounds.empty()) {
-      ++work.empty;
-      continue;
-    }
-    m.cls = segmentation::canonical_class(instance.class_name);
-    const bool owned = m.mask == &m.owned;
-    made.push_back(std::move(m));  // no reallocation (reserved): only `owned` moves
-    if (owned) made.back().mask = &made.back().owned;
-  }
-
-  // 3b. Duplicates: a detector that boxes one object twice (the keyboard, and the keyboard with
-  //     the desk around it) gives two instances of one class; one object takes one instance of a
-  //     keyframe, so the second would keep an object of its own. Two instances of one class are
-  //     one object when the smaller box lies mostly inside the larger and the smaller mask mostly
-  //     inside the larger mask (both shares >= duplicate_overlap); the higher score (then the one
-  //     listed first) is kept.
-  std::vector<bool> keep(made.size(), true);
-  const auto shared_pixels = [](const Made& a, const Made& b) {
-    const cv::Rect both = a.bounds & b.bounds;
-    std::size_t n = 0;
-    for (int v = both.y; v < both.y + both.height; ++v) {
-      const std::size_t row = static_cast<std::size_t>(v) * a.mask->width;
-      for (int u = both.x; u < both.x + both.width; ++u)
-        n += a.mask->data[row + u] != 0 && b.mask->data[row + u] != 0;
-    }
-    return n;
-  };
-  const auto box_share = [](const segmentation::Box& a, const segmentation::Box& b) {
-    const double w = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
-    const double h = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
-    const double smaller = std::min(a.w * a.h, b.w * b.h);
-    return w > 0 && h > 0 && smaller > 0 ? w * h / smaller : 0.0;
-  };
-  if (options.duplicate_overlap < 1.0) {
-    std::vector<std::size_t> order(made.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return made[a].instance->score > made[b].instance->score;
-    });
-    std::vector<std::size_t> kept;
-    const auto pixels = [&](Made& m) {
-      if (m.pixels == kUnknown) m.pixels = mask_pixels(*m.mask, m.bounds);
-      return m.pixels;
-    };
-    for (std::size_t i : order) {
-      for (std::size_t k : kept) {
-        if (made[k].cls != made[i].cls) continue;
-        if (box_share(made[i].instance->bbox, made[k].instance->bbox) < options.duplicate_overlap)
-          continue;
-        const std::size_t smaller = std::min(pixels(made[i]), pixels(made[k]));
-        if (smaller > 0 && static_cast<double>(shared_pixels(made[i], made[k])) >=
-                               options.duplicate_overlap * static_cast<double>(smaller)) {
-          keep[i] = false;
-          ++work.duplicates;
-          break;
-        }
-      }
-      if (keep[i]) kept.push_back(i);
-    }
-  }
-
+  std::vector<InstanceMask> made = instance_masks(options, camera, depth, *seg, work);
+  // 3b. One instance per object and keyframe: a second box of the same object is dropped.
+  const std::vector<bool> keep = drop_duplicates(options, made, work);
   // 3c. The kept instances' pixels in the world, in the segmentation's order.
   for (std::size_t i = 0; i < made.size(); ++i) {
     if (!keep[i]) continue;
-    const Made& m = made[i];
+    const InstanceMask& m = made[i];
     const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, m.mask,
                                               m.bounds);
     if (instance_frame.roi.empty()) {
@@ -491,6 +557,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     obs.points_in_world = std::move(points.points_in_world);
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;
+    obs.world_from_cam = keyframe.world_from_cam;
     work.observations.push_back(std::move(obs));
   }
   return work;
@@ -563,6 +630,7 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
       {"outlier_threshold", std::isfinite(r.outlier_threshold) ? ordered_json(r.outlier_threshold)
                                                                : ordered_json(nullptr)}};
   o["observation_count"] = r.observations;
+  o["view_count"] = r.views;
   o["first_seen"] = r.first_seen;
   o["last_seen"] = r.last_seen;
   o["track_ids"] = r.track_ids;
@@ -592,7 +660,8 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
                       {"p_id", mlink.p_id},
                       {"distance_m", mlink.distance_m},
                       {"overlap", mlink.overlap},
-                      {"p", mlink.score_p}});
+                      {"p", mlink.score_p},
+                      {"rule", mlink.class_confusion ? "class confusion" : "same class"}});
   o["merged"] = merges;
   return o;
 }
@@ -727,6 +796,11 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   fusion::ObjectMapOptions object_options = options.objects;
   object_options.overlap_measure =
       fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
+  if (result.keyframes.still_camera) {
+    // A camera that hardly moves has one viewpoint: its frames are the views.
+    object_options.view_min_translation_m = 0.0;
+    object_options.view_min_rotation_deg = 0.0;
+  }
   fusion::ObjectMap objects(object_options);
 
   const std::size_t window = static_cast<std::size_t>(threads);
@@ -765,6 +839,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       result.instances_refined += work.refined;
       result.instances_duplicate += work.duplicates;
       result.mask_pixels_removed += work.mask_pixels_removed;
+      result.instances_depth_gated += work.depth_gated;
+      result.depth_gate_pixels_removed += work.depth_gate_pixels_removed;
       result.instances_empty += work.empty;
       // The keyframe's observations are associated together, best match first.
       for (const auto& added : objects.add_frame(work.observations)) {
@@ -903,6 +979,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
                    {"instances_mask_refined", result.instances_refined},
                    {"instances_duplicate", result.instances_duplicate},
                    {"mask_pixels_removed", result.mask_pixels_removed},
+                   {"instances_depth_gated", result.instances_depth_gated},
+                   {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
                    {"instances_without_points", result.instances_empty},
                    {"observations", result.observations},
                    {"objects_before_confirmation", result.objects_total},

@@ -11,6 +11,7 @@
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/keyframes.h"
 #include "objmap/segmentation/box_mask.h"
+#include "objmap/segmentation/depth_gate.h"
 #include "objmap/segmentation/mask_refine.h"
 
 // `objmap fuse`: the object-oriented semantic map (paper §3.2–3.3). Keyframes with their poses are
@@ -41,6 +42,7 @@ struct FuseOptions {
   double duplicate_overlap = 0.5;   // same class, box and mask this much inside another: one kept
   segmentation::BoxMaskOptions box_mask;        // masks for instances that have only a box
   segmentation::MaskRefineOptions mask_refine;  // given masks: parts across depth edges removed
+  segmentation::DepthGateOptions depth_gate;    // given masks: depths off the object's band removed
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
   double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
   fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
@@ -67,6 +69,8 @@ struct FuseResult {
   std::size_t instances_refined = 0;      // given masks that lost pixels in refine_mask
   std::size_t instances_duplicate = 0;    // dropped as a second instance of an object (keyframe)
   std::uint64_t mask_pixels_removed = 0;  // pixels those masks lost
+  std::size_t instances_depth_gated = 0;  // given masks that lost pixels in gate_mask_depth
+  std::uint64_t depth_gate_pixels_removed = 0;  // pixels those masks lost
   std::size_t instances_empty = 0;  // no usable pixels (box mask empty, no depth, too few points)
   std::size_t observations = 0;     // added to the object map
   std::size_t objects_total = 0;    // objects before the confirmation rule

@@ -117,6 +117,7 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
                       std::to_string(posed.size()) + " posed frames, fewer than the " +
                       std::to_string(options.min_keyframes) + " needed: every posed frame";
       result.mode = "all";
+      result.still_camera = true;
       result.keyframes = std::move(posed);
     }
   }
