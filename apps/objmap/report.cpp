@@ -124,6 +124,26 @@ std::optional<std::vector<report::PageDuplicate>> read_duplicates(const json& ru
   return pairs;
 }
 
+// The objects of the top view, each labelled "id class"; a suspected duplicate's label names its
+// partners: "7 chair (dup 3)".
+std::vector<report::TopViewObject> top_view_objects(
+    const std::vector<io::MappedObject>& objects,
+    const std::optional<std::vector<report::PageDuplicate>>& duplicates) {
+  std::map<int, std::string> partners;
+  if (duplicates)
+    for (const report::PageDuplicate& d : *duplicates) {
+      partners[d.a] += (partners[d.a].empty() ? "" : ",") + std::to_string(d.b);
+      partners[d.b] += (partners[d.b].empty() ? "" : ",") + std::to_string(d.a);
+    }
+  std::vector<report::TopViewObject> drawn;
+  for (const auto& o : objects) {
+    std::string label = std::to_string(o.id) + " " + o.class_name;
+    if (partners.count(o.id)) label += " (dup " + partners[o.id] + ")";
+    drawn.push_back({o.id, label, o.obb, fusion::class_color(o.class_name)});
+  }
+  return drawn;
+}
+
 void run_report(const ReportOptions& options) {
   require(options.up == "x" || options.up == "y" || options.up == "z", "--up",
           "'" + options.up + "'; expected x, y or z");
@@ -316,19 +336,7 @@ void run_report(const ReportOptions& options) {
   if (run.is_object() && run.contains("options") && run["options"].contains("map") &&
       run["options"]["map"].contains("voxel_m") && run["options"]["map"]["voxel_m"].is_number())
     view_options.point_size_m = run["options"]["map"]["voxel_m"].get<double>();
-  // A suspected duplicate's label names its partners: "7 chair (dup 3)".
-  std::map<int, std::string> partners;
-  for (const report::PageDuplicate& d :
-       page.duplicates.value_or(std::vector<report::PageDuplicate>{})) {
-    partners[d.a] += (partners[d.a].empty() ? "" : ",") + std::to_string(d.b);
-    partners[d.b] += (partners[d.b].empty() ? "" : ",") + std::to_string(d.a);
-  }
-  std::vector<report::TopViewObject> drawn;
-  for (const auto& o : objects) {
-    std::string label = std::to_string(o.id) + " " + o.class_name;
-    if (partners.count(o.id)) label += " (dup " + partners[o.id] + ")";
-    drawn.push_back({o.id, label, o.obb, fusion::class_color(o.class_name)});
-  }
+  const std::vector<report::TopViewObject> drawn = top_view_objects(objects, page.duplicates);
   std::vector<report::TopViewPath> paths;
   // The map was fused with the run's own trajectory: the corrected one for a corrected run.
   const std::optional<Trajectory>& map_trajectory =
