@@ -199,6 +199,51 @@ TEST(Duplicates, VerdictAgreesWithTheMergePass) {
   EXPECT_THROW(map.merge_verdict(0, 0), InputError);
 }
 
+TEST(Duplicates, VerdictAndMergePassAgreeOnAClutteredMap) {
+  // Fragments and neighbours of a few boxes under track switches: the first merge the pass makes
+  // is the pair with the highest P among those whose verdict is "none", and after the pass no live
+  // pair has that verdict (the pass stops when none is left).
+  ObjectMapOptions options;
+  options.match_threshold = 0.9;  // strict online matching leaves fragments for the pass
+  ObjectMap map(options);
+  const PointCloud whole = brick(kCentre, kHalf);
+  for (int f = 0; f < 12; ++f) {
+    const Vec3 step(0.04 * (f % 4), 0.0, 0.0);
+    map.add(seen(f, 1 + f / 3, "chair", keep_if(brick(kCentre + step, kHalf), kCentre.x() + 0.02)));
+    map.add(seen(f, 9, f % 2 ? "chair" : "book", brick(kCentre + Vec3(0.0, 0.3, 0.0), kHalf)));
+  }
+  RecordOptions all;
+  all.confirmed_only = false;
+  all.outlier_filter = false;
+  const auto live_ids = [&] {
+    std::vector<int> ids;
+    for (const ObjectRecord& r : map.records(all)) ids.push_back(r.id);
+    return ids;
+  };
+  const std::vector<int> before = live_ids();
+  ASSERT_GE(before.size(), 3u);
+  const MergeVerdict* best = nullptr;
+  std::vector<MergeVerdict> verdicts;
+  for (std::size_t i = 0; i < before.size(); ++i)
+    for (std::size_t j = i + 1; j < before.size(); ++j)
+      verdicts.push_back(map.merge_verdict(before[i], before[j]));
+  for (const MergeVerdict& v : verdicts)
+    if (v.refused == MergeRefusal::kNone && (!best || v.score_p > best->score_p)) best = &v;
+  const auto merges = map.merge_pass();
+  ASSERT_EQ(merges.empty(), best == nullptr);
+  if (best) {
+    EXPECT_EQ(merges[0].into, best->a);
+    EXPECT_EQ(merges[0].absorbed, best->b);
+    EXPECT_EQ(merges[0].score_p, best->score_p);
+  }
+  const std::vector<int> after = live_ids();
+  EXPECT_EQ(after.size(), before.size() - merges.size());
+  for (std::size_t i = 0; i < after.size(); ++i)
+    for (std::size_t j = i + 1; j < after.size(); ++j)
+      EXPECT_NE(map.merge_verdict(after[i], after[j]).refused, MergeRefusal::kNone)
+          << after[i] << " " << after[j];
+}
+
 TEST(Duplicates, BoxContainmentIsTheSharedVolumeOfTheSmaller) {
   Obb large;
   large.half_extent = Vec3(1.0, 1.0, 1.0);
