@@ -10,7 +10,8 @@
 #    Plus the synthetic scenes `objmap synth --seed N --orbit-speed 60` (N in $BENCH_SEEDS, default
 #    1 2 3): their estimated.txt drifts, objects_gt.json is exact.
 #    Then: fuse with groundtruth.txt (and with the estimate), eval objects (map vs ground-truth objects:
-#    Table 3; map of the estimate vs map of the ground truth: Tables 4-5; Table 6 from run.json),
+#    Table 3, beside it the suspected duplicates of run.json; map of the estimate vs map of the
+#    ground truth: Tables 4-5; Table 6 from run.json),
 #    eval ate of the estimate and, when `objmap correct` exists, of its corrected trajectories
 #    (--method paper and graph: Table 7) and of the map fused with the corrected poses.
 #    An estimate in its own SLAM frame (first pose = identity) is first moved onto the ground truth's

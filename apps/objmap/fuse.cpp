@@ -39,6 +39,9 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
                 r.instances_seen, options.min_instance_score);
   std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass)\n", r.objects.size(),
               r.objects_total, r.merges.size());
+  if (!r.duplicates.pairs.empty())
+    std::printf("            suspected duplicates: %zu (run.json \"duplicates\", objmap report)\n",
+                r.duplicates.pairs.size());
   std::printf("\n  %4s  %-16s %9s %9s %9s  %8s  %5s\n", "id", "class", "x", "y", "z", "points",
               "obs");
   for (const auto& o : r.objects)

@@ -97,6 +97,53 @@ report::PlotSeries aligned_series(const std::string& name, const Rgb& color,
   return s;
 }
 
+// run.json "duplicates" (fuse's suspected duplicates); nullopt when the run.json has none.
+std::optional<std::vector<report::PageDuplicate>> read_duplicates(const json& run,
+                                                                  const fs::path& run_file) {
+  if (!run.is_object() || !run.contains("duplicates")) return std::nullopt;
+  const json& section = run["duplicates"];
+  if (!section.is_object() || !section.contains("pairs") || !section["pairs"].is_array())
+    throw InputError(run_file.string(), "\"duplicates\" has no \"pairs\" array");
+  std::vector<report::PageDuplicate> pairs;
+  try {
+    for (const json& p : section["pairs"]) {
+      report::PageDuplicate d;
+      d.a = p.at("a").get<int>();
+      d.b = p.at("b").get<int>();
+      d.class_name = p.at("class").get<std::string>();
+      d.obb_overlap = p.at("obb_overlap").get<double>();
+      d.surface_distance_m = p.at("surface_distance_m").get<double>();
+      d.touching_share = p.at("touching_share").get<double>();
+      d.merge_refused = p.at("merge_refused").get<std::string>();
+      d.merge_reason = p.value("merge_reason", d.merge_refused);
+      pairs.push_back(std::move(d));
+    }
+  } catch (const json::exception& e) {
+    throw InputError(run_file.string(), std::string("\"duplicates\": ") + e.what());
+  }
+  return pairs;
+}
+
+// The objects of the top view, each labelled "id class"; a suspected duplicate's label names its
+// partners: "7 chair (dup 3)".
+std::vector<report::TopViewObject> top_view_objects(
+    const std::vector<io::MappedObject>& objects,
+    const std::optional<std::vector<report::PageDuplicate>>& duplicates) {
+  std::map<int, std::string> partners;
+  if (duplicates)
+    for (const report::PageDuplicate& d : *duplicates) {
+      partners[d.a] += (partners[d.a].empty() ? "" : ",") + std::to_string(d.b);
+      partners[d.b] += (partners[d.b].empty() ? "" : ",") + std::to_string(d.a);
+    }
+  std::vector<report::TopViewObject> drawn;
+  for (const auto& o : objects) {
+    std::string label = std::to_string(o.id) + " " + o.class_name;
+    if (partners.count(o.id)) label += " (dup " + partners[o.id] + ")";
+    drawn.push_back({o.id, label, o.obb, fusion::class_color(o.class_name)});
+  }
+  return drawn;
+}
+
 void run_report(const ReportOptions& options) {
   require(options.up == "x" || options.up == "y" || options.up == "z", "--up",
           "'" + options.up + "'; expected x, y or z");
@@ -133,6 +180,7 @@ void run_report(const ReportOptions& options) {
       page.counts = counts;
     }
     if (run.contains("points")) page.points = eval::read_point_counts(run_file);
+    page.duplicates = read_duplicates(run, run_file);
   } else {
     page.notes.push_back(run_file.string() + " not found: no counts, no trajectory, no Table 6");
   }
@@ -288,10 +336,7 @@ void run_report(const ReportOptions& options) {
   if (run.is_object() && run.contains("options") && run["options"].contains("map") &&
       run["options"]["map"].contains("voxel_m") && run["options"]["map"]["voxel_m"].is_number())
     view_options.point_size_m = run["options"]["map"]["voxel_m"].get<double>();
-  std::vector<report::TopViewObject> drawn;
-  for (const auto& o : objects)
-    drawn.push_back({o.id, std::to_string(o.id) + " " + o.class_name, o.obb,
-                     fusion::class_color(o.class_name)});
+  const std::vector<report::TopViewObject> drawn = top_view_objects(objects, page.duplicates);
   std::vector<report::TopViewPath> paths;
   // The map was fused with the run's own trajectory: the corrected one for a corrected run.
   const std::optional<Trajectory>& map_trajectory =
@@ -311,8 +356,8 @@ void run_report(const ReportOptions& options) {
   char caption[512];
   std::snprintf(caption, sizeof caption,
                 "%s seen from above (%s up, %.1f mm per pixel, %zu points): each "
-                "object's oriented box outlined in its class colour and labelled \"id class\"%s; "
-                "the bar is 1 m.",
+                "object's oriented box outlined in its class colour and labelled \"id class\" "
+                "(\"(dup N)\": a suspected duplicate of object N)%s; the bar is 1 m.",
                 map_name.c_str(), options.up.c_str(), view.pixel_m * 1000, map.size(),
                 est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;

@@ -129,6 +129,45 @@ TEST(FuseSynthetic, OutputsValidateAndReadBack) {
   EXPECT_EQ(run["points"]["dense_map"].get<std::size_t>(), dense.size());
 }
 
+TEST(FuseSynthetic, RunJsonListsSuspectedDuplicatesWithTheMergeVerdict) {
+  // Every pair of run.json "duplicates" is two objects of objects.json of one class that overlap
+  // or touch, kept apart by a named rule. This scene's objects are all distinct (each found once,
+  // above); its two stacked books touch and are seen together: reported, refused for shared
+  // keyframes (two objects), not for a score the next change could tip.
+  const SceneRun& r = default_run();
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  const auto run = read_json(r.out / "run.json");
+  ASSERT_TRUE(run.contains("duplicates"));
+  const auto& d = run["duplicates"];
+  const double touch_m = d["touch_distance_m"].get<double>();
+  std::map<int, std::string> class_of;
+  for (const auto& o : read_fused_objects(r.out / "objects.json")) class_of[o.id] = o.cls;
+  ASSERT_EQ(d["count"].get<std::size_t>(), d["pairs"].size());
+  EXPECT_GE(d["pairs_checked"].get<std::size_t>(), d["pairs"].size());
+  ASSERT_GE(d["pairs"].size(), 1u) << r.fuse.out;
+  int books = 0;
+  for (const auto& p : d["pairs"]) {
+    const int a = p["a"].get<int>(), b = p["b"].get<int>();
+    EXPECT_LT(a, b);
+    ASSERT_TRUE(class_of.count(a) && class_of.count(b)) << a << " " << b;
+    EXPECT_EQ(class_of[a], class_of[b]);
+    EXPECT_EQ(p["class"].get<std::string>(), class_of[a]);
+    EXPECT_TRUE(p["obb_overlap"].get<double>() > 0.0 ||
+                p["surface_distance_m"].get<double>() <= touch_m);
+    EXPECT_EQ(p["merge_refused"].get<std::string>(), "shared_frames") << p.dump();
+    EXPECT_GT(p["merge"]["shared_frames"].get<double>(),
+              0.3 * p["merge"]["smaller_frames"].get<double>());
+    books += p["class"].get<std::string>() == "book";
+  }
+  EXPECT_EQ(books, 1);
+  // The console line (the run's stdout is there when this process made the cached run).
+  if (!r.fuse.out.empty()) {
+    EXPECT_NE(r.fuse.out.find("suspected duplicates: " + std::to_string(d["pairs"].size())),
+              std::string::npos)
+        << r.fuse.out;
+  }
+}
+
 TEST(FuseSynthetic, SemanticMapIsTheDenseMapWithTheObjectsInClassColours) {
   // map_semantic.ply: the dense points in the same order; a voxel holding a point of an object
   // takes its class colour (the object with more observations, then the lower id, when several);

@@ -232,7 +232,9 @@ void write_fake_bench(const fs::path& bench) {
                  "objects_confirmed": 11},
                  "points": {"dense_back_projected": 1000, "dense_map": 500, "objects_raw": 400,
                  "objects_voxel_filtered": 200, "objects_outlier_filtered": 150,
-                 "objects_map": 150}})");
+                 "objects_map": 150},
+                 "duplicates": {"count": 1, "pairs": [{"a": 3, "b": 7, "class": "book",
+                 "merge_refused": "shared_frames"}]}})");
   const std::string stats =
       R"({"count": 11, "rmse": 0.04, "mean": 0.0321, "median": 0.03, "std": 0.01, "min": 0.01,
           "max": 0.08})";
@@ -260,6 +262,8 @@ TEST(BenchTables, RenderReplacesOnlyTheGeneratedSection) {
   EXPECT_EQ(doc.find("OLD TABLES"), std::string::npos) << doc;
   // Table 3 row: 12 true objects, 11 mapped, 8.3%; Table 4-5 column: mean 0.0321 m.
   EXPECT_NE(doc.find("| synth_seed9 | 12 | 11 | 8.3% |"), std::string::npos) << doc;
+  // ... and its suspected duplicates (run.json "duplicates"): count, ids, class, refusing rule.
+  EXPECT_NE(doc.find("| 1: 3+7 book (shared frames) |"), std::string::npos) << doc;
   EXPECT_NE(doc.find("0.0321"), std::string::npos) << doc;
   EXPECT_NE(doc.find("0.0115"), std::string::npos) << "the paper's Table 7 beside ours";
 

@@ -60,5 +60,33 @@ TEST(Page, MarkdownReferencesTheFilesBeside) {
   EXPECT_EQ(md.find("base64"), std::string::npos);
 }
 
+TEST(Page, SuspectedDuplicatesAreATableWithTheReason) {
+  PageContent c = small_page();
+  EXPECT_EQ(page_html(c).find("Suspected duplicates"), std::string::npos);  // no section: none
+  c.duplicates.emplace();
+  EXPECT_NE(page_html(c).find("No suspected duplicates"), std::string::npos);
+  EXPECT_NE(page_markdown(c).find("No suspected duplicates"), std::string::npos);
+  PageDuplicate d;
+  d.a = 3;
+  d.b = 8;
+  d.class_name = "cup";
+  d.obb_overlap = 0.884;
+  d.surface_distance_m = 0.0004;
+  d.touching_share = 0.5;
+  d.merge_refused = "score";
+  d.merge_reason = "score P 0.39 <= 0.40 (same track no, centroids 0.25 m apart, containment 0.73)";
+  c.duplicates->push_back(d);
+  const std::string html = page_html(c);
+  EXPECT_EQ(xml_problem(html), "");
+  EXPECT_NE(html.find("<h2>Suspected duplicates</h2>"), std::string::npos);
+  EXPECT_NE(html.find("why not merged"), std::string::npos);
+  EXPECT_NE(html.find("P 0.39 &lt;= 0.40"), std::string::npos);  // escaped
+  EXPECT_EQ(html.find("No suspected duplicates"), std::string::npos);
+  const std::string md = page_markdown(c);
+  EXPECT_NE(md.find("| 3 + 8 | cup | 88.4% | 0.000 | 50.0% | score P 0.39 <= 0.40"),
+            std::string::npos)
+      << md;
+}
+
 }  // namespace
 }  // namespace objmap::report

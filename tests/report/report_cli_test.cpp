@@ -145,6 +145,52 @@ TEST(ReportCli, PageHasOneThumbnailPerObjectAndEveryPictureDecodes) {
   EXPECT_NE(r.out.find(out.string() + "/report.html"), std::string::npos) << r.out;
 }
 
+TEST(ReportCli, SuspectedDuplicatesOfRunJsonAreShownAndMarkedInTheTopView) {
+  // The seed-3 scene's two stacked books touch and are seen together (tests/integration): one
+  // suspected pair, refused for shared keyframes.
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  const auto run = nlohmann::json::parse(read_text(c.run / "run.json"));
+  ASSERT_GE(run["duplicates"]["pairs"].size(), 1u);
+  const auto& pair = run["duplicates"]["pairs"][0];
+  TempDir dir;
+  const RunResult r =
+      run_objmap({"report", "--run", c.run.string(), "--out", (dir / "rep").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string md = read_text(dir / "rep" / "report.md");
+  const std::string ids =
+      std::to_string(pair["a"].get<int>()) + " + " + std::to_string(pair["b"].get<int>());
+  EXPECT_NE(md.find("## Suspected duplicates"), std::string::npos) << md;
+  EXPECT_NE(md.find("| " + ids + " | " + pair["class"].get<std::string>() + " |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("seen together in "), std::string::npos) << md;
+  EXPECT_NE(md.find("(dup N)"), std::string::npos);  // the top view's caption explains the mark
+  EXPECT_NE(read_text(dir / "rep" / "report.html").find("<h2>Suspected duplicates</h2>"),
+            std::string::npos);
+
+  // A run.json without the section (an older objmap): no section; a broken one: exit 2.
+  auto doc = run;
+  doc.erase("duplicates");
+  const fs::path copy = dir / "run";
+  fs::create_directories(copy);
+  for (const char* name : {"objects.json", "map_semantic.ply", "objects"})
+    fs::create_symlink(fs::absolute(c.run / name), copy / name);
+  write_text(copy / "run.json", doc.dump(1));
+  const RunResult old =
+      run_objmap({"report", "--run", copy.string(), "--out", (dir / "rep_old").string()});
+  ASSERT_EQ(old.exit_code, 0) << old.err;
+  EXPECT_EQ(read_text(dir / "rep_old" / "report.md").find("Suspected duplicates"),
+            std::string::npos);
+  doc["duplicates"] = {{"pairs", {{{"a", 1}}}}};
+  write_text(copy / "run.json", doc.dump(1));
+  const RunResult bad =
+      run_objmap({"report", "--run", copy.string(), "--out", (dir / "rep_bad").string()});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("run.json"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("duplicates"), std::string::npos) << bad.err;
+}
+
 TEST(ReportCli, ARunWithoutTheDenseMapsShowsTheObjectsMap) {
   // A run fused with --dense-map false has no map_semantic.ply: the top view is map_objects.ply.
   const Cached& c = cached_run();

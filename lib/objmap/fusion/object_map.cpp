@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 
@@ -504,6 +505,83 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   absorbed->merges.clear();
 }
 
+const char* to_string(MergeRefusal refusal) {
+  switch (refusal) {
+    case MergeRefusal::kNone:
+      return "none";
+    case MergeRefusal::kClass:
+      return "class";
+    case MergeRefusal::kSharedFrames:
+      return "shared_frames";
+    case MergeRefusal::kScore:
+      return "score";
+    case MergeRefusal::kOverlap:
+      return "overlap";
+  }
+  return "none";
+}
+
+MergeVerdict ObjectMap::judge_pair(const Object& a, const Object& b, bool full) const {
+  MergeVerdict v;
+  v.a = a.id;
+  v.b = b.id;
+  const auto refuse = [&](MergeRefusal r) {
+    if (v.refused == MergeRefusal::kNone) v.refused = r;
+  };
+  if ((options_.require_same_class || options_.merge_require_same_class) &&
+      segmentation::canonical_class(voted_class(a)) !=
+          segmentation::canonical_class(voted_class(b))) {
+    refuse(MergeRefusal::kClass);
+    if (!full) return v;
+  }
+  // Shared keyframes: those where both objects took an observation labelled with their (common)
+  // voted class. Two books stacked are both "book" in the same frames; a keyboard that the
+  // detector also boxed as "laptop" in some frames is one object seen twice, not two objects.
+  const std::string cls = segmentation::canonical_class(voted_class(a));
+  const std::vector<double> fa = class_frames(a, cls), fb = class_frames(b, cls);
+  std::size_t shared = 0;
+  for (double t : fa) shared += std::binary_search(fb.begin(), fb.end(), t);
+  const std::size_t nfr = std::min(a.frames.size(), b.frames.size());
+  v.shared_frames = static_cast<int>(shared);
+  v.smaller_frames = static_cast<int>(nfr);
+  if (static_cast<double>(shared) > options_.merge_max_shared_frames * static_cast<double>(nfr)) {
+    refuse(MergeRefusal::kSharedFrames);
+    if (!full) return v;
+  }
+  bool same_id = false;
+  for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
+  // M: the smaller object against the larger (containment: the share of the smaller on the
+  // larger). The pass lets score() skip M when P cannot pass the threshold anyway; the verdict
+  // computes it (the refusal is the same: P <= K either way).
+  const bool a_small = a.voxels.size() <= b.voxels.size();
+  const Object& small = a_small ? a : b;
+  const Object& large = a_small ? b : a;
+  const double threshold =
+      full ? -std::numeric_limits<double>::infinity() : options_.merge_threshold;
+  const Scores s = score(same_id, small.centroid, small.radius, small.voxels, small.lo, small.hi,
+                         large, threshold);
+  v.p_id = s.p_id;
+  v.distance_m = s.distance_m;
+  v.overlap = s.overlap;
+  v.score_p = s.score_p;
+  if (!(s.score_p > options_.merge_threshold)) refuse(MergeRefusal::kScore);
+  if (!(s.overlap >= options_.merge_min_overlap)) refuse(MergeRefusal::kOverlap);
+  return v;
+}
+
+MergeVerdict ObjectMap::merge_verdict(int a, int b) const {
+  const auto live = [&](int id) {
+    require(id >= 0 && id < static_cast<int>(objects_.size()) && objects_[id]->alive,
+            "ObjectMap::merge_verdict", "object " + std::to_string(id) + " is not a live object");
+    return objects_[id].get();
+  };
+  const Object* x = live(a);
+  const Object* y = live(b);
+  require(a != b, "ObjectMap::merge_verdict", "an object with itself (" + std::to_string(a) + ")");
+  // The pass scores each pair as (lower id, higher id).
+  return a < b ? judge_pair(*x, *y, /*full=*/true) : judge_pair(*y, *x, /*full=*/true);
+}
+
 std::vector<MergeLink> ObjectMap::merge_pass() {
   std::vector<MergeLink> made;
   // Scores of every live pair (i < j), computed once; after a merge only the pairs of the grown
@@ -513,29 +591,9 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     Scores s;
   };
   auto pair_score = [&](const Object& a, const Object& b, Scores& s) {
-    if ((options_.require_same_class || options_.merge_require_same_class) &&
-        segmentation::canonical_class(voted_class(a)) !=
-            segmentation::canonical_class(voted_class(b)))
-      return false;
-    // Shared keyframes: those where both objects took an observation labelled with their (common)
-    // voted class. Two books stacked are both "book" in the same frames; a keyboard that the
-    // detector also boxed as "laptop" in some frames is one object seen twice, not two objects.
-    const std::string cls = segmentation::canonical_class(voted_class(a));
-    const std::vector<double> fa = class_frames(a, cls), fb = class_frames(b, cls);
-    std::size_t shared = 0;
-    for (double t : fa) shared += std::binary_search(fb.begin(), fb.end(), t);
-    const double nfr = static_cast<double>(std::min(a.frames.size(), b.frames.size()));
-    if (static_cast<double>(shared) > options_.merge_max_shared_frames * nfr) return false;
-    bool same_id = false;
-    for (int t : a.track_ids) same_id = same_id || b.track_ids.count(t) > 0;
-    // M: the smaller object against the larger (containment: the share of the smaller on the
-    // larger).
-    const bool a_small = a.voxels.size() <= b.voxels.size();
-    const Object& small = a_small ? a : b;
-    const Object& large = a_small ? b : a;
-    s = score(same_id, small.centroid, small.radius, small.voxels, small.lo, small.hi, large,
-              options_.merge_threshold);
-    return s.score_p > options_.merge_threshold && s.overlap >= options_.merge_min_overlap;
+    const MergeVerdict v = judge_pair(a, b, /*full=*/false);
+    s = Scores{v.p_id, v.distance_m, v.overlap, v.score_p};
+    return v.refused == MergeRefusal::kNone;
   };
   std::vector<Pair> pairs;  // only pairs above the threshold, in (i, j) order
   for (std::size_t i = 0; i < objects_.size(); ++i) {

@@ -143,6 +143,29 @@ struct MergeLink {
   bool class_confusion = false;  // joined by the class-confusion rule (overlap = containment)
 };
 
+// The rule of the merge pass that keeps two objects apart: the first that refuses, in the pass's
+// order (class, shared keyframes, P, M).
+enum class MergeRefusal {
+  kNone,          // no rule refuses: the pass would join them
+  kClass,         // different voted classes (merge_require_same_class or require_same_class)
+  kSharedFrames,  // both labelled their class in > merge_max_shared_frames of the smaller's frames
+  kScore,         // P <= merge_threshold
+  kOverlap,       // M (containment of the smaller in the larger) < merge_min_overlap
+};
+// "none", "class", "shared_frames", "score", "overlap".
+const char* to_string(MergeRefusal refusal);
+
+// The merge pass's rules evaluated for two live objects (ObjectMap::merge_verdict).
+struct MergeVerdict {
+  int a = -1, b = -1;  // object ids, a < b
+  MergeRefusal refused = MergeRefusal::kNone;
+  // P_ID, D, M, P of eq 22 between the two (the smaller against the larger), each computed
+  // whichever rule refused.
+  double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
+  int shared_frames = 0;   // keyframes in which both took an observation labelled with the class
+  int smaller_frames = 0;  // keyframes of the object with fewer (the share's denominator)
+};
+
 struct ClassVote {
   double score_sum = 0.0;  // Σ detector score of the observations with this class
   int count = 0;           // number of those observations
@@ -229,6 +252,11 @@ class ObjectMap {
   // higher id into the lower. Returns the merges made. Calling it again finds nothing new.
   std::vector<MergeLink> merge_pass();
 
+  // The rules of merge_pass() for live objects `a` and `b` as they are now, every score computed
+  // (the pass stops at the first refusal): after the pass, why two objects stayed apart. Throws
+  // InputError for an id that is not a live object.
+  MergeVerdict merge_verdict(int a, int b) const;
+
   // Live objects (not absorbed by a merge), ascending id.
   std::size_t size() const;
   std::size_t confirmed_count() const;
@@ -256,6 +284,10 @@ class ObjectMap {
   // |A ∩ B| of eq 21: voxels of `a` that `b` has (overlap_tolerance_voxels 0) or has within one
   // voxel (1).
   std::size_t shared_voxels(const VoxelMap& a, const Object& b) const;
+  // The merge pass's rules for live objects a (the lower id) and b; `full`: every score computed
+  // (merge_verdict), else it stops at the first refusal and scores P against merge_threshold only
+  // as far as it decides (merge_pass).
+  MergeVerdict judge_pair(const Object& a, const Object& b, bool full) const;
   // An observation's voxel set at the map resolution, its bounds and centroid (add() step 1).
   struct Prepared;
   bool prepare(const Observation& obs, Prepared& out) const;

@@ -189,6 +189,7 @@ void FuseOptions::check() const {
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
           "objects.min_voxel_support", "must be in [0, 1]");
   check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
+  check_part([&] { duplicates.check(); }, "DuplicateOptions", "duplicates");
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
 }
@@ -666,6 +667,36 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
   return o;
 }
 
+// run.json "duplicates": the suspected duplicates and why the merge pass kept each pair apart.
+ordered_json duplicates_json(const fusion::DuplicateReport& report,
+                             const fusion::DuplicateOptions& options,
+                             const fusion::ObjectMapOptions& map_options) {
+  ordered_json pairs = ordered_json::array();
+  for (const fusion::DuplicatePair& p : report.pairs) {
+    const fusion::MergeVerdict& v = p.merge;
+    pairs.push_back({{"a", p.a},
+                     {"b", p.b},
+                     {"class", p.class_name},
+                     {"obb_overlap", p.obb_overlap},
+                     {"surface_distance_m", p.surface_distance_m},
+                     {"touching_share", p.touching_share},
+                     {"merge",
+                      {{"p_id", v.p_id},
+                       {"distance_m", v.distance_m},
+                       {"overlap", v.overlap},
+                       {"score_p", v.score_p},
+                       {"shared_frames", v.shared_frames},
+                       {"smaller_frames", v.smaller_frames}}},
+                     {"merge_refused", fusion::to_string(v.refused)},
+                     {"merge_reason", fusion::describe_refusal(v, map_options)}});
+  }
+  return {{"touch_distance_m", options.touch_distance_m},
+          {"obb_samples_per_axis", options.obb_samples_per_axis},
+          {"pairs_checked", report.pairs_checked},
+          {"count", report.pairs.size()},
+          {"pairs", pairs}};
+}
+
 }  // namespace
 
 // What a fuse reads before the keyframes: the TUM folder, the camera, the trajectory, the
@@ -892,6 +923,12 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   }
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
+  // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
+  //     pass's reason for keeping them apart (no ground truth needed).
+  t0 = Clock::now();
+  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
+  result.times.push_back({"duplicate check", seconds_since(t0)});
+
   // 5. The maps: map_dense.ply and the semantic map (the dense points with the objects' colours)
   //    on two more threads, the objects meanwhile.
   t0 = Clock::now();
@@ -1001,6 +1038,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       {"reduction_objects_total",
        reduction(result.object_points_raw, result.object_points_filtered)},
       {"reduction_dense", reduction(result.dense_points_raw, result.dense_points_map)}};
+  run["duplicates"] = duplicates_json(result.duplicates, options.duplicates, object_options);
   // The only part of the run folder that differs between two runs of the same inputs.
   ordered_json perf;
   for (const auto& t : result.times) perf["seconds"][t.stage] = t.seconds;

@@ -6,6 +6,7 @@
 
 #include "objmap/core/camera.h"
 #include "objmap/filters/outlier.h"
+#include "objmap/fusion/duplicates.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/geometry/backproject.h"
 #include "objmap/pipeline/config.h"
@@ -44,10 +45,11 @@ struct FuseOptions {
   segmentation::MaskRefineOptions mask_refine;  // given masks: parts across depth edges removed
   segmentation::DepthGateOptions depth_gate;    // given masks: depths off the object's band removed
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
-  double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
-  fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
-  bool outlier_filter = true;        // eq 18 on each object's cloud
-  filters::OutlierOptions outlier;   // K = 20, k = 1.0
+  double min_voxel_support = 0.1;       // an object keeps voxels seen in >= 10% of its observations
+  fusion::ObjectMapOptions objects;     // association (eq 22), confirmation, merge pass
+  bool outlier_filter = true;           // eq 18 on each object's cloud
+  filters::OutlierOptions outlier;      // K = 20, k = 1.0
+  fusion::DuplicateOptions duplicates;  // suspected duplicates in run.json: touching = 2 cm
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
   void check() const;  // throws InputError naming the bad field
 };
@@ -76,6 +78,7 @@ struct FuseResult {
   std::size_t objects_total = 0;    // objects before the confirmation rule
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
+  fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
   // Table 6: points.
   std::uint64_t dense_points_raw = 0;      // back-projected points of all keyframes
   std::size_t dense_points_map = 0;        // voxels of the dense map (= points of map_dense.ply)

@@ -165,6 +165,26 @@ Table points_table(const eval::PointCounts& p) {
   return t;
 }
 
+Table duplicates_table(const std::vector<PageDuplicate>& pairs) {
+  Table t;
+  t.caption =
+      "Suspected duplicates (run.json): objects of one class whose oriented boxes overlap or whose "
+      "surfaces touch, and why the merge pass kept them apart";
+  t.header = {"ids", "class", "box overlap", "surface distance [m]", "touching", "why not merged"};
+  t.numeric = {false, false, true, true, true, false};
+  for (const PageDuplicate& d : pairs) {
+    t.rows.push_back({std::to_string(d.a) + " + " + std::to_string(d.b), d.class_name,
+                      percent(d.obb_overlap), fixed(d.surface_distance_m, 3),
+                      percent(d.touching_share), d.merge_reason});
+    t.swatches.push_back(hex_color(fusion::class_color(d.class_name)));
+  }
+  return t;
+}
+
+// The duplicates section of a run without any.
+const char* kNoDuplicates =
+    "No suspected duplicates: no two objects of one class overlap or touch.";
+
 const char* kStyle = R"(
 body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
        color: #222; max-width: 1240px; margin: 20px auto; padding: 0 16px; line-height: 1.4; }
@@ -284,6 +304,13 @@ std::string page_html(const PageContent& c) {
   h += "<div class=\"tables\">\n<div>" + html_table(class_table(c)) + "</div>\n";
   if (c.points) h += "<div>" + html_table(points_table(*c.points)) + "</div>\n";
   h += "</div>\n";
+  if (c.duplicates) {
+    h += "<h2>Suspected duplicates</h2>\n";
+    if (c.duplicates->empty())
+      h += std::string("<p>") + kNoDuplicates + "</p>\n";
+    else
+      h += html_table(duplicates_table(*c.duplicates));
+  }
   if (c.object_eval) {
     h += html_table(error_table(*c.object_eval));
     h += html_table(precision_table(*c.object_eval));
@@ -315,6 +342,11 @@ std::string page_markdown(const PageContent& c) {
     m += markdown_table(precision_table(*c.object_eval));
   }
   if (c.points) m += markdown_table(points_table(*c.points));
+  if (c.duplicates) {
+    m += "## Suspected duplicates\n\n";
+    m += c.duplicates->empty() ? std::string(kNoDuplicates) + "\n\n"
+                               : markdown_table(duplicates_table(*c.duplicates));
+  }
   for (const std::string& line : c.inputs) m += line + "  \n";
   return m;
 }

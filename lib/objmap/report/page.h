@@ -34,6 +34,18 @@ struct RunCounts {
             objects_before_confirmation = 0;
 };
 
+// One pair of run.json "duplicates": same-class objects whose boxes overlap or whose surfaces
+// touch.
+struct PageDuplicate {
+  int a = -1, b = -1;  // object ids
+  std::string class_name;
+  double obb_overlap = 0.0;         // share of the smaller box inside the larger
+  double surface_distance_m = 0.0;  // shortest distance between the two clouds
+  double touching_share = 0.0;      // of the smaller cloud's points touching the larger
+  std::string merge_refused;        // the merge pass's rule: "shared_frames", "overlap", ...
+  std::string merge_reason;         // that rule in words, with its figures
+};
+
 struct PageAte {
   std::string name;  // "estimated", "corrected"
   std::string gt_source, est_source;
@@ -51,8 +63,10 @@ struct PageContent {
   std::vector<PageObject> objects;                    // in objects.json order
   std::optional<eval::ObjectEvalReport> object_eval;  // Tables 3–5 against ground truth
   std::optional<eval::PointCounts> points;            // Table 6
-  std::vector<std::string> notes;                     // what could not be shown and why
-  std::vector<std::string> inputs;                    // "label: path" lines for the footer
+  // run.json "duplicates" (absent: a run.json without that section, e.g. of an older objmap).
+  std::optional<std::vector<PageDuplicate>> duplicates;
+  std::vector<std::string> notes;   // what could not be shown and why
+  std::vector<std::string> inputs;  // "label: path" lines for the footer
 };
 
 // One line: keyframes, objects (per class), ATE when known.
