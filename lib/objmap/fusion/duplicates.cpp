@@ -20,6 +20,9 @@ void DuplicateOptions::check() const {
   require(obb_samples_per_axis >= 1 && obb_samples_per_axis <= 200,
           "DuplicateOptions.obb_samples_per_axis",
           "must be in [1, 200], got " + std::to_string(obb_samples_per_axis));
+  require(std::isfinite(min_obb_overlap) && min_obb_overlap >= 0.0 && min_obb_overlap <= 1.0,
+          "DuplicateOptions.min_obb_overlap",
+          "must be in [0, 1], got " + std::to_string(min_obb_overlap));
 }
 
 double obb_containment(const Obb& small, const Obb& large, int samples_per_axis) {
@@ -130,13 +133,14 @@ DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const 
       const double overlap = obb_containment(a_small ? ra.obb : rb.obb, a_small ? rb.obb : ra.obb,
                                              options.obb_samples_per_axis);
       // Surfaces further apart than their axis-aligned boxes cannot touch.
-      if (overlap <= 0.0 && aabb_gap(ra.aabb, rb.aabb) > options.touch_distance_m) continue;
+      const bool boxes_overlap = overlap > 0.0 && overlap >= options.min_obb_overlap;
+      if (!boxes_overlap && aabb_gap(ra.aabb, rb.aabb) > options.touch_distance_m) continue;
       // 2. Surface contact: the smaller cloud (fewer points; ties: the lower id) against the
       //    larger's kd-tree.
       const bool a_fewer = ra.cloud.size() <= rb.cloud.size();
       const Contact contact = surface_contact(a_fewer ? ra.cloud : rb.cloud,
                                               tree_of(a_fewer ? j : i), options.touch_distance_m);
-      if (overlap <= 0.0 && contact.distance_m > options.touch_distance_m) continue;
+      if (!boxes_overlap && contact.distance_m > options.touch_distance_m) continue;
       DuplicatePair p;
       p.a = ra.id;
       p.b = rb.id;

@@ -20,6 +20,9 @@ struct DuplicateOptions {
   // (cell centres): 20 → 8000 points, the share exact to about 1/20 of a box side's share at worst,
   // far better where faces do not cut the cells' centres in a row.
   int obb_samples_per_axis = 20;
+  // Boxes that overlap by less than this share (of the smaller) and whose surfaces do not touch are
+  // no suspects: PCA boxes of neighbours graze each other's corners (a few per cent).
+  double min_obb_overlap = 0.1;
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -41,8 +44,8 @@ struct DuplicateReport {
   std::size_t pairs_checked = 0;     // same-class pairs of confirmed objects looked at
 };
 
-// Every pair of confirmed records of one canonical class with obb_overlap > 0 or
-// surface_distance_m <= touch_distance_m. `records` are those of `map` after its merge pass
+// Every pair of confirmed records of one canonical class with obb_overlap >= min_obb_overlap (and
+// > 0) or surface_distance_m <= touch_distance_m. `records` are those of `map` after its merge pass
 // (ObjectMap::records: ids are the map's); the verdict is taken from `map`. No output, no IO.
 DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const ObjectMap& map,
                                 const DuplicateOptions& options = {});

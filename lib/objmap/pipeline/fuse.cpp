@@ -692,6 +692,7 @@ ordered_json duplicates_json(const fusion::DuplicateReport& report,
   }
   return {{"touch_distance_m", options.touch_distance_m},
           {"obb_samples_per_axis", options.obb_samples_per_axis},
+          {"min_obb_overlap", options.min_obb_overlap},
           {"pairs_checked", report.pairs_checked},
           {"count", report.pairs.size()},
           {"pairs", pairs}};
