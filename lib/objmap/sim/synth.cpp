@@ -157,7 +157,8 @@ SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progr
   // 3. The detector + tracker output, in time order (track IDs carry from frame to frame).
   SegmentationNoise noise = make_segmentation_noise(options);
   for (auto& f : seq.frames)
-    f.segmentation = noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height);
+    f.segmentation =
+        noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height, f.depth_exact_m);
   seq.seg_stats = noise.stats();
   return seq;
 }
