@@ -335,7 +335,8 @@ TEST(SegNoise, EdgeSceneMasksBleedFarBehindTheObjects) {
         }
     }
   }
-  // Measured (seed 1): 11401 added, 78% of them >= 0.15 m behind, 4% on other objects.
+  // Measured (seed 1): 11571 added, 80% of them >= 0.15 m behind (median 2.3 m: the walls), 4%
+  // on other objects.
   ASSERT_GT(added, 1000);
   EXPECT_GT(far_behind, added / 2) << added << " added";
   EXPECT_LT(on_objects, added / 10);  // mostly table, floor and walls
