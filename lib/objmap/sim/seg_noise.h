@@ -89,7 +89,7 @@ cv::Mat to_mat(const segmentation::Mask& mask);
 segmentation::Mask to_mask(const cv::Mat& binary);
 // The pixels an exact mask (CV_8UC1, non-zero = object) bleeds onto: within bleed_px of it (the
 // elliptic kernel of boundary_px), not in it, and behind the object: their exact depth is larger
-// than that of every mask pixel within bleed_px, or 0 (nothing hit, as far as can be). So the
+// than that of every mask pixel within bleed_px, or 0 (nothing hit: as far as it gets). So the
 // table, floor, wall or a farther object behind the silhouette, never an occluder in front.
 // CV_8UC1, 1 on those pixels; all 0 for bleed_px = 0 or an empty mask.
 cv::Mat bleed_region(const cv::Mat& exact_mask, const cv::Mat& depth_exact_m, int bleed_px);
