@@ -57,6 +57,9 @@ void run_synth(SynthCommand& cmd) {
       "segmentation  %d true instances: %d missed, %d confused, %d false positives, "
       "%d id switches (%d re-used ids)\n",
       st.true_instances, st.missed, st.confused, st.false_positives, st.id_switches, st.id_reuses);
+  if (o.seg_noise.bleed_px > 0)
+    std::printf("mask bleed    %lld pixels added behind the objects (up to %d px from the masks)\n",
+                st.bleed_pixels, o.seg_noise.bleed_px);
 }
 
 void setup_synth(CLI::App& app) {
@@ -83,7 +86,9 @@ void setup_synth(CLI::App& app) {
   c->add_option("--orbit-speed", o.orbit_speed_deg_per_s,
                 "camera azimuth rate around the table, deg/s (0: the preset's, 20 for tabletop)")
       ->capture_default_str();
-  c->add_option("--preset", o.preset, "scene: tabletop (one table) or office (two tables)")
+  c->add_option("--preset", o.preset,
+                "scene: tabletop (one table), office (two tables) or edge (a small table, its "
+                "objects at the edges, the floor behind them: for the mask bleed)")
       ->capture_default_str();
   c->add_flag("--noise-free", cmd->noise_free,
               "exact depth and segmentation, no image noise, no drift (overrides the knobs below)");
@@ -120,6 +125,12 @@ void setup_synth(CLI::App& app) {
                 "probability of teddy bear -> person and mouse -> cup (default 0.15 each)");
   c->add_option("--mask-boundary", o.seg_noise.boundary_px,
                 "masks are eroded/dilated by up to this many pixels")
+      ->capture_default_str();
+  c->add_option("--mask-bleed-px", o.seg_noise.bleed_px,
+                "masks also cover the pixels up to this far beyond the object's silhouette where "
+                "the scene behind it shows (table, floor, wall, a farther object; never an "
+                "occluder in front), as real masks overlap by 1-4 px; at a table's edge these "
+                "back-project far behind the object (0 = off)")
       ->capture_default_str();
   c->add_option("--min-area", o.seg_noise.min_area_px, "smallest reported mask, pixels")
       ->capture_default_str();

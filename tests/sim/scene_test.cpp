@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "objmap/core/error.h"
@@ -131,6 +133,41 @@ TEST(Scene, PresetsHaveThePaperClassesAndTheirBoxesCoverEveryPart) {
   }
 }
 
+TEST(Scene, EdgePresetObjectsStandOnTheTableCentimetresFromItsEdge) {
+  for (std::uint64_t seed : {1, 2, 3, 4, 5}) {
+    const Scene scene = make_scene("edge", seed);
+    ASSERT_EQ(scene.objects.size(), 6u);
+    // The table top: the structure part whose top is at table height.
+    Vec3 top_half = Vec3::Zero(), top_center = Vec3::Zero();
+    for (const auto& s : scene.structure)
+      for (std::size_t p = 0; p < s.parts.size(); ++p)
+        if (s.class_name == "table" && s.parts[p].half_extent.z() < 0.03) {
+          top_half = s.parts[p].half_extent;
+          top_center = s.world_from_part[p].translation();
+        }
+    ASSERT_GT(top_half.x(), 0.0);
+    const double table_z = top_center.z() + top_half.z();
+    for (const auto& o : scene.objects) {
+      // Points sampled in its parts lie over the table, the outermost 1-3 cm from an edge.
+      double gap_m = 1.0;
+      for (std::size_t p = 0; p < o.parts.size(); ++p)
+        for (int a = -8; a <= 8; ++a)
+          for (int b = -8; b <= 8; ++b)
+            for (int c = -8; c <= 8; ++c) {
+              const Vec3 q = Vec3(a, b, c).cwiseProduct(o.parts[p].half_extent) / 8.0;
+              if (!inside_part(o.parts[p], q)) continue;
+              const Vec3 in_table = o.world_from_part[p] * q - top_center;
+              gap_m = std::min({gap_m, top_half.x() - std::abs(in_table.x()),
+                                top_half.y() - std::abs(in_table.y())});
+            }
+      EXPECT_GT(gap_m, 0.005) << o.class_name << " seed " << seed;
+      EXPECT_LT(gap_m, 0.03) << o.class_name << " seed " << seed << " gap " << gap_m;
+      // Standing on it (the teddy's legs sink 5 mm into it).
+      EXPECT_NEAR(o.obb.center.z() - o.obb.half_extent.z(), table_z, 0.006) << o.class_name;
+    }
+  }
+}
+
 TEST(Scene, UnknownPresetIsAnInputError) {
   try {
     make_scene("garden", 1);
@@ -138,6 +175,7 @@ TEST(Scene, UnknownPresetIsAnInputError) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), "--preset");
     EXPECT_NE(std::string(e.what()).find("garden"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("tabletop, office or edge"), std::string::npos);
   }
 }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "objmap/sim/presets.h"
+#include "support/schema_check.h"
 #include "support/test_support.h"
 
 namespace objmap::test {
@@ -114,6 +115,47 @@ TEST(SynthCli, BadOptionsExitTwoWithOneLine) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--miss-rate"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tmp / "z"));
+
+  for (const char* bad : {"-1", "21"}) {
+    r = run_objmap({"synth", "--out", (tmp / "b").string(), "--mask-bleed-px", bad});
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_EQ(r.err.rfind("objmap: error: --mask-bleed-px: must be in [0, 20] pixels", 0), 0u)
+        << r.err;
+    EXPECT_FALSE(fs::exists(tmp / "b"));
+  }
+}
+
+TEST(SynthCli, MaskBleedGrowsTheNoisyMasksAndIsRecorded) {
+  TempDir tmp;
+  RunResult r = run_objmap({"synth", "--out", (tmp / "plain").string(), "--preset", "edge",
+                            "--frames", "2", "--scale", "0.25", "--mask-bleed-px", "0"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_objmap({"synth", "--out", (tmp / "bled").string(), "--preset", "edge", "--frames", "2",
+                  "--scale", "0.25", "--mask-bleed-px", "2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("mask bleed"), std::string::npos) << r.out;
+  const auto json = nlohmann::json::parse(read_text(tmp / "bled" / "synth.json"));
+  EXPECT_EQ(json.at("preset"), "edge");
+  EXPECT_EQ(json.at("segmentation_noise").at("bleed_px"), 2);
+  EXPECT_GT(json.at("made").at("bleed_pixels").get<long>(), 0);
+  const auto errors = validate_json(json, load_schema("synth.schema.json"));
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  EXPECT_FALSE(nlohmann::json::parse(read_text(tmp / "plain" / "synth.json"))
+                   .at("segmentation_noise")
+                   .contains("bleed_px"));
+  // Only the noisy masks differ: images, exact segmentation and trajectories are the same files.
+  int same = 0, differ = 0;
+  for (const auto& e : fs::recursive_directory_iterator(tmp / "plain")) {
+    if (!e.is_regular_file()) continue;
+    const fs::path rel = fs::relative(e.path(), tmp / "plain");
+    const bool equal = read_text(e.path()) == read_text(tmp / "bled" / rel);
+    const bool noisy = rel.begin()->string() == "segmentation" || rel == "synth.json";
+    EXPECT_EQ(equal, !noisy) << rel;
+    (equal ? same : differ) += 1;
+  }
+  EXPECT_EQ(differ, 2 + 1);
+  EXPECT_GT(same, 10);
 }
 
 }  // namespace

@@ -37,6 +37,18 @@ bool same(const segmentation::FrameSegmentation& a, const segmentation::FrameSeg
   return true;
 }
 
+// Expects every file under `a` to have an identical twin under `b`; returns how many were compared.
+int expect_same_files(const test::fs::path& a, const test::fs::path& b) {
+  int compared = 0;
+  for (const auto& e : test::fs::recursive_directory_iterator(a)) {
+    if (!e.is_regular_file()) continue;
+    const auto rel = test::fs::relative(e.path(), a);
+    EXPECT_EQ(test::read_text(e.path()), test::read_text(b / rel)) << rel;
+    ++compared;
+  }
+  return compared;
+}
+
 TEST(Synth, SameSeedSameSequenceWhateverTheThreads) {
   const SynthSequence a = synthesize(small(7, 1));
   const SynthSequence b = synthesize(small(7, 2));
@@ -122,7 +134,7 @@ TEST(Synth, CameraKeepsTheTableInView) {
   o.frames = 30;
   o.resolution_scale = 0.25;
   o.seg_noise.min_area_px = 4;
-  for (const std::string preset : {"tabletop", "office"}) {
+  for (const std::string preset : {"tabletop", "office", "edge"}) {
     o.preset = preset;
     const SynthSequence s = synthesize(o);
     for (const auto& f : s.frames) {
@@ -146,13 +158,7 @@ TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
   const SynthSequence streamed = write_synthetic_sequence(tmp / "streamed", o);
   EXPECT_TRUE(streamed.frames.empty());
   EXPECT_GT(streamed.seg_stats.id_switches, 0);
-  int compared = 0;
-  for (const auto& e : test::fs::recursive_directory_iterator(tmp / "memory")) {
-    if (!e.is_regular_file()) continue;
-    const auto rel = test::fs::relative(e.path(), tmp / "memory");
-    EXPECT_EQ(test::read_text(e.path()), test::read_text(tmp / "streamed" / rel)) << rel;
-    ++compared;
-  }
+  const int compared = expect_same_files(tmp / "memory", tmp / "streamed");
   EXPECT_EQ(compared, 11 * 4 + 7);  // rgb, depth, 2 segmentations per frame + 7 files
   // The PNGs (png.h's encoder) read back as the images in memory.
   for (const auto& f : memory.frames) {
@@ -167,6 +173,34 @@ TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
     EXPECT_EQ(cv::norm(rgb, f.rgb, cv::NORM_INF), 0.0) << f.index;
     EXPECT_EQ(cv::norm(depth, f.depth, cv::NORM_INF), 0.0) << f.index;
   }
+}
+
+TEST(Synth, StreamingWriterBleedsTheMasksAsTheInMemoryOne) {
+  // The streaming writer keeps each frame's exact depth for the bleed until its turn in the chain.
+  SynthOptions o = small(5, 2);
+  o.preset = "edge";
+  o.frames = 7;
+  o.seg_noise.bleed_px = 2;
+  test::TempDir tmp;
+  const SynthSequence memory = synthesize(o);
+  write_sequence(tmp / "memory", memory, 1);
+  const SynthSequence streamed = write_synthetic_sequence(tmp / "streamed", o);
+  EXPECT_GT(streamed.seg_stats.bleed_pixels, 0);
+  EXPECT_EQ(streamed.seg_stats.bleed_pixels, memory.seg_stats.bleed_pixels);
+  const int compared = expect_same_files(tmp / "memory", tmp / "streamed");
+  EXPECT_EQ(compared, 7 * 4 + 7);
+}
+
+TEST(Synth, BleedIsRecordedInSynthJsonOnlyWhenOn) {
+  // Without the bleed, synth.json is as it was before the option existed.
+  SynthOptions o = small(5, 0);
+  o.frames = 2;
+  const std::string off = synth_json(synthesize(o));
+  EXPECT_EQ(off.find("bleed"), std::string::npos);
+  o.seg_noise.bleed_px = 2;
+  const std::string on = synth_json(synthesize(o));
+  EXPECT_NE(on.find("\"bleed_px\": 2"), std::string::npos) << on;
+  EXPECT_NE(on.find("\"bleed_pixels\": "), std::string::npos) << on;
 }
 
 TEST(Synth, BadOptionsNameTheOption) {

@@ -1,6 +1,9 @@
 #include "objmap/sim/presets.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 #include "objmap/core/error.h"
 #include "objmap/sim/random.h"
@@ -33,6 +36,11 @@ class Builder {
   Builder(Scene* scene, std::uint64_t seed) : scene_(scene), rng_(derive_seed(seed, 0, 0x5CE4E)) {}
 
   Rng& rng() { return rng_; }
+  // Caps the position and yaw jitter of the objects made from now on (objects placed at an edge).
+  void limit_jitter(double max_jitter_m, double max_yaw_jitter_deg) {
+    jitter_limit_m_ = max_jitter_m;
+    yaw_jitter_limit_deg_ = max_yaw_jitter_deg;
+  }
 
   Material mat(Rgb base, Rgb accent, Pattern pattern, double scale_m, double grain = 0.06) {
     Material m;
@@ -49,6 +57,8 @@ class Builder {
   // `jitter_m` and the yaw by up to `yaw_jitter_deg`.
   SceneObject& object(const std::string& cls, double x, double y, double z, double yaw_deg,
                       double jitter_m = 0.02, double yaw_jitter_deg = 12.0) {
+    jitter_m = std::min(jitter_m, jitter_limit_m_);
+    yaw_jitter_deg = std::min(yaw_jitter_deg, yaw_jitter_limit_deg_);
     SceneObject o;
     o.id = static_cast<int>(scene_->objects.size()) + 1;
     o.class_name = cls;
@@ -77,6 +87,8 @@ class Builder {
   }
   Scene* scene_;
   Rng rng_;
+  double jitter_limit_m_ = std::numeric_limits<double>::infinity();
+  double yaw_jitter_limit_deg_ = std::numeric_limits<double>::infinity();
 };
 
 // The room: one box seen from inside, floor at z = 0.
@@ -149,8 +161,10 @@ void add_mouse(Builder& b, double x, double y, double yaw_deg) {
                          b.mat({185, 185, 190}, {90, 90, 95}, Pattern::kStripes, 0.02, 0.05)));
 }
 
-void add_cup(Builder& b, double x, double y, Rgb colour) {
-  auto& o = b.object("cup", x, y, kTableHeight, b.rng().uniform(0.0, 360.0), 0.02, 0.0);
+// The handle points along the cup's x; its yaw is random unless given.
+void add_cup(Builder& b, double x, double y, Rgb colour, std::optional<double> yaw_deg = {}) {
+  const double random_yaw_deg = b.rng().uniform(0.0, 360.0);
+  auto& o = b.object("cup", x, y, kTableHeight, yaw_deg.value_or(random_yaw_deg), 0.02, 0.0);
   const Material m = b.mat(colour, {240, 240, 240}, Pattern::kStripes, 0.018, 0.06);
   o.parts.push_back(part(Shape::kCylinder, Vec3(0.04, 0.04, 0.05), at(0, 0, 0.05), m));
   o.parts.push_back(part(Shape::kBox, Vec3(0.015, 0.006, 0.03), at(0.05, 0, 0.055), m));  // handle
@@ -202,7 +216,38 @@ void tabletop_objects(Builder& b, double x, double y, bool mirror, int books) {
   if (books >= 3) add_book(b, x - m * 0.2, y - 0.26, kTableHeight, -10.0, book_colours[2]);
 }
 
+// The "edge" scene's table (0.9 x 0.6 m) and six objects, each 1-2.5 cm from an edge: two on the
+// -y side (where the orbit starts), two on the +y side, one at each end. (The distance of a centre
+// from the edge is the object's half footprint across the edge + 1.5-2 cm; the jitter is at most
+// 5 mm and 3 degrees.)
+void edge_table_with_objects(Builder& b) {
+  const double hx = 0.45, hy = 0.3;
+  add_table(b, 0, 0, hx, hy);
+  b.limit_jitter(0.005, 3.0);
+  add_cup(b, -0.05, -hy + 0.058, {200, 40, 40}, 0.0);  // radius 4 cm, handle along the edge
+  add_bottle(b, -0.28, -hy + 0.055);                   // radius 3.55 cm
+  add_mouse(b, hx - 0.05, -0.08, 0.0);                 // 6.4 x 11.6 cm, long side along the edge
+  add_teddy(b, 0.12, hy - 0.085, 0.0);                 // back 6.5 cm behind its centre, facing -y
+  add_cup(b, 0.3, hy - 0.058, {40, 90, 200}, 180.0);
+  add_book(b, -hx + 0.105, 0.08, kTableHeight, 90.0, {30, 110, 60});  // 17 x 24 cm
+}
+
+std::string preset_list() {
+  std::string out;
+  const auto& names = scene_presets();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return out;
+}
+
 }  // namespace
+
+void check_scene_preset(const std::string& preset) {
+  const auto& names = scene_presets();
+  if (std::find(names.begin(), names.end(), preset) == names.end())
+    throw InputError("--preset",
+                     "unknown scene preset '" + preset + "'; expected " + preset_list());
+}
 
 const std::vector<std::string>& paper_classes() {
   static const std::vector<std::string> names{"chair",  "cup",  "tv monitor", "teddy bear",
@@ -211,11 +256,12 @@ const std::vector<std::string>& paper_classes() {
 }
 
 const std::vector<std::string>& scene_presets() {
-  static const std::vector<std::string> names{"tabletop", "office"};
+  static const std::vector<std::string> names{"tabletop", "office", "edge"};
   return names;
 }
 
 Scene make_scene(const std::string& preset, std::uint64_t seed) {
+  check_scene_preset(preset);
   Scene scene;
   Builder b(&scene, seed);
   if (preset == "tabletop") {
@@ -233,9 +279,9 @@ Scene make_scene(const std::string& preset, std::uint64_t seed) {
     add_chair(b, -0.9, -0.75, 90.0);
     add_chair(b, 0.8, -0.75, 90.0);
     add_chair(b, 0.0, 0.8, -90.0);
-  } else {
-    throw InputError("--preset",
-                     "unknown scene preset '" + preset + "'; expected tabletop or office");
+  } else {  // "edge"
+    add_room(b, 2.5, 2.5, 2.6);
+    edge_table_with_objects(b);
   }
   for (auto& o : scene.structure) o.finalize(16);
   for (auto& o : scene.objects) o.finalize(64);
@@ -243,16 +289,21 @@ Scene make_scene(const std::string& preset, std::uint64_t seed) {
 }
 
 CameraPathOptions preset_camera_path(const std::string& preset) {
+  check_scene_preset(preset);
   CameraPathOptions path;
-  if (preset == "office") {
+  if (preset == "edge") {
+    // Low (35 cm above the table top) and close. Past the objects at the near edge the lines of
+    // sight graze the table top 0.15-0.5 m behind them; past those at the far edge and the ends
+    // they miss the table and reach the floor and walls, metres behind.
+    path.radius_m = 1.4;
+    path.height_m = 1.15;
+    path.look_at_height_m = 0.8;
+  } else if (preset == "office") {
     path.radius_m = 2.3;
     path.height_m = 1.55;
     path.look_at_height_m = 0.75;
     path.start_angle_deg = -115.0;
     path.speed_deg_per_s = 15.0;  // 0.6 m/s at 2.3 m
-  } else if (preset != "tabletop") {
-    throw InputError("--preset",
-                     "unknown scene preset '" + preset + "'; expected tabletop or office");
   }
   return path;
 }

@@ -18,6 +18,32 @@ bool probability(double p) { return std::isfinite(p) && p >= 0.0 && p <= 1.0; }
 // Classes a spurious detection may get.
 const char* const kFalsePositiveClasses[] = {"person", "chair",        "cup",        "book",
                                              "bottle", "potted plant", "cell phone", "laptop"};
+
+// A reported mask: the exact one eroded (radius < 0) or dilated by |radius|, then grown by its
+// bleed region (bleed_px > 0), which reaches out from the exact silhouette whatever the boundary
+// noise did. Empty when the erosion left nothing; adds the bleed's new pixels to *bleed_pixels.
+cv::Mat noisy_mask(const cv::Mat& exact, int radius, int bleed_px, const cv::Mat& depth_exact_m,
+                   long long* bleed_pixels) {
+  // A copy when the bleed follows: it is or-ed in place, and `exact` is read after the noise.
+  cv::Mat mask = bleed_px > 0 ? exact.clone() : exact;
+  if (radius != 0) {
+    const int r = std::abs(radius);
+    const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
+    if (radius > 0)
+      cv::dilate(mask, mask, kernel);
+    else
+      cv::erode(mask, mask, kernel);
+  }
+  if (cv::countNonZero(mask) == 0) return cv::Mat();
+  if (bleed_px > 0) {
+    const cv::Mat bleed = bleed_region(exact, depth_exact_m, bleed_px);
+    cv::Mat added;
+    cv::bitwise_and(bleed, mask == 0, added);
+    *bleed_pixels += cv::countNonZero(added);
+    cv::bitwise_or(mask, bleed, mask);
+  }
+  return mask;
+}
 }  // namespace
 
 void SegNoiseOptions::check() const {
@@ -41,6 +67,8 @@ void SegNoiseOptions::check() const {
   require(std::isfinite(score_min) && std::isfinite(score_max) && 0.0 <= score_min &&
               score_min <= score_max && score_max <= 1.0,
           "SegNoiseOptions.score_min", "scores must satisfy 0 <= score_min <= score_max <= 1");
+  require(bleed_px >= 0 && bleed_px <= 20, "--mask-bleed-px",
+          "must be in [0, 20] pixels (0 = no bleed), got " + std::to_string(bleed_px));
 }
 
 SegNoiseOptions SegNoiseOptions::none() {
@@ -81,6 +109,39 @@ seg::Box mask_box(const seg::Mask& mask) {
   if (r.area() == 0) return {};
   return {static_cast<double>(r.x), static_cast<double>(r.y), static_cast<double>(r.width),
           static_cast<double>(r.height)};
+}
+
+cv::Mat bleed_region(const cv::Mat& exact_mask, const cv::Mat& depth_exact_m, int bleed_px) {
+  require(exact_mask.type() == CV_8UC1 && depth_exact_m.type() == CV_32FC1 &&
+              exact_mask.size() == depth_exact_m.size(),
+          "bleed_region", "expected a CV_8UC1 mask and a CV_32FC1 depth image of the same size");
+  cv::Mat region(exact_mask.size(), CV_8UC1, cv::Scalar::all(0));
+  const cv::Rect box = cv::boundingRect(exact_mask);
+  if (bleed_px <= 0 || box.area() == 0) return region;
+  // Work in the mask's box grown by the kernel's reach.
+  const cv::Rect roi = cv::Rect(box.x - bleed_px, box.y - bleed_px, box.width + 2 * bleed_px,
+                                box.height + 2 * bleed_px) &
+                       cv::Rect(0, 0, exact_mask.cols, exact_mask.rows);
+  const cv::Mat mask = exact_mask(roi);
+  const cv::Mat depth_m = depth_exact_m(roi);
+  const cv::Mat kernel =
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * bleed_px + 1, 2 * bleed_px + 1});
+  // Within reach of the mask, and the farthest object depth within reach of each pixel.
+  cv::Mat reach, object_depth_m(mask.size(), CV_32FC1, cv::Scalar::all(0)), farthest_object_m;
+  cv::dilate(mask, reach, kernel);
+  depth_m.copyTo(object_depth_m, mask);
+  cv::dilate(object_depth_m, farthest_object_m, kernel);
+  cv::Mat out = region(roi);
+  for (int v = 0; v < mask.rows; ++v) {
+    const auto* in_mask = mask.ptr<std::uint8_t>(v);
+    const auto* in_reach = reach.ptr<std::uint8_t>(v);
+    const auto* d = depth_m.ptr<float>(v);
+    const auto* object_d = farthest_object_m.ptr<float>(v);
+    auto* o = out.ptr<std::uint8_t>(v);
+    for (int u = 0; u < mask.cols; ++u)
+      o[u] = in_reach[u] && !in_mask[u] && (d[u] == 0.0f || d[u] > object_d[u]) ? 1 : 0;
+  }
+  return region;
 }
 
 seg::FrameSegmentation exact_segmentation(const cv::Mat& labels, const Scene& scene,
@@ -135,9 +196,41 @@ SegmentationNoise::SegmentationNoise(const SegNoiseOptions& options, std::uint64
   options_.check();
 }
 
-seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& exact, int width,
-                                                int height) {
+// False positives: an ellipse somewhere, a plausible class, a low score, a fresh ID each time.
+void SegmentationNoise::add_false_positives(int width, int height, seg::FrameSegmentation* out) {
   const SegNoiseOptions& o = options_;
+  const int spurious =
+      o.false_positives_per_frame > 0.0 ? rng_.poisson(o.false_positives_per_frame) : 0;
+  for (int k = 0; k < spurious; ++k) {
+    const cv::Point centre(rng_.uniform_int(width), rng_.uniform_int(height));
+    const cv::Size axes(5 + rng_.uniform_int(std::max(1, width / 12)),
+                        5 + rng_.uniform_int(std::max(1, height / 12)));
+    const double angle = rng_.uniform(0.0, 180.0);
+    const int cls = rng_.uniform_int(static_cast<int>(std::size(kFalsePositiveClasses)));
+    const double score = rng_.uniform(0.3, 0.6);
+    cv::Mat mask(height, width, CV_8UC1, cv::Scalar::all(0));
+    cv::ellipse(mask, centre, axes, angle, 0.0, 360.0, cv::Scalar(1), cv::FILLED);
+    seg::Instance instance;
+    instance.class_name = kFalsePositiveClasses[cls];
+    instance.score = score;
+    instance.track_id = next_track_id_++;
+    if (cv::countNonZero(mask) == 0) continue;
+    instance.mask = to_mask(mask);
+    instance.bbox = mask_box(*instance.mask);
+    out->instances.push_back(std::move(instance));
+    ++stats_.false_positives;
+  }
+}
+
+seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& exact, int width,
+                                                int height, const cv::Mat& depth_exact_m) {
+  const SegNoiseOptions& o = options_;
+  if (o.bleed_px > 0)
+    require(depth_exact_m.type() == CV_32FC1 && depth_exact_m.cols == width &&
+                depth_exact_m.rows == height,
+            "SegmentationNoise::apply",
+            "the mask bleed (bleed_px > 0) needs the frame's exact depth, CV_32FC1 " +
+                std::to_string(width) + "x" + std::to_string(height));
   seg::FrameSegmentation out;
   out.timestamp = exact.timestamp;
   out.source = "synthetic";
@@ -197,16 +290,9 @@ seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& ex
     }
     instance.score = score;
     instance.track_id = it->second;
-    cv::Mat mask = to_mat(*truth.mask);
-    if (radius != 0) {
-      const int r = std::abs(radius);
-      const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
-      if (radius > 0)
-        cv::dilate(mask, mask, kernel);
-      else
-        cv::erode(mask, mask, kernel);
-    }
-    if (cv::countNonZero(mask) == 0) {  // eroded away: the detector saw nothing
+    const cv::Mat mask =
+        noisy_mask(to_mat(*truth.mask), radius, o.bleed_px, depth_exact_m, &stats_.bleed_pixels);
+    if (mask.empty()) {  // eroded away: the detector saw nothing
       ++stats_.missed;
       continue;
     }
@@ -215,28 +301,7 @@ seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& ex
     out.instances.push_back(std::move(instance));
   }
 
-  // False positives: an ellipse somewhere, a plausible class, a low score, a fresh ID each time.
-  const int spurious =
-      o.false_positives_per_frame > 0.0 ? rng_.poisson(o.false_positives_per_frame) : 0;
-  for (int k = 0; k < spurious; ++k) {
-    const cv::Point centre(rng_.uniform_int(width), rng_.uniform_int(height));
-    const cv::Size axes(5 + rng_.uniform_int(std::max(1, width / 12)),
-                        5 + rng_.uniform_int(std::max(1, height / 12)));
-    const double angle = rng_.uniform(0.0, 180.0);
-    const int cls = rng_.uniform_int(static_cast<int>(std::size(kFalsePositiveClasses)));
-    const double score = rng_.uniform(0.3, 0.6);
-    cv::Mat mask(height, width, CV_8UC1, cv::Scalar::all(0));
-    cv::ellipse(mask, centre, axes, angle, 0.0, 360.0, cv::Scalar(1), cv::FILLED);
-    seg::Instance instance;
-    instance.class_name = kFalsePositiveClasses[cls];
-    instance.score = score;
-    instance.track_id = next_track_id_++;
-    if (cv::countNonZero(mask) == 0) continue;
-    instance.mask = to_mask(mask);
-    instance.bbox = mask_box(*instance.mask);
-    out.instances.push_back(std::move(instance));
-    ++stats_.false_positives;
-  }
+  add_false_positives(width, height, &out);
   return out;
 }
 

@@ -35,6 +35,12 @@ struct SegNoiseOptions {
   double id_reuse_prob = 0.3;    // share of new IDs that re-use an ID another track dropped earlier
   double score_min = 0.55;       // scores of true detections are uniform in [score_min, score_max]
   double score_max = 0.99;
+  // Mask bleed, as real instance masks have (YCB-Video's labels overlap the silhouette by 1-4 px):
+  // each reported mask also covers bleed_region() of its exact mask, the pixels within bleed_px
+  // that lie behind the object, never an occluder in front. Where the background is far (an object
+  // at a table's edge, the floor behind) they back-project far behind the object. Deterministic (no
+  // random draws); needs the frames' exact depth. 0 = off.
+  int bleed_px = 0;
 
   void check() const;             // throws InputError naming the bad field
   static SegNoiseOptions none();  // no error at all: the noisy output equals the exact one
@@ -49,9 +55,11 @@ segmentation::FrameSegmentation exact_segmentation(const cv::Mat& labels, const 
 class SegmentationNoise {
  public:
   SegmentationNoise(const SegNoiseOptions& options, std::uint64_t seed);
-  // The noisy segmentation of one frame, from its exact segmentation.
+  // The noisy segmentation of one frame, from its exact segmentation. `depth_exact_m` is the
+  // frame's rendered exact depth (CV_32FC1, width x height, SynthFrame::depth_exact_m), needed
+  // only for the mask bleed: with options.bleed_px > 0 an empty or mis-sized one throws InputError.
   segmentation::FrameSegmentation apply(const segmentation::FrameSegmentation& exact, int width,
-                                        int height);
+                                        int height, const cv::Mat& depth_exact_m = cv::Mat());
 
   // Counts of what was done so far (for tests and the summary).
   struct Stats {
@@ -61,10 +69,13 @@ class SegmentationNoise {
     int false_positives = 0;
     int id_switches = 0;
     int id_reuses = 0;
+    long long bleed_pixels = 0;  // pixels added to reported masks by the bleed
   };
   const Stats& stats() const { return stats_; }
 
  private:
+  void add_false_positives(int width, int height, segmentation::FrameSegmentation* out);
+
   SegNoiseOptions options_;
   Rng rng_;
   std::map<int, int> track_of_object_;  // object id -> current track id
@@ -76,6 +87,13 @@ class SegmentationNoise {
 // Conversions between a 0/1 mask and a CV_8UC1 image.
 cv::Mat to_mat(const segmentation::Mask& mask);
 segmentation::Mask to_mask(const cv::Mat& binary);
+// The pixels an exact mask (CV_8UC1, non-zero = object) bleeds onto: within bleed_px of it (the
+// elliptic kernel of boundary_px), not in it, and behind the object: their exact depth is larger
+// than that of every mask pixel within bleed_px, or 0 (nothing hit: as far as it gets). So the
+// table, floor, wall or a farther object behind the silhouette, never an occluder in front.
+// CV_8UC1, 1 on those pixels; all 0 for bleed_px = 0 or an empty mask.
+cv::Mat bleed_region(const cv::Mat& exact_mask, const cv::Mat& depth_exact_m, int bleed_px);
+
 // Tight box of the non-zero pixels (COCO x, y, w, h); all zero for an empty mask.
 segmentation::Box mask_box(const segmentation::Mask& mask);
 

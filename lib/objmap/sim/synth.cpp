@@ -17,9 +17,7 @@ double round_us(double t) { return std::round(t * 1e6) / 1e6; }
 }  // namespace
 
 void SynthOptions::check() const {
-  bool known = false;
-  for (const auto& p : scene_presets()) known |= (p == preset);
-  require(known, "--preset", "unknown scene preset '" + preset + "'; expected tabletop or office");
+  check_scene_preset(preset);
   require(frames >= 1 && frames <= 100000, "--frames",
           "must be in [1, 100000], got " + std::to_string(frames));
   require(std::isfinite(frame_rate_hz) && frame_rate_hz > 0.0 && frame_rate_hz <= 1000.0,
@@ -159,7 +157,8 @@ SynthSequence synthesize(const SynthOptions& options, const SynthProgress& progr
   // 3. The detector + tracker output, in time order (track IDs carry from frame to frame).
   SegmentationNoise noise = make_segmentation_noise(options);
   for (auto& f : seq.frames)
-    f.segmentation = noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height);
+    f.segmentation =
+        noise.apply(f.segmentation_gt, seq.camera.width, seq.camera.height, f.depth_exact_m);
   seq.seg_stats = noise.stats();
   return seq;
 }

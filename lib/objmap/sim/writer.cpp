@@ -140,6 +140,11 @@ std::string synth_json(const SynthSequence& s) {
                 {"false_positives", s.seg_stats.false_positives},
                 {"id_switches", s.seg_stats.id_switches},
                 {"id_reuses", s.seg_stats.id_reuses}}}};
+  // Recorded only when on, so that the synth.json of a sequence without bleed stays as it was.
+  if (o.seg_noise.bleed_px > 0) {
+    doc["segmentation_noise"]["bleed_px"] = o.seg_noise.bleed_px;
+    doc["made"]["bleed_pixels"] = s.seg_stats.bleed_pixels;
+  }
   return doc.dump(2) + "\n";
 }
 
@@ -215,11 +220,16 @@ SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& 
 
   // One pass over the frames on the threads: each frame is rendered, its images and exact
   // segmentation written and its memory freed; only the exact segmentation waits in `pending`
-  // for the segmentation noise, which must see the frames in time order (track ids carry over).
-  // Whichever thread finds the next frame ready (and the chain free) advances the chain, so the
-  // noise runs alongside the rendering. The files do not depend on the thread count.
+  // for the segmentation noise, which must see the frames in time order (track ids carry over),
+  // with the exact depth when the masks bleed. Whichever thread finds the next frame ready (and
+  // the chain free) advances the chain, so the noise runs alongside the rendering. The files do
+  // not depend on the thread count.
   SegmentationNoise noise = make_segmentation_noise(options);
-  std::vector<std::optional<segmentation::FrameSegmentation>> pending(total);
+  struct Pending {
+    segmentation::FrameSegmentation exact;
+    cv::Mat depth_exact_m;  // empty unless the masks bleed
+  };
+  std::vector<std::optional<Pending>> pending(total);
   std::mutex pending_mutex;       // guards `pending` and `next_in_chain`
   std::mutex chain_mutex;         // held by the thread advancing the chain (uses `noise`)
   std::size_t next_in_chain = 0;  // frames whose noisy segmentation is written
@@ -228,15 +238,16 @@ SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& 
       std::unique_lock<std::mutex> chain(chain_mutex, std::try_to_lock);
       if (!chain.owns_lock()) return;  // the owner will see our frame (it re-checks below)
       for (;;) {
-        std::optional<segmentation::FrameSegmentation> exact;
+        std::optional<Pending> ready;
         {
           std::lock_guard<std::mutex> lock(pending_mutex);
           if (next_in_chain >= total || !pending[next_in_chain]) break;
-          exact = std::move(pending[next_in_chain]);
+          ready = std::move(pending[next_in_chain]);
           pending[next_in_chain].reset();
         }
-        write_segmentation(dir, "segmentation",
-                           noise.apply(*exact, seq.camera.width, seq.camera.height));
+        write_segmentation(
+            dir, "segmentation",
+            noise.apply(ready->exact, seq.camera.width, seq.camera.height, ready->depth_exact_m));
         std::size_t done = 0;
         {
           std::lock_guard<std::mutex> lock(pending_mutex);
@@ -257,7 +268,8 @@ SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& 
     write_segmentation(dir, "segmentation_gt", f.segmentation_gt);
     {
       std::lock_guard<std::mutex> lock(pending_mutex);
-      pending[i] = std::move(f.segmentation_gt);
+      pending[i] = Pending{std::move(f.segmentation_gt),
+                           options.seg_noise.bleed_px > 0 ? f.depth_exact_m : cv::Mat()};
     }
     advance_chain();
   });
