@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "objmap/core/error.h"
@@ -68,10 +69,11 @@ TEST(DepthGate, BleedJoinedByARampIsRemovedWhereRefineKeepsIt) {
   EXPECT_EQ(near.pixels, 60u * 84u);
   EXPECT_NEAR(near.median_depth_m, 0.8, 1e-3);
 
-  // The whole ramp: S = 130 px · z_med / f; pixels more than S (+ noise) behind z_med go.
+  // The whole ramp: S = sqrt(60 · 130) px · z_med / f; pixels more than S (+ noise) behind z_med
+  // go.
   const DepthGateResult far = gate_mask_depth(mask_of(long_rect), long_rect, depth, camera());
   EXPECT_NEAR(far.median_depth_m, 0.8, 1e-3);
-  EXPECT_NEAR(far.size_m, 130.0 / 525.0 * 0.8, 1e-3);
+  EXPECT_NEAR(far.size_m, std::sqrt(60.0 * 130.0) / 525.0 * 0.8, 1e-3);
   EXPECT_NEAR(far.band_m, far.size_m + 0.005 * 0.64, 1e-6);
   std::size_t expected = 0;
   for (int v = long_rect.y; v < object.y; ++v)
@@ -84,7 +86,8 @@ TEST(DepthGate, BleedJoinedByARampIsRemovedWhereRefineKeepsIt) {
 }
 
 TEST(DepthGate, FarBleedAndAnOccluderInFrontGo) {
-  // A box at 1.5 m; 3 % of its mask sees the floor 1 m behind, a hand-sized patch 1 m in front.
+  // A box at 1.5 m (S = 29 cm); 3 % of its mask sees the floor 1 m behind, a hand-sized patch 1 m
+  // in front.
   cv::Mat depth = flat(1.5);
   const cv::Rect mask_rect(100, 100, 100, 100);
   depth(cv::Rect(100, 197, 100, 3)).setTo(cv::Scalar(raw(2.5)));  // 300 px far
@@ -99,7 +102,7 @@ TEST(DepthGate, FarBleedAndAnOccluderInFrontGo) {
 
 TEST(DepthGate, ASlantedLargeObjectKeepsItsWholeDepthRange) {
   // A table top seen at a grazing angle: 400 × 150 px, depth 1.0 m at the bottom row to 2.0 m at
-  // the top: S ≈ 400 / 525 × 1.5 m = 1.1 m > its 0.5 m half-range.
+  // the top: S ≈ sqrt(400 · 150) / 525 × 1.5 m = 0.7 m > its 0.5 m half-range.
   cv::Mat depth = flat(3.5);
   const cv::Rect top(100, 200, 400, 150);
   for (int v = top.y; v < top.y + top.height; ++v)

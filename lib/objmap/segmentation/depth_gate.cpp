@@ -79,7 +79,9 @@ DepthGateResult gate_mask_depth(const Mask& mask, const cv::Rect& bounds, const 
   auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
   std::nth_element(depths.begin(), mid, depths.end());
   const double z_med = *mid / factor;
-  const double extent_px = std::max(roi.width / camera.fx, roi.height / camera.fy);
+  // The geometric mean of the box's sides: a bottle (tall, thin) is as deep as it is wide, not as
+  // tall; a table seen at a grazing angle keeps its depth range (wide and fairly high in view).
+  const double extent_px = std::sqrt((roi.width / camera.fx) * (roi.height / camera.fy));
   result.median_depth_m = z_med;
   result.size_m = extent_px * z_med;
   result.band_m = std::max(options.size_factor * result.size_m, options.min_band_m) +

@@ -17,7 +17,8 @@
 //
 // The rule: an object extends along the ray about as far as across it. Let z_med be the median
 // depth of the mask's pixels (robust while bleed is a minority) and S the metric size of the mask's
-// bounding rectangle at that depth (its larger side in pixels × z_med / f). A pixel is kept when
+// bounding rectangle at that depth (the geometric mean of its sides in pixels × z_med / f: a
+// bottle is as deep as it is wide, not as tall). A pixel is kept when
 //   |z − z_med| ≤ max(size_factor · S, min_band_m) + noise_m_per_m2 · z_med²
 // and removed from the mask otherwise (an occluder in front of the object is removed as well).
 namespace objmap::segmentation {
