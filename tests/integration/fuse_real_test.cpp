@@ -186,5 +186,25 @@ TEST(FuseReal, YcbVideoMaskBleedOntoTheFarBackgroundDoesNotMoveTheObjects) {
   EXPECT_GT(ycbv_position_errors(data, dir / "plain").at("009 gelatin box"), 0.04);
 }
 
+TEST(FuseReal, Fr1RpyEveryFrameGivesTheSameObjectsAsTheKeyframes) {
+  // Issue 17: fr1_rpy_every4 with its detector boxes; motion keeps 145 of the 174 frames. Fusing
+  // all 174 confirmed 21 objects where the keyframes gave 18 (a false positive lasting 3 frames,
+  // a keyboard also boxed as "book"); views, not frames, now confirm, and a class confusion joins
+  // its object: 18 and 17 (docs/benchmarks.md, objects per keyframe density).
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
+  TempDir dir;
+  const auto keyframes = fuse_real(data, "detections_yolofastest", dir / "kf");
+  ASSERT_EQ(keyframes.exit_code, 0) << keyframes.err;
+  const auto every = fuse_real(data, "detections_yolofastest", dir / "all", {"--keyframes", "all"});
+  ASSERT_EQ(every.exit_code, 0) << every.err;
+  const auto kf = read_json(dir / "kf" / "run.json"), all = read_json(dir / "all" / "run.json");
+  EXPECT_EQ(all["counts"]["keyframes"].get<int>(), 174);
+  const double n_kf = kf["counts"]["objects_confirmed"].get<double>();
+  const double n_all = all["counts"]["objects_confirmed"].get<double>();
+  EXPECT_GE(n_kf, 14) << keyframes.out;
+  EXPECT_LE(std::abs(n_all - n_kf), 0.1 * n_kf) << keyframes.out << every.out;
+  EXPECT_LE(all["duplicates"]["count"].get<int>(), kf["duplicates"]["count"].get<int>());
+}
+
 }  // namespace
 }  // namespace objmap::test

@@ -141,6 +141,26 @@ TEST(FuseSynthetic, MaskBleedOntoTheTableBehindDoesNotMoveObjectsAtTheEdge) {
   EXPECT_GT(worst, 2.0) << "without the gate some object should be beyond twice its tolerance";
 }
 
+TEST(FuseSynthetic, EveryFrameGivesTheSameObjectsAsTheKeyframes) {
+  // Issue 17: more frames of the same scene must not make more objects. Seeds 1-3 with their
+  // defaults (motion keeps 30 of the 90 frames) fused again with --keyframes all.
+  for (const char* seed : {"1", "2", "3"}) {
+    const SceneRun r = make_run(std::string("seed") + seed + "-motion", {"--seed", seed}, {});
+    ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+    const fs::path all = cached_output(std::string("seed") + seed + "-all",
+                                       fuse_args(r.scene, "{OUT}", {"--keyframes", "all"}));
+    ASSERT_TRUE(fs::exists(all)) << "seed " << seed;
+    const auto keyframes = read_json(r.out / "run.json"), every = read_json(all / "run.json");
+    EXPECT_GT(every["counts"]["keyframes"].get<int>(),
+              2 * keyframes["counts"]["keyframes"].get<int>());
+    const double n_keyframes = keyframes["counts"]["objects_confirmed"].get<double>();
+    const double n_all = every["counts"]["objects_confirmed"].get<double>();
+    EXPECT_LE(std::abs(n_all - n_keyframes), 0.1 * n_keyframes) << "seed " << seed;
+    EXPECT_LE(every["duplicates"]["count"].get<int>(), keyframes["duplicates"]["count"].get<int>())
+        << "seed " << seed;
+  }
+}
+
 TEST(FuseSynthetic, OutputsValidateAndReadBack) {
   const SceneRun& r = default_run();
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
