@@ -70,10 +70,11 @@ void setup_fuse(CLI::App& app) {
   auto config = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand(
       "fuse",
-      "Build the object-oriented semantic map (paper 3.2-3.3): back-project the keyframes, "
-      "associate "
-      "each instance with an object by track ID, centroid distance and voxel overlap (eq 22), "
-      "confirm objects seen >= 3 times, filter outliers (eq 18). Writes OUT/objects.json, "
+      "Build the object-oriented semantic map (paper 3.2-3.3): back-project the keyframes "
+      "(given masks cleaned of spill and of depth off the object's band), associate each "
+      "instance with an object by track ID, centroid distance and voxel overlap (eq 22), "
+      "confirm objects seen from >= 3 viewpoints, filter outliers (eq 18). Writes "
+      "OUT/objects.json, "
       "OUT/objects/<id>_<class>.ply, OUT/map_dense.ply, OUT/map_semantic.ply, OUT/map_objects.ply, "
       "OUT/run.json (the two dense maps not with --dense-map false).");
   cmd->add_option("--dataset", options->dataset,
