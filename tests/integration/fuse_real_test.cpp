@@ -157,6 +157,14 @@ TEST(FuseReal, YcbVideoClipWithDefaultsFindsItsThreeObjects) {
   EXPECT_TRUE(read_fused_objects(dir / "motion" / "objects.json").empty());
   EXPECT_NE(m.out.find("only 1 keyframe(s): an object needs 3 observations"), std::string::npos)
       << m.out;
+
+  // Every frame asked for by name: the camera is still, so each frame is a view of its objects.
+  const auto all =
+      run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
+                  (data / "groundtruth.txt").string(), "--segmentation", (data / "masks").string(),
+                  "--out", (dir / "all").string(), "--keyframes", "all"});
+  ASSERT_EQ(all.exit_code, 0) << all.err;
+  EXPECT_EQ(read_fused_objects(dir / "all" / "objects.json").size(), 3u) << all.out;
 }
 
 TEST(FuseReal, YcbVideoMaskBleedOntoTheFarBackgroundDoesNotMoveTheObjects) {

@@ -64,6 +64,22 @@ InputError no_pose_error(const io::TumDataset& dataset, const Trajectory& trajec
                         (hint.empty() ? " in seconds as in rgb.txt" : hint));
 }
 
+// The motion keyframes among `posed`: the first, then each frame that moved at least
+// min_translation_m or turned at least min_rotation_deg since the last keyframe.
+std::vector<Keyframe> motion_keyframes(const std::vector<Keyframe>& posed,
+                                       const KeyframeOptions& options) {
+  const double min_rotation_rad = options.min_rotation_deg * M_PI / 180.0;
+  std::vector<Keyframe> kept{posed.front()};
+  for (std::size_t i = 1; i < posed.size(); ++i) {
+    const Pose last_from_this = kept.back().world_from_cam.inverse() * posed[i].world_from_cam;
+    const double moved_m = last_from_this.translation().norm();
+    const double turned_rad = Eigen::AngleAxisd(last_from_this.rotation()).angle();
+    if (moved_m >= options.min_translation_m || turned_rad >= min_rotation_rad)
+      kept.push_back(posed[i]);
+  }
+  return kept;
+}
+
 }  // namespace
 
 KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajectory& trajectory,
@@ -93,33 +109,27 @@ KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajecto
                     " frames: " + (keyframe_file ? "a keyframe trajectory" : "thinned by motion");
   }
 
+  // 3. Motion: a new keyframe after enough translation or rotation since the last one. Computed
+  //    whatever the mode: a camera whose motion keeps fewer keyframes than an object needs views
+  //    is still (each frame then counts as a view, fusion::count_views).
+  std::vector<Keyframe> moved = motion_keyframes(posed, options);
+  result.still_camera = moved.size() < options.min_keyframes && moved.size() < posed.size();
+
   if (result.mode == "all") {
     result.keyframes = std::move(posed);
   } else if (result.mode == "stride") {
     for (std::size_t i = 0; i < posed.size(); i += options.stride)
       result.keyframes.push_back(posed[i]);
-  } else {  // motion: translation or rotation since the last keyframe
-    const double min_rotation_rad = options.min_rotation_deg * M_PI / 180.0;
-    result.keyframes.push_back(posed.front());
-    for (std::size_t i = 1; i < posed.size(); ++i) {
-      const Pose last_from_this =
-          result.keyframes.back().world_from_cam.inverse() * posed[i].world_from_cam;
-      const double moved_m = last_from_this.translation().norm();
-      const double turned_rad = Eigen::AngleAxisd(last_from_this.rotation()).angle();
-      if (moved_m >= options.min_translation_m || turned_rad >= min_rotation_rad)
-        result.keyframes.push_back(posed[i]);
-    }
+  } else if (options.mode == "auto" && result.still_camera) {
     // auto: a camera that hardly moves over a short clip leaves too few keyframes to confirm
     // anything; every posed frame is used then.
-    if (options.mode == "auto" && result.keyframes.size() < options.min_keyframes &&
-        result.keyframes.size() < posed.size()) {
-      result.reason = "motion kept " + std::to_string(result.keyframes.size()) + " of the " +
-                      std::to_string(posed.size()) + " posed frames, fewer than the " +
-                      std::to_string(options.min_keyframes) + " needed: every posed frame";
-      result.mode = "all";
-      result.still_camera = true;
-      result.keyframes = std::move(posed);
-    }
+    result.reason = "motion kept " + std::to_string(moved.size()) + " of the " +
+                    std::to_string(posed.size()) + " posed frames, fewer than the " +
+                    std::to_string(options.min_keyframes) + " needed: every posed frame";
+    result.mode = "all";
+    result.keyframes = std::move(posed);
+  } else {
+    result.keyframes = std::move(moved);
   }
   return result;
 }

@@ -33,9 +33,11 @@ struct Keyframe {
 struct KeyframeSelection {
   std::vector<Keyframe> keyframes;
   std::size_t frames_with_pose = 0;
-  std::string mode;           // the mode used (auto resolved)
-  std::string reason;         // auto: why that mode, e.g. "a pose for 58 of 1227 frames"
-  bool still_camera = false;  // auto: motion kept too few keyframes, so every posed frame is used
+  std::string mode;    // the mode used (auto resolved)
+  std::string reason;  // auto: why that mode, e.g. "a pose for 58 of 1227 frames"
+  // The posed frames' motion keeps fewer keyframes than min_keyframes (whatever the mode): the
+  // camera is still (auto then uses every posed frame; fuse counts each frame as a view).
+  bool still_camera = false;
 };
 
 // Throws InputError naming the trajectory when no frame has a pose.
