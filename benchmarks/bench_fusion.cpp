@@ -26,6 +26,8 @@
 #include "objmap/io/png_fast.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/segmentation/box_mask.h"
+#include "objmap/segmentation/depth_gate.h"
+#include "objmap/segmentation/mask_refine.h"
 #include "objmap/segmentation/read.h"
 
 namespace fs = std::filesystem;
@@ -356,6 +358,61 @@ void BM_MaskFromBoxReal(benchmark::State& state) {
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_MaskFromBoxReal)->Unit(benchmark::kMillisecond);
+
+// The two clean-ups of a given mask on ycbv_0000_10f's label masks (30 masks, 18-22k pixels each,
+// on their depth images): Arg 0 = refine_mask, Arg 1 = gate_mask_depth (the depth gate), as fuse
+// applies them to every given mask.
+void BM_CleanGivenMaskYcb(benchmark::State& state) {
+  struct Job {
+    cv::Mat depth;
+    std::vector<segmentation::Mask> masks;
+  };
+  static const std::vector<Job> jobs = [] {
+    std::vector<Job> out;
+    const fs::path dir = data_dir() / "ycbv_0000_10f";
+    if (!fs::exists(dir / "masks")) return out;
+    const io::TumDataset dataset = io::read_tum_dataset(dir);
+    segmentation::ReadOptions read;
+    read.image_width = 640;
+    read.image_height = 480;
+    const segmentation::Segmentation seg = segmentation::read_segmentation(dir / "masks", read);
+    for (const auto& frame : seg.frames)
+      for (const auto& pair : dataset.frames) {
+        if (std::abs(pair.rgb_timestamp - frame.timestamp) > 1e-3) continue;
+        Job job{cv::imread(pair.depth_file.string(), cv::IMREAD_UNCHANGED), {}};
+        for (const auto& instance : frame.instances)
+          if (instance.mask) job.masks.push_back(*instance.mask);
+        out.push_back(std::move(job));
+        break;
+      }
+    return out;
+  }();
+  if (jobs.empty()) {
+    state.SkipWithError("real data missing (OBJMAP_DATA)");
+    return;
+  }
+  Camera camera = camera_preset("fr1");
+  camera.fx = 1066.778, camera.fy = 1067.487, camera.cx = 312.9869, camera.cy = 241.3109;
+  camera.depth_factor = 10000.0;
+  std::size_t masks = 0;
+  for (const Job& job : jobs) masks += job.masks.size();
+  for (auto _ : state)
+    for (const Job& job : jobs)
+      for (const auto& mask : job.masks) {
+        const cv::Rect bounds = geometry::mask_bounds(mask);
+        if (state.range(0) == 0)
+          benchmark::DoNotOptimize(
+              segmentation::refine_mask(mask, bounds, job.depth, camera).removed_pixels);
+        else
+          benchmark::DoNotOptimize(
+              segmentation::gate_mask_depth(mask, bounds, job.depth, camera).removed_pixels);
+      }
+  state.counters["masks"] = static_cast<double>(masks);
+  state.counters["ms/mask"] =
+      benchmark::Counter(static_cast<double>(masks) * state.iterations() * 1e-3,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_CleanGivenMaskYcb)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Reading fr3_long_office_household's 2585 box files (17,225 boxes, COCO ids).
 void BM_ReadBoxSegmentationFr3LongOffice(benchmark::State& state) {
