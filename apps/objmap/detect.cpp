@@ -127,18 +127,20 @@ void setup_detect(CLI::App& app) {
       "detect",
       "Detect objects in the rgb frames of a TUM folder with OpenCV's dnn module and write the "
       "canonical segmentation (SEG/<timestamp>.json). Models: Darknet YOLO (.weights + .cfg, "
-      "e.g. Yolo-Fastest; boxes) or TensorFlow Mask R-CNN (frozen_inference_graph.pb + .pbtxt; "
-      "instance masks). Nothing is downloaded (docs/cli.md says where to get the models).");
+      "e.g. Yolo-Fastest; boxes), TensorFlow Mask R-CNN (frozen_inference_graph.pb + .pbtxt; "
+      "instance masks) or an Ultralytics YOLOv5-seg / YOLOv8-seg ONNX export (.onnx; instance "
+      "masks). Nothing is downloaded (docs/cli.md says how to get or export the models).");
   c->add_option("--dataset", cmd->dataset, "TUM RGB-D folder (rgb.txt, rgb/)")->required();
   c->add_option("--model", cmd->model,
-                "model weights: Darknet .weights or TensorFlow Mask R-CNN .pb")
+                "model weights: Darknet .weights, TensorFlow Mask R-CNN .pb, or an Ultralytics "
+                "YOLOv5-seg / YOLOv8-seg export .onnx (the whole network in one file)")
       ->required();
   c->add_option("--config", cmd->config,
                 "network description: Darknet .cfg (default: the model's name with .cfg) or the "
                 ".pbtxt text graph (required for .pb)");
   c->add_option("--classes-file", cmd->classes_file,
                 "class names, one per line, line i = class id i-1 (default: built-in COCO-80 for "
-                "Darknet, COCO-90 for Mask R-CNN)");
+                "Darknet and ONNX, COCO-90 for Mask R-CNN)");
   c->add_option("--classes", cmd->classes,
                 "comma-separated classes to keep, or 'all' (default: the paper's eight: chair, "
                 "cup, tv monitor, teddy bear, bottle, book, keyboard, mouse)");
@@ -152,13 +154,13 @@ void setup_detect(CLI::App& app) {
               "suppress overlapping boxes within each class only (default: across classes, one "
               "box per object)");
   c->add_option("--input-width", o.input_width,
-                "network input width in pixels (0: the model's, e.g. the cfg's width; Mask R-CNN "
-                "800)")
+                "network input width in pixels (0: the model's, e.g. the cfg's width, the ONNX "
+                "graph's input; Mask R-CNN 800)")
       ->capture_default_str();
   c->add_option("--input-height", o.input_height, "network input height in pixels (0: the model's)")
       ->capture_default_str();
   c->add_option("--mask-threshold", o.mask_threshold,
-                "Mask R-CNN: mask value above which a pixel is the object's")
+                "Mask R-CNN and ONNX segmentation: mask value above which a pixel is the object's")
       ->capture_default_str();
   c->add_option("--out", cmd->out,
                 "output segmentation folder (an earlier segmentation there is replaced; any other "

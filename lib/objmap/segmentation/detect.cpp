@@ -14,6 +14,7 @@
 #include "objmap/io/image.h"
 #include "objmap/io/text_lines.h"
 #include "objmap/segmentation/coco_classes.h"
+#include "objmap/segmentation/yolo_seg.h"
 
 namespace objmap::segmentation {
 
@@ -55,6 +56,25 @@ void require_readable(const fs::path& file, const std::string& expected) {
 }
 
 const char* const kDarknetExpected = "a Darknet YOLO model: .weights with its .cfg";
+const char* const kOnnxExpected =
+    "an Ultralytics instance-segmentation export (YOLOv5-seg or YOLOv8-seg .onnx)";
+
+// An ONNX model's outputs and input size: an instance-segmentation export has two outputs (the
+// detections and the mask prototypes); its input is [1, 3, H, W] (or the size asked for).
+void onnx_seg_outputs(cv::dnn::Net& net, const DetectOptions& options, ModelInfo& info,
+                      std::vector<std::string>& output_names) {
+  output_names = net.getUnconnectedOutLayersNames();
+  require(output_names.size() == 2, info.model.string(),
+          "has " + std::to_string(output_names.size()) +
+              " output(s); expected 2, the detections and the mask prototypes of " + kOnnxExpected +
+              " (a detector without masks cannot give instance masks)");
+  const std::vector<std::int64_t> shape = onnx_input_shape(info.model);
+  const bool known = shape.size() == 4 && shape[2] > 0 && shape[3] > 0;
+  info.input_width =
+      options.input_width > 0 ? options.input_width : (known ? static_cast<int>(shape[3]) : 640);
+  info.input_height =
+      options.input_height > 0 ? options.input_height : (known ? static_cast<int>(shape[2]) : 640);
+}
 const char* const kTfExpected =
     "a TensorFlow Mask R-CNN frozen_inference_graph.pb with its .pbtxt text graph (--config)";
 
@@ -151,7 +171,15 @@ struct Candidate {
 }  // namespace
 
 std::string model_kind_name(ModelKind kind) {
-  return kind == ModelKind::kDarknetYolo ? "darknet-yolo" : "tensorflow-mask-rcnn";
+  switch (kind) {
+    case ModelKind::kDarknetYolo:
+      return "darknet-yolo";
+    case ModelKind::kTensorflowMaskRcnn:
+      return "tensorflow-mask-rcnn";
+    case ModelKind::kOnnxYoloSeg:
+      return "onnx-yolo-seg";
+  }
+  return "unknown";
 }
 
 const std::vector<std::string>& paper_detect_classes() {
@@ -209,6 +237,30 @@ void DetectOptions::check() const {
             "an empty class name; expected names");
 }
 
+namespace {
+
+// An Ultralytics segmentation export on one image: letterboxed into the input, run, decoded
+// (yolo_seg.h); the output with 4 dimensions is the prototypes, the other the detections.
+std::vector<Instance> detect_onnx_seg(cv::dnn::Net& net, const std::vector<std::string>& names,
+                                      const ModelInfo& info, const DetectOptions& options,
+                                      const cv::Mat& image_bgr, const std::string& where) {
+  const Letterbox lb =
+      make_letterbox(image_bgr.cols, image_bgr.rows, info.input_width, info.input_height);
+  std::vector<cv::Mat> outputs;
+  try {
+    net.setInput(letterbox_blob(image_bgr, lb));
+    net.forward(outputs, names);
+  } catch (const cv::Exception& e) {
+    throw InputError(info.model.string(),
+                     "OpenCV cannot run the network on " + where + " (" + one_line(e.err) + ")");
+  }
+  const bool first_is_protos = outputs[0].dims == 4;
+  return decode_yolo_seg(info, options, outputs[first_is_protos ? 1 : 0],
+                         outputs[first_is_protos ? 0 : 1], lb);
+}
+
+}  // namespace
+
 struct Detector::Impl {
   ModelInfo info;
   DetectOptions options;
@@ -225,7 +277,8 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
   info.model = options.model;
   require(!options.model.empty(), "model", "no model given; expected a .weights or .pb file");
   require(fs::exists(options.model), options.model.string(),
-          "no such file; expected " + std::string(kDarknetExpected) + ", or " + kTfExpected);
+          "no such file; expected " + std::string(kDarknetExpected) + ", " + kTfExpected + ", or " +
+              kOnnxExpected);
 
   // 1. The kind, from the extensions.
   const std::string ext = lower_extension(options.model);
@@ -252,14 +305,18 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
     require(lower_extension(info.config) == ".pbtxt", info.config.string(),
             "a TensorFlow model's text graph must be a .pbtxt file; expected " +
                 std::string(kTfExpected));
+  } else if (ext == ".onnx") {
+    info.kind = ModelKind::kOnnxYoloSeg;  // the whole network is the one file
+    info.config = options.model;
   } else {
     throw InputError(options.model.string(),
                      "unsupported model kind '" +
                          (ext.empty() ? std::string("(no extension)") : ext) + "'; expected " +
-                         kDarknetExpected + ", or " + kTfExpected);
+                         kDarknetExpected + ", " + kTfExpected + ", or " + kOnnxExpected);
   }
-  const std::string expected =
-      info.kind == ModelKind::kDarknetYolo ? kDarknetExpected : kTfExpected;
+  const std::string expected = info.kind == ModelKind::kDarknetYolo   ? kDarknetExpected
+                               : info.kind == ModelKind::kOnnxYoloSeg ? kOnnxExpected
+                                                                      : kTfExpected;
   require_readable(info.model, expected);
   require_readable(info.config, expected);
 
@@ -267,12 +324,16 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
   try {
     if (info.kind == ModelKind::kDarknetYolo) {
       d.net = cv::dnn::readNetFromDarknet(info.config.string(), info.model.string());
+    } else if (info.kind == ModelKind::kOnnxYoloSeg) {
+      d.net = cv::dnn::readNetFromONNX(info.model.string());
     } else {
       d.net = cv::dnn::readNetFromTensorflow(info.model.string(), info.config.string());
     }
   } catch (const cv::Exception& e) {
-    throw InputError(info.model.string(), "OpenCV cannot load it with " + info.config.string() +
-                                              " (" + one_line(e.err) + "); expected " + expected);
+    const std::string with =
+        info.config == info.model ? std::string() : " with " + info.config.string();
+    throw InputError(info.model.string(), "OpenCV cannot load it" + with + " (" + one_line(e.err) +
+                                              "); expected " + expected);
   }
   require(!d.net.empty(), info.model.string(),
           "OpenCV loaded an empty network; expected " + expected);
@@ -310,6 +371,8 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
     info.input_height = options.input_height > 0 ? options.input_height : height;
     require(info.input_width > 0 && info.input_height > 0, info.config.string(),
             "no width/height in its [net] section; expected them, or an input size option");
+  } else if (info.kind == ModelKind::kOnnxYoloSeg) {
+    onnx_seg_outputs(d.net, options, info, d.output_names);
   } else {
     for (const char* name : {"detection_out_final", "detection_masks"}) {
       require(d.net.getLayerId(name) >= 0, info.config.string(),
@@ -326,7 +389,7 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
   if (!options.classes_file.empty()) {
     info.class_names = read_class_names(options.classes_file);
     d.class_source = options.classes_file.string();
-  } else if (info.kind == ModelKind::kDarknetYolo) {
+  } else if (info.kind != ModelKind::kTensorflowMaskRcnn) {
     info.class_names = coco80_names();
     d.class_source = "the built-in COCO-80 names";
   } else {
@@ -358,6 +421,8 @@ std::vector<Instance> Detector::detect(const cv::Mat& image_bgr, const std::stri
   const ModelInfo& info = d.info;
   require(!image_bgr.empty() && image_bgr.type() == CV_8UC3, where,
           "not a colour image; expected 8-bit BGR");
+  if (info.kind == ModelKind::kOnnxYoloSeg)
+    return detect_onnx_seg(d.net, d.output_names, info, d.options, image_bgr, where);
   const bool yolo = info.kind == ModelKind::kDarknetYolo;
 
   // 1. The blob: resized to the network's input (no crop), RGB; YOLO wants pixels in [0, 1].

@@ -19,13 +19,16 @@
 //     made by OpenCV's tf_text_graph_mask_rcnn.py), run as OpenCV's samples/dnn/mask_rcnn.py does:
 //     outputs "detection_out_final" (boxes) and "detection_masks" (a 15 x 15 mask per class);
 //     real instance masks.
+//   - Ultralytics instance-segmentation exports as ONNX (.onnx: YOLOv5-seg, YOLOv8-seg; the layout
+//     told from the output shapes, the input size read from the model, frames letterboxed into
+//     it): real instance masks (yolo_seg.h).
 // Everything the user can get wrong (missing or unreadable file, a model of another kind, a class
 // name the model does not know, no detection at all) is an InputError naming the file or field.
 namespace objmap::segmentation {
 
-enum class ModelKind { kDarknetYolo, kTensorflowMaskRcnn };
+enum class ModelKind { kDarknetYolo, kTensorflowMaskRcnn, kOnnxYoloSeg };
 
-// "darknet-yolo" | "tensorflow-mask-rcnn".
+// "darknet-yolo" | "tensorflow-mask-rcnn" | "onnx-yolo-seg".
 std::string model_kind_name(ModelKind kind);
 
 // The paper's eight classes, canonical spelling: chair, cup, tv monitor, teddy bear, bottle, book,
@@ -39,7 +42,7 @@ const std::vector<std::string>& paper_detect_classes();
 const std::vector<std::string>& coco90_names();
 
 struct DetectOptions {
-  // The weights: Darknet .weights or TensorFlow .pb. Required.
+  // The weights: Darknet .weights, TensorFlow .pb or ONNX .onnx. Required.
   std::filesystem::path model;
   // The network description: Darknet .cfg (default: the model path with extension .cfg) or the
   // TensorFlow .pbtxt text graph (required for a .pb model).
@@ -63,10 +66,11 @@ struct DetectOptions {
   // false: per class, as OpenCV's object_detection sample. The class filter applies before NMS.
   bool nms_across_classes = true;
   // Network input size in pixels; 0 = the model's own: the cfg's width/height for Darknet (320 x
-  // 320 for Yolo-Fastest), 800 x 800 for Mask R-CNN (OpenCV's sample). Multiples of 32 for YOLO.
+  // 320 for Yolo-Fastest), 800 x 800 for Mask R-CNN (OpenCV's sample), the graph input's for ONNX.
+  // Multiples of 32 for YOLO.
   int input_width = 0, input_height = 0;
-  // Mask R-CNN: a pixel of the box belongs to the object when its resized mask value is > this
-  // (0.5 as the OpenCV sample).
+  // Mask R-CNN and ONNX segmentation: a pixel of the box belongs to the object when its resized
+  // mask value is > this (0.5 as the OpenCV sample and Ultralytics).
   double mask_threshold = 0.5;
   // Throws InputError naming the bad field.
   void check() const;

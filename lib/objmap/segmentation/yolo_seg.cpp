@@ -1,0 +1,328 @@
+#include "objmap/segmentation/yolo_seg.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <set>
+
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "objmap/core/error.h"
+
+namespace objmap::segmentation {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kMaskCoefficients = 32;
+
+std::string shape_text(const cv::Mat& m) {
+  std::string s = "[";
+  for (int i = 0; i < m.dims; ++i) s += (i ? ", " : "") + std::to_string(m.size[i]);
+  return s + "]";
+}
+
+// A box candidate before NMS: its class, score, box in the frame's pixels and its row in output0.
+struct SegCandidate {
+  int class_id = 0;
+  float score = 0;
+  cv::Rect2d box;
+  int row = 0;
+};
+
+// Reads output0 row by row in either layout: value(row, column).
+struct Rows {
+  const float* data;
+  int count, width;
+  bool transposed;
+  float at(int row, int column) const {
+    return transposed ? data[static_cast<std::size_t>(column) * count + row]
+                      : data[static_cast<std::size_t>(row) * width + column];
+  }
+};
+
+// Step 1: the rows above the score threshold, of a kept class, boxes in the frame.
+std::vector<SegCandidate> seg_candidates(const ModelInfo& model, const DetectOptions& options,
+                                         const Rows& rows, bool objectness, const Letterbox& lb) {
+  const int classes = static_cast<int>(model.class_names.size());
+  const int first_class = objectness ? 5 : 4;
+  std::vector<bool> kept_class(static_cast<std::size_t>(classes), false);
+  for (int id : model.kept_class_ids)
+    if (id >= 0 && id < classes) kept_class[static_cast<std::size_t>(id)] = true;
+  std::vector<SegCandidate> out;
+  for (int r = 0; r < rows.count; ++r) {
+    int best = 0;
+    float best_score = rows.at(r, first_class);
+    for (int c = 1; c < classes; ++c) {
+      const float s = rows.at(r, first_class + c);
+      if (s > best_score) best_score = s, best = c;
+    }
+    const float score = objectness ? rows.at(r, 4) * best_score : best_score;
+    if (score < options.score_threshold || score <= 0.f || !kept_class[best]) continue;
+    const double cx = rows.at(r, 0), cy = rows.at(r, 1), w = rows.at(r, 2), h = rows.at(r, 3);
+    const auto to_x = [&](double x) {
+      return std::clamp((x - lb.pad_x) / lb.scale, 0.0, static_cast<double>(lb.image_width));
+    };
+    const auto to_y = [&](double y) {
+      return std::clamp((y - lb.pad_y) / lb.scale, 0.0, static_cast<double>(lb.image_height));
+    };
+    const double x1 = to_x(cx - w / 2), x2 = to_x(cx + w / 2);
+    const double y1 = to_y(cy - h / 2), y2 = to_y(cy + h / 2);
+    if (x2 - x1 < 1 || y2 - y1 < 1) continue;
+    out.push_back({best, score, cv::Rect2d(x1, y1, x2 - x1, y2 - y1), r});
+  }
+  return out;
+}
+
+// Step 2: non-maximum suppression across classes or per class; sorted by class id, then score.
+std::vector<SegCandidate> suppress(const std::vector<SegCandidate>& candidates,
+                                   const DetectOptions& options) {
+  std::set<int> groups;
+  for (const auto& c : candidates) groups.insert(options.nms_across_classes ? -1 : c.class_id);
+  std::vector<SegCandidate> kept;
+  for (int group : groups) {
+    std::vector<cv::Rect2d> boxes;
+    std::vector<float> scores;
+    std::vector<const SegCandidate*> members;
+    for (const auto& c : candidates)
+      if (group == -1 || c.class_id == group) {
+        boxes.push_back(c.box);
+        scores.push_back(c.score);
+        members.push_back(&c);
+      }
+    std::vector<int> indices;
+    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(options.score_threshold),
+                      static_cast<float>(options.nms_threshold), indices);
+    for (int i : indices) kept.push_back(*members[static_cast<std::size_t>(i)]);
+  }
+  std::sort(kept.begin(), kept.end(), [](const SegCandidate& a, const SegCandidate& b) {
+    if (a.class_id != b.class_id) return a.class_id < b.class_id;
+    if (a.score != b.score) return a.score > b.score;
+    if (a.box.x != b.box.x) return a.box.x < b.box.x;
+    return a.box.y < b.box.y;
+  });
+  return kept;
+}
+
+// Step 3: one instance's mask in the frame: sigmoid(coefficients · prototypes) at the prototypes'
+// resolution, zero outside the box, upsampled to the input, the letterbox undone, thresholded and
+// kept inside the box. Empty when nothing passes the threshold.
+Mask instance_mask(const Rows& rows, int first_coefficient, const cv::Mat& protos,
+                   const SegCandidate& c, const Letterbox& lb, double threshold) {
+  const int ph = protos.size[2], pw = protos.size[3];
+  const cv::Mat basis(kMaskCoefficients, ph * pw, CV_32F, const_cast<float*>(protos.ptr<float>()));
+  cv::Mat coefficients(1, kMaskCoefficients, CV_32F);
+  for (int k = 0; k < kMaskCoefficients; ++k)
+    coefficients.at<float>(k) = rows.at(c.row, first_coefficient + k);
+  cv::Mat logits = coefficients * basis;  // 1 × (ph · pw)
+  cv::Mat proto_mask = logits.reshape(1, ph);
+  // The box at the prototypes' resolution (input pixels / stride); outside it, 0 (crop_mask).
+  const double sx = static_cast<double>(pw) / lb.input_width;
+  const double sy = static_cast<double>(ph) / lb.input_height;
+  const double bx1 = (c.box.x * lb.scale + lb.pad_x) * sx;
+  const double bx2 = ((c.box.x + c.box.width) * lb.scale + lb.pad_x) * sx;
+  const double by1 = (c.box.y * lb.scale + lb.pad_y) * sy;
+  const double by2 = ((c.box.y + c.box.height) * lb.scale + lb.pad_y) * sy;
+  for (int v = 0; v < ph; ++v) {
+    float* row = proto_mask.ptr<float>(v);
+    for (int u = 0; u < pw; ++u) {
+      const bool inside = u >= bx1 && u < bx2 && v >= by1 && v < by2;
+      row[u] = inside ? 1.f / (1.f + std::exp(-row[u])) : 0.f;
+    }
+  }
+  cv::Mat input_mask;
+  cv::resize(proto_mask, input_mask, cv::Size(lb.input_width, lb.input_height), 0, 0,
+             cv::INTER_LINEAR);
+  const cv::Rect content(lb.pad_x, lb.pad_y,
+                         static_cast<int>(std::lround(lb.image_width * lb.scale)),
+                         static_cast<int>(std::lround(lb.image_height * lb.scale)));
+  cv::Mat frame_mask = input_mask(content & cv::Rect(0, 0, lb.input_width, lb.input_height));
+  if (frame_mask.cols != lb.image_width || frame_mask.rows != lb.image_height)
+    cv::resize(frame_mask, frame_mask, cv::Size(lb.image_width, lb.image_height), 0, 0,
+               cv::INTER_LINEAR);
+  Mask mask;
+  mask.width = lb.image_width;
+  mask.height = lb.image_height;
+  mask.data.assign(static_cast<std::size_t>(mask.width) * mask.height, 0);
+  const int u0 = static_cast<int>(std::floor(c.box.x)), v0 = static_cast<int>(std::floor(c.box.y));
+  const int u1 = std::min(mask.width, static_cast<int>(std::ceil(c.box.x + c.box.width)));
+  const int v1 = std::min(mask.height, static_cast<int>(std::ceil(c.box.y + c.box.height)));
+  std::size_t area = 0;
+  for (int v = std::max(0, v0); v < v1; ++v) {
+    const float* src = frame_mask.ptr<float>(v);
+    for (int u = std::max(0, u0); u < u1; ++u)
+      if (src[u] > threshold) {
+        mask.data[static_cast<std::size_t>(v) * mask.width + u] = 1;
+        ++area;
+      }
+  }
+  if (area == 0) mask.data.clear();
+  return mask;
+}
+
+// Protobuf, as much as onnx_input_shape needs: varints and length-delimited fields.
+struct ProtoReader {
+  const std::uint8_t* p = nullptr;
+  const std::uint8_t* end = nullptr;
+  bool varint(std::uint64_t& v) {
+    v = 0;
+    for (int shift = 0; shift < 64 && p < end; shift += 7) {
+      const std::uint8_t b = *p++;
+      v |= static_cast<std::uint64_t>(b & 0x7f) << shift;
+      if (!(b & 0x80)) return true;
+    }
+    return false;
+  }
+  // The next field: its number and wire type; a varint's value in `value`; for wire type 2, `sub`
+  // spans its bytes. False at the end or on a malformed field.
+  bool next(std::uint32_t& field, std::uint32_t& wire, ProtoReader& sub, std::uint64_t& value) {
+    std::uint64_t key = 0;
+    if (p >= end || !varint(key)) return false;
+    field = static_cast<std::uint32_t>(key >> 3);
+    wire = static_cast<std::uint32_t>(key & 7);
+    const auto skip = [&](std::ptrdiff_t n) { return end - p >= n && (p += n, true); };
+    switch (wire) {
+      case 0:
+        return varint(value);
+      case 1:
+        return skip(8);
+      case 5:
+        return skip(4);
+      case 2:
+        if (!varint(value) || value > static_cast<std::uint64_t>(end - p)) return false;
+        sub = {p, p + value};
+        p += value;
+        return true;
+      default:
+        return false;
+    }
+  }
+  // The first length-delimited field `number`.
+  bool find(std::uint32_t number, ProtoReader& out) {
+    std::uint32_t field = 0, wire = 0;
+    std::uint64_t value = 0;
+    ProtoReader sub;
+    while (next(field, wire, sub, value))
+      if (field == number && wire == 2) return (out = sub, true);
+    return false;
+  }
+};
+
+}  // namespace
+
+const char* to_string(YoloSegLayout layout) {
+  return layout == YoloSegLayout::kV5 ? "yolov5-seg" : "yolov8-seg";
+}
+
+Letterbox make_letterbox(int image_width, int image_height, int input_width, int input_height) {
+  Letterbox lb;
+  lb.image_width = image_width;
+  lb.image_height = image_height;
+  lb.input_width = input_width;
+  lb.input_height = input_height;
+  lb.scale = std::min({1.0, static_cast<double>(input_width) / image_width,
+                       static_cast<double>(input_height) / image_height});
+  const int w = static_cast<int>(std::lround(image_width * lb.scale));
+  const int h = static_cast<int>(std::lround(image_height * lb.scale));
+  lb.pad_x = (input_width - w) / 2;
+  lb.pad_y = (input_height - h) / 2;
+  return lb;
+}
+
+cv::Mat letterbox_blob(const cv::Mat& image_bgr, const Letterbox& lb) {
+  cv::Mat canvas(lb.input_height, lb.input_width, CV_8UC3, cv::Scalar(114, 114, 114));
+  const cv::Size size(static_cast<int>(std::lround(lb.image_width * lb.scale)),
+                      static_cast<int>(std::lround(lb.image_height * lb.scale)));
+  cv::Mat roi = canvas(cv::Rect(cv::Point(lb.pad_x, lb.pad_y), size));
+  if (size == image_bgr.size())
+    image_bgr.copyTo(roi);
+  else
+    cv::resize(image_bgr, roi, size, 0, 0, cv::INTER_LINEAR);
+  return cv::dnn::blobFromImage(canvas, 1.0 / 255.0, cv::Size(), cv::Scalar(), /*swapRB=*/true,
+                                /*crop=*/false);
+}
+
+YoloSegLayout yolo_seg_layout(const cv::Mat& detections, const cv::Mat& protos,
+                              std::size_t class_count, const std::string& where) {
+  const int columns = static_cast<int>(class_count) + kMaskCoefficients;
+  const std::string shapes = "output0 " + shape_text(detections) + ", output1 " +
+                             shape_text(protos) + " for " + std::to_string(class_count) +
+                             " classes";
+  require(protos.dims == 4 && protos.size[0] == 1 && protos.size[1] == kMaskCoefficients, where,
+          "unexpected output shapes (" + shapes + "); expected Ultralytics YOLOv5-seg [1, N, " +
+              std::to_string(5 + columns) + "] or YOLOv8-seg [1, " + std::to_string(4 + columns) +
+              ", N] detections and [1, 32, h, w] mask prototypes");
+  if (detections.dims == 3 && detections.size[0] == 1 && detections.size[2] == 5 + columns)
+    return YoloSegLayout::kV5;
+  if (detections.dims == 3 && detections.size[0] == 1 && detections.size[1] == 4 + columns)
+    return YoloSegLayout::kV8;
+  throw InputError(where, "unexpected output shapes (" + shapes +
+                              "); expected Ultralytics YOLOv5-seg [1, N, " +
+                              std::to_string(5 + columns) + "] or YOLOv8-seg [1, " +
+                              std::to_string(4 + columns) +
+                              ", N] detections (a classes file that fits the model)");
+}
+
+std::vector<Instance> decode_yolo_seg(const ModelInfo& model, const DetectOptions& options,
+                                      const cv::Mat& detections, const cv::Mat& protos,
+                                      const Letterbox& letterbox) {
+  const YoloSegLayout layout =
+      yolo_seg_layout(detections, protos, model.class_names.size(), model.model.string());
+  const bool v5 = layout == YoloSegLayout::kV5;
+  const cv::Mat d = detections.isContinuous() ? detections : detections.clone();
+  const Rows rows{d.ptr<float>(), v5 ? d.size[1] : d.size[2], v5 ? d.size[2] : d.size[1], !v5};
+  const int first_coefficient = (v5 ? 5 : 4) + static_cast<int>(model.class_names.size());
+  const cv::Mat p = protos.isContinuous() ? protos : protos.clone();
+
+  // 1. Candidates, 2. NMS, 3. masks; boxes to 1/100 px and scores to 1e-6 as detect() does.
+  std::vector<Instance> instances;
+  for (const SegCandidate& c :
+       suppress(seg_candidates(model, options, rows, v5, letterbox), options)) {
+    Mask mask = instance_mask(rows, first_coefficient, p, c, letterbox, options.mask_threshold);
+    if (mask.data.empty()) continue;  // nothing of the object survives the threshold
+    Instance instance;
+    instance.class_name = model.class_names[static_cast<std::size_t>(c.class_id)];
+    instance.score = std::round(c.score / 1e-6) * 1e-6;
+    const auto r = [](double v) { return std::round(v / 0.01) * 0.01; };
+    instance.bbox = {r(c.box.x), r(c.box.y), r(c.box.width), r(c.box.height)};
+    instance.mask = std::move(mask);
+    instances.push_back(std::move(instance));
+  }
+  return instances;
+}
+
+std::vector<std::int64_t> onnx_input_shape(const fs::path& model) {
+  std::ifstream in(model, std::ios::binary);
+  require(static_cast<bool>(in), model.string(), "cannot be read; expected an ONNX model");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
+  ProtoReader file{bytes.data(), bytes.data() + bytes.size()};
+  ProtoReader graph, input, type, tensor, shape;
+  // ModelProto.graph (7) → GraphProto.input (11) → ValueInfoProto.type (2) → TypeProto.tensor_type
+  // (1) → shape (2) → dim (1) → dim_value (1, varint) | dim_param (2, a name: -1 here).
+  require(file.find(7, graph) && graph.find(11, input) && input.find(2, type) &&
+              type.find(1, tensor) && tensor.find(2, shape),
+          model.string(),
+          "no graph input with a tensor shape; expected an ONNX model (e.g. an Ultralytics "
+          "YOLOv5-seg / YOLOv8-seg export)");
+  std::vector<std::int64_t> dims;
+  std::uint32_t field = 0, wire = 0;
+  std::uint64_t value = 0;
+  ProtoReader dim;
+  while (shape.next(field, wire, dim, value)) {
+    if (field != 1 || wire != 2) continue;
+    std::int64_t size = -1;
+    std::uint32_t f = 0, w = 0;
+    std::uint64_t v = 0;
+    ProtoReader sub;
+    while (dim.next(f, w, sub, v))
+      if (f == 1 && w == 0) size = static_cast<std::int64_t>(v);
+    dims.push_back(size);
+  }
+  return dims;
+}
+
+}  // namespace objmap::segmentation
