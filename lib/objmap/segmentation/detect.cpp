@@ -148,6 +148,182 @@ struct Candidate {
   int source = 0;  // index into the network's detections (Mask R-CNN: its mask)
 };
 
+// What the decoding steps share: the image size and the classes of the model that are kept.
+struct DecodeContext {
+  DecodeContext(const ModelInfo& info_, const DetectOptions& options_, int width_, int height_)
+      : info(info_),
+        options(options_),
+        width(width_),
+        height(height_),
+        class_count(info_.class_names.size()),
+        classes_where(options_.classes_file.empty() ? info_.model.string()
+                                                    : options_.classes_file.string()),
+        kept_class(class_count, false) {
+    for (int id : info.kept_class_ids)
+      if (id >= 0 && static_cast<std::size_t>(id) < class_count) kept_class[id] = true;
+  }
+
+  // The box with corners (x1, y1), (x2, y2) clamped to the image.
+  cv::Rect2d clamp_box(double x1, double y1, double x2, double y2) const {
+    x1 = std::clamp(x1, 0.0, static_cast<double>(width));
+    x2 = std::clamp(x2, 0.0, static_cast<double>(width));
+    y1 = std::clamp(y1, 0.0, static_cast<double>(height));
+    y2 = std::clamp(y2, 0.0, static_cast<double>(height));
+    return cv::Rect2d(x1, y1, x2 - x1, y2 - y1);
+  }
+
+  const ModelInfo& info;
+  const DetectOptions& options;
+  const int width, height;          // the image, pixels
+  const std::size_t class_count;    // of the model
+  const std::string classes_where;  // where the class names come from, for messages
+  std::vector<bool> kept_class;     // per class id
+};
+
+// Step 2, YOLO: each row of an output is centre x, centre y, width, height (fractions of the
+// image), objectness, then one score per class (objectness already multiplied in). The class is
+// the best-scored one (OpenCV's object_detection sample), then the class filter applies.
+std::vector<Candidate> yolo_candidates(const DecodeContext& c,
+                                       const std::vector<cv::Mat>& outputs) {
+  std::vector<Candidate> candidates;
+  for (const cv::Mat& out : outputs) {
+    require(out.dims == 2 && out.cols == static_cast<int>(c.class_count) + 5, c.classes_where,
+            std::to_string(c.class_count) + " class names but the model outputs " +
+                std::to_string(out.cols - 5) + " classes; expected a classes file that fits");
+    for (int r = 0; r < out.rows; ++r) {
+      const float* row = out.ptr<float>(r);
+      const float* best = std::max_element(row + 5, row + out.cols);
+      const int class_id = static_cast<int>(best - (row + 5));
+      if (*best < c.options.score_threshold || *best <= 0.f || !c.kept_class[class_id]) continue;
+      const double cx = row[0] * c.width, cy = row[1] * c.height;
+      const double w = row[2] * c.width, h = row[3] * c.height;
+      const cv::Rect2d box = c.clamp_box(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2);
+      if (box.width <= 0 || box.height <= 0) continue;
+      candidates.push_back({class_id, *best, box, r});
+    }
+  }
+  return candidates;
+}
+
+// Step 2, Mask R-CNN: "detection_out_final", 1 x 1 x N x 7 rows [batch, class id, score, x1, y1,
+// x2, y2] in fractions of the image; "detection_masks", N x classes x 15 x 15 (OpenCV's mask_rcnn
+// sample).
+std::vector<Candidate> mask_rcnn_candidates(const DecodeContext& c,
+                                            const std::vector<cv::Mat>& outputs) {
+  const ModelInfo& info = c.info;
+  require(outputs.size() == 2, info.config.string(),
+          "expected two outputs (detection_out_final, detection_masks)");
+  const cv::Mat& boxes = outputs[0];
+  const cv::Mat& masks = outputs[1];
+  require(
+      boxes.dims == 4 && boxes.size[3] == 7 && masks.dims == 4 && masks.size[0] >= boxes.size[2],
+      info.config.string(),
+      "unexpected output shapes; expected a Mask R-CNN graph (detection_out_final N x 7, "
+      "detection_masks N x classes x h x w)");
+  require(masks.size[1] == static_cast<int>(c.class_count), c.classes_where,
+          std::to_string(c.class_count) + " class names but the model outputs " +
+              std::to_string(masks.size[1]) + " classes; expected a classes file that fits");
+  std::vector<Candidate> candidates;
+  const int count = boxes.size[2];
+  const float* rows = boxes.ptr<float>();
+  for (int i = 0; i < count; ++i) {
+    const float* row = rows + 7 * i;
+    const int class_id = static_cast<int>(row[1]);
+    const float score = row[2];
+    if (class_id < 0 || class_id >= static_cast<int>(c.class_count)) continue;
+    if (score < c.options.score_threshold || score <= 0.f || !c.kept_class[class_id]) continue;
+    const cv::Rect2d box =
+        c.clamp_box(row[3] * c.width, row[4] * c.height, row[5] * c.width, row[6] * c.height);
+    if (box.width < 1 || box.height < 1) continue;
+    candidates.push_back({class_id, score, box, i});
+  }
+  return candidates;
+}
+
+// Step 3: non-maximum suppression, over all kept classes at once (default) or per class; the kept
+// candidates sorted by class id, then score.
+std::vector<Candidate> suppress_non_maxima(const std::vector<Candidate>& candidates,
+                                           const DetectOptions& options) {
+  std::vector<Candidate> kept;
+  std::set<int> classes;
+  for (const auto& c : candidates) classes.insert(options.nms_across_classes ? -1 : c.class_id);
+  for (int class_id : classes) {
+    std::vector<cv::Rect2d> boxes;
+    std::vector<float> scores;
+    std::vector<const Candidate*> members;
+    for (const auto& c : candidates)
+      if (class_id == -1 || c.class_id == class_id) {
+        boxes.push_back(c.box);
+        scores.push_back(c.score);
+        members.push_back(&c);
+      }
+    std::vector<int> indices;
+    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(options.score_threshold),
+                      static_cast<float>(options.nms_threshold), indices);
+    for (int i : indices) kept.push_back(*members[static_cast<std::size_t>(i)]);
+  }
+  std::sort(kept.begin(), kept.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.class_id != b.class_id) return a.class_id < b.class_id;
+    if (a.score != b.score) return a.score > b.score;
+    if (a.box.x != b.box.x) return a.box.x < b.box.x;
+    return a.box.y < b.box.y;
+  });
+  return kept;
+}
+
+// Step 4, Mask R-CNN: the candidate's class mask resized to its box and thresholded (the sample's
+// way), placed in a full-image mask; its area (0: nothing of the object survives the threshold).
+std::size_t mask_rcnn_mask(const DecodeContext& c, const Candidate& candidate, const cv::Mat& masks,
+                           Mask& mask) {
+  const int width = c.width, height = c.height;
+  const cv::Rect2d& box = candidate.box;
+  const int left = std::clamp(static_cast<int>(box.x), 0, width - 1);
+  const int top = std::clamp(static_cast<int>(box.y), 0, height - 1);
+  const int right = std::clamp(static_cast<int>(box.x + box.width), left, width - 1);
+  const int bottom = std::clamp(static_cast<int>(box.y + box.height), top, height - 1);
+  const int mask_h = masks.size[2], mask_w = masks.size[3];
+  const cv::Mat class_mask(
+      mask_h, mask_w, CV_32F,
+      const_cast<float*>(masks.ptr<float>(candidate.source, candidate.class_id)));
+  cv::Mat resized;
+  cv::resize(class_mask, resized, cv::Size(right - left + 1, bottom - top + 1));
+  mask.width = width;
+  mask.height = height;
+  mask.data.assign(static_cast<std::size_t>(width) * height, 0);
+  std::size_t area = 0;
+  for (int v = 0; v < resized.rows; ++v) {
+    const float* src = resized.ptr<float>(v);
+    for (int u = 0; u < resized.cols; ++u)
+      if (src[u] > c.options.mask_threshold) {
+        mask.data[static_cast<std::size_t>(top + v) * width + left + u] = 1;
+        ++area;
+      }
+  }
+  return area;
+}
+
+// Step 4: instances: boxes (x, y, w, h) to 1/100 px, scores to 1e-6; with Mask R-CNN's `masks`
+// (nullptr for YOLO), the instance's mask, and no instance when nothing of it survives.
+std::vector<Instance> to_instances(const DecodeContext& c, const std::vector<Candidate>& kept,
+                                   const cv::Mat* masks) {
+  std::vector<Instance> instances;
+  for (const auto& candidate : kept) {
+    Instance instance;
+    instance.class_name = c.info.class_names[static_cast<std::size_t>(candidate.class_id)];
+    instance.score = round_to(candidate.score, 1e-6);
+    const cv::Rect2d& box = candidate.box;
+    instance.bbox = {round_to(box.x, 0.01), round_to(box.y, 0.01), round_to(box.width, 0.01),
+                     round_to(box.height, 0.01)};
+    if (masks != nullptr) {
+      Mask mask;
+      if (mask_rcnn_mask(c, candidate, *masks, mask) == 0) continue;
+      instance.mask = std::move(mask);
+    }
+    instances.push_back(std::move(instance));
+  }
+  return instances;
+}
+
 }  // namespace
 
 std::string model_kind_name(ModelKind kind) {
@@ -379,138 +555,18 @@ std::vector<Instance> Detector::detect(const cv::Mat& image_bgr, const std::stri
 std::vector<Instance> decode_outputs(const ModelInfo& info, const DetectOptions& options,
                                      const std::vector<cv::Mat>& outputs, int width, int height) {
   require(width > 0 && height > 0, "image", "empty image; expected a size > 0");
-  const std::size_t class_count = info.class_names.size();
-  const std::string classes_where =
-      options.classes_file.empty() ? info.model.string() : options.classes_file.string();
+  const DecodeContext context(info, options, width, height);
   const bool yolo = info.kind == ModelKind::kDarknetYolo;
-  std::vector<bool> kept_class(class_count, false);
-  for (int id : info.kept_class_ids)
-    if (id >= 0 && static_cast<std::size_t>(id) < class_count) kept_class[id] = true;
 
   // 2. Candidates above the score threshold, of a kept class.
-  std::vector<Candidate> candidates;
-  auto clamp_box = [&](double x1, double y1, double x2, double y2) {
-    x1 = std::clamp(x1, 0.0, static_cast<double>(width));
-    x2 = std::clamp(x2, 0.0, static_cast<double>(width));
-    y1 = std::clamp(y1, 0.0, static_cast<double>(height));
-    y2 = std::clamp(y2, 0.0, static_cast<double>(height));
-    return cv::Rect2d(x1, y1, x2 - x1, y2 - y1);
-  };
-  const cv::Mat* masks = nullptr;
-  if (yolo) {
-    // Each row of a YOLO output: centre x, centre y, width, height (fractions of the image),
-    // objectness, then one score per class (objectness already multiplied in). The class is the
-    // best-scored one (OpenCV's object_detection sample), then the class filter applies.
-    for (const cv::Mat& out : outputs) {
-      require(out.dims == 2 && out.cols == static_cast<int>(class_count) + 5, classes_where,
-              std::to_string(class_count) + " class names but the model outputs " +
-                  std::to_string(out.cols - 5) + " classes; expected a classes file that fits");
-      for (int r = 0; r < out.rows; ++r) {
-        const float* row = out.ptr<float>(r);
-        const float* best = std::max_element(row + 5, row + out.cols);
-        const int class_id = static_cast<int>(best - (row + 5));
-        if (*best < options.score_threshold || *best <= 0.f || !kept_class[class_id]) continue;
-        const double cx = row[0] * width, cy = row[1] * height;
-        const double w = row[2] * width, h = row[3] * height;
-        const cv::Rect2d box = clamp_box(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2);
-        if (box.width <= 0 || box.height <= 0) continue;
-        candidates.push_back({class_id, *best, box, r});
-      }
-    }
-  } else {
-    // "detection_out_final": 1 x 1 x N x 7 rows [batch, class id, score, x1, y1, x2, y2] in
-    // fractions of the image; "detection_masks": N x classes x 15 x 15 (OpenCV's mask_rcnn sample).
-    require(outputs.size() == 2, info.config.string(),
-            "expected two outputs (detection_out_final, detection_masks)");
-    const cv::Mat& boxes = outputs[0];
-    masks = &outputs[1];
-    require(boxes.dims == 4 && boxes.size[3] == 7 && masks->dims == 4 &&
-                masks->size[0] >= boxes.size[2],
-            info.config.string(),
-            "unexpected output shapes; expected a Mask R-CNN graph (detection_out_final N x 7, "
-            "detection_masks N x classes x h x w)");
-    require(masks->size[1] == static_cast<int>(class_count), classes_where,
-            std::to_string(class_count) + " class names but the model outputs " +
-                std::to_string(masks->size[1]) + " classes; expected a classes file that fits");
-    const int count = boxes.size[2];
-    const float* rows = boxes.ptr<float>();
-    for (int i = 0; i < count; ++i) {
-      const float* row = rows + 7 * i;
-      const int class_id = static_cast<int>(row[1]);
-      const float score = row[2];
-      if (class_id < 0 || class_id >= static_cast<int>(class_count)) continue;
-      if (score < options.score_threshold || score <= 0.f || !kept_class[class_id]) continue;
-      const cv::Rect2d box =
-          clamp_box(row[3] * width, row[4] * height, row[5] * width, row[6] * height);
-      if (box.width < 1 || box.height < 1) continue;
-      candidates.push_back({class_id, score, box, i});
-    }
-  }
+  const std::vector<Candidate> candidates =
+      yolo ? yolo_candidates(context, outputs) : mask_rcnn_candidates(context, outputs);
 
   // 3. Non-maximum suppression, over all kept classes at once (default) or per class.
-  std::vector<Candidate> kept;
-  std::set<int> classes;
-  for (const auto& c : candidates) classes.insert(options.nms_across_classes ? -1 : c.class_id);
-  for (int class_id : classes) {
-    std::vector<cv::Rect2d> boxes;
-    std::vector<float> scores;
-    std::vector<const Candidate*> members;
-    for (const auto& c : candidates)
-      if (class_id == -1 || c.class_id == class_id) {
-        boxes.push_back(c.box);
-        scores.push_back(c.score);
-        members.push_back(&c);
-      }
-    std::vector<int> indices;
-    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(options.score_threshold),
-                      static_cast<float>(options.nms_threshold), indices);
-    for (int i : indices) kept.push_back(*members[static_cast<std::size_t>(i)]);
-  }
-  std::sort(kept.begin(), kept.end(), [](const Candidate& a, const Candidate& b) {
-    if (a.class_id != b.class_id) return a.class_id < b.class_id;
-    if (a.score != b.score) return a.score > b.score;
-    if (a.box.x != b.box.x) return a.box.x < b.box.x;
-    return a.box.y < b.box.y;
-  });
+  const std::vector<Candidate> kept = suppress_non_maxima(candidates, options);
 
-  // 4. Instances: boxes (x, y, w, h) to 1/100 px, scores to 1e-6; Mask R-CNN's class mask resized
-  //    to the box and thresholded (the sample's way), placed in a full-image mask.
-  std::vector<Instance> instances;
-  for (const auto& c : kept) {
-    Instance instance;
-    instance.class_name = info.class_names[static_cast<std::size_t>(c.class_id)];
-    instance.score = round_to(c.score, 1e-6);
-    instance.bbox = {round_to(c.box.x, 0.01), round_to(c.box.y, 0.01), round_to(c.box.width, 0.01),
-                     round_to(c.box.height, 0.01)};
-    if (masks != nullptr) {
-      const int left = std::clamp(static_cast<int>(c.box.x), 0, width - 1);
-      const int top = std::clamp(static_cast<int>(c.box.y), 0, height - 1);
-      const int right = std::clamp(static_cast<int>(c.box.x + c.box.width), left, width - 1);
-      const int bottom = std::clamp(static_cast<int>(c.box.y + c.box.height), top, height - 1);
-      const int mask_h = masks->size[2], mask_w = masks->size[3];
-      const cv::Mat class_mask(mask_h, mask_w, CV_32F,
-                               const_cast<float*>(masks->ptr<float>(c.source, c.class_id)));
-      cv::Mat resized;
-      cv::resize(class_mask, resized, cv::Size(right - left + 1, bottom - top + 1));
-      Mask mask;
-      mask.width = width;
-      mask.height = height;
-      mask.data.assign(static_cast<std::size_t>(width) * height, 0);
-      std::size_t area = 0;
-      for (int v = 0; v < resized.rows; ++v) {
-        const float* src = resized.ptr<float>(v);
-        for (int u = 0; u < resized.cols; ++u)
-          if (src[u] > options.mask_threshold) {
-            mask.data[static_cast<std::size_t>(top + v) * width + left + u] = 1;
-            ++area;
-          }
-      }
-      if (area == 0) continue;  // nothing of the object survives the threshold
-      instance.mask = std::move(mask);
-    }
-    instances.push_back(std::move(instance));
-  }
-  return instances;
+  // 4. Instances: boxes to 1/100 px, scores to 1e-6; Mask R-CNN's masks in full-image masks.
+  return to_instances(context, kept, yolo ? nullptr : &outputs[1]);
 }
 
 std::vector<DetectFrame> list_rgb_frames(const fs::path& dataset) {
