@@ -139,6 +139,149 @@ std::vector<std::string> read_class_names(const fs::path& file) {
   return names;
 }
 
+// The files a model of that kind needs, for messages.
+std::string expected_files(ModelKind kind) {
+  return kind == ModelKind::kDarknetYolo ? kDarknetExpected : kTfExpected;
+}
+
+// Step 1 of loading: the kind, from the extensions, and the model's files (info.kind, model,
+// config), which must be readable.
+void model_kind_and_files(const DetectOptions& options, ModelInfo& info) {
+  const std::string ext = lower_extension(options.model);
+  if (ext == ".weights" || ext == ".cfg") {
+    info.kind = ModelKind::kDarknetYolo;
+    fs::path weights = options.model, cfg = options.config;
+    if (ext == ".cfg") std::swap(weights, cfg);
+    if (weights.empty()) weights = fs::path(options.model).replace_extension(".weights");
+    if (cfg.empty()) cfg = fs::path(options.model).replace_extension(".cfg");
+    require(lower_extension(cfg) == ".cfg", cfg.string(),
+            "a Darknet model's network description must be a .cfg file; expected " +
+                std::string(kDarknetExpected));
+    require(lower_extension(weights) == ".weights", weights.string(),
+            "a Darknet model's weights must be a .weights file; expected " +
+                std::string(kDarknetExpected));
+    info.model = weights;
+    info.config = cfg;
+  } else if (ext == ".pb") {
+    info.kind = ModelKind::kTensorflowMaskRcnn;
+    info.config = options.config;
+    require(!info.config.empty(), options.model.string(),
+            "a TensorFlow .pb model needs its text graph; expected --config <graph>.pbtxt (made "
+            "by OpenCV's tf_text_graph_mask_rcnn.py)");
+    require(lower_extension(info.config) == ".pbtxt", info.config.string(),
+            "a TensorFlow model's text graph must be a .pbtxt file; expected " +
+                std::string(kTfExpected));
+  } else {
+    throw InputError(options.model.string(),
+                     "unsupported model kind '" +
+                         (ext.empty() ? std::string("(no extension)") : ext) + "'; expected " +
+                         kDarknetExpected + ", or " + kTfExpected);
+  }
+  const std::string expected = expected_files(info.kind);
+  require_readable(info.model, expected);
+  require_readable(info.config, expected);
+}
+
+// Step 2 of loading: the network, on OpenCV's CPU backend; OpenCV's parser errors become one line
+// naming the file. A Darknet network must hold as many weights as its cfg asks for.
+cv::dnn::Net load_network(const ModelInfo& info) {
+  const std::string expected = expected_files(info.kind);
+  cv::dnn::Net net;
+  try {
+    if (info.kind == ModelKind::kDarknetYolo) {
+      net = cv::dnn::readNetFromDarknet(info.config.string(), info.model.string());
+    } else {
+      net = cv::dnn::readNetFromTensorflow(info.model.string(), info.config.string());
+    }
+  } catch (const cv::Exception& e) {
+    throw InputError(info.model.string(), "OpenCV cannot load it with " + info.config.string() +
+                                              " (" + one_line(e.err) + "); expected " + expected);
+  }
+  require(!net.empty(), info.model.string(),
+          "OpenCV loaded an empty network; expected " + expected);
+  if (info.kind == ModelKind::kDarknetYolo) {
+    // OpenCV reads as many weights as the cfg asks for and says nothing of a file that holds fewer
+    // (truncated) or more (another cfg): either detects nothing. The counts must agree.
+    const long long in_file = darknet_weight_count(info.model);
+    const long long in_net = network_weight_count(net);
+    require(in_file >= 0, info.model.string(),
+            "not a Darknet weights file (a header of 3 or 4 integers, then float32 values); "
+            "expected " +
+                expected);
+    require(in_file == in_net, info.model.string(),
+            "holds " + std::to_string(in_file) + " weights, " +
+                (in_file < in_net ? "fewer" : "more") + " than the " + std::to_string(in_net) +
+                " that " + info.config.filename().string() + " asks for (" +
+                (in_file < in_net ? "truncated, or made for another cfg" : "made for another cfg") +
+                "); expected the .weights trained with this .cfg");
+  }
+  net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return net;
+}
+
+// Step 3 of loading: the outputs to read, YOLO region layers or Mask R-CNN's two outputs (the
+// network must be a detector of its kind), and the input size (info.input_width/height).
+std::vector<std::string> detector_outputs(cv::dnn::Net& net, const DetectOptions& options,
+                                          ModelInfo& info) {
+  std::vector<std::string> output_names;
+  if (info.kind == ModelKind::kDarknetYolo) {
+    for (const auto& name : net.getUnconnectedOutLayersNames()) {
+      const auto layer = net.getLayer(net.getLayerId(name));
+      if (layer && layer->type == "Region") output_names.push_back(name);
+    }
+    require(!output_names.empty(), info.config.string(),
+            "the network has no [yolo] or [region] output layer; expected a Darknet YOLO "
+            "detector");
+    int width = 0, height = 0;
+    darknet_input_size(info.config, width, height);
+    info.input_width = options.input_width > 0 ? options.input_width : width;
+    info.input_height = options.input_height > 0 ? options.input_height : height;
+    require(info.input_width > 0 && info.input_height > 0, info.config.string(),
+            "no width/height in its [net] section; expected them, or an input size option");
+  } else {
+    for (const char* name : {"detection_out_final", "detection_masks"}) {
+      require(net.getLayerId(name) >= 0, info.config.string(),
+              std::string("the graph has no layer '") + name +
+                  "'; expected a Mask R-CNN text graph made by OpenCV's "
+                  "tf_text_graph_mask_rcnn.py");
+      output_names.push_back(name);
+    }
+    info.input_width = options.input_width > 0 ? options.input_width : 800;
+    info.input_height = options.input_height > 0 ? options.input_height : 800;
+  }
+  return output_names;
+}
+
+// Step 4 of loading: the class names (info.class_names: the classes file's, else the built-in
+// names of the kind) and the filter (info.kept_class_ids); returns where the names come from.
+std::string class_names_and_filter(const DetectOptions& options, ModelInfo& info) {
+  std::string class_source;  // for messages: the classes file or "the built-in COCO-80 names"
+  if (!options.classes_file.empty()) {
+    info.class_names = read_class_names(options.classes_file);
+    class_source = options.classes_file.string();
+  } else if (info.kind == ModelKind::kDarknetYolo) {
+    info.class_names = coco80_names();
+    class_source = "the built-in COCO-80 names";
+  } else {
+    info.class_names = coco90_names();
+    class_source = "the built-in COCO-90 names of the TensorFlow models";
+  }
+  std::vector<bool> kept(info.class_names.size(), options.classes.empty());
+  for (const auto& wanted : options.classes) {
+    const std::string name = canonical_class(wanted);
+    const auto it = std::find(info.class_names.begin(), info.class_names.end(), name);
+    require(it != info.class_names.end(), "DetectOptions.classes",
+            "'" + wanted + "' is not a class of the model (" + class_source + ", " +
+                std::to_string(info.class_names.size()) +
+                " names); expected names such as 'chair', 'cup', 'tv monitor', 'keyboard'");
+    kept[static_cast<std::size_t>(it - info.class_names.begin())] = true;
+  }
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    if (kept[i]) info.kept_class_ids.push_back(static_cast<int>(i));
+  return class_source;
+}
+
 double round_to(double value, double step) { return std::round(value / step) * step; }
 
 struct Candidate {
@@ -404,123 +547,16 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
           "no such file; expected " + std::string(kDarknetExpected) + ", or " + kTfExpected);
 
   // 1. The kind, from the extensions.
-  const std::string ext = lower_extension(options.model);
-  if (ext == ".weights" || ext == ".cfg") {
-    info.kind = ModelKind::kDarknetYolo;
-    fs::path weights = options.model, cfg = options.config;
-    if (ext == ".cfg") std::swap(weights, cfg);
-    if (weights.empty()) weights = fs::path(options.model).replace_extension(".weights");
-    if (cfg.empty()) cfg = fs::path(options.model).replace_extension(".cfg");
-    require(lower_extension(cfg) == ".cfg", cfg.string(),
-            "a Darknet model's network description must be a .cfg file; expected " +
-                std::string(kDarknetExpected));
-    require(lower_extension(weights) == ".weights", weights.string(),
-            "a Darknet model's weights must be a .weights file; expected " +
-                std::string(kDarknetExpected));
-    info.model = weights;
-    info.config = cfg;
-  } else if (ext == ".pb") {
-    info.kind = ModelKind::kTensorflowMaskRcnn;
-    info.config = options.config;
-    require(!info.config.empty(), options.model.string(),
-            "a TensorFlow .pb model needs its text graph; expected --config <graph>.pbtxt (made "
-            "by OpenCV's tf_text_graph_mask_rcnn.py)");
-    require(lower_extension(info.config) == ".pbtxt", info.config.string(),
-            "a TensorFlow model's text graph must be a .pbtxt file; expected " +
-                std::string(kTfExpected));
-  } else {
-    throw InputError(options.model.string(),
-                     "unsupported model kind '" +
-                         (ext.empty() ? std::string("(no extension)") : ext) + "'; expected " +
-                         kDarknetExpected + ", or " + kTfExpected);
-  }
-  const std::string expected =
-      info.kind == ModelKind::kDarknetYolo ? kDarknetExpected : kTfExpected;
-  require_readable(info.model, expected);
-  require_readable(info.config, expected);
+  model_kind_and_files(options, info);
 
   // 2. The network; OpenCV's parser errors become one line naming the file.
-  try {
-    if (info.kind == ModelKind::kDarknetYolo) {
-      d.net = cv::dnn::readNetFromDarknet(info.config.string(), info.model.string());
-    } else {
-      d.net = cv::dnn::readNetFromTensorflow(info.model.string(), info.config.string());
-    }
-  } catch (const cv::Exception& e) {
-    throw InputError(info.model.string(), "OpenCV cannot load it with " + info.config.string() +
-                                              " (" + one_line(e.err) + "); expected " + expected);
-  }
-  require(!d.net.empty(), info.model.string(),
-          "OpenCV loaded an empty network; expected " + expected);
-  if (info.kind == ModelKind::kDarknetYolo) {
-    // OpenCV reads as many weights as the cfg asks for and says nothing of a file that holds fewer
-    // (truncated) or more (another cfg): either detects nothing. The counts must agree.
-    const long long in_file = darknet_weight_count(info.model);
-    const long long in_net = network_weight_count(d.net);
-    require(in_file >= 0, info.model.string(),
-            "not a Darknet weights file (a header of 3 or 4 integers, then float32 values); "
-            "expected " +
-                expected);
-    require(in_file == in_net, info.model.string(),
-            "holds " + std::to_string(in_file) + " weights, " +
-                (in_file < in_net ? "fewer" : "more") + " than the " + std::to_string(in_net) +
-                " that " + info.config.filename().string() + " asks for (" +
-                (in_file < in_net ? "truncated, or made for another cfg" : "made for another cfg") +
-                "); expected the .weights trained with this .cfg");
-  }
-  d.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
-  d.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  d.net = load_network(info);
 
   // 3. It must be a detector of that kind: YOLO region outputs, or Mask R-CNN's two outputs.
-  if (info.kind == ModelKind::kDarknetYolo) {
-    for (const auto& name : d.net.getUnconnectedOutLayersNames()) {
-      const auto layer = d.net.getLayer(d.net.getLayerId(name));
-      if (layer && layer->type == "Region") d.output_names.push_back(name);
-    }
-    require(!d.output_names.empty(), info.config.string(),
-            "the network has no [yolo] or [region] output layer; expected a Darknet YOLO "
-            "detector");
-    int width = 0, height = 0;
-    darknet_input_size(info.config, width, height);
-    info.input_width = options.input_width > 0 ? options.input_width : width;
-    info.input_height = options.input_height > 0 ? options.input_height : height;
-    require(info.input_width > 0 && info.input_height > 0, info.config.string(),
-            "no width/height in its [net] section; expected them, or an input size option");
-  } else {
-    for (const char* name : {"detection_out_final", "detection_masks"}) {
-      require(d.net.getLayerId(name) >= 0, info.config.string(),
-              std::string("the graph has no layer '") + name +
-                  "'; expected a Mask R-CNN text graph made by OpenCV's "
-                  "tf_text_graph_mask_rcnn.py");
-      d.output_names.push_back(name);
-    }
-    info.input_width = options.input_width > 0 ? options.input_width : 800;
-    info.input_height = options.input_height > 0 ? options.input_height : 800;
-  }
+  d.output_names = detector_outputs(d.net, options, info);
 
   // 4. Class names and the filter.
-  if (!options.classes_file.empty()) {
-    info.class_names = read_class_names(options.classes_file);
-    d.class_source = options.classes_file.string();
-  } else if (info.kind == ModelKind::kDarknetYolo) {
-    info.class_names = coco80_names();
-    d.class_source = "the built-in COCO-80 names";
-  } else {
-    info.class_names = coco90_names();
-    d.class_source = "the built-in COCO-90 names of the TensorFlow models";
-  }
-  std::vector<bool> kept(info.class_names.size(), options.classes.empty());
-  for (const auto& wanted : options.classes) {
-    const std::string name = canonical_class(wanted);
-    const auto it = std::find(info.class_names.begin(), info.class_names.end(), name);
-    require(it != info.class_names.end(), "DetectOptions.classes",
-            "'" + wanted + "' is not a class of the model (" + d.class_source + ", " +
-                std::to_string(info.class_names.size()) +
-                " names); expected names such as 'chair', 'cup', 'tv monitor', 'keyboard'");
-    kept[static_cast<std::size_t>(it - info.class_names.begin())] = true;
-  }
-  for (std::size_t i = 0; i < kept.size(); ++i)
-    if (kept[i]) info.kept_class_ids.push_back(static_cast<int>(i));
+  d.class_source = class_names_and_filter(options, info);
 }
 
 Detector::~Detector() = default;
