@@ -252,6 +252,611 @@ void morph(std::vector<std::uint8_t>& bits, std::vector<std::uint8_t>& tmp, int 
   }
 }
 
+constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+
+// The box clipped to the image: pixels [u0, u1) × [v0, v1) (u1 < u0 or v1 < v0: outside).
+struct ClippedBox {
+  int u0, v0, u1, v1;
+};
+
+int clip(double value, int hi) {
+  if (!std::isfinite(value)) return 0;
+  return static_cast<int>(std::clamp(value, 0.0, static_cast<double>(hi)));
+}
+
+ClippedBox clip_box(const Box& box, int width, int height) {
+  return {clip(std::floor(box.x), width), clip(std::floor(box.y), height),
+          clip(std::ceil(box.x + box.w), width), clip(std::ceil(box.y + box.h), height)};
+}
+
+// A window of box-local pixels [x0, x1) × [y0, y1).
+struct Window {
+  int x0, x1, y0, y1;
+};
+
+// What every step reads: the call's inputs, the clipped box and the thresholds derived from the
+// options; the box-local buffers are in ws.
+struct BoxPixels {
+  BoxPixels(const Box& box_, const cv::Mat& depth_, const Camera& camera_,
+            const BoxMaskOptions& options_, const ClippedBox& clipped)
+      : box(box_),
+        depth(depth_),
+        camera(camera_),
+        options(options_),
+        ws(workspace()),
+        width(depth_.cols),
+        height(depth_.rows),
+        u0(clipped.u0),
+        v0(clipped.v0),
+        u1(clipped.u1),
+        v1(clipped.v1),
+        bw(u1 - u0),
+        bh(v1 - v0),
+        area(static_cast<std::size_t>(bw) * bh),
+        to_m(static_cast<float>(1.0 / camera_.depth_factor)),
+        zmin(static_cast<float>(options_.min_depth_m)),
+        zmax(static_cast<float>(options_.max_depth_m)),
+        tol(static_cast<float>(options_.seed_tolerance_bins * options_.bin_m)),
+        thr(static_cast<float>(options_.support_inlier_m)) {}
+
+  // Depth in metres at image pixel (u, v); 0 when not valid.
+  float depth_at(int u, int v) const {
+    const float z = depth.at<std::uint16_t>(v, u) * to_m;
+    return (z >= zmin && z <= zmax) ? z : 0.0f;
+  }
+
+  // The central `frac` of the box (1: the whole box), box-local.
+  Window seed_window(double frac) const {
+    const double cu = box.x + 0.5 * box.w - u0, cv = box.y + 0.5 * box.h - v0;
+    return Window{std::max(0, static_cast<int>(std::floor(cu - 0.5 * frac * box.w))),
+                  std::min(bw, static_cast<int>(std::ceil(cu + 0.5 * frac * box.w))),
+                  std::max(0, static_cast<int>(std::floor(cv - 0.5 * frac * box.h))),
+                  std::min(bh, static_cast<int>(std::ceil(cv + 0.5 * frac * box.h)))};
+  }
+
+  const Box& box;
+  const cv::Mat& depth;
+  const Camera& camera;
+  const BoxMaskOptions& options;
+  Workspace& ws;
+  const int width, height;   // the image
+  const int u0, v0, u1, v1;  // the clipped box, pixels [u0, u1) × [v0, v1)
+  const int bw, bh;          // its size
+  const std::size_t area;
+  const float to_m, zmin, zmax;  // raw depth to metres; valid depths
+  const float tol;               // seeds: within this of the object's depth, metres
+  const float thr;               // support plane inlier distance, metres
+};
+
+// The valid depths' histogram bins: bins of bin_m from z_lo.
+struct DepthBins {
+  float z_lo = 0;
+  int bins = 0;
+};
+
+// Step 1: the pixel rays of the image and the valid depths of the box into ws (z_m, kValid);
+// counts them into valid_pixels. The bins are meaningful only when valid_pixels > 0.
+DepthBins valid_depths(const BoxPixels& b, std::size_t& valid_pixels) {
+  Workspace& ws = b.ws;
+  ws.ray_x.resize(static_cast<std::size_t>(b.width));
+  for (int u = 0; u < b.width; ++u)
+    ws.ray_x[u] = static_cast<float>((u - b.camera.cx) / b.camera.fx);
+  ws.ray_y.resize(static_cast<std::size_t>(b.height));
+  for (int v = 0; v < b.height; ++v)
+    ws.ray_y[v] = static_cast<float>((v - b.camera.cy) / b.camera.fy);
+  ws.z_m.resize(b.area);
+  ws.flags.assign(b.area, 0);
+  float z_lo = b.zmax, z_hi = 0;
+  for (int y = 0; y < b.bh; ++y) {
+    const std::uint16_t* src = b.depth.ptr<std::uint16_t>(b.v0 + y) + b.u0;
+    float* dst = ws.z_m.data() + static_cast<std::size_t>(y) * b.bw;
+    std::uint8_t* fl = ws.flags.data() + static_cast<std::size_t>(y) * b.bw;
+    for (int x = 0; x < b.bw; ++x) {
+      const float z = src[x] * b.to_m;
+      if (z >= b.zmin && z <= b.zmax) {
+        dst[x] = z;
+        fl[x] = kValid;
+        z_lo = std::min(z_lo, z);
+        z_hi = std::max(z_hi, z);
+        ++valid_pixels;
+      } else {
+        dst[x] = 0;
+      }
+    }
+  }
+  return {z_lo, std::max(1, static_cast<int>((z_hi - z_lo) / b.options.bin_m) + 1)};
+}
+
+// Step 2, the histogram's weights: a separable Gaussian around the box centre, box-local.
+void centre_weights(const BoxPixels& b) {
+  Workspace& ws = b.ws;
+  ws.weight_u.resize(static_cast<std::size_t>(b.bw));
+  ws.weight_v.resize(static_cast<std::size_t>(b.bh));
+  const double cu = b.box.x + 0.5 * b.box.w, cv = b.box.y + 0.5 * b.box.h;
+  const double su = std::max(1.0, b.options.center_sigma_fraction * b.box.w);
+  const double sv = std::max(1.0, b.options.center_sigma_fraction * b.box.h);
+  for (int x = 0; x < b.bw; ++x) {
+    const double t = (b.u0 + x + 0.5 - cu) / su;
+    ws.weight_u[x] = static_cast<float>(std::exp(-0.5 * t * t));
+  }
+  for (int y = 0; y < b.bh; ++y) {
+    const double t = (b.v0 + y + 0.5 - cv) / sv;
+    ws.weight_v[y] = static_cast<float>(std::exp(-0.5 * t * t));
+  }
+}
+
+// Step 2: the object's depth, the near mode of the histogram of the valid pixels without `exclude`
+// flags; 0 when there is none.
+double object_depth(const BoxPixels& b, const DepthBins& bins, std::uint8_t exclude) {
+  return near_mode(b.ws, b.bw, b.bh, bins.z_lo, bins.bins, b.options.bin_m,
+                   b.options.near_mode_min_share, exclude);
+}
+
+// Step 3, the plane samples: valid depths of the box's bottom rows and of the rows just below it,
+// on a grid of at most about support_max_samples points, into ws.samples (camera frame).
+void sample_support_strip(const BoxPixels& b) {
+  const BoxMaskOptions& options = b.options;
+  Workspace& ws = b.ws;
+  const int rows_bottom = static_cast<int>(std::ceil(options.support_bottom_fraction * b.bh));
+  const int rows_below = static_cast<int>(std::ceil(options.support_below_fraction * b.box.h));
+  const int s0 = std::max(b.v0, b.v1 - rows_bottom), s1 = std::min(b.height, b.v1 + rows_below);
+  ws.samples.clear();
+  if (s1 <= s0) return;
+  const double strip = static_cast<double>(b.bw) * (s1 - s0);
+  const int stride =
+      std::max(1, static_cast<int>(std::ceil(std::sqrt(strip / options.support_max_samples))));
+  for (int v = s0; v < s1; v += stride) {
+    for (int u = b.u0; u < b.u1; u += stride) {
+      const float z = b.depth_at(u, v);
+      if (z > 0) ws.samples.emplace_back(ws.ray_x[u] * z, ws.ray_y[v] * z, z);
+    }
+  }
+}
+
+// Step 3: flags the box pixels on the plane or beyond it kSupport (and no other); returns how many.
+std::size_t set_aside_plane_pixels(const BoxPixels& b, const Plane& plane) {
+  Workspace& ws = b.ws;
+  std::size_t removed = 0;
+  for (int y = 0; y < b.bh; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * b.bw;
+    const float ry = ws.ray_y[b.v0 + y];
+    for (int x = 0; x < b.bw; ++x) {
+      std::uint8_t& f = ws.flags[row + x];
+      f &= static_cast<std::uint8_t>(~kSupport);
+      if (!(f & kValid)) continue;
+      const float z = ws.z_m[row + x];
+      const float dist =
+          z * (plane.n.x() * ws.ray_x[b.u0 + x] + plane.n.y() * ry + plane.n.z()) + plane.d;
+      if (dist < b.thr) {
+        f |= kSupport;
+        ++removed;
+      }
+    }
+  }
+  return removed;
+}
+
+// Step 3: does the object found without any plane (mode0's central pixels; the whole box's when
+// the centre has none) stand on the camera's side of the plane? An occluder's face or the object's
+// own face has the object behind it or on it.
+bool object_stands_on(const BoxPixels& b, const Plane& plane, double mode0) {
+  const Workspace& ws = b.ws;
+  std::size_t above = 0, beyond = 0, count = 0;
+  for (int pass = 0; pass < 2 && count == 0; ++pass) {
+    const Window win = b.seed_window(pass == 0 ? b.options.seed_center_fraction : 1.0);
+    for (int y = win.y0; y < win.y1; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * b.bw;
+      const float ry = ws.ray_y[b.v0 + y];
+      for (int x = win.x0; x < win.x1; ++x) {
+        const float z = ws.z_m[row + x];
+        if (!(ws.flags[row + x] & kValid) || std::abs(z - mode0) > b.tol) continue;
+        const float dist =
+            z * (plane.n.x() * ws.ray_x[b.u0 + x] + plane.n.y() * ry + plane.n.z()) + plane.d;
+        above += dist > b.thr;
+        beyond += dist < -b.thr;
+        ++count;
+      }
+    }
+  }
+  return count > 0 && static_cast<double>(above) >= b.options.support_min_above_share * count &&
+         static_cast<double>(beyond) <= b.options.support_max_beyond_share * count;
+}
+
+// Step 3: drops the plane's inliers from ws.samples, so that the next plane can be fitted.
+void drop_plane_samples(const BoxPixels& b, const Plane& plane) {
+  auto& samples = b.ws.samples;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (std::abs(plane.n.dot(samples[i]) + plane.d) > b.thr) samples[kept++] = samples[i];
+  }
+  samples.resize(kept);
+}
+
+// Step 3: the supporting surface. Planes are fitted to the box's bottom rows and the rows just
+// below it; a plane is accepted when it is well supported, leaves a fair share of the box, and the
+// object found without it (mode0) stands on it, on the camera's side. A rejected plane (an
+// occluder's or the object's own face) gives up its samples and the next one is tried. With a
+// plane, its pixels keep kSupport, the result gets the plane, and the object's depth is taken again
+// without them: returned, mode0 without a plane.
+double supporting_surface(const BoxPixels& b, const DepthBins& bins, double mode0,
+                          BoxMaskResult& result) {
+  const BoxMaskOptions& options = b.options;
+  Workspace& ws = b.ws;
+  sample_support_strip(b);
+  for (int attempt = 0; attempt < options.support_max_planes; ++attempt) {
+    const Plane plane =
+        fit_plane(ws.samples, b.thr, options.support_ransac_iterations, ws.sample_inlier);
+    const double needed = std::max<double>(options.support_min_inliers,
+                                           options.support_min_inlier_share * ws.samples.size());
+    if (!plane.valid || static_cast<double>(plane.inliers) < needed) break;
+    // Set aside the box pixels on the plane or beyond it (the object stands on the camera's side).
+    const std::size_t removed = set_aside_plane_pixels(b, plane);
+    // The plane must leave a fair share of the box, and the object must stand on it.
+    if (removed * 10 <= result.valid_pixels * 9 && object_stands_on(b, plane, mode0)) {
+      const double mode = object_depth(b, bins, kSupport);
+      if (mode > 0) {
+        result.support_plane_removed = true;
+        result.support_inliers = plane.inliers;
+        result.support_pixels_removed = removed;
+        result.support_plane_in_cam << plane.n.cast<double>(), plane.d;
+        return mode;
+      }
+    }
+    drop_plane_samples(b, plane);
+  }
+  for (auto& f : ws.flags) f &= static_cast<std::uint8_t>(~kSupport);
+  return mode0;
+}
+
+// A region grown at one candidate depth.
+struct Grown {
+  std::size_t pixels = 0, seeds = 0, touching = 0, continuing = 0;
+  double band = 0;
+  // Share of the region's pixels on the box border whose surface goes on outside the box.
+  double leak() const { return touching ? static_cast<double>(continuing) / touching : 0.0; }
+};
+
+// Step 4: region growing from seeds at a candidate depth (grow), over the flags kValid and
+// kSupport of steps 1 and 3, which it does not change; the region is the pixels flagged kInMask.
+class RegionGrower {
+ public:
+  RegionGrower(const BoxPixels& b, const BoxMaskResult& result)
+      : b_(b),
+        ws_(b.ws),
+        slope_per_m_(static_cast<float>(std::tan(b.options.smooth_max_slope_deg * kPi / 180) * 2 /
+                                        (b.camera.fx + b.camera.fy))),
+        noise_per_m2_(static_cast<float>(b.options.smooth_noise_m_per_m2)),
+        have_plane_(result.support_plane_removed),
+        reclaim_(have_plane_ && b.options.support_reclaim_angle_deg < 90.0),
+        plane_n_(result.support_plane_in_cam.head<3>().cast<float>()),
+        plane_d_(static_cast<float>(result.support_plane_in_cam[3])),
+        max_cos_(static_cast<float>(std::cos(b.options.support_reclaim_angle_deg * kPi / 180))) {
+    // The queues of the floods and of the region growing: room for every box pixel (a pixel joins
+    // each at most once), written through raw pointers.
+    if (ws_.queue.size() < b.area) {
+      ws_.queue.resize(b.area);
+      ws_.seed_queue.resize(b.area);
+    }
+    queue_ = ws_.queue.data();
+    seed_queue_ = ws_.seed_queue.data();
+  }
+
+  // The region at depth mode_m: the band around it, the seeds, the growing, the border leak.
+  Grown grow(double mode_m) {
+    Grown g;
+    g.band = mark_band(mode_m);
+    g.seeds = seed(mode_m);
+    g.pixels = grow_from_seeds(g.seeds);
+    measure_border_leak(g);
+    return g;
+  }
+
+ private:
+  using Px = Workspace::Px;
+
+  // The depth change per pixel of a steep surface at depth z, plus sensor noise.
+  float step_at(float z) const { return z * (slope_per_m_ + noise_per_m2_ * z); }
+
+  // Flags kBand the valid non-support pixels within the depth band around mode_m (sized from the
+  // box's metric size at that depth), clearing the previous candidate's flags; returns the band's
+  // far half-width.
+  double mark_band(double mode_m) {
+    const BoxMaskOptions& options = b_.options;
+    constexpr std::uint8_t kPerMode = kBand | kInMask | kChecked | kSeed;
+    const double metric_size =
+        std::max(b_.box.w * mode_m / b_.camera.fx, b_.box.h * mode_m / b_.camera.fy);
+    const double band = std::clamp(options.band_size_factor * metric_size, options.band_min_m,
+                                   std::max(options.band_min_m, options.band_max_m));
+    band_lo_ = static_cast<float>(mode_m - band * options.band_near_fraction);
+    band_hi_ = static_cast<float>(mode_m + band);
+    for (std::size_t i = 0; i < b_.area; ++i) {
+      std::uint8_t f = ws_.flags[i] & static_cast<std::uint8_t>(~kPerMode);
+      if ((f & kValid) && !(f & kSupport) && ws_.z_m[i] >= band_lo_ && ws_.z_m[i] <= band_hi_) {
+        f |= kBand;
+      }
+      ws_.flags[i] = f;
+    }
+    return band;
+  }
+
+  // Seeds: central pixels at the mode depth (the whole box when the centre has none), and of those
+  // only the smooth-connected components with a good share of the heaviest one's centre weight: an
+  // occluder's surface that crosses the mode depth elsewhere in the centre is not seeded. The seeds
+  // go to seed_queue_ (flagged kInMask); returns how many.
+  std::size_t seed(double mode_m) {
+    std::size_t candidates = 0;
+    for (int pass = 0; pass < 2 && candidates == 0; ++pass) {
+      win_ = b_.seed_window(pass == 0 ? b_.options.seed_center_fraction : 1.0);
+      for (int y = win_.y0; y < win_.y1; ++y) {
+        for (int x = win_.x0; x < win_.x1; ++x) {
+          const std::size_t i = static_cast<std::size_t>(y) * b_.bw + x;
+          if ((ws_.flags[i] & kBand) &&
+              std::abs(ws_.z_m[i] - static_cast<float>(mode_m)) <= b_.tol) {
+            ws_.flags[i] |= kSeed;
+            ++candidates;
+          }
+        }
+      }
+    }
+    // Components of the candidates and their centre weights (kInMask marks "visited" meanwhile).
+    auto& starts = ws_.components;
+    starts.clear();
+    double best_weight = 0;
+    for (int y = win_.y0; y < win_.y1; ++y) {
+      for (int x = win_.x0; x < win_.x1; ++x) {
+        const std::uint8_t f = ws_.flags[static_cast<std::size_t>(y) * b_.bw + x];
+        if (!(f & kSeed) || (f & kInMask)) continue;
+        const double weight = flood_seeds({x, y});
+        starts.emplace_back(Px{x, y}, weight);
+        best_weight = std::max(best_weight, weight);
+      }
+    }
+    for (int y = win_.y0; y < win_.y1; ++y) {
+      for (int x = win_.x0; x < win_.x1; ++x) {
+        ws_.flags[static_cast<std::size_t>(y) * b_.bw + x] &= static_cast<std::uint8_t>(~kInMask);
+      }
+    }
+    // The seeds: the components holding at least seed_component_min_share of the best one's
+    // weight (an object cut in two by a thin occluder keeps both halves; specks do not count).
+    std::size_t seeds = 0;
+    for (const auto& [start, weight] : starts) {
+      if (weight < b_.options.seed_component_min_share * best_weight) continue;
+      flood_seeds(start);
+      std::copy(queue_, queue_ + queued_, seed_queue_ + seeds);
+      seeds += queued_;
+    }
+    return seeds;
+  }
+
+  // Floods one component of the seed candidates in the seed window from `start` into queue_;
+  // returns its centre weight.
+  double flood_seeds(Px start) {
+    // Locals, not members, in the loop: the byte stores to the flags would reload members.
+    const int bw = b_.bw, n_neigh = b_.options.connectivity;
+    const Window win = win_;
+    Px* const queue = queue_;
+    std::size_t queued = 0;
+    queue[queued++] = start;
+    ws_.flags[static_cast<std::size_t>(start.y) * bw + start.x] |= kInMask;
+    double weight = 0;
+    for (std::size_t head = 0; head < queued; ++head) {
+      const int xi = queue[head].x, yi = queue[head].y;
+      const std::int32_t i = yi * bw + xi;
+      weight += static_cast<double>(ws_.weight_u[xi]) * ws_.weight_v[yi];
+      const float z = ws_.z_m[i];
+      const float step = step_at(z);
+      for (int k = 0; k < n_neigh; ++k) {
+        const int xx = xi + kDx[k], yy = yi + kDy[k];
+        if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
+        const std::int32_t j = yy * bw + xx;
+        const std::uint8_t f = ws_.flags[j];
+        if (!(f & kSeed) || (f & kInMask) || std::abs(ws_.z_m[j] - z) > step) continue;
+        ws_.flags[j] = f | kInMask;
+        queue[queued++] = {xx, yy};
+      }
+    }
+    queued_ = queued;
+    return weight;
+  }
+
+  // Region growing across smooth depth inside the band from the `seeds` first pixels of
+  // seed_queue_; returns the region's size.
+  std::size_t grow_from_seeds(std::size_t seeds) {
+    const int bw = b_.bw, bh = b_.bh, n_neigh = b_.options.connectivity;
+    Px* const seed_queue = seed_queue_;
+    for (std::size_t head = 0; head < seeds; ++head) {
+      const int x = seed_queue[head].x, y = seed_queue[head].y;
+      const std::int32_t i = y * bw + x;
+      const float z = ws_.z_m[i];
+      const float step = step_at(z);
+      for (int k = 0; k < n_neigh; ++k) {
+        const int xx = x + kDx[k], yy = y + kDy[k];
+        if (xx < 0 || yy < 0 || xx >= bw || yy >= bh) continue;
+        const std::int32_t j = yy * bw + xx;
+        const std::uint8_t f = ws_.flags[j];
+        if ((f & kInMask) || !(f & kValid) || std::abs(ws_.z_m[j] - z) > step) continue;
+        if (!(f & kBand)) {
+          // A pixel within the plane's inlier distance joins when its surface is not the plane's:
+          // the object's lowest rows, not the table.
+          if (!reclaim_ || (f & kChecked) || !(f & kSupport) || ws_.z_m[j] < band_lo_ ||
+              ws_.z_m[j] > band_hi_ || !off_plane(xx, yy)) {
+            ws_.flags[j] = f | kChecked;
+            continue;
+          }
+        }
+        ws_.flags[j] = f | kInMask;
+        seed_queue[seeds++] = {xx, yy};
+      }
+    }
+    return seeds;
+  }
+
+  Eigen::Vector3f point(int x, int y) const {
+    const float z = ws_.z_m[static_cast<std::size_t>(y) * b_.bw + x];
+    return Eigen::Vector3f(ws_.ray_x[b_.u0 + x] * z, ws_.ray_y[b_.v0 + y] * z, z);
+  }
+
+  // May the support pixel (x, y) be taken back? When it lies on the plane, not beyond it, and its
+  // normal (3D central differences over ±2 px) is off the plane's by the reclaim angle.
+  bool off_plane(int x, int y) const {
+    constexpr int k = 2;
+    const int bw = b_.bw;
+    if (x < k || y < k || x + k >= bw || y + k >= b_.bh) return false;
+    const Eigen::Vector3f p = point(x, y);
+    if (plane_n_.dot(p) + plane_d_ < -b_.thr) return false;  // beyond the plane
+    // A smooth neighbourhood only (no step, no kink): across a depth edge the "normal" is
+    // meaningless. Second differences along both axes below half a smoothness step.
+    const float z = p.z(), tol = 0.5f * step_at(z);
+    const std::size_t c = static_cast<std::size_t>(y) * bw + x;
+    const std::size_t l = c - k, r = c + k, u = c - k * bw, d = c + k * bw;
+    if (!(ws_.flags[l] & ws_.flags[r] & ws_.flags[u] & ws_.flags[d] & kValid)) return false;
+    if (std::abs(ws_.z_m[l] + ws_.z_m[r] - 2 * z) > tol) return false;
+    if (std::abs(ws_.z_m[u] + ws_.z_m[d] - 2 * z) > tol) return false;
+    const Eigen::Vector3f n =
+        (point(x + k, y) - point(x - k, y)).cross(point(x, y + k) - point(x, y - k));
+    const float len = n.norm();
+    return len > 0 && std::abs(n.dot(plane_n_)) < max_cos_ * len;
+  }
+
+  // Does the surface at box pixel i continue smoothly to image pixel (u, v) outside the box?
+  bool continues(std::size_t i, int u, int v) const {
+    const float z_out = b_.depth_at(u, v);
+    if (z_out <= 0 || std::abs(z_out - ws_.z_m[i]) > step_at(ws_.z_m[i])) return false;
+    if (!have_plane_) return true;
+    const Eigen::Vector3f p(ws_.ray_x[u] * z_out, ws_.ray_y[v] * z_out, z_out);
+    return plane_n_.dot(p) + plane_d_ >= b_.thr;  // the table outside the box does not count
+  }
+
+  // Border leak: the region's pixels on each box side that lies inside the image, and those whose
+  // surface continues just outside (an occluder or background cut by the box goes on; the object
+  // of a fitting box ends at it).
+  void measure_border_leak(Grown& g) const {
+    const auto border = [&](int x, int y, int u, int v) {
+      const std::size_t i = static_cast<std::size_t>(y) * b_.bw + x;
+      if (!(ws_.flags[i] & kInMask)) return;
+      ++g.touching;
+      g.continuing += continues(i, u, v) ? 1 : 0;
+    };
+    const int u0 = b_.u0, v0 = b_.v0, u1 = b_.u1, v1 = b_.v1, bw = b_.bw, bh = b_.bh;
+    for (int y = 0; y < bh; ++y) {
+      if (u0 > 0) border(0, y, u0 - 1, v0 + y);
+      if (u1 < b_.width) border(bw - 1, y, u1, v0 + y);
+    }
+    for (int x = 0; x < bw; ++x) {
+      if (v0 > 0) border(x, 0, u0 + x, v0 - 1);
+      if (v1 < b_.height) border(x, bh - 1, u0 + x, v1);
+    }
+  }
+
+  const BoxPixels& b_;
+  Workspace& ws_;
+  const float slope_per_m_, noise_per_m2_;
+  const bool have_plane_;
+  const bool reclaim_;  // support pixels off the plane's normal may join the region
+  const Eigen::Vector3f plane_n_;
+  const float plane_d_;
+  const float max_cos_;
+  Px* queue_ = nullptr;       // the flood of one seed component
+  Px* seed_queue_ = nullptr;  // the seeds, then the region
+  std::size_t queued_ = 0;
+  float band_lo_ = 0, band_hi_ = 0;  // the current candidate's depth band
+  Window win_{};                     // the current candidate's seed window
+};
+
+// Step 5, occluders: the first region (grown at `mode`) runs on beyond the box. The nearest
+// farther candidate depth whose region stays inside the box wins (mode becomes it); when every
+// candidate leaks, the first region is kept.
+Grown grow_behind_occluder(RegionGrower& grower, const BoxPixels& b, const DepthBins& bins,
+                           std::uint8_t exclude, const Grown& first, double& mode) {
+  const BoxMaskOptions& options = b.options;
+  Workspace& ws = b.ws;
+  // grow() depends only on the mode and on flags it does not change (kValid, kSupport): the
+  // nearest candidate's region is kept as its flags rather than grown again if every one leaks.
+  bool regrown = false;
+  // The farther candidates: peaks of one histogram (grow() does not change what it counts).
+  const bool counted =
+      depth_histogram(ws, b.bw, b.bh, bins.z_lo, bins.bins, options.bin_m, exclude);
+  for (int k = 1; k < options.depth_candidates && counted; ++k) {
+    const double next = histogram_peak(ws, bins.bins, options.near_mode_min_share, k);
+    if (next <= 0) break;
+    if (!regrown) ws.saved_flags = ws.flags;
+    regrown = true;
+    const Grown g = grower.grow(next);
+    if (g.pixels > 0 && g.leak() <= options.max_border_leak) {
+      mode = next;
+      return g;
+    }
+  }
+  if (regrown) ws.flags.swap(ws.saved_flags);
+  return first;
+}
+
+// Step 6: a closing of the region (kInMask) into ws.scratch, restricted to pixels that may belong
+// to the object (no depth, or in the band).
+void close_region(const BoxPixels& b) {
+  Workspace& ws = b.ws;
+  auto& bits = ws.scratch;
+  bits.resize(b.area);
+  for (std::size_t i = 0; i < b.area; ++i) bits[i] = (ws.flags[i] & kInMask) ? 1 : 0;
+  if (b.options.close_radius_px <= 0) return;
+  morph(bits, ws.scratch2, b.bw, b.bh, b.options.close_radius_px, true);
+  morph(bits, ws.scratch2, b.bw, b.bh, b.options.close_radius_px, false);
+  for (std::size_t i = 0; i < b.area; ++i) {
+    const std::uint8_t f = ws.flags[i];
+    if (bits[i] && !(f & kInMask) && (f & kValid) && !(f & kBand)) bits[i] = 0;
+  }
+}
+
+// The pixels of a mask and their bounding rectangle.
+struct MaskExtent {
+  std::size_t pixels = 0;
+  cv::Rect bounds;
+};
+
+// Step 6: copies the closed region (ws.scratch) into the full-image mask; returns its extent.
+MaskExtent place_in_mask(const BoxPixels& b, Mask& mask) {
+  const auto& bits = b.ws.scratch;
+  std::size_t pixels = 0;
+  int bx0 = b.bw, bx1 = -1, by0 = b.bh, by1 = -1;  // box-local bounds of the mask's pixels
+  for (int y = 0; y < b.bh; ++y) {
+    std::uint8_t* out = mask.data.data() + static_cast<std::size_t>(b.v0 + y) * b.width + b.u0;
+    const std::uint8_t* in = bits.data() + static_cast<std::size_t>(y) * b.bw;
+    std::size_t row_pixels = 0;
+    for (int x = 0; x < b.bw; ++x) {
+      out[x] = in[x];
+      row_pixels += in[x];
+    }
+    if (row_pixels == 0) continue;
+    pixels += row_pixels;
+    int first = 0, last = b.bw - 1;
+    while (!in[first]) ++first;
+    while (!in[last]) --last;
+    bx0 = std::min(bx0, first);
+    bx1 = std::max(bx1, last);
+    by0 = std::min(by0, y);
+    by1 = std::max(by1, y);
+  }
+  return {pixels, cv::Rect(b.u0 + bx0, b.v0 + by0, bx1 - bx0 + 1, by1 - by0 + 1)};
+}
+
+// Step 6: the closed region into result's mask, with its pixels, bounds and status (kTooSmall and
+// an empty mask below the minimum area).
+void clean_up(const BoxPixels& b, BoxMaskResult& result) {
+  close_region(b);
+  const MaskExtent extent = place_in_mask(b, result.mask);
+  const double min_area = std::max<double>(
+      b.options.min_pixels, b.options.min_box_fraction * static_cast<double>(b.area));
+  if (static_cast<double>(extent.pixels) < min_area || extent.pixels == 0) {
+    std::fill(result.mask.data.begin(), result.mask.data.end(), 0);
+    result.status = BoxMaskStatus::kTooSmall;
+    return;
+  }
+  result.pixels = extent.pixels;
+  result.bounds = extent.bounds;
+  result.status = BoxMaskStatus::kOk;
+}
+
 }  // namespace
 
 void BoxMaskOptions::check() const {
@@ -338,476 +943,55 @@ BoxMaskResult mask_from_box(const Box& box, const cv::Mat& depth, const Camera& 
     result.status = BoxMaskStatus::kOutsideImage;
     return result;
   }
-  const int width = depth.cols, height = depth.rows;
-  result.mask.width = width;
-  result.mask.height = height;
-  result.mask.data.assign(static_cast<std::size_t>(width) * height, 0);
+  result.mask.width = depth.cols;
+  result.mask.height = depth.rows;
+  result.mask.data.assign(static_cast<std::size_t>(depth.cols) * depth.rows, 0);
 
-  // 1. Clip the box to the image: pixels [u0, u1) × [v0, v1).
-  const auto clip = [](double value, int hi) {
-    if (!std::isfinite(value)) return 0;
-    return static_cast<int>(std::clamp(value, 0.0, static_cast<double>(hi)));
-  };
-  const int u0 = clip(std::floor(box.x), width), u1 = clip(std::ceil(box.x + box.w), width);
-  const int v0 = clip(std::floor(box.y), height), v1 = clip(std::ceil(box.y + box.h), height);
-  result.u0 = u0;
-  result.v0 = v0;
-  result.u1 = std::max(u0, u1);
-  result.v1 = std::max(v0, v1);
-  if (u1 <= u0 || v1 <= v0) {
+  // 1. Valid depths inside the box clipped to the image.
+  const ClippedBox clipped = clip_box(box, depth.cols, depth.rows);
+  result.u0 = clipped.u0;
+  result.v0 = clipped.v0;
+  result.u1 = std::max(clipped.u0, clipped.u1);
+  result.v1 = std::max(clipped.v0, clipped.v1);
+  if (clipped.u1 <= clipped.u0 || clipped.v1 <= clipped.v0) {
     result.status = BoxMaskStatus::kOutsideImage;
     return result;
   }
-  const int bw = u1 - u0, bh = v1 - v0;
-  const std::size_t area = static_cast<std::size_t>(bw) * bh;
-
-  Workspace& ws = workspace();
-  const float to_m = static_cast<float>(1.0 / camera.depth_factor);
-  const float zmin = static_cast<float>(options.min_depth_m);
-  const float zmax = static_cast<float>(options.max_depth_m);
-  ws.ray_x.resize(static_cast<std::size_t>(width));
-  for (int u = 0; u < width; ++u) ws.ray_x[u] = static_cast<float>((u - camera.cx) / camera.fx);
-  ws.ray_y.resize(static_cast<std::size_t>(height));
-  for (int v = 0; v < height; ++v) ws.ray_y[v] = static_cast<float>((v - camera.cy) / camera.fy);
-  const auto depth_at = [&](int u, int v) {
-    const float z = depth.at<std::uint16_t>(v, u) * to_m;
-    return (z >= zmin && z <= zmax) ? z : 0.0f;
-  };
-
-  // Valid depths of the box.
-  ws.z_m.resize(area);
-  ws.flags.assign(area, 0);
-  float z_lo = zmax, z_hi = 0;
-  for (int y = 0; y < bh; ++y) {
-    const std::uint16_t* src = depth.ptr<std::uint16_t>(v0 + y) + u0;
-    float* dst = ws.z_m.data() + static_cast<std::size_t>(y) * bw;
-    std::uint8_t* fl = ws.flags.data() + static_cast<std::size_t>(y) * bw;
-    for (int x = 0; x < bw; ++x) {
-      const float z = src[x] * to_m;
-      if (z >= zmin && z <= zmax) {
-        dst[x] = z;
-        fl[x] = kValid;
-        z_lo = std::min(z_lo, z);
-        z_hi = std::max(z_hi, z);
-        ++result.valid_pixels;
-      } else {
-        dst[x] = 0;
-      }
-    }
-  }
+  const BoxPixels b(box, depth, camera, options, clipped);
+  const DepthBins bins = valid_depths(b, result.valid_pixels);
   if (result.valid_pixels == 0) {
     result.status = BoxMaskStatus::kNoValidDepth;
     return result;
   }
 
-  // Centre weights (separable Gaussian), in box-local coordinates.
-  ws.weight_u.resize(static_cast<std::size_t>(bw));
-  ws.weight_v.resize(static_cast<std::size_t>(bh));
-  {
-    const double cu = box.x + 0.5 * box.w, cv = box.y + 0.5 * box.h;
-    const double su = std::max(1.0, options.center_sigma_fraction * box.w);
-    const double sv = std::max(1.0, options.center_sigma_fraction * box.h);
-    for (int x = 0; x < bw; ++x) {
-      const double t = (u0 + x + 0.5 - cu) / su;
-      ws.weight_u[x] = static_cast<float>(std::exp(-0.5 * t * t));
-    }
-    for (int y = 0; y < bh; ++y) {
-      const double t = (v0 + y + 0.5 - cv) / sv;
-      ws.weight_v[y] = static_cast<float>(std::exp(-0.5 * t * t));
-    }
-  }
-  const int bins = std::max(1, static_cast<int>((z_hi - z_lo) / options.bin_m) + 1);
-
-  // 2–3. The object's depth and the support plane. Planes are fitted to the box's bottom rows and
-  // the rows just below it; a plane is accepted when it is well supported, leaves a fair share of
-  // the box, and the object found without it (mode0) stands on it, on the camera's side. A rejected
-  // plane (an occluder's or the object's own face) gives up its samples and the next one is tried.
-  // With a plane, the object's depth is taken again without the plane's pixels.
-  const float tol = static_cast<float>(options.seed_tolerance_bins * options.bin_m);
-  const float thr = static_cast<float>(options.support_inlier_m);
-  struct Window {
-    int x0, x1, y0, y1;
-  };
-  const auto seed_window = [&](double frac) {
-    const double cu = box.x + 0.5 * box.w - u0, cv = box.y + 0.5 * box.h - v0;
-    return Window{std::max(0, static_cast<int>(std::floor(cu - 0.5 * frac * box.w))),
-                  std::min(bw, static_cast<int>(std::ceil(cu + 0.5 * frac * box.w))),
-                  std::max(0, static_cast<int>(std::floor(cv - 0.5 * frac * box.h))),
-                  std::min(bh, static_cast<int>(std::ceil(cv + 0.5 * frac * box.h)))};
-  };
-  // The object's depth without any plane: the near mode of the histogram.
-  const double mode0 =
-      near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share, 0);
+  // 2. The object's depth: the nearest good peak of the centre-weighted depth histogram.
+  centre_weights(b);
+  const double mode0 = object_depth(b, bins, 0);
   if (mode0 <= 0) {
     result.status = BoxMaskStatus::kNoValidDepth;
     return result;
   }
-  double mode = mode0;
-  bool have_plane = false;
-  if (options.remove_support_plane) {
-    const int rows_bottom = static_cast<int>(std::ceil(options.support_bottom_fraction * bh));
-    const int rows_below = static_cast<int>(std::ceil(options.support_below_fraction * box.h));
-    const int s0 = std::max(v0, v1 - rows_bottom), s1 = std::min(height, v1 + rows_below);
-    ws.samples.clear();
-    if (s1 > s0) {
-      const double strip = static_cast<double>(bw) * (s1 - s0);
-      const int stride =
-          std::max(1, static_cast<int>(std::ceil(std::sqrt(strip / options.support_max_samples))));
-      for (int v = s0; v < s1; v += stride) {
-        for (int u = u0; u < u1; u += stride) {
-          const float z = depth_at(u, v);
-          if (z > 0) ws.samples.emplace_back(ws.ray_x[u] * z, ws.ray_y[v] * z, z);
-        }
-      }
-    }
-    for (int attempt = 0; attempt < options.support_max_planes && !have_plane; ++attempt) {
-      const Plane plane =
-          fit_plane(ws.samples, thr, options.support_ransac_iterations, ws.sample_inlier);
-      const double needed = std::max<double>(options.support_min_inliers,
-                                             options.support_min_inlier_share * ws.samples.size());
-      if (!plane.valid || static_cast<double>(plane.inliers) < needed) break;
-      // Set aside the box pixels on the plane or beyond it (the object stands on the camera's
-      // side).
-      std::size_t removed = 0;
-      for (int y = 0; y < bh; ++y) {
-        const std::size_t row = static_cast<std::size_t>(y) * bw;
-        const float ry = ws.ray_y[v0 + y];
-        for (int x = 0; x < bw; ++x) {
-          std::uint8_t& f = ws.flags[row + x];
-          f &= static_cast<std::uint8_t>(~kSupport);
-          if (!(f & kValid)) continue;
-          const float z = ws.z_m[row + x];
-          const float dist =
-              z * (plane.n.x() * ws.ray_x[u0 + x] + plane.n.y() * ry + plane.n.z()) + plane.d;
-          if (dist < thr) {
-            f |= kSupport;
-            ++removed;
-          }
-        }
-      }
-      // The plane must leave a fair share of the box, and the object found without any plane
-      // (mode0's central pixels) must stand on the camera's side of it: an occluder's face or the
-      // object's own face has the object behind it or on it.
-      bool ok = removed * 10 <= result.valid_pixels * 9;
-      if (ok) {
-        std::size_t above = 0, beyond = 0, count = 0;
-        for (int pass = 0; pass < 2 && count == 0; ++pass) {
-          const Window win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
-          for (int y = win.y0; y < win.y1; ++y) {
-            const std::size_t row = static_cast<std::size_t>(y) * bw;
-            const float ry = ws.ray_y[v0 + y];
-            for (int x = win.x0; x < win.x1; ++x) {
-              const float z = ws.z_m[row + x];
-              if (!(ws.flags[row + x] & kValid) || std::abs(z - mode0) > tol) continue;
-              const float dist =
-                  z * (plane.n.x() * ws.ray_x[u0 + x] + plane.n.y() * ry + plane.n.z()) + plane.d;
-              above += dist > thr;
-              beyond += dist < -thr;
-              ++count;
-            }
-          }
-        }
-        ok = count > 0 && static_cast<double>(above) >= options.support_min_above_share * count &&
-             static_cast<double>(beyond) <= options.support_max_beyond_share * count;
-        if (ok) {
-          mode = near_mode(ws, bw, bh, z_lo, bins, options.bin_m, options.near_mode_min_share,
-                           kSupport);
-          ok = mode > 0;
-        }
-      }
-      if (ok) {
-        have_plane = true;
-        result.support_plane_removed = true;
-        result.support_inliers = plane.inliers;
-        result.support_pixels_removed = removed;
-        result.support_plane_in_cam << plane.n.cast<double>(), plane.d;
-      } else {
-        // Drop this plane's samples and try the next one.
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < ws.samples.size(); ++i) {
-          if (std::abs(plane.n.dot(ws.samples[i]) + plane.d) > thr)
-            ws.samples[kept++] = ws.samples[i];
-        }
-        ws.samples.resize(kept);
-      }
-    }
-    if (!have_plane) {
-      for (auto& f : ws.flags) f &= static_cast<std::uint8_t>(~kSupport);
-    }
-  }
-  if (!have_plane) mode = mode0;
 
-  // 4. Region growing from the object's depth (a function of the candidate depth: see below).
-  const float slope_per_m = static_cast<float>(std::tan(options.smooth_max_slope_deg * kPi / 180) *
-                                               2 / (camera.fx + camera.fy));
-  const float noise_per_m2 = static_cast<float>(options.smooth_noise_m_per_m2);
-  const auto step_at = [&](float z) { return z * (slope_per_m + noise_per_m2 * z); };
-  const int n_neigh = options.connectivity;
-  static constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
-  static constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
-  // Support pixels may be taken back (see below) when they lie on the plane, not beyond it, and
-  // their normal (3D central differences over ±2 px) is off the plane's by the reclaim angle.
-  const bool reclaim = have_plane && options.support_reclaim_angle_deg < 90.0;
-  const Eigen::Vector3f plane_n = result.support_plane_in_cam.head<3>().cast<float>();
-  const float plane_d = static_cast<float>(result.support_plane_in_cam[3]);
-  const float max_cos = static_cast<float>(std::cos(options.support_reclaim_angle_deg * kPi / 180));
-  const auto point = [&](int x, int y) {
-    const float z = ws.z_m[static_cast<std::size_t>(y) * bw + x];
-    return Eigen::Vector3f(ws.ray_x[u0 + x] * z, ws.ray_y[v0 + y] * z, z);
-  };
-  const auto off_plane = [&](int x, int y) {
-    constexpr int k = 2;
-    if (x < k || y < k || x + k >= bw || y + k >= bh) return false;
-    const Eigen::Vector3f p = point(x, y);
-    if (plane_n.dot(p) + plane_d < -thr) return false;  // beyond the plane
-    // A smooth neighbourhood only (no step, no kink): across a depth edge the "normal" is
-    // meaningless. Second differences along both axes below half a smoothness step.
-    const float z = p.z(), tol = 0.5f * step_at(z);
-    const std::size_t c = static_cast<std::size_t>(y) * bw + x;
-    const std::size_t l = c - k, r = c + k, u = c - k * bw, d = c + k * bw;
-    if (!(ws.flags[l] & ws.flags[r] & ws.flags[u] & ws.flags[d] & kValid)) return false;
-    if (std::abs(ws.z_m[l] + ws.z_m[r] - 2 * z) > tol) return false;
-    if (std::abs(ws.z_m[u] + ws.z_m[d] - 2 * z) > tol) return false;
-    const Eigen::Vector3f n =
-        (point(x + k, y) - point(x - k, y)).cross(point(x, y + k) - point(x, y - k));
-    const float len = n.norm();
-    return len > 0 && std::abs(n.dot(plane_n)) < max_cos * len;
-  };
-  // Does the surface at box pixel i continue smoothly to image pixel (u, v) outside the box?
-  const auto continues = [&](std::size_t i, int u, int v) {
-    const float z_out = depth_at(u, v);
-    if (z_out <= 0 || std::abs(z_out - ws.z_m[i]) > step_at(ws.z_m[i])) return false;
-    if (!have_plane) return true;
-    const Eigen::Vector3f p(ws.ray_x[u] * z_out, ws.ray_y[v] * z_out, z_out);
-    return plane_n.dot(p) + plane_d >= thr;  // the table outside the box does not count
-  };
+  // 3. The supporting surface: a plane the object stands on; its pixels are set aside and the
+  //    object's depth is taken again without them.
+  double mode = options.remove_support_plane ? supporting_surface(b, bins, mode0, result) : mode0;
 
-  struct Grown {
-    std::size_t pixels = 0, seeds = 0, touching = 0, continuing = 0;
-    double band = 0;
-    // Share of the region's pixels on the box border whose surface goes on outside the box.
-    double leak() const { return touching ? static_cast<double>(continuing) / touching : 0.0; }
-  };
-  float band_lo = 0, band_hi = 0;
-  // The queues of the floods and of the region growing: room for every box pixel (a pixel joins
-  // each at most once), written through raw pointers.
-  if (ws.queue.size() < area) {
-    ws.queue.resize(area);
-    ws.seed_queue.resize(area);
-  }
-  Workspace::Px* const queue = ws.queue.data();
-  Workspace::Px* const seed_queue = ws.seed_queue.data();
-  std::size_t queued = 0;
-  const auto grow = [&](double mode_m) {
-    Grown g;
-    constexpr std::uint8_t kPerMode = kBand | kInMask | kChecked | kSeed;
-    // Depth band from the box's metric size at the mode depth.
-    const double metric_size = std::max(box.w * mode_m / camera.fx, box.h * mode_m / camera.fy);
-    g.band = std::clamp(options.band_size_factor * metric_size, options.band_min_m,
-                        std::max(options.band_min_m, options.band_max_m));
-    band_lo = static_cast<float>(mode_m - g.band * options.band_near_fraction);
-    band_hi = static_cast<float>(mode_m + g.band);
-    for (std::size_t i = 0; i < area; ++i) {
-      std::uint8_t f = ws.flags[i] & static_cast<std::uint8_t>(~kPerMode);
-      if ((f & kValid) && !(f & kSupport) && ws.z_m[i] >= band_lo && ws.z_m[i] <= band_hi) {
-        f |= kBand;
-      }
-      ws.flags[i] = f;
-    }
-    // Seeds: central pixels at the mode depth (the whole box when the centre has none), and of
-    // those only the smooth-connected component with the most centre weight: an occluder's
-    // surface that crosses the mode depth elsewhere in the centre is not seeded.
-    std::size_t candidates = 0;
-    Window win{};
-    for (int pass = 0; pass < 2 && candidates == 0; ++pass) {
-      win = seed_window(pass == 0 ? options.seed_center_fraction : 1.0);
-      for (int y = win.y0; y < win.y1; ++y) {
-        for (int x = win.x0; x < win.x1; ++x) {
-          const std::size_t i = static_cast<std::size_t>(y) * bw + x;
-          if ((ws.flags[i] & kBand) && std::abs(ws.z_m[i] - static_cast<float>(mode_m)) <= tol) {
-            ws.flags[i] |= kSeed;
-            ++candidates;
-          }
-        }
-      }
-    }
-    // Flood one component of the seed candidates from `start`; returns its centre weight.
-    const auto flood_seeds = [&](Workspace::Px start) {
-      queued = 0;
-      queue[queued++] = start;
-      ws.flags[static_cast<std::size_t>(start.y) * bw + start.x] |= kInMask;
-      double weight = 0;
-      for (std::size_t head = 0; head < queued; ++head) {
-        const int xi = queue[head].x, yi = queue[head].y;
-        const std::int32_t i = yi * bw + xi;
-        weight += static_cast<double>(ws.weight_u[xi]) * ws.weight_v[yi];
-        const float z = ws.z_m[i];
-        const float step = step_at(z);
-        for (int k = 0; k < n_neigh; ++k) {
-          const int xx = xi + kDx[k], yy = yi + kDy[k];
-          if (xx < win.x0 || yy < win.y0 || xx >= win.x1 || yy >= win.y1) continue;
-          const std::int32_t j = yy * bw + xx;
-          const std::uint8_t f = ws.flags[j];
-          if (!(f & kSeed) || (f & kInMask) || std::abs(ws.z_m[j] - z) > step) continue;
-          ws.flags[j] = f | kInMask;
-          queue[queued++] = {xx, yy};
-        }
-      }
-      return weight;
-    };
-    // Components of the candidates and their centre weights (kInMask marks "visited" meanwhile).
-    auto& starts = ws.components;
-    starts.clear();
-    double best_weight = 0;
-    for (int y = win.y0; y < win.y1; ++y) {
-      for (int x = win.x0; x < win.x1; ++x) {
-        const std::uint8_t f = ws.flags[static_cast<std::size_t>(y) * bw + x];
-        if (!(f & kSeed) || (f & kInMask)) continue;
-        const double weight = flood_seeds({x, y});
-        starts.emplace_back(Workspace::Px{x, y}, weight);
-        best_weight = std::max(best_weight, weight);
-      }
-    }
-    for (int y = win.y0; y < win.y1; ++y) {
-      for (int x = win.x0; x < win.x1; ++x) {
-        ws.flags[static_cast<std::size_t>(y) * bw + x] &= static_cast<std::uint8_t>(~kInMask);
-      }
-    }
-    // The seeds: the components holding at least seed_component_min_share of the best one's
-    // weight (an object cut in two by a thin occluder keeps both halves; specks do not count).
-    std::size_t seeds = 0;
-    for (const auto& [start, weight] : starts) {
-      if (weight < options.seed_component_min_share * best_weight) continue;
-      flood_seeds(start);
-      std::copy(queue, queue + queued, seed_queue + seeds);
-      seeds += queued;
-    }
-    g.seeds = seeds;
+  // 4. Region growing from seeds at the object's depth.
+  RegionGrower grower(b, result);
+  Grown grown = grower.grow(mode);
 
-    // Region growing across smooth depth inside the band.
-    for (std::size_t head = 0; head < seeds; ++head) {
-      const int x = seed_queue[head].x, y = seed_queue[head].y;
-      const std::int32_t i = y * bw + x;
-      const float z = ws.z_m[i];
-      const float step = step_at(z);
-      for (int k = 0; k < n_neigh; ++k) {
-        const int xx = x + kDx[k], yy = y + kDy[k];
-        if (xx < 0 || yy < 0 || xx >= bw || yy >= bh) continue;
-        const std::int32_t j = yy * bw + xx;
-        const std::uint8_t f = ws.flags[j];
-        if ((f & kInMask) || !(f & kValid) || std::abs(ws.z_m[j] - z) > step) continue;
-        if (!(f & kBand)) {
-          // A pixel within the plane's inlier distance joins when its surface is not the plane's:
-          // the object's lowest rows, not the table.
-          if (!reclaim || (f & kChecked) || !(f & kSupport) || ws.z_m[j] < band_lo ||
-              ws.z_m[j] > band_hi || !off_plane(xx, yy)) {
-            ws.flags[j] = f | kChecked;
-            continue;
-          }
-        }
-        ws.flags[j] = f | kInMask;
-        seed_queue[seeds++] = {xx, yy};
-      }
-    }
-    g.pixels = seeds;
-
-    // Border leak: the region's pixels on each box side that lies inside the image, and those whose
-    // surface continues just outside (an occluder or background cut by the box goes on; the object
-    // of a fitting box ends at it).
-    const auto border = [&](int x, int y, int u, int v) {
-      const std::size_t i = static_cast<std::size_t>(y) * bw + x;
-      if (!(ws.flags[i] & kInMask)) return;
-      ++g.touching;
-      g.continuing += continues(i, u, v) ? 1 : 0;
-    };
-    for (int y = 0; y < bh; ++y) {
-      if (u0 > 0) border(0, y, u0 - 1, v0 + y);
-      if (u1 < width) border(bw - 1, y, u1, v0 + y);
-    }
-    for (int x = 0; x < bw; ++x) {
-      if (v0 > 0) border(x, 0, u0 + x, v0 - 1);
-      if (v1 < height) border(x, bh - 1, u0 + x, v1);
-    }
-    return g;
-  };
-
-  // 5. Occluders: the nearest candidate depth whose region stays inside the box wins; an occluder
-  // in front of the object (a table edge, a monitor's side) runs on beyond the box and gives way to
-  // the next candidate farther away. When every candidate leaks, the nearest is kept.
-  const std::uint8_t exclude = have_plane ? kSupport : 0;
-  Grown grown = grow(mode);
+  // 5. Occluders: a region that runs on beyond the box gives way to the next candidate depth.
   if (grown.leak() > options.max_border_leak) {
-    // grow() depends only on the mode and on flags it does not change (kValid, kSupport): the
-    // nearest candidate's region is kept as its flags rather than grown again if every one leaks.
-    const Grown first = grown;
-    bool found = false, regrown = false;
-    // The farther candidates: peaks of one histogram (grow() does not change what it counts).
-    const bool counted = depth_histogram(ws, bw, bh, z_lo, bins, options.bin_m, exclude);
-    for (int k = 1; k < options.depth_candidates && !found && counted; ++k) {
-      const double next = histogram_peak(ws, bins, options.near_mode_min_share, k);
-      if (next <= 0) break;
-      if (!regrown) ws.saved_flags = ws.flags;
-      regrown = true;
-      const Grown g = grow(next);
-      if (g.pixels > 0 && g.leak() <= options.max_border_leak) {
-        grown = g;
-        mode = next;
-        found = true;
-      }
-    }
-    if (!found) {
-      grown = first;
-      if (regrown) ws.flags.swap(ws.saved_flags);
-    }
+    const std::uint8_t exclude = result.support_plane_removed ? kSupport : 0;
+    grown = grow_behind_occluder(grower, b, bins, exclude, grown, mode);
   }
   result.mode_depth_m = mode;
   result.band_half_width_m = grown.band;
   result.seed_pixels = grown.seeds;
   result.border_leak = grown.leak();
 
-  // 6. Closing, restricted to pixels that may belong to the object (no depth, or in the band).
-  auto& bits = ws.scratch;
-  bits.resize(area);
-  for (std::size_t i = 0; i < area; ++i) bits[i] = (ws.flags[i] & kInMask) ? 1 : 0;
-  if (options.close_radius_px > 0) {
-    morph(bits, ws.scratch2, bw, bh, options.close_radius_px, true);
-    morph(bits, ws.scratch2, bw, bh, options.close_radius_px, false);
-    for (std::size_t i = 0; i < area; ++i) {
-      const std::uint8_t f = ws.flags[i];
-      if (bits[i] && !(f & kInMask) && (f & kValid) && !(f & kBand)) bits[i] = 0;
-    }
-  }
-  std::size_t pixels = 0;
-  int bx0 = bw, bx1 = -1, by0 = bh, by1 = -1;  // box-local bounds of the mask's pixels
-  for (int y = 0; y < bh; ++y) {
-    std::uint8_t* out = result.mask.data.data() + static_cast<std::size_t>(v0 + y) * width + u0;
-    const std::uint8_t* in = bits.data() + static_cast<std::size_t>(y) * bw;
-    std::size_t row_pixels = 0;
-    for (int x = 0; x < bw; ++x) {
-      out[x] = in[x];
-      row_pixels += in[x];
-    }
-    if (row_pixels == 0) continue;
-    pixels += row_pixels;
-    int first = 0, last = bw - 1;
-    while (!in[first]) ++first;
-    while (!in[last]) --last;
-    bx0 = std::min(bx0, first);
-    bx1 = std::max(bx1, last);
-    by0 = std::min(by0, y);
-    by1 = std::max(by1, y);
-  }
-
-  const double min_area =
-      std::max<double>(options.min_pixels, options.min_box_fraction * static_cast<double>(area));
-  if (static_cast<double>(pixels) < min_area || pixels == 0) {
-    std::fill(result.mask.data.begin(), result.mask.data.end(), 0);
-    result.status = BoxMaskStatus::kTooSmall;
-    return result;
-  }
-  result.pixels = pixels;
-  result.bounds = cv::Rect(u0 + bx0, v0 + by0, bx1 - bx0 + 1, by1 - by0 + 1);
-  result.status = BoxMaskStatus::kOk;
+  // 6. Clean-up: a closing within the band; a region below the minimum area gives an empty mask.
+  clean_up(b, result);
   return result;
 }
 

@@ -14,6 +14,7 @@
 #include "objmap/io/image.h"
 #include "objmap/io/text_lines.h"
 #include "objmap/segmentation/coco_classes.h"
+#include "objmap/segmentation/detect_internal.h"
 #include "objmap/segmentation/yolo_seg.h"
 
 namespace objmap::segmentation {
@@ -58,23 +59,6 @@ void require_readable(const fs::path& file, const std::string& expected) {
 const char* const kDarknetExpected = "a Darknet YOLO model: .weights with its .cfg";
 const char* const kOnnxExpected =
     "an Ultralytics instance-segmentation export (YOLOv5-seg or YOLOv8-seg .onnx)";
-
-// An ONNX model's outputs and input size: an instance-segmentation export has two outputs (the
-// detections and the mask prototypes); its input is [1, 3, H, W] (or the size asked for).
-void onnx_seg_outputs(cv::dnn::Net& net, const DetectOptions& options, ModelInfo& info,
-                      std::vector<std::string>& output_names) {
-  output_names = net.getUnconnectedOutLayersNames();
-  require(output_names.size() == 2, info.model.string(),
-          "has " + std::to_string(output_names.size()) +
-              " output(s); expected 2, the detections and the mask prototypes of " + kOnnxExpected +
-              " (a detector without masks cannot give instance masks)");
-  const std::vector<std::int64_t> shape = onnx_input_shape(info.model);
-  const bool known = shape.size() == 4 && shape[2] > 0 && shape[3] > 0;
-  info.input_width =
-      options.input_width > 0 ? options.input_width : (known ? static_cast<int>(shape[3]) : 640);
-  info.input_height =
-      options.input_height > 0 ? options.input_height : (known ? static_cast<int>(shape[2]) : 640);
-}
 const char* const kTfExpected =
     "a TensorFlow Mask R-CNN frozen_inference_graph.pb with its .pbtxt text graph (--config)";
 
@@ -159,16 +143,358 @@ std::vector<std::string> read_class_names(const fs::path& file) {
   return names;
 }
 
+// The files a model of that kind needs, for messages.
+std::string expected_files(ModelKind kind) {
+  return kind == ModelKind::kDarknetYolo   ? kDarknetExpected
+         : kind == ModelKind::kOnnxYoloSeg ? kOnnxExpected
+                                           : kTfExpected;
+}
+
+// Step 1 of loading: the kind, from the extensions, and the model's files (info.kind, model,
+// config), which must be readable.
+void model_kind_and_files(const DetectOptions& options, ModelInfo& info) {
+  const std::string ext = lower_extension(options.model);
+  if (ext == ".weights" || ext == ".cfg") {
+    info.kind = ModelKind::kDarknetYolo;
+    fs::path weights = options.model, cfg = options.config;
+    if (ext == ".cfg") std::swap(weights, cfg);
+    if (weights.empty()) weights = fs::path(options.model).replace_extension(".weights");
+    if (cfg.empty()) cfg = fs::path(options.model).replace_extension(".cfg");
+    require(lower_extension(cfg) == ".cfg", cfg.string(),
+            "a Darknet model's network description must be a .cfg file; expected " +
+                std::string(kDarknetExpected));
+    require(lower_extension(weights) == ".weights", weights.string(),
+            "a Darknet model's weights must be a .weights file; expected " +
+                std::string(kDarknetExpected));
+    info.model = weights;
+    info.config = cfg;
+  } else if (ext == ".pb") {
+    info.kind = ModelKind::kTensorflowMaskRcnn;
+    info.config = options.config;
+    require(!info.config.empty(), options.model.string(),
+            "a TensorFlow .pb model needs its text graph; expected --config <graph>.pbtxt (made "
+            "by OpenCV's tf_text_graph_mask_rcnn.py)");
+    require(lower_extension(info.config) == ".pbtxt", info.config.string(),
+            "a TensorFlow model's text graph must be a .pbtxt file; expected " +
+                std::string(kTfExpected));
+  } else if (ext == ".onnx") {
+    info.kind = ModelKind::kOnnxYoloSeg;  // the whole network is the one file
+    info.config = options.model;
+  } else {
+    throw InputError(options.model.string(),
+                     "unsupported model kind '" +
+                         (ext.empty() ? std::string("(no extension)") : ext) + "'; expected " +
+                         kDarknetExpected + ", " + kTfExpected + ", or " + kOnnxExpected);
+  }
+  const std::string expected = expected_files(info.kind);
+  require_readable(info.model, expected);
+  require_readable(info.config, expected);
+}
+
+// Step 2 of loading: the network, on OpenCV's CPU backend; OpenCV's parser errors become one line
+// naming the file. A Darknet network must hold as many weights as its cfg asks for.
+cv::dnn::Net load_network(const ModelInfo& info) {
+  const std::string expected = expected_files(info.kind);
+  cv::dnn::Net net;
+  try {
+    if (info.kind == ModelKind::kDarknetYolo) {
+      net = cv::dnn::readNetFromDarknet(info.config.string(), info.model.string());
+    } else if (info.kind == ModelKind::kOnnxYoloSeg) {
+      net = cv::dnn::readNetFromONNX(info.model.string());
+    } else {
+      net = cv::dnn::readNetFromTensorflow(info.model.string(), info.config.string());
+    }
+  } catch (const cv::Exception& e) {
+    const std::string with =
+        info.config == info.model ? std::string() : " with " + info.config.string();
+    throw InputError(info.model.string(), "OpenCV cannot load it" + with + " (" + one_line(e.err) +
+                                              "); expected " + expected);
+  }
+  require(!net.empty(), info.model.string(),
+          "OpenCV loaded an empty network; expected " + expected);
+  if (info.kind == ModelKind::kDarknetYolo) {
+    // OpenCV reads as many weights as the cfg asks for and says nothing of a file that holds fewer
+    // (truncated) or more (another cfg): either detects nothing. The counts must agree.
+    const long long in_file = darknet_weight_count(info.model);
+    const long long in_net = network_weight_count(net);
+    require(in_file >= 0, info.model.string(),
+            "not a Darknet weights file (a header of 3 or 4 integers, then float32 values); "
+            "expected " +
+                expected);
+    require(in_file == in_net, info.model.string(),
+            "holds " + std::to_string(in_file) + " weights, " +
+                (in_file < in_net ? "fewer" : "more") + " than the " + std::to_string(in_net) +
+                " that " + info.config.filename().string() + " asks for (" +
+                (in_file < in_net ? "truncated, or made for another cfg" : "made for another cfg") +
+                "); expected the .weights trained with this .cfg");
+  }
+  net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return net;
+}
+
+// Step 3 of loading: the outputs to read, YOLO region layers or Mask R-CNN's two outputs (the
+// network must be a detector of its kind), and the input size (info.input_width/height).
+std::vector<std::string> detector_outputs(cv::dnn::Net& net, const DetectOptions& options,
+                                          ModelInfo& info) {
+  std::vector<std::string> output_names;
+  if (info.kind == ModelKind::kDarknetYolo) {
+    for (const auto& name : net.getUnconnectedOutLayersNames()) {
+      const auto layer = net.getLayer(net.getLayerId(name));
+      if (layer && layer->type == "Region") output_names.push_back(name);
+    }
+    require(!output_names.empty(), info.config.string(),
+            "the network has no [yolo] or [region] output layer; expected a Darknet YOLO "
+            "detector");
+    int width = 0, height = 0;
+    darknet_input_size(info.config, width, height);
+    info.input_width = options.input_width > 0 ? options.input_width : width;
+    info.input_height = options.input_height > 0 ? options.input_height : height;
+    require(info.input_width > 0 && info.input_height > 0, info.config.string(),
+            "no width/height in its [net] section; expected them, or an input size option");
+  } else if (info.kind == ModelKind::kOnnxYoloSeg) {
+    // An instance-segmentation export has two outputs (the detections, the mask prototypes); its
+    // input is [1, 3, H, W] (or the size asked for).
+    output_names = net.getUnconnectedOutLayersNames();
+    require(output_names.size() == 2, info.model.string(),
+            "has " + std::to_string(output_names.size()) +
+                " output(s); expected 2, the detections and the mask prototypes of " +
+                kOnnxExpected + " (a detector without masks cannot give instance masks)");
+    const std::vector<std::int64_t> shape = onnx_input_shape(info.model);
+    const bool known = shape.size() == 4 && shape[2] > 0 && shape[3] > 0;
+    info.input_width =
+        options.input_width > 0 ? options.input_width : (known ? static_cast<int>(shape[3]) : 640);
+    info.input_height = options.input_height > 0 ? options.input_height
+                                                 : (known ? static_cast<int>(shape[2]) : 640);
+  } else {
+    for (const char* name : {"detection_out_final", "detection_masks"}) {
+      require(net.getLayerId(name) >= 0, info.config.string(),
+              std::string("the graph has no layer '") + name +
+                  "'; expected a Mask R-CNN text graph made by OpenCV's "
+                  "tf_text_graph_mask_rcnn.py");
+      output_names.push_back(name);
+    }
+    info.input_width = options.input_width > 0 ? options.input_width : 800;
+    info.input_height = options.input_height > 0 ? options.input_height : 800;
+  }
+  return output_names;
+}
+
+// Step 4 of loading: the class names (info.class_names: the classes file's, else the built-in
+// names of the kind) and the filter (info.kept_class_ids); returns where the names come from.
+std::string class_names_and_filter(const DetectOptions& options, ModelInfo& info) {
+  std::string class_source;  // for messages: the classes file or "the built-in COCO-80 names"
+  if (!options.classes_file.empty()) {
+    info.class_names = read_class_names(options.classes_file);
+    class_source = options.classes_file.string();
+  } else if (info.kind != ModelKind::kTensorflowMaskRcnn) {
+    info.class_names = coco80_names();
+    class_source = "the built-in COCO-80 names";
+  } else {
+    info.class_names = coco90_names();
+    class_source = "the built-in COCO-90 names of the TensorFlow models";
+  }
+  std::vector<bool> kept(info.class_names.size(), options.classes.empty());
+  for (const auto& wanted : options.classes) {
+    const std::string name = canonical_class(wanted);
+    const auto it = std::find(info.class_names.begin(), info.class_names.end(), name);
+    require(it != info.class_names.end(), "DetectOptions.classes",
+            "'" + wanted + "' is not a class of the model (" + class_source + ", " +
+                std::to_string(info.class_names.size()) +
+                " names); expected names such as 'chair', 'cup', 'tv monitor', 'keyboard'");
+    kept[static_cast<std::size_t>(it - info.class_names.begin())] = true;
+  }
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    if (kept[i]) info.kept_class_ids.push_back(static_cast<int>(i));
+  return class_source;
+}
+
 double round_to(double value, double step) { return std::round(value / step) * step; }
 
-struct Candidate {
-  int class_id = 0;
-  float score = 0;
-  cv::Rect2d box;  // pixels of the image, clamped
-  int source = 0;  // index into the network's detections (Mask R-CNN: its mask)
+using detail::Candidate;
+using detail::suppress_non_maxima;
+
+// What the decoding steps share: the image size and the classes of the model that are kept.
+struct DecodeContext {
+  DecodeContext(const ModelInfo& info_, const DetectOptions& options_, int width_, int height_)
+      : info(info_),
+        options(options_),
+        width(width_),
+        height(height_),
+        class_count(info_.class_names.size()),
+        classes_where(options_.classes_file.empty() ? info_.model.string()
+                                                    : options_.classes_file.string()),
+        kept_class(class_count, false) {
+    for (int id : info.kept_class_ids)
+      if (id >= 0 && static_cast<std::size_t>(id) < class_count) kept_class[id] = true;
+  }
+
+  // The box with corners (x1, y1), (x2, y2) clamped to the image.
+  cv::Rect2d clamp_box(double x1, double y1, double x2, double y2) const {
+    x1 = std::clamp(x1, 0.0, static_cast<double>(width));
+    x2 = std::clamp(x2, 0.0, static_cast<double>(width));
+    y1 = std::clamp(y1, 0.0, static_cast<double>(height));
+    y2 = std::clamp(y2, 0.0, static_cast<double>(height));
+    return cv::Rect2d(x1, y1, x2 - x1, y2 - y1);
+  }
+
+  const ModelInfo& info;
+  const DetectOptions& options;
+  const int width, height;          // the image, pixels
+  const std::size_t class_count;    // of the model
+  const std::string classes_where;  // where the class names come from, for messages
+  std::vector<bool> kept_class;     // per class id
 };
 
+// Step 2, YOLO: each row of an output is centre x, centre y, width, height (fractions of the
+// image), objectness, then one score per class (objectness already multiplied in). The class is
+// the best-scored one (OpenCV's object_detection sample), then the class filter applies.
+std::vector<Candidate> yolo_candidates(const DecodeContext& c,
+                                       const std::vector<cv::Mat>& outputs) {
+  std::vector<Candidate> candidates;
+  for (const cv::Mat& out : outputs) {
+    require(out.dims == 2 && out.cols == static_cast<int>(c.class_count) + 5, c.classes_where,
+            std::to_string(c.class_count) + " class names but the model outputs " +
+                std::to_string(out.cols - 5) + " classes; expected a classes file that fits");
+    for (int r = 0; r < out.rows; ++r) {
+      const float* row = out.ptr<float>(r);
+      const float* best = std::max_element(row + 5, row + out.cols);
+      const int class_id = static_cast<int>(best - (row + 5));
+      if (*best < c.options.score_threshold || *best <= 0.f || !c.kept_class[class_id]) continue;
+      const double cx = row[0] * c.width, cy = row[1] * c.height;
+      const double w = row[2] * c.width, h = row[3] * c.height;
+      const cv::Rect2d box = c.clamp_box(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2);
+      if (box.width <= 0 || box.height <= 0) continue;
+      candidates.push_back({class_id, *best, box, r});
+    }
+  }
+  return candidates;
+}
+
+// Step 2, Mask R-CNN: "detection_out_final", 1 x 1 x N x 7 rows [batch, class id, score, x1, y1,
+// x2, y2] in fractions of the image; "detection_masks", N x classes x 15 x 15 (OpenCV's mask_rcnn
+// sample).
+std::vector<Candidate> mask_rcnn_candidates(const DecodeContext& c,
+                                            const std::vector<cv::Mat>& outputs) {
+  const ModelInfo& info = c.info;
+  require(outputs.size() == 2, info.config.string(),
+          "expected two outputs (detection_out_final, detection_masks)");
+  const cv::Mat& boxes = outputs[0];
+  const cv::Mat& masks = outputs[1];
+  require(
+      boxes.dims == 4 && boxes.size[3] == 7 && masks.dims == 4 && masks.size[0] >= boxes.size[2],
+      info.config.string(),
+      "unexpected output shapes; expected a Mask R-CNN graph (detection_out_final N x 7, "
+      "detection_masks N x classes x h x w)");
+  require(masks.size[1] == static_cast<int>(c.class_count), c.classes_where,
+          std::to_string(c.class_count) + " class names but the model outputs " +
+              std::to_string(masks.size[1]) + " classes; expected a classes file that fits");
+  std::vector<Candidate> candidates;
+  const int count = boxes.size[2];
+  const float* rows = boxes.ptr<float>();
+  for (int i = 0; i < count; ++i) {
+    const float* row = rows + 7 * i;
+    const int class_id = static_cast<int>(row[1]);
+    const float score = row[2];
+    if (class_id < 0 || class_id >= static_cast<int>(c.class_count)) continue;
+    if (score < c.options.score_threshold || score <= 0.f || !c.kept_class[class_id]) continue;
+    const cv::Rect2d box =
+        c.clamp_box(row[3] * c.width, row[4] * c.height, row[5] * c.width, row[6] * c.height);
+    if (box.width < 1 || box.height < 1) continue;
+    candidates.push_back({class_id, score, box, i});
+  }
+  return candidates;
+}
+
+// Step 4, Mask R-CNN: the candidate's class mask resized to its box and thresholded (the sample's
+// way), placed in a full-image mask; its area (0: nothing of the object survives the threshold).
+std::size_t mask_rcnn_mask(const DecodeContext& c, const Candidate& candidate, const cv::Mat& masks,
+                           Mask& mask) {
+  const int width = c.width, height = c.height;
+  const cv::Rect2d& box = candidate.box;
+  const int left = std::clamp(static_cast<int>(box.x), 0, width - 1);
+  const int top = std::clamp(static_cast<int>(box.y), 0, height - 1);
+  const int right = std::clamp(static_cast<int>(box.x + box.width), left, width - 1);
+  const int bottom = std::clamp(static_cast<int>(box.y + box.height), top, height - 1);
+  const int mask_h = masks.size[2], mask_w = masks.size[3];
+  const cv::Mat class_mask(
+      mask_h, mask_w, CV_32F,
+      const_cast<float*>(masks.ptr<float>(candidate.source, candidate.class_id)));
+  cv::Mat resized;
+  cv::resize(class_mask, resized, cv::Size(right - left + 1, bottom - top + 1));
+  mask.width = width;
+  mask.height = height;
+  mask.data.assign(static_cast<std::size_t>(width) * height, 0);
+  std::size_t area = 0;
+  for (int v = 0; v < resized.rows; ++v) {
+    const float* src = resized.ptr<float>(v);
+    for (int u = 0; u < resized.cols; ++u)
+      if (src[u] > c.options.mask_threshold) {
+        mask.data[static_cast<std::size_t>(top + v) * width + left + u] = 1;
+        ++area;
+      }
+  }
+  return area;
+}
+
+// Step 4: instances: boxes (x, y, w, h) to 1/100 px, scores to 1e-6; with Mask R-CNN's `masks`
+// (nullptr for YOLO), the instance's mask, and no instance when nothing of it survives.
+std::vector<Instance> to_instances(const DecodeContext& c, const std::vector<Candidate>& kept,
+                                   const cv::Mat* masks) {
+  std::vector<Instance> instances;
+  for (const auto& candidate : kept) {
+    Instance instance;
+    instance.class_name = c.info.class_names[static_cast<std::size_t>(candidate.class_id)];
+    instance.score = round_to(candidate.score, 1e-6);
+    const cv::Rect2d& box = candidate.box;
+    instance.bbox = {round_to(box.x, 0.01), round_to(box.y, 0.01), round_to(box.width, 0.01),
+                     round_to(box.height, 0.01)};
+    if (masks != nullptr) {
+      Mask mask;
+      if (mask_rcnn_mask(c, candidate, *masks, mask) == 0) continue;
+      instance.mask = std::move(mask);
+    }
+    instances.push_back(std::move(instance));
+  }
+  return instances;
+}
+
 }  // namespace
+
+namespace detail {
+
+// Non-maximum suppression (step 3 of decoding), over all kept classes at once (default) or per
+// class; the kept candidates sorted by class id, then score.
+std::vector<Candidate> suppress_non_maxima(const std::vector<Candidate>& candidates,
+                                           const DetectOptions& options) {
+  std::vector<Candidate> kept;
+  std::set<int> classes;
+  for (const auto& c : candidates) classes.insert(options.nms_across_classes ? -1 : c.class_id);
+  for (int class_id : classes) {
+    std::vector<cv::Rect2d> boxes;
+    std::vector<float> scores;
+    std::vector<const Candidate*> members;
+    for (const auto& c : candidates)
+      if (class_id == -1 || c.class_id == class_id) {
+        boxes.push_back(c.box);
+        scores.push_back(c.score);
+        members.push_back(&c);
+      }
+    std::vector<int> indices;
+    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(options.score_threshold),
+                      static_cast<float>(options.nms_threshold), indices);
+    for (int i : indices) kept.push_back(*members[static_cast<std::size_t>(i)]);
+  }
+  std::sort(kept.begin(), kept.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.class_id != b.class_id) return a.class_id < b.class_id;
+    if (a.score != b.score) return a.score > b.score;
+    if (a.box.x != b.box.x) return a.box.x < b.box.x;
+    return a.box.y < b.box.y;
+  });
+  return kept;
+}
+
+}  // namespace detail
 
 std::string model_kind_name(ModelKind kind) {
   switch (kind) {
@@ -237,6 +563,44 @@ void DetectOptions::check() const {
             "an empty class name; expected names");
 }
 
+struct Detector::Impl {
+  ModelInfo info;
+  DetectOptions options;
+  cv::dnn::Net net;
+  std::vector<std::string> output_names;
+  std::string class_source;  // for messages: the classes file or "the built-in COCO-80 names"
+};
+
+Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>()) {
+  options.check();
+  Impl& d = *impl_;
+  d.options = options;
+  ModelInfo& info = d.info;
+  info.model = options.model;
+  require(!options.model.empty(), "model", "no model given; expected a .weights or .pb file");
+  require(fs::exists(options.model), options.model.string(),
+          "no such file; expected " + std::string(kDarknetExpected) + ", " + kTfExpected + ", or " +
+              kOnnxExpected);
+
+  // 1. The kind, from the extensions.
+  model_kind_and_files(options, info);
+
+  // 2. The network; OpenCV's parser errors become one line naming the file.
+  d.net = load_network(info);
+
+  // 3. It must be a detector of that kind: YOLO region outputs, or Mask R-CNN's two outputs.
+  d.output_names = detector_outputs(d.net, options, info);
+
+  // 4. Class names and the filter.
+  d.class_source = class_names_and_filter(options, info);
+}
+
+Detector::~Detector() = default;
+
+const ModelInfo& Detector::info() const { return impl_->info; }
+
+const DetectOptions& Detector::options() const { return impl_->options; }
+
 namespace {
 
 // An Ultralytics segmentation export on one image: letterboxed into the input, run, decoded
@@ -260,161 +624,6 @@ std::vector<Instance> detect_onnx_seg(cv::dnn::Net& net, const std::vector<std::
 }
 
 }  // namespace
-
-struct Detector::Impl {
-  ModelInfo info;
-  DetectOptions options;
-  cv::dnn::Net net;
-  std::vector<std::string> output_names;
-  std::string class_source;  // for messages: the classes file or "the built-in COCO-80 names"
-};
-
-Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>()) {
-  options.check();
-  Impl& d = *impl_;
-  d.options = options;
-  ModelInfo& info = d.info;
-  info.model = options.model;
-  require(!options.model.empty(), "model", "no model given; expected a .weights or .pb file");
-  require(fs::exists(options.model), options.model.string(),
-          "no such file; expected " + std::string(kDarknetExpected) + ", " + kTfExpected + ", or " +
-              kOnnxExpected);
-
-  // 1. The kind, from the extensions.
-  const std::string ext = lower_extension(options.model);
-  if (ext == ".weights" || ext == ".cfg") {
-    info.kind = ModelKind::kDarknetYolo;
-    fs::path weights = options.model, cfg = options.config;
-    if (ext == ".cfg") std::swap(weights, cfg);
-    if (weights.empty()) weights = fs::path(options.model).replace_extension(".weights");
-    if (cfg.empty()) cfg = fs::path(options.model).replace_extension(".cfg");
-    require(lower_extension(cfg) == ".cfg", cfg.string(),
-            "a Darknet model's network description must be a .cfg file; expected " +
-                std::string(kDarknetExpected));
-    require(lower_extension(weights) == ".weights", weights.string(),
-            "a Darknet model's weights must be a .weights file; expected " +
-                std::string(kDarknetExpected));
-    info.model = weights;
-    info.config = cfg;
-  } else if (ext == ".pb") {
-    info.kind = ModelKind::kTensorflowMaskRcnn;
-    info.config = options.config;
-    require(!info.config.empty(), options.model.string(),
-            "a TensorFlow .pb model needs its text graph; expected --config <graph>.pbtxt (made "
-            "by OpenCV's tf_text_graph_mask_rcnn.py)");
-    require(lower_extension(info.config) == ".pbtxt", info.config.string(),
-            "a TensorFlow model's text graph must be a .pbtxt file; expected " +
-                std::string(kTfExpected));
-  } else if (ext == ".onnx") {
-    info.kind = ModelKind::kOnnxYoloSeg;  // the whole network is the one file
-    info.config = options.model;
-  } else {
-    throw InputError(options.model.string(),
-                     "unsupported model kind '" +
-                         (ext.empty() ? std::string("(no extension)") : ext) + "'; expected " +
-                         kDarknetExpected + ", " + kTfExpected + ", or " + kOnnxExpected);
-  }
-  const std::string expected = info.kind == ModelKind::kDarknetYolo   ? kDarknetExpected
-                               : info.kind == ModelKind::kOnnxYoloSeg ? kOnnxExpected
-                                                                      : kTfExpected;
-  require_readable(info.model, expected);
-  require_readable(info.config, expected);
-
-  // 2. The network; OpenCV's parser errors become one line naming the file.
-  try {
-    if (info.kind == ModelKind::kDarknetYolo) {
-      d.net = cv::dnn::readNetFromDarknet(info.config.string(), info.model.string());
-    } else if (info.kind == ModelKind::kOnnxYoloSeg) {
-      d.net = cv::dnn::readNetFromONNX(info.model.string());
-    } else {
-      d.net = cv::dnn::readNetFromTensorflow(info.model.string(), info.config.string());
-    }
-  } catch (const cv::Exception& e) {
-    const std::string with =
-        info.config == info.model ? std::string() : " with " + info.config.string();
-    throw InputError(info.model.string(), "OpenCV cannot load it" + with + " (" + one_line(e.err) +
-                                              "); expected " + expected);
-  }
-  require(!d.net.empty(), info.model.string(),
-          "OpenCV loaded an empty network; expected " + expected);
-  if (info.kind == ModelKind::kDarknetYolo) {
-    // OpenCV reads as many weights as the cfg asks for and says nothing of a file that holds fewer
-    // (truncated) or more (another cfg): either detects nothing. The counts must agree.
-    const long long in_file = darknet_weight_count(info.model);
-    const long long in_net = network_weight_count(d.net);
-    require(in_file >= 0, info.model.string(),
-            "not a Darknet weights file (a header of 3 or 4 integers, then float32 values); "
-            "expected " +
-                expected);
-    require(in_file == in_net, info.model.string(),
-            "holds " + std::to_string(in_file) + " weights, " +
-                (in_file < in_net ? "fewer" : "more") + " than the " + std::to_string(in_net) +
-                " that " + info.config.filename().string() + " asks for (" +
-                (in_file < in_net ? "truncated, or made for another cfg" : "made for another cfg") +
-                "); expected the .weights trained with this .cfg");
-  }
-  d.net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
-  d.net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
-
-  // 3. It must be a detector of that kind: YOLO region outputs, or Mask R-CNN's two outputs.
-  if (info.kind == ModelKind::kDarknetYolo) {
-    for (const auto& name : d.net.getUnconnectedOutLayersNames()) {
-      const auto layer = d.net.getLayer(d.net.getLayerId(name));
-      if (layer && layer->type == "Region") d.output_names.push_back(name);
-    }
-    require(!d.output_names.empty(), info.config.string(),
-            "the network has no [yolo] or [region] output layer; expected a Darknet YOLO "
-            "detector");
-    int width = 0, height = 0;
-    darknet_input_size(info.config, width, height);
-    info.input_width = options.input_width > 0 ? options.input_width : width;
-    info.input_height = options.input_height > 0 ? options.input_height : height;
-    require(info.input_width > 0 && info.input_height > 0, info.config.string(),
-            "no width/height in its [net] section; expected them, or an input size option");
-  } else if (info.kind == ModelKind::kOnnxYoloSeg) {
-    onnx_seg_outputs(d.net, options, info, d.output_names);
-  } else {
-    for (const char* name : {"detection_out_final", "detection_masks"}) {
-      require(d.net.getLayerId(name) >= 0, info.config.string(),
-              std::string("the graph has no layer '") + name +
-                  "'; expected a Mask R-CNN text graph made by OpenCV's "
-                  "tf_text_graph_mask_rcnn.py");
-      d.output_names.push_back(name);
-    }
-    info.input_width = options.input_width > 0 ? options.input_width : 800;
-    info.input_height = options.input_height > 0 ? options.input_height : 800;
-  }
-
-  // 4. Class names and the filter.
-  if (!options.classes_file.empty()) {
-    info.class_names = read_class_names(options.classes_file);
-    d.class_source = options.classes_file.string();
-  } else if (info.kind != ModelKind::kTensorflowMaskRcnn) {
-    info.class_names = coco80_names();
-    d.class_source = "the built-in COCO-80 names";
-  } else {
-    info.class_names = coco90_names();
-    d.class_source = "the built-in COCO-90 names of the TensorFlow models";
-  }
-  std::vector<bool> kept(info.class_names.size(), options.classes.empty());
-  for (const auto& wanted : options.classes) {
-    const std::string name = canonical_class(wanted);
-    const auto it = std::find(info.class_names.begin(), info.class_names.end(), name);
-    require(it != info.class_names.end(), "DetectOptions.classes",
-            "'" + wanted + "' is not a class of the model (" + d.class_source + ", " +
-                std::to_string(info.class_names.size()) +
-                " names); expected names such as 'chair', 'cup', 'tv monitor', 'keyboard'");
-    kept[static_cast<std::size_t>(it - info.class_names.begin())] = true;
-  }
-  for (std::size_t i = 0; i < kept.size(); ++i)
-    if (kept[i]) info.kept_class_ids.push_back(static_cast<int>(i));
-}
-
-Detector::~Detector() = default;
-
-const ModelInfo& Detector::info() const { return impl_->info; }
-
-const DetectOptions& Detector::options() const { return impl_->options; }
 
 std::vector<Instance> Detector::detect(const cv::Mat& image_bgr, const std::string& where) {
   Impl& d = *impl_;
@@ -444,138 +653,18 @@ std::vector<Instance> Detector::detect(const cv::Mat& image_bgr, const std::stri
 std::vector<Instance> decode_outputs(const ModelInfo& info, const DetectOptions& options,
                                      const std::vector<cv::Mat>& outputs, int width, int height) {
   require(width > 0 && height > 0, "image", "empty image; expected a size > 0");
-  const std::size_t class_count = info.class_names.size();
-  const std::string classes_where =
-      options.classes_file.empty() ? info.model.string() : options.classes_file.string();
+  const DecodeContext context(info, options, width, height);
   const bool yolo = info.kind == ModelKind::kDarknetYolo;
-  std::vector<bool> kept_class(class_count, false);
-  for (int id : info.kept_class_ids)
-    if (id >= 0 && static_cast<std::size_t>(id) < class_count) kept_class[id] = true;
 
   // 2. Candidates above the score threshold, of a kept class.
-  std::vector<Candidate> candidates;
-  auto clamp_box = [&](double x1, double y1, double x2, double y2) {
-    x1 = std::clamp(x1, 0.0, static_cast<double>(width));
-    x2 = std::clamp(x2, 0.0, static_cast<double>(width));
-    y1 = std::clamp(y1, 0.0, static_cast<double>(height));
-    y2 = std::clamp(y2, 0.0, static_cast<double>(height));
-    return cv::Rect2d(x1, y1, x2 - x1, y2 - y1);
-  };
-  const cv::Mat* masks = nullptr;
-  if (yolo) {
-    // Each row of a YOLO output: centre x, centre y, width, height (fractions of the image),
-    // objectness, then one score per class (objectness already multiplied in). The class is the
-    // best-scored one (OpenCV's object_detection sample), then the class filter applies.
-    for (const cv::Mat& out : outputs) {
-      require(out.dims == 2 && out.cols == static_cast<int>(class_count) + 5, classes_where,
-              std::to_string(class_count) + " class names but the model outputs " +
-                  std::to_string(out.cols - 5) + " classes; expected a classes file that fits");
-      for (int r = 0; r < out.rows; ++r) {
-        const float* row = out.ptr<float>(r);
-        const float* best = std::max_element(row + 5, row + out.cols);
-        const int class_id = static_cast<int>(best - (row + 5));
-        if (*best < options.score_threshold || *best <= 0.f || !kept_class[class_id]) continue;
-        const double cx = row[0] * width, cy = row[1] * height;
-        const double w = row[2] * width, h = row[3] * height;
-        const cv::Rect2d box = clamp_box(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2);
-        if (box.width <= 0 || box.height <= 0) continue;
-        candidates.push_back({class_id, *best, box, r});
-      }
-    }
-  } else {
-    // "detection_out_final": 1 x 1 x N x 7 rows [batch, class id, score, x1, y1, x2, y2] in
-    // fractions of the image; "detection_masks": N x classes x 15 x 15 (OpenCV's mask_rcnn sample).
-    require(outputs.size() == 2, info.config.string(),
-            "expected two outputs (detection_out_final, detection_masks)");
-    const cv::Mat& boxes = outputs[0];
-    masks = &outputs[1];
-    require(boxes.dims == 4 && boxes.size[3] == 7 && masks->dims == 4 &&
-                masks->size[0] >= boxes.size[2],
-            info.config.string(),
-            "unexpected output shapes; expected a Mask R-CNN graph (detection_out_final N x 7, "
-            "detection_masks N x classes x h x w)");
-    require(masks->size[1] == static_cast<int>(class_count), classes_where,
-            std::to_string(class_count) + " class names but the model outputs " +
-                std::to_string(masks->size[1]) + " classes; expected a classes file that fits");
-    const int count = boxes.size[2];
-    const float* rows = boxes.ptr<float>();
-    for (int i = 0; i < count; ++i) {
-      const float* row = rows + 7 * i;
-      const int class_id = static_cast<int>(row[1]);
-      const float score = row[2];
-      if (class_id < 0 || class_id >= static_cast<int>(class_count)) continue;
-      if (score < options.score_threshold || score <= 0.f || !kept_class[class_id]) continue;
-      const cv::Rect2d box =
-          clamp_box(row[3] * width, row[4] * height, row[5] * width, row[6] * height);
-      if (box.width < 1 || box.height < 1) continue;
-      candidates.push_back({class_id, score, box, i});
-    }
-  }
+  const std::vector<Candidate> candidates =
+      yolo ? yolo_candidates(context, outputs) : mask_rcnn_candidates(context, outputs);
 
   // 3. Non-maximum suppression, over all kept classes at once (default) or per class.
-  std::vector<Candidate> kept;
-  std::set<int> classes;
-  for (const auto& c : candidates) classes.insert(options.nms_across_classes ? -1 : c.class_id);
-  for (int class_id : classes) {
-    std::vector<cv::Rect2d> boxes;
-    std::vector<float> scores;
-    std::vector<const Candidate*> members;
-    for (const auto& c : candidates)
-      if (class_id == -1 || c.class_id == class_id) {
-        boxes.push_back(c.box);
-        scores.push_back(c.score);
-        members.push_back(&c);
-      }
-    std::vector<int> indices;
-    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(options.score_threshold),
-                      static_cast<float>(options.nms_threshold), indices);
-    for (int i : indices) kept.push_back(*members[static_cast<std::size_t>(i)]);
-  }
-  std::sort(kept.begin(), kept.end(), [](const Candidate& a, const Candidate& b) {
-    if (a.class_id != b.class_id) return a.class_id < b.class_id;
-    if (a.score != b.score) return a.score > b.score;
-    if (a.box.x != b.box.x) return a.box.x < b.box.x;
-    return a.box.y < b.box.y;
-  });
+  const std::vector<Candidate> kept = suppress_non_maxima(candidates, options);
 
-  // 4. Instances: boxes (x, y, w, h) to 1/100 px, scores to 1e-6; Mask R-CNN's class mask resized
-  //    to the box and thresholded (the sample's way), placed in a full-image mask.
-  std::vector<Instance> instances;
-  for (const auto& c : kept) {
-    Instance instance;
-    instance.class_name = info.class_names[static_cast<std::size_t>(c.class_id)];
-    instance.score = round_to(c.score, 1e-6);
-    instance.bbox = {round_to(c.box.x, 0.01), round_to(c.box.y, 0.01), round_to(c.box.width, 0.01),
-                     round_to(c.box.height, 0.01)};
-    if (masks != nullptr) {
-      const int left = std::clamp(static_cast<int>(c.box.x), 0, width - 1);
-      const int top = std::clamp(static_cast<int>(c.box.y), 0, height - 1);
-      const int right = std::clamp(static_cast<int>(c.box.x + c.box.width), left, width - 1);
-      const int bottom = std::clamp(static_cast<int>(c.box.y + c.box.height), top, height - 1);
-      const int mask_h = masks->size[2], mask_w = masks->size[3];
-      const cv::Mat class_mask(mask_h, mask_w, CV_32F,
-                               const_cast<float*>(masks->ptr<float>(c.source, c.class_id)));
-      cv::Mat resized;
-      cv::resize(class_mask, resized, cv::Size(right - left + 1, bottom - top + 1));
-      Mask mask;
-      mask.width = width;
-      mask.height = height;
-      mask.data.assign(static_cast<std::size_t>(width) * height, 0);
-      std::size_t area = 0;
-      for (int v = 0; v < resized.rows; ++v) {
-        const float* src = resized.ptr<float>(v);
-        for (int u = 0; u < resized.cols; ++u)
-          if (src[u] > options.mask_threshold) {
-            mask.data[static_cast<std::size_t>(top + v) * width + left + u] = 1;
-            ++area;
-          }
-      }
-      if (area == 0) continue;  // nothing of the object survives the threshold
-      instance.mask = std::move(mask);
-    }
-    instances.push_back(std::move(instance));
-  }
-  return instances;
+  // 4. Instances: boxes to 1/100 px, scores to 1e-6; Mask R-CNN's masks in full-image masks.
+  return to_instances(context, kept, yolo ? nullptr : &outputs[1]);
 }
 
 std::vector<DetectFrame> list_rgb_frames(const fs::path& dataset) {

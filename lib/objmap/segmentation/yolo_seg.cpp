@@ -4,12 +4,12 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
-#include <set>
 
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "objmap/core/error.h"
+#include "objmap/segmentation/detect_internal.h"
 
 namespace objmap::segmentation {
 
@@ -25,13 +25,7 @@ std::string shape_text(const cv::Mat& m) {
   return s + "]";
 }
 
-// A box candidate before NMS: its class, score, box in the frame's pixels and its row in output0.
-struct SegCandidate {
-  int class_id = 0;
-  float score = 0;
-  cv::Rect2d box;
-  int row = 0;
-};
+using detail::Candidate;
 
 // Reads output0 row by row in either layout: value(row, column).
 struct Rows {
@@ -45,14 +39,14 @@ struct Rows {
 };
 
 // Step 1: the rows above the score threshold, of a kept class, boxes in the frame.
-std::vector<SegCandidate> seg_candidates(const ModelInfo& model, const DetectOptions& options,
-                                         const Rows& rows, bool objectness, const Letterbox& lb) {
+std::vector<Candidate> seg_candidates(const ModelInfo& model, const DetectOptions& options,
+                                      const Rows& rows, bool objectness, const Letterbox& lb) {
   const int classes = static_cast<int>(model.class_names.size());
   const int first_class = objectness ? 5 : 4;
   std::vector<bool> kept_class(static_cast<std::size_t>(classes), false);
   for (int id : model.kept_class_ids)
     if (id >= 0 && id < classes) kept_class[static_cast<std::size_t>(id)] = true;
-  std::vector<SegCandidate> out;
+  std::vector<Candidate> out;
   for (int r = 0; r < rows.count; ++r) {
     int best = 0;
     float best_score = rows.at(r, first_class);
@@ -77,46 +71,16 @@ std::vector<SegCandidate> seg_candidates(const ModelInfo& model, const DetectOpt
   return out;
 }
 
-// Step 2: non-maximum suppression across classes or per class; sorted by class id, then score.
-std::vector<SegCandidate> suppress(const std::vector<SegCandidate>& candidates,
-                                   const DetectOptions& options) {
-  std::set<int> groups;
-  for (const auto& c : candidates) groups.insert(options.nms_across_classes ? -1 : c.class_id);
-  std::vector<SegCandidate> kept;
-  for (int group : groups) {
-    std::vector<cv::Rect2d> boxes;
-    std::vector<float> scores;
-    std::vector<const SegCandidate*> members;
-    for (const auto& c : candidates)
-      if (group == -1 || c.class_id == group) {
-        boxes.push_back(c.box);
-        scores.push_back(c.score);
-        members.push_back(&c);
-      }
-    std::vector<int> indices;
-    cv::dnn::NMSBoxes(boxes, scores, static_cast<float>(options.score_threshold),
-                      static_cast<float>(options.nms_threshold), indices);
-    for (int i : indices) kept.push_back(*members[static_cast<std::size_t>(i)]);
-  }
-  std::sort(kept.begin(), kept.end(), [](const SegCandidate& a, const SegCandidate& b) {
-    if (a.class_id != b.class_id) return a.class_id < b.class_id;
-    if (a.score != b.score) return a.score > b.score;
-    if (a.box.x != b.box.x) return a.box.x < b.box.x;
-    return a.box.y < b.box.y;
-  });
-  return kept;
-}
-
 // Step 3: one instance's mask in the frame: sigmoid(coefficients · prototypes) at the prototypes'
 // resolution, zero outside the box, upsampled to the input, the letterbox undone, thresholded and
 // kept inside the box. Empty when nothing passes the threshold.
 Mask instance_mask(const Rows& rows, int first_coefficient, const cv::Mat& protos,
-                   const SegCandidate& c, const Letterbox& lb, double threshold) {
+                   const Candidate& c, const Letterbox& lb, double threshold) {
   const int ph = protos.size[2], pw = protos.size[3];
   const cv::Mat basis(kMaskCoefficients, ph * pw, CV_32F, const_cast<float*>(protos.ptr<float>()));
   cv::Mat coefficients(1, kMaskCoefficients, CV_32F);
   for (int k = 0; k < kMaskCoefficients; ++k)
-    coefficients.at<float>(k) = rows.at(c.row, first_coefficient + k);
+    coefficients.at<float>(k) = rows.at(c.source, first_coefficient + k);
   cv::Mat logits = coefficients * basis;  // 1 × (ph · pw)
   cv::Mat proto_mask = logits.reshape(1, ph);
   // The box at the prototypes' resolution (input pixels / stride); outside it, 0 (crop_mask).
@@ -279,8 +243,8 @@ std::vector<Instance> decode_yolo_seg(const ModelInfo& model, const DetectOption
 
   // 1. Candidates, 2. NMS, 3. masks; boxes to 1/100 px and scores to 1e-6 as detect() does.
   std::vector<Instance> instances;
-  for (const SegCandidate& c :
-       suppress(seg_candidates(model, options, rows, v5, letterbox), options)) {
+  for (const Candidate& c :
+       detail::suppress_non_maxima(seg_candidates(model, options, rows, v5, letterbox), options)) {
     Mask mask = instance_mask(rows, first_coefficient, p, c, letterbox, options.mask_threshold);
     if (mask.data.empty()) continue;  // nothing of the object survives the threshold
     Instance instance;
