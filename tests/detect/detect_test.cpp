@@ -221,12 +221,13 @@ TEST(Detect, ModelErrors) {
   o.model = tmp / "none.weights";
   EXPECT_EQ(error_of([&] { Detector d(o); }),
             (tmp / "none.weights").string() +
-                ": no such file; expected a Darknet YOLO model: .weights with its .cfg, or a "
+                ": no such file; expected a Darknet YOLO model: .weights with its .cfg, a "
                 "TensorFlow Mask R-CNN frozen_inference_graph.pb with its .pbtxt text graph "
-                "(--config)");
-  test::write_text(tmp / "model.onnx", "x");
-  o.model = tmp / "model.onnx";
-  EXPECT_NE(error_of([&] { Detector d(o); }).find(": unsupported model kind '.onnx'; expected"),
+                "(--config), or an Ultralytics instance-segmentation export (YOLOv5-seg or "
+                "YOLOv8-seg .onnx)");
+  test::write_text(tmp / "model.tflite", "x");
+  o.model = tmp / "model.tflite";
+  EXPECT_NE(error_of([&] { Detector d(o); }).find(": unsupported model kind '.tflite'; expected"),
             std::string::npos);
   // A .pb needs its text graph.
   test::write_text(tmp / "frozen_inference_graph.pb", "x");
