@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <opencv2/core/utils/logger.hpp>
 #include <string>
 #include <vector>
@@ -12,6 +13,9 @@
 #include "command.h"
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
+#include "objmap/io/trajectory.h"
+#include "objmap/io/tum_dataset.h"
+#include "objmap/pipeline/keyframes.h"
 #include "objmap/segmentation/detect.h"
 #include "objmap/segmentation/write.h"
 #include "progress.h"
@@ -29,6 +33,9 @@ struct DetectCommand {
   std::string classes_file;
   std::string classes;  // comma list, "all", or empty = the paper's eight
   bool nms_per_class = false;
+  std::string frames = "all";  // all | keyframes
+  std::string trajectory;      // --frames keyframes: the trajectory fuse will be given
+  int threads = 0;             // OpenCV's threads for the network, 0 = the cores
   segmentation::DetectOptions options;
 };
 
@@ -49,6 +56,31 @@ std::vector<std::string> split_classes(const std::string& list) {
   return names;
 }
 
+// The frames to run the network on: every rgb frame (what track needs), or only those that fuse
+// will take as keyframes with this trajectory (fuse's default selection: a keyframe trajectory's
+// frames, else motion-thinned, every frame for a still camera).
+std::vector<segmentation::DetectFrame> frames_to_detect(const DetectCommand& cmd) {
+  require(cmd.frames == "all" || cmd.frames == "keyframes", "--frames",
+          "'" + cmd.frames + "'; expected all or keyframes");
+  std::vector<segmentation::DetectFrame> frames = segmentation::list_rgb_frames(cmd.dataset);
+  if (cmd.frames == "all") {
+    require(cmd.trajectory.empty(), "--trajectory",
+            "is used with --frames keyframes only; expected no trajectory with --frames all");
+    return frames;
+  }
+  require(!cmd.trajectory.empty(), "--trajectory",
+          "missing; --frames keyframes needs the trajectory that fuse will be given");
+  const io::TumDataset dataset = io::read_tum_dataset(cmd.dataset);
+  pipeline::KeyframeOptions options;
+  options.min_keyframes = 3;  // fuse's default: the views an object needs
+  const pipeline::KeyframeSelection selection =
+      pipeline::select_keyframes(dataset, io::read_trajectory(cmd.trajectory), options);
+  std::vector<segmentation::DetectFrame> kept;
+  for (const auto& keyframe : selection.keyframes)
+    kept.push_back({keyframe.timestamp, dataset.frames[keyframe.frame].rgb_file});
+  return kept;
+}
+
 void run_detect(DetectCommand& cmd) {
   // OpenCV's dnn may log warnings on stderr; the user sees objmap's lines only.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
@@ -65,6 +97,9 @@ void run_detect(DetectCommand& cmd) {
   }
   require(fs::is_directory(cmd.dataset), cmd.dataset,
           "no such folder; expected a TUM RGB-D folder with rgb.txt");
+  require(cmd.threads >= 0 && cmd.threads <= 64, "--threads",
+          "must be in [0, 64] (0: the cores), got " + std::to_string(cmd.threads));
+  if (cmd.threads > 0) cv::setNumThreads(cmd.threads);
 
   // The model first (its errors before any progress output), then the frames.
   const auto load_start = std::chrono::steady_clock::now();
@@ -78,7 +113,7 @@ void run_detect(DetectCommand& cmd) {
                       {"DetectOptions.input_width/input_height", "--input-width/--input-height"}});
   const double load_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count();
-  const std::vector<segmentation::DetectFrame> frames = segmentation::list_rgb_frames(cmd.dataset);
+  const std::vector<segmentation::DetectFrame> frames = frames_to_detect(cmd);
   // A bar for long runs only: a short run's error (e.g. no detections) stays the one line on
   // stderr.
   std::unique_ptr<ProgressBar> bar;
@@ -97,9 +132,11 @@ void run_detect(DetectCommand& cmd) {
   const auto& m = result.model;
   std::printf("wrote       %s (%zu frame files)\n", cmd.out.c_str(),
               result.segmentation.frames.size());
-  std::printf("model       %s: %s + %s, input %d x %d, %zu classes\n",
-              segmentation::model_kind_name(m.kind).c_str(), m.model.string().c_str(),
-              m.config.string().c_str(), m.input_width, m.input_height, m.class_names.size());
+  const std::string files =
+      m.config == m.model ? m.model.string() : m.model.string() + " + " + m.config.string();
+  std::printf("model       %s: %s, input %d x %d, %zu classes\n",
+              segmentation::model_kind_name(m.kind).c_str(), files.c_str(), m.input_width,
+              m.input_height, m.class_names.size());
   std::string kept;
   if (m.kept_class_ids.size() == m.class_names.size()) {
     kept = "all";
@@ -161,6 +198,17 @@ void setup_detect(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--mask-threshold", o.mask_threshold,
                 "Mask R-CNN and ONNX segmentation: mask value above which a pixel is the object's")
+      ->capture_default_str();
+  c->add_option("--frames", cmd->frames,
+                "all: every rgb frame (what track needs); keyframes: only the frames fuse will "
+                "take as keyframes with --trajectory (the network runs once per frame that needs "
+                "it)")
+      ->capture_default_str();
+  c->add_option("--trajectory", cmd->trajectory,
+                "with --frames keyframes: the trajectory fuse will be given (TUM format)");
+  c->add_option("--threads", cmd->threads,
+                "threads of the network (OpenCV), 0 = the cores; the outputs are the same for any "
+                "count")
       ->capture_default_str();
   c->add_option("--out", cmd->out,
                 "output segmentation folder (an earlier segmentation there is replaced; any other "
