@@ -30,6 +30,43 @@ std::vector<std::pair<std::string, std::string>> files_of(const path& dir) {
   return files;
 }
 
+TEST(DetectCli, KeyframesOnlyAndThreads) {
+  // --frames keyframes: only the frames fuse will take with this trajectory (motion keeps 3 of
+  // fr1_desk_9's 9); the same files as the whole run for those frames, for any thread count.
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
+  OBJMAP_DATA_OR_SKIP(models, kModels);
+  test::TempDir tmp;
+  const std::string model = (models / "yolo-fastest-1.1-xl.weights").string();
+  const std::string gt = (data / "groundtruth.txt").string();
+  const auto all = run_objmap({"detect", "--dataset", data.string(), "--model", model, "--out",
+                               (tmp / "all").string(), "--threads", "1"});
+  ASSERT_EQ(all.exit_code, 0) << all.err;
+  const auto kf =
+      run_objmap({"detect", "--dataset", data.string(), "--model", model, "--frames", "keyframes",
+                  "--trajectory", gt, "--out", (tmp / "kf").string(), "--threads", "2"});
+  ASSERT_EQ(kf.exit_code, 0) << kf.err;
+  const auto every = files_of(tmp / "all"), keyframes = files_of(tmp / "kf");
+  EXPECT_EQ(keyframes.size(), 3u);
+  for (const auto& file : keyframes)
+    EXPECT_NE(std::find(every.begin(), every.end(), file), every.end()) << file.first;
+
+  // Bad combinations: one line, exit 2, nothing written.
+  for (const auto& [extra, flag] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--frames", "keyframes"}, "--trajectory: missing"},
+           {{"--frames", "some"}, "--frames: 'some'; expected all or keyframes"},
+           {{"--trajectory", gt}, "--trajectory: is used with --frames keyframes only"},
+           {{"--threads", "-1"}, "--threads: must be in [0, 64]"}}) {
+    std::vector<std::string> args{"detect", "--dataset", data.string(),         "--model",
+                                  model,    "--out",     (tmp / "bad").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_objmap(args);
+    EXPECT_EQ(r.exit_code, 2) << flag;
+    EXPECT_NE(r.err.find(flag), std::string::npos) << r.err;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_FALSE(test::fs::exists(tmp / "bad")) << flag;
+  }
+}
+
 TEST(DetectCli, WholeFolderValidatesAndRerunsIdentically) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
   OBJMAP_DATA_OR_SKIP(models, kModels);
