@@ -775,11 +775,6 @@ void fuse_again(const CorrectOptions& options, const json& run_doc, const Trajec
   result.refused_map = true;
 }
 
-// The re-fused map's own consistency must not get worse (the median object scatter of OUT against
-// the input run's); refuses the result when it does.
-void check_map_consistency(const CorrectOptions& options, const Trajectory& corrected,
-                           const RunProblem& rp, CorrectResult& result);
-
 // OUT/trajectory_corrected.txt and OUT/correction.json; an accepted correction's run.json names the
 // corrected trajectory.
 void write_outputs(const CorrectOptions& options, const Trajectory& corrected,
@@ -881,6 +876,8 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
 
 namespace {
 
+// The re-fused map's own consistency must not get worse (the median object scatter of OUT against
+// the input run's); refuses the result when it does.
 void check_map_consistency(const CorrectOptions& options, const Trajectory& corrected,
                            const RunProblem& rp, CorrectResult& result) {
   CorrectOptions no_links = options;
