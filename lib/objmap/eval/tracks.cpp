@@ -85,18 +85,13 @@ double instance_iou(const Instance& a, const Instance& b) {
   return iou(a, mask_info(a), b, mask_info(b));
 }
 
-TrackEvalResult evaluate_tracks(const segmentation::Segmentation& gt,
-                                const segmentation::Segmentation& est,
-                                const TrackEvalOptions& options) {
-  options.check();
-  TrackEvalResult r;
-  r.gt_source = gt.source;
-  r.est_source = est.source;
-  const std::string gt_where = gt.source.empty() ? "ground truth" : gt.source;
-  require(!gt.frames.empty(), gt_where, "no frame; expected a ground-truth segmentation");
-  r.frames = gt.frames.size();
+namespace {
 
-  // Estimated frame of each ground-truth frame (by timestamp, both sorted).
+// The estimated frame of each ground-truth frame (by timestamp, both sorted); counts the
+// estimated frames left over.
+std::vector<const segmentation::FrameSegmentation*> estimated_frames(
+    const segmentation::Segmentation& gt, const segmentation::Segmentation& est,
+    const TrackEvalOptions& options, TrackEvalResult& r) {
   std::vector<const segmentation::FrameSegmentation*> est_of(gt.frames.size(), nullptr);
   std::size_t matched_est = 0;
   for (std::size_t g = 0, e = 0; g < gt.frames.size(); ++g) {
@@ -110,117 +105,164 @@ TrackEvalResult evaluate_tracks(const segmentation::Segmentation& gt,
     }
   }
   r.est_frames_unmatched = est.frames.size() - matched_est;
+  return est_of;
+}
 
+struct GtTrack {
+  std::size_t present = 0, matched = 0, fragments = 0;
+  bool tracked_before = false, gap_open = false;
+};
+
+// What the frames add up for the summary.
+struct TrackCounts {
   std::map<int, int> last_match;  // gt id -> hypothesis id it was last matched to
-  struct GtTrack {
-    std::size_t present = 0, matched = 0, fragments = 0;
-    bool tracked_before = false, gap_open = false;
-  };
   std::map<int, GtTrack> gt_tracks;
   std::set<int> est_ids;
   std::map<int, std::size_t> gt_count, est_count;
   std::map<std::pair<int, int>, std::size_t> overlap;  // (gt id, hyp id) -> frames with IoU >= min
   double iou_sum = 0.0;
+};
 
-  for (std::size_t f = 0; f < gt.frames.size(); ++f) {
-    const auto& gframe = gt.frames[f];
-    std::vector<const Instance*> gts, hyps;
-    for (const Instance& inst : gframe.instances) {
-      require(inst.track_id.has_value(), gframe.source.empty() ? gt_where : gframe.source,
-              "a ground-truth instance has no track_id; expected the true object id in every "
-              "instance");
-      gts.push_back(&inst);
-    }
-    if (est_of[f])
-      for (const Instance& inst : est_of[f]->instances) {
-        if (inst.track_id)
-          hyps.push_back(&inst);
-        else
-          ++r.est_untracked;
-      }
-    r.gt_instances += gts.size();
-    r.est_instances += hyps.size();
-    std::vector<MaskInfo> gm, hm;
-    for (const Instance* i : gts) gm.push_back(mask_info(*i));
-    for (const Instance* i : hyps) hm.push_back(mask_info(*i));
+// One frame's ground-truth instances and tracked hypotheses, with their masks.
+struct FrameInstances {
+  std::vector<const Instance*> gts, hyps;
+  std::vector<MaskInfo> gm, hm;
+};
 
-    // IoU of every pair; a pair is admissible at IoU >= min_iou (and the same class, if asked).
-    Eigen::MatrixXd pair_iou = Eigen::MatrixXd::Zero(gts.size(), hyps.size());
-    std::vector<std::vector<char>> ok(gts.size(), std::vector<char>(hyps.size(), 0));
-    for (std::size_t i = 0; i < gts.size(); ++i)
-      for (std::size_t j = 0; j < hyps.size(); ++j) {
-        if (options.same_class && gts[i]->class_name != hyps[j]->class_name) continue;
-        if (box_iou(gts[i]->bbox, hyps[j]->bbox) <= 0 && !same_size_masks(gm[i], hm[j])) continue;
-        pair_iou(i, j) = iou(*gts[i], gm[i], *hyps[j], hm[j]);
-        ok[i][j] = pair_iou(i, j) >= options.min_iou;
-        if (ok[i][j]) ++overlap[{*gts[i]->track_id, *hyps[j]->track_id}];
-      }
-    for (const Instance* i : gts) ++gt_count[*i->track_id];
-    for (const Instance* j : hyps) {
-      ++est_count[*j->track_id];
-      est_ids.insert(*j->track_id);
-    }
-
-    // 1. Keep last frame's correspondences that are still admissible (CLEAR-MOT).
-    std::vector<int> gt_to_hyp(gts.size(), -1), hyp_to_gt(hyps.size(), -1);
-    for (std::size_t i = 0; i < gts.size(); ++i) {
-      const auto last = last_match.find(*gts[i]->track_id);
-      if (last == last_match.end()) continue;
-      for (std::size_t j = 0; j < hyps.size(); ++j)
-        if (hyp_to_gt[j] < 0 && *hyps[j]->track_id == last->second && ok[i][j]) {
-          gt_to_hyp[i] = static_cast<int>(j);
-          hyp_to_gt[j] = static_cast<int>(i);
-          break;
-        }
-    }
-    // 2. The rest by minimum total 1 - IoU over the admissible pairs (Hungarian method).
-    std::vector<int> free_g, free_h;
-    for (std::size_t i = 0; i < gts.size(); ++i)
-      if (gt_to_hyp[i] < 0) free_g.push_back(static_cast<int>(i));
-    for (std::size_t j = 0; j < hyps.size(); ++j)
-      if (hyp_to_gt[j] < 0) free_h.push_back(static_cast<int>(j));
-    if (!free_g.empty() && !free_h.empty()) {
-      constexpr double kForbidden = 1e6;
-      Eigen::MatrixXd cost(free_g.size(), free_h.size());
-      for (std::size_t a = 0; a < free_g.size(); ++a)
-        for (std::size_t b = 0; b < free_h.size(); ++b)
-          cost(a, b) = ok[free_g[a]][free_h[b]] ? 1.0 - pair_iou(free_g[a], free_h[b]) : kForbidden;
-      const std::vector<int> assigned = track::solve_assignment(cost);
-      for (std::size_t a = 0; a < free_g.size(); ++a) {
-        if (assigned[a] < 0 || cost(a, assigned[a]) >= kForbidden) continue;
-        const int i = free_g[a], j = free_h[assigned[a]];
-        gt_to_hyp[i] = j;
-        hyp_to_gt[j] = i;
-        const int gid = *gts[i]->track_id, hid = *hyps[j]->track_id;
-        const auto last = last_match.find(gid);
-        if (last != last_match.end() && last->second != hid) ++r.id_switches;
-      }
-    }
-    // 3. Count.
-    for (std::size_t i = 0; i < gts.size(); ++i) {
-      GtTrack& t = gt_tracks[*gts[i]->track_id];
-      ++t.present;
-      if (gt_to_hyp[i] >= 0) {
-        ++r.matches;
-        ++t.matched;
-        iou_sum += pair_iou(i, gt_to_hyp[i]);
-        last_match[*gts[i]->track_id] = *hyps[gt_to_hyp[i]]->track_id;
-        if (t.gap_open) ++t.fragments;  // resumed after an interruption
-        t.tracked_before = true;
-        t.gap_open = false;
-      } else {
-        ++r.misses;
-        if (t.tracked_before) t.gap_open = true;
-      }
-    }
-    for (std::size_t j = 0; j < hyps.size(); ++j)
-      if (hyp_to_gt[j] < 0) ++r.false_positives;
+FrameInstances frame_instances(const segmentation::FrameSegmentation& gframe,
+                               const segmentation::FrameSegmentation* est_frame,
+                               const std::string& gt_where, TrackEvalResult& r) {
+  FrameInstances fi;
+  for (const Instance& inst : gframe.instances) {
+    require(inst.track_id.has_value(), gframe.source.empty() ? gt_where : gframe.source,
+            "a ground-truth instance has no track_id; expected the true object id in every "
+            "instance");
+    fi.gts.push_back(&inst);
   }
+  if (est_frame)
+    for (const Instance& inst : est_frame->instances) {
+      if (inst.track_id)
+        fi.hyps.push_back(&inst);
+      else
+        ++r.est_untracked;
+    }
+  r.gt_instances += fi.gts.size();
+  r.est_instances += fi.hyps.size();
+  for (const Instance* i : fi.gts) fi.gm.push_back(mask_info(*i));
+  for (const Instance* i : fi.hyps) fi.hm.push_back(mask_info(*i));
+  return fi;
+}
 
-  // CLEAR-MOT summary.
-  r.gt_tracks = gt_tracks.size();
-  r.est_tracks = est_ids.size();
-  for (const auto& [id, t] : gt_tracks) {
+struct FramePairs {
+  Eigen::MatrixXd iou;                // gt x hypothesis
+  std::vector<std::vector<char>> ok;  // admissible
+};
+
+// IoU of every pair; a pair is admissible at IoU >= min_iou (and the same class, if asked).
+FramePairs pair_ious(const FrameInstances& fi, const TrackEvalOptions& options,
+                     TrackCounts& counts) {
+  const auto& gts = fi.gts;
+  const auto& hyps = fi.hyps;
+  FramePairs pairs;
+  pairs.iou = Eigen::MatrixXd::Zero(gts.size(), hyps.size());
+  pairs.ok.assign(gts.size(), std::vector<char>(hyps.size(), 0));
+  for (std::size_t i = 0; i < gts.size(); ++i)
+    for (std::size_t j = 0; j < hyps.size(); ++j) {
+      if (options.same_class && gts[i]->class_name != hyps[j]->class_name) continue;
+      if (box_iou(gts[i]->bbox, hyps[j]->bbox) <= 0 && !same_size_masks(fi.gm[i], fi.hm[j]))
+        continue;
+      pairs.iou(i, j) = iou(*gts[i], fi.gm[i], *hyps[j], fi.hm[j]);
+      pairs.ok[i][j] = pairs.iou(i, j) >= options.min_iou;
+      if (pairs.ok[i][j]) ++counts.overlap[{*gts[i]->track_id, *hyps[j]->track_id}];
+    }
+  for (const Instance* i : gts) ++counts.gt_count[*i->track_id];
+  for (const Instance* j : hyps) {
+    ++counts.est_count[*j->track_id];
+    counts.est_ids.insert(*j->track_id);
+  }
+  return pairs;
+}
+
+struct FrameMatch {
+  std::vector<int> gt_to_hyp, hyp_to_gt;  // -1: unmatched
+};
+
+// Keep last frame's correspondences that are still admissible (CLEAR-MOT).
+FrameMatch keep_last_matches(const FrameInstances& fi, const FramePairs& pairs,
+                             const TrackCounts& counts) {
+  const auto& gts = fi.gts;
+  const auto& hyps = fi.hyps;
+  FrameMatch m{std::vector<int>(gts.size(), -1), std::vector<int>(hyps.size(), -1)};
+  for (std::size_t i = 0; i < gts.size(); ++i) {
+    const auto last = counts.last_match.find(*gts[i]->track_id);
+    if (last == counts.last_match.end()) continue;
+    for (std::size_t j = 0; j < hyps.size(); ++j)
+      if (m.hyp_to_gt[j] < 0 && *hyps[j]->track_id == last->second && pairs.ok[i][j]) {
+        m.gt_to_hyp[i] = static_cast<int>(j);
+        m.hyp_to_gt[j] = static_cast<int>(i);
+        break;
+      }
+  }
+  return m;
+}
+
+// The rest by minimum total 1 - IoU over the admissible pairs (Hungarian method); a gt object
+// matched to another hypothesis than last time is an identity switch.
+void match_the_rest(const FrameInstances& fi, const FramePairs& pairs, const TrackCounts& counts,
+                    FrameMatch& m, TrackEvalResult& r) {
+  std::vector<int> free_g, free_h;
+  for (std::size_t i = 0; i < fi.gts.size(); ++i)
+    if (m.gt_to_hyp[i] < 0) free_g.push_back(static_cast<int>(i));
+  for (std::size_t j = 0; j < fi.hyps.size(); ++j)
+    if (m.hyp_to_gt[j] < 0) free_h.push_back(static_cast<int>(j));
+  if (free_g.empty() || free_h.empty()) return;
+  constexpr double kForbidden = 1e6;
+  Eigen::MatrixXd cost(free_g.size(), free_h.size());
+  for (std::size_t a = 0; a < free_g.size(); ++a)
+    for (std::size_t b = 0; b < free_h.size(); ++b)
+      cost(a, b) =
+          pairs.ok[free_g[a]][free_h[b]] ? 1.0 - pairs.iou(free_g[a], free_h[b]) : kForbidden;
+  const std::vector<int> assigned = track::solve_assignment(cost);
+  for (std::size_t a = 0; a < free_g.size(); ++a) {
+    if (assigned[a] < 0 || cost(a, assigned[a]) >= kForbidden) continue;
+    const int i = free_g[a], j = free_h[assigned[a]];
+    m.gt_to_hyp[i] = j;
+    m.hyp_to_gt[j] = i;
+    const int gid = *fi.gts[i]->track_id, hid = *fi.hyps[j]->track_id;
+    const auto last = counts.last_match.find(gid);
+    if (last != counts.last_match.end() && last->second != hid) ++r.id_switches;
+  }
+}
+
+// Count matches, misses, false positives and the fragments of each gt track.
+void count_frame(const FrameInstances& fi, const FramePairs& pairs, const FrameMatch& m,
+                 TrackCounts& counts, TrackEvalResult& r) {
+  for (std::size_t i = 0; i < fi.gts.size(); ++i) {
+    GtTrack& t = counts.gt_tracks[*fi.gts[i]->track_id];
+    ++t.present;
+    if (m.gt_to_hyp[i] >= 0) {
+      ++r.matches;
+      ++t.matched;
+      counts.iou_sum += pairs.iou(i, m.gt_to_hyp[i]);
+      counts.last_match[*fi.gts[i]->track_id] = *fi.hyps[m.gt_to_hyp[i]]->track_id;
+      if (t.gap_open) ++t.fragments;  // resumed after an interruption
+      t.tracked_before = true;
+      t.gap_open = false;
+    } else {
+      ++r.misses;
+      if (t.tracked_before) t.gap_open = true;
+    }
+  }
+  for (std::size_t j = 0; j < fi.hyps.size(); ++j)
+    if (m.hyp_to_gt[j] < 0) ++r.false_positives;
+}
+
+// CLEAR-MOT summary: MOTA, MOTP, mostly tracked / partially tracked / mostly lost.
+void clear_mot_summary(const TrackCounts& counts, const TrackEvalOptions& options,
+                       TrackEvalResult& r) {
+  r.gt_tracks = counts.gt_tracks.size();
+  r.est_tracks = counts.est_ids.size();
+  for (const auto& [id, t] : counts.gt_tracks) {
     r.fragmentations += t.fragments;
     const double ratio = static_cast<double>(t.matched) / static_cast<double>(t.present);
     if (ratio >= options.mostly_tracked)
@@ -234,21 +276,23 @@ TrackEvalResult evaluate_tracks(const segmentation::Segmentation& gt,
                ? 0.0
                : 1.0 - static_cast<double>(r.misses + r.false_positives + r.id_switches) /
                            static_cast<double>(r.gt_instances);
-  r.motp = r.matches == 0 ? 0.0 : iou_sum / static_cast<double>(r.matches);
+  r.motp = r.matches == 0 ? 0.0 : counts.iou_sum / static_cast<double>(r.matches);
+}
 
-  // Identity metrics: the one-to-one trajectory matching that maximises the frames where a gt
-  // object and its hypothesis overlap (IDTP) — the min-cost bipartite matching of Ristani et al.,
-  // since IDFN + IDFP = (gt + hypotheses) - 2 IDTP.
+// Identity metrics: the one-to-one trajectory matching that maximises the frames where a gt
+// object and its hypothesis overlap (IDTP) — the min-cost bipartite matching of Ristani et al.,
+// since IDFN + IDFP = (gt + hypotheses) - 2 IDTP.
+void identity_metrics(const TrackCounts& counts, TrackEvalResult& r) {
   std::vector<int> gt_ids, hyp_ids;
-  for (const auto& [id, n] : gt_count) gt_ids.push_back(id);
-  for (const auto& [id, n] : est_count) hyp_ids.push_back(id);
+  for (const auto& [id, n] : counts.gt_count) gt_ids.push_back(id);
+  for (const auto& [id, n] : counts.est_count) hyp_ids.push_back(id);
   if (!gt_ids.empty() && !hyp_ids.empty()) {
     std::map<int, int> hyp_index;
     for (std::size_t j = 0; j < hyp_ids.size(); ++j) hyp_index[hyp_ids[j]] = static_cast<int>(j);
     std::map<int, int> gt_index;
     for (std::size_t i = 0; i < gt_ids.size(); ++i) gt_index[gt_ids[i]] = static_cast<int>(i);
     Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(gt_ids.size(), hyp_ids.size());
-    for (const auto& [pair, n] : overlap)
+    for (const auto& [pair, n] : counts.overlap)
       cost(gt_index[pair.first], hyp_index[pair.second]) = -static_cast<double>(n);
     const std::vector<int> assigned = track::solve_assignment(cost);
     for (std::size_t i = 0; i < assigned.size(); ++i)
@@ -261,6 +305,40 @@ TrackEvalResult evaluate_tracks(const segmentation::Segmentation& gt,
   r.idp =
       r.est_instances ? static_cast<double>(r.idtp) / static_cast<double>(r.est_instances) : 0.0;
   r.idr = r.gt_instances ? static_cast<double>(r.idtp) / static_cast<double>(r.gt_instances) : 0.0;
+}
+
+}  // namespace
+
+TrackEvalResult evaluate_tracks(const segmentation::Segmentation& gt,
+                                const segmentation::Segmentation& est,
+                                const TrackEvalOptions& options) {
+  options.check();
+  TrackEvalResult r;
+  r.gt_source = gt.source;
+  r.est_source = est.source;
+  const std::string gt_where = gt.source.empty() ? "ground truth" : gt.source;
+  require(!gt.frames.empty(), gt_where, "no frame; expected a ground-truth segmentation");
+  r.frames = gt.frames.size();
+
+  // 1. The estimated frame of each ground-truth frame (by timestamp).
+  const std::vector<const segmentation::FrameSegmentation*> est_of =
+      estimated_frames(gt, est, options, r);
+
+  // 2. Per frame: the instances, their IoU, the CLEAR-MOT correspondences and their counts.
+  TrackCounts counts;
+  for (std::size_t f = 0; f < gt.frames.size(); ++f) {
+    const FrameInstances instances = frame_instances(gt.frames[f], est_of[f], gt_where, r);
+    const FramePairs pairs = pair_ious(instances, options, counts);
+    FrameMatch match = keep_last_matches(instances, pairs, counts);
+    match_the_rest(instances, pairs, counts, match, r);
+    count_frame(instances, pairs, match, counts, r);
+  }
+
+  // 3. CLEAR-MOT summary.
+  clear_mot_summary(counts, options, r);
+
+  // 4. Identity metrics.
+  identity_metrics(counts, r);
   return r;
 }
 

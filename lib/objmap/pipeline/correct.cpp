@@ -123,57 +123,42 @@ class ScratchDir {
   io::UnfinishedOutput unfinished_;
 };
 
-std::string correction_json(const CorrectOptions& options, const CorrectResult& result,
-                            const RunProblem& rp, const std::string& input_trajectory) {
-  const pose::CorrectionResult& c = result.correction;
+// correction.json's options: those of the pose stage, and check_map.
+ordered_json options_json(const CorrectOptions& options) {
   const pose::CorrectionOptions& o = options.correction;
-  ordered_json doc;
-  doc["schema_version"] = 1;
-  doc["generator"] = std::string("objmap ") + objmap::version();
-  doc["command"] = "correct";
-  doc["run"] = options.run.string();
-  doc["input_trajectory"] = input_trajectory;
-  doc["output_trajectory"] = "trajectory_corrected.txt";
-  doc["method"] = o.method;
-  doc["view_model"] = options.view_model;
-  doc["accepted"] = result.accepted;
-  doc["reason"] = result.reason;
-  doc["view_links_used"] = result.links_used;
-  doc["reason_with_view_links"] = result.reason_with_links;
-  doc["options"] = {{"min_pairs", o.min_pairs},
-                    {"min_spread_m", o.min_spread_m},
-                    {"observation_sigma_m", o.observation_sigma_m},
-                    {"robust_sigmas", o.robust_sigmas},
-                    {"odometry_sigma_m", o.odometry_sigma_m},
-                    {"odometry_sigma_fraction", o.odometry_sigma_fraction},
-                    {"odometry_sigma_deg", o.odometry_sigma_deg},
-                    {"odometry_sigma_deg_per_deg", o.odometry_sigma_deg_per_deg},
-                    {"odometry_sigma_deg_per_m", o.odometry_sigma_deg_per_m},
-                    {"max_translation_m", o.max_translation_m},
-                    {"max_translation_fraction", o.max_translation_fraction},
-                    {"max_rotation_deg", o.max_rotation_deg},
-                    {"max_rotation_deg_per_m", o.max_rotation_deg_per_m},
-                    {"link_sigma_m", o.link_sigma_m},
-                    {"link_sigma_deg", o.link_sigma_deg},
-                    {"min_held_out_link_improvement", o.min_held_out_link_improvement},
-                    {"min_improvement", o.min_improvement},
-                    {"min_translation_m", o.min_translation_m},
-                    {"min_rotation_deg", o.min_rotation_deg},
-                    {"min_held_out_improvement", o.min_held_out_improvement},
-                    {"reweight_rounds", o.reweight_rounds},
-                    {"paper_prior", o.paper_prior},
-                    {"paper_prior_fraction", o.paper_prior_fraction},
-                    {"max_iterations", o.max_iterations},
-                    {"check_map", options.check_map}};
-  doc["counts"] = {{"keyframes", c.keyframes.size()},
-                   {"keyframes_corrected", result.accepted ? c.corrected_keyframes : 0},
-                   {"landmarks", result.landmarks},
-                   {"observations", result.observations},
-                   {"observations_without_view", result.observations_without_view},
-                   {"observations_aligned", result.observations_aligned},
-                   {"view_links", result.links},
-                   {"view_links_tried", result.links_tried}};
-  doc["consistency"] = {
+  ordered_json out = {{"min_pairs", o.min_pairs},
+                      {"min_spread_m", o.min_spread_m},
+                      {"observation_sigma_m", o.observation_sigma_m},
+                      {"robust_sigmas", o.robust_sigmas},
+                      {"odometry_sigma_m", o.odometry_sigma_m},
+                      {"odometry_sigma_fraction", o.odometry_sigma_fraction},
+                      {"odometry_sigma_deg", o.odometry_sigma_deg},
+                      {"odometry_sigma_deg_per_deg", o.odometry_sigma_deg_per_deg},
+                      {"odometry_sigma_deg_per_m", o.odometry_sigma_deg_per_m},
+                      {"max_translation_m", o.max_translation_m},
+                      {"max_translation_fraction", o.max_translation_fraction},
+                      {"max_rotation_deg", o.max_rotation_deg},
+                      {"max_rotation_deg_per_m", o.max_rotation_deg_per_m},
+                      {"link_sigma_m", o.link_sigma_m},
+                      {"link_sigma_deg", o.link_sigma_deg},
+                      {"min_held_out_link_improvement", o.min_held_out_link_improvement},
+                      {"min_improvement", o.min_improvement},
+                      {"min_translation_m", o.min_translation_m},
+                      {"min_rotation_deg", o.min_rotation_deg},
+                      {"min_held_out_improvement", o.min_held_out_improvement},
+                      {"reweight_rounds", o.reweight_rounds},
+                      {"paper_prior", o.paper_prior},
+                      {"paper_prior_fraction", o.paper_prior_fraction},
+                      {"max_iterations", o.max_iterations},
+                      {"check_map", options.check_map}};
+  return out;
+}
+
+// correction.json's consistency: observation, held-out, odometry and link RMS, and the map's
+// object scatter before and after.
+ordered_json consistency_json(const CorrectResult& result) {
+  const pose::CorrectionResult& c = result.correction;
+  ordered_json out = {
       {"observation_rms_before_m", c.residual_before_m},
       {"held_out_rms_before_m", c.held_out_before_m},
       {"held_out_rms_after_m", c.held_out_after_m},
@@ -187,10 +172,12 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
       {"map_scatter_after_m", result.map_rms_after_m},
       {"map_objects_before", result.map_objects_before},
       {"map_objects_after", result.map_objects_after}};
-  doc["max_correction"] = {{"translation_m", c.max_translation_m},
-                           {"rotation_deg", c.max_rotation_deg}};
-  doc["solver"] = {{"iterations", c.iterations}, {"seconds", c.seconds}};
-  doc["seconds"] = {{"correct", result.seconds_correct}, {"total", result.seconds_total}};
+  return out;
+}
+
+// Per keyframe: its objects, the verdict and the solver's proposed pose (also when refused).
+ordered_json keyframes_json(const CorrectResult& result, const RunProblem& rp) {
+  const pose::CorrectionResult& c = result.correction;
   ordered_json kfs = ordered_json::array();
   for (const auto& k : c.keyframes) {
     ordered_json e;
@@ -211,8 +198,11 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
         p.translation().x(), p.translation().y(), p.translation().z(), q.x(), q.y(), q.z(), q.w()};
     kfs.push_back(e);
   }
-  doc["keyframes"] = kfs;
-  // Per observation: which object from which keyframe, its partial-view bias and residuals.
+  return kfs;
+}
+
+// Per observation: which object from which keyframe, its partial-view bias and residuals.
+ordered_json observations_json(const pose::CorrectionResult& c, const RunProblem& rp) {
   std::vector<Vec3> mean(rp.problem.landmarks.size(), Vec3::Zero());
   std::vector<int> count(rp.problem.landmarks.size(), 0);
   for (const auto& ob : rp.problem.observations) {
@@ -232,9 +222,12 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                    {"residual_before_m", (before - m).norm()},
                    {"residual_after_m", (after - c.landmarks_in_world[ob.landmark]).norm()}});
   }
-  doc["observations"] = obs;
-  // Per view link: the two keyframes, the object, how far the poses are from the measured
-  // relative pose, before and after.
+  return obs;
+}
+
+// Per view link: the two keyframes, the object, how far the poses are from the measured relative
+// pose, before and after.
+ordered_json links_json(const pose::CorrectionResult& c, const RunProblem& rp) {
   ordered_json links = ordered_json::array();
   for (const auto& l : rp.problem.links) {
     const auto error = [&](const Pose& a, const Pose& b) {
@@ -254,7 +247,46 @@ std::string correction_json(const CorrectOptions& options, const CorrectResult& 
                      {"error_after_m", ta},
                      {"error_after_deg", ra}});
   }
-  doc["links"] = links;
+  return links;
+}
+
+std::string correction_json(const CorrectOptions& options, const CorrectResult& result,
+                            const RunProblem& rp, const std::string& input_trajectory) {
+  const pose::CorrectionResult& c = result.correction;
+  ordered_json doc;
+  // The run, the method and the verdict.
+  doc["schema_version"] = 1;
+  doc["generator"] = std::string("objmap ") + objmap::version();
+  doc["command"] = "correct";
+  doc["run"] = options.run.string();
+  doc["input_trajectory"] = input_trajectory;
+  doc["output_trajectory"] = "trajectory_corrected.txt";
+  doc["method"] = options.correction.method;
+  doc["view_model"] = options.view_model;
+  doc["accepted"] = result.accepted;
+  doc["reason"] = result.reason;
+  doc["view_links_used"] = result.links_used;
+  doc["reason_with_view_links"] = result.reason_with_links;
+  // The options.
+  doc["options"] = options_json(options);
+  // Counts, consistency, the largest correction and the time taken.
+  doc["counts"] = {{"keyframes", c.keyframes.size()},
+                   {"keyframes_corrected", result.accepted ? c.corrected_keyframes : 0},
+                   {"landmarks", result.landmarks},
+                   {"observations", result.observations},
+                   {"observations_without_view", result.observations_without_view},
+                   {"observations_aligned", result.observations_aligned},
+                   {"view_links", result.links},
+                   {"view_links_tried", result.links_tried}};
+  doc["consistency"] = consistency_json(result);
+  doc["max_correction"] = {{"translation_m", c.max_translation_m},
+                           {"rotation_deg", c.max_rotation_deg}};
+  doc["solver"] = {{"iterations", c.iterations}, {"seconds", c.seconds}};
+  doc["seconds"] = {{"correct", result.seconds_correct}, {"total", result.seconds_total}};
+  // Per keyframe, per observation, per view link.
+  doc["keyframes"] = keyframes_json(result, rp);
+  doc["observations"] = observations_json(c, rp);
+  doc["links"] = links_json(c, rp);
   return doc.dump(2) + "\n";
 }
 
@@ -382,139 +414,163 @@ std::vector<pose::ViewLink> view_links(const pose::Problem& problem,
   return links;
 }
 
-}  // namespace
+// The remade observations of a run's keyframes, and for each problem observation the remade one
+// with the same keyframe and centroid (null when there is none).
+struct RemadeViews {
+  std::vector<fusion::Observation> remade;
+  std::vector<const fusion::Observation*> source;  // per problem observation
+};
 
-// view_model icp: every object's observations grouped by view. In keyframe order, an observation
-// is aligned (point-to-plane ICP) to the anchor observations of its object that look at it from
-// within max_view_angle_deg; the first that aligns takes it into its group, else it anchors a new
-// group. Each group with >= 2 members becomes a landmark at its anchor's centroid, and each member
-// observes that point where its alignment puts it (centroid_in_cam = (ΔT·world_from_cam)⁻¹·anchor
-// centroid). Two views of the same side of an object are compared point by point, at the
-// resolution of the depth image, not through the 1 cm model (which the drift itself blurs).
-void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOptions& options,
-                   const std::map<int, double>& keyframe_time, RunProblem& rp) {
+// Each observation's points, made again from the run's inputs (the same masks and back-projection
+// as fuse), in a temporary run folder in `scratch`.
+RemadeViews remade_views(const fs::path& run, const json& run_doc, const CorrectOptions& options,
+                         const std::map<int, double>& keyframe_time, const pose::Problem& problem,
+                         const fs::path& scratch) {
   const fs::path run_file = run / "run.json";
-  ScratchDir scratch(options.out, "icp");
-  FuseOptions fo = fuse_options_of(run, run_doc, scratch.path());
+  FuseOptions fo = fuse_options_of(run, run_doc, scratch);
   fo.trajectory = input_path(run_doc, run_file, "trajectory");
-  fo.out = scratch.path() / "run";
+  fo.out = scratch / "run";
   fo.threads = options.threads;
   // Problem keyframe slot -> run keyframe index (the problem's keyframes are keyframe_time's).
   std::vector<int> run_keyframe;
   for (const auto& [kf, t] : keyframe_time) run_keyframe.push_back(kf);
-  const std::vector<fusion::Observation> remade = remake_observations(fo, run_keyframe);
+  RemadeViews views;
+  views.remade = remake_observations(fo, run_keyframe);
   std::map<int, std::vector<const fusion::Observation*>> of_keyframe;
-  for (const auto& o : remade)
+  for (const auto& o : views.remade)
     if (o.keyframe_index && o.centroid_in_cam) of_keyframe[*o.keyframe_index].push_back(&o);
-  const pose::Problem& problem = rp.problem;
   const std::size_t n_obs = problem.observations.size();
   // The remade observation of each problem observation: same keyframe, same centroid.
-  std::vector<const fusion::Observation*> source(n_obs, nullptr);
+  views.source.assign(n_obs, nullptr);
   for (std::size_t i = 0; i < n_obs; ++i) {
     const pose::Observation& o = problem.observations[i];
     double best = 1e-6;
     for (const fusion::Observation* r : of_keyframe[run_keyframe[o.keyframe]]) {
       const double d = (*r->centroid_in_cam - o.centroid_in_cam).norm();
-      if (d < best) best = d, source[i] = r;
+      if (d < best) best = d, views.source[i] = r;
     }
   }
-  // Per object, its observations in keyframe order (the problem keeps them by object).
+  return views;
+}
+
+// Per object, its observations with points in keyframe order (the problem keeps them by object).
+std::vector<std::vector<std::size_t>> in_keyframe_order(
+    const pose::Problem& problem, const std::vector<const fusion::Observation*>& source) {
   std::vector<std::vector<std::size_t>> of_landmark(problem.landmarks.size());
-  for (std::size_t i = 0; i < n_obs; ++i)
+  for (std::size_t i = 0; i < problem.observations.size(); ++i)
     if (source[i]) of_landmark[problem.observations[i].landmark].push_back(i);
   for (auto& v : of_landmark)
     std::stable_sort(v.begin(), v.end(), [&](std::size_t a, std::size_t b) {
       return problem.observations[a].keyframe < problem.observations[b].keyframe;
     });
-  struct Member {
-    std::size_t observation;
-    Pose correction;
-  };
-  struct Group {
-    std::size_t landmark;
-    Vec3 anchor_centroid, view;  // world frame; view: unit vector camera -> anchor centroid
-    std::unique_ptr<pose::ModelAligner> aligner;
-    std::vector<Member> members;
-  };
-  std::vector<std::vector<Group>> groups(problem.landmarks.size());
+  return of_landmark;
+}
+
+struct Member {
+  std::size_t observation;
+  Pose correction;
+};
+
+// An anchor view of an object and the views aligned to it.
+struct Group {
+  std::size_t landmark;
+  Vec3 anchor_centroid, view;  // world frame; view: unit vector camera -> anchor centroid
+  std::unique_ptr<pose::ModelAligner> aligner;
+  std::vector<Member> members;
+};
+
+Group make_group(const pose::Problem& problem,
+                 const std::vector<const fusion::Observation*>& source,
+                 const CorrectOptions& options, std::size_t j, std::size_t i) {
+  Group group;
+  group.landmark = j;
+  group.anchor_centroid = geometry::centroid(source[i]->points_in_world);
+  group.view = view_direction(problem, i);
+  group.aligner = std::make_unique<pose::ModelAligner>(source[i]->points_in_world, options.icp);
+  group.members.push_back({i, Pose::Identity()});
+  return group;
+}
+
+// One anchor per object (its first view); every other view aligns to it on its own, so all
+// alignments run in parallel.
+void align_to_first_views(const pose::Problem& problem,
+                          const std::vector<const fusion::Observation*>& source,
+                          const std::vector<std::vector<std::size_t>>& of_landmark,
+                          const CorrectOptions& options, std::vector<std::vector<Group>>& groups) {
   const double cos_max = std::cos(options.icp_max_view_angle_deg * kRadPerDeg);
-  const auto view_of = [&](std::size_t i) { return view_direction(problem, i); };
-  const auto make_group = [&](std::size_t j, std::size_t i) {
-    Group group;
-    group.landmark = j;
-    group.anchor_centroid = geometry::centroid(source[i]->points_in_world);
-    group.view = view_of(i);
-    group.aligner = std::make_unique<pose::ModelAligner>(source[i]->points_in_world, options.icp);
-    group.members.push_back({i, Pose::Identity()});
-    return group;
-  };
-  if (!options.icp_groups) {
-    // One anchor per object (its first view); every other view aligns to it on its own, so all
-    // alignments run in parallel.
-    parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
-      if (!of_landmark[j].empty()) groups[j].push_back(make_group(j, of_landmark[j].front()));
-    });
-    std::vector<std::pair<std::size_t, std::size_t>> jobs;  // (landmark, observation)
-    for (std::size_t j = 0; j < of_landmark.size(); ++j)
-      for (std::size_t k = 1; k < of_landmark[j].size(); ++k)
-        jobs.emplace_back(j, of_landmark[j][k]);
-    std::vector<std::optional<Pose>> aligned(jobs.size());
-    parallel_for(jobs.size(), options.threads, [&](std::size_t n) {
-      const auto [j, i] = jobs[n];
-      const Group& g = groups[j].front();
-      if (g.view.dot(view_of(i)) < cos_max) return;
-      const pose::IcpResult r = g.aligner->align(source[i]->points_in_world);
-      if (r.aligned) aligned[n] = r.correction;
-    });
-    for (std::size_t n = 0; n < jobs.size(); ++n)
-      if (aligned[n])
-        groups[jobs[n].first].front().members.push_back({jobs[n].second, *aligned[n]});
-  } else {
-    // Groups: an observation joins the first anchor (closest direction first) that aligns it, or
-    // anchors a group of its own; the order matters, so each object runs in keyframe order.
-    parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
-      auto& mine = groups[j];
-      for (std::size_t i : of_landmark[j]) {
-        const Vec3 view = view_of(i);
-        std::vector<std::pair<double, std::size_t>> candidates;
-        for (std::size_t g = 0; g < mine.size(); ++g) {
-          const double c = mine[g].view.dot(view);
-          if (c >= cos_max) candidates.emplace_back(-c, g);
-        }
-        std::sort(candidates.begin(), candidates.end());
-        bool joined = false;
-        for (const auto& [c, g] : candidates) {
-          const pose::IcpResult r = mine[g].aligner->align(source[i]->points_in_world);
-          if (!r.aligned) continue;
-          mine[g].members.push_back({i, r.correction});
-          joined = true;
-          break;
-        }
-        if (!joined) mine.push_back(make_group(j, i));
+  parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
+    if (!of_landmark[j].empty())
+      groups[j].push_back(make_group(problem, source, options, j, of_landmark[j].front()));
+  });
+  std::vector<std::pair<std::size_t, std::size_t>> jobs;  // (landmark, observation)
+  for (std::size_t j = 0; j < of_landmark.size(); ++j)
+    for (std::size_t k = 1; k < of_landmark[j].size(); ++k) jobs.emplace_back(j, of_landmark[j][k]);
+  std::vector<std::optional<Pose>> aligned(jobs.size());
+  parallel_for(jobs.size(), options.threads, [&](std::size_t n) {
+    const auto [j, i] = jobs[n];
+    const Group& g = groups[j].front();
+    if (g.view.dot(view_direction(problem, i)) < cos_max) return;
+    const pose::IcpResult r = g.aligner->align(source[i]->points_in_world);
+    if (r.aligned) aligned[n] = r.correction;
+  });
+  for (std::size_t n = 0; n < jobs.size(); ++n)
+    if (aligned[n]) groups[jobs[n].first].front().members.push_back({jobs[n].second, *aligned[n]});
+}
+
+// Groups: an observation joins the first anchor (closest direction first) that aligns it, or
+// anchors a group of its own; the order matters, so each object runs in keyframe order.
+void align_in_groups(const pose::Problem& problem,
+                     const std::vector<const fusion::Observation*>& source,
+                     const std::vector<std::vector<std::size_t>>& of_landmark,
+                     const CorrectOptions& options, std::vector<std::vector<Group>>& groups) {
+  const double cos_max = std::cos(options.icp_max_view_angle_deg * kRadPerDeg);
+  parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
+    auto& mine = groups[j];
+    for (std::size_t i : of_landmark[j]) {
+      const Vec3 view = view_direction(problem, i);
+      std::vector<std::pair<double, std::size_t>> candidates;
+      for (std::size_t g = 0; g < mine.size(); ++g) {
+        const double c = mine[g].view.dot(view);
+        if (c >= cos_max) candidates.emplace_back(-c, g);
       }
-    });
-  }
-  std::vector<pose::ViewLink> links;
-  if (options.icp_links > 0)
-    links = view_links(problem, source, of_landmark, options, rp.links_tried);
-  if (!options.icp_groups) {
-    rp.problem.links = links;
-    // One anchor per object; the observations it does not align keep the visible-part model.
-    for (std::size_t j = 0; j < groups.size(); ++j) {
-      if (groups[j].empty() || groups[j][0].members.size() < 2) continue;
-      const Group& g = groups[j][0];
-      for (const Member& m : g.members) {
-        pose::Observation& o = rp.problem.observations[m.observation];
-        o.centroid_in_cam =
-            (m.correction * problem.keyframes[o.keyframe].world_from_cam).inverse() *
-            g.anchor_centroid;
-        o.bias_in_world = g.anchor_centroid - problem.landmarks[j].position_in_world;
-        ++rp.observations_aligned;
+      std::sort(candidates.begin(), candidates.end());
+      bool joined = false;
+      for (const auto& [c, g] : candidates) {
+        const pose::IcpResult r = mine[g].aligner->align(source[i]->points_in_world);
+        if (!r.aligned) continue;
+        mine[g].members.push_back({i, r.correction});
+        joined = true;
+        break;
       }
+      if (!joined) mine.push_back(make_group(problem, source, options, j, i));
     }
-    return;
+  });
+}
+
+// One anchor per object: each aligned view observes the anchor's centroid where its alignment
+// puts it; the observations it does not align keep the visible-part model.
+void observe_first_views(const std::vector<std::vector<Group>>& groups, RunProblem& rp) {
+  const pose::Problem& problem = rp.problem;
+  for (std::size_t j = 0; j < groups.size(); ++j) {
+    if (groups[j].empty() || groups[j][0].members.size() < 2) continue;
+    const Group& g = groups[j][0];
+    for (const Member& m : g.members) {
+      pose::Observation& o = rp.problem.observations[m.observation];
+      o.centroid_in_cam = (m.correction * problem.keyframes[o.keyframe].world_from_cam).inverse() *
+                          g.anchor_centroid;
+      o.bias_in_world = g.anchor_centroid - problem.landmarks[j].position_in_world;
+      ++rp.observations_aligned;
+    }
   }
-  // The new problem: one landmark per group of >= 2 members.
+}
+
+// The problem of the groups: one landmark per group of >= 2 members at its anchor's centroid;
+// links keep their keyframes, their landmark becomes the object's first group.
+RunProblem problem_of_groups(const std::vector<std::vector<Group>>& groups,
+                             const std::vector<pose::ViewLink>& links,
+                             const std::vector<const fusion::Observation*>& source,
+                             const RunProblem& rp) {
+  const pose::Problem& problem = rp.problem;
   RunProblem out;
   out.problem.keyframes = problem.keyframes;
   out.keyframe_objects = rp.keyframe_objects;
@@ -541,9 +597,8 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
       out.object_ids.push_back(rp.object_ids[j]);
     }
   }
-  for (std::size_t i = 0; i < n_obs; ++i)
+  for (std::size_t i = 0; i < problem.observations.size(); ++i)
     if (!source[i]) ++out.observations_without_view;
-  // Links keep their keyframes; their landmark becomes the object's first group.
   std::map<int, std::size_t> first_landmark;
   for (std::size_t k = out.object_ids.size(); k-- > 0;) first_landmark[out.object_ids[k]] = k;
   for (pose::ViewLink l : links) {
@@ -553,33 +608,28 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
     out.problem.links.push_back(l);
   }
   out.links_tried = rp.links_tried;
-  rp = std::move(out);
+  return out;
 }
 
-RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
-                            const CorrectOptions& options) {
-  const std::string& view_model = options.view_model;
-  const fs::path run_file = run / "run.json";
-  const fs::path objects_file = run / "objects.json";
-  const json run_doc = read_json_file(run_file);
-  const Camera camera = camera_from_run(run_doc, run_file);
-  double max_diff_s = 0.02;
-  if (run_doc.contains("options") && run_doc["options"].contains("max_diff_s"))
-    max_diff_s = field<double>(run_doc["options"], "max_diff_s", run_file, "options");
-  const json doc = read_json_file(objects_file);
-  const json objects = field<json>(doc, "objects", objects_file, "");
-  require(objects.is_array(), objects_file.string() + ": objects", "expected an array");
+struct RawObservation {
+  int keyframe;
+  std::size_t landmark;
+  Vec3 centroid_in_cam;
+};
 
-  RunProblem rp;
+// What objects.json gives besides the landmarks: the object models, the keyframes' timestamps
+// (by run keyframe index) and the observations with their run keyframe index.
+struct ObjectsRead {
   std::vector<PointCloud> models;
-  // Keyframe index (of the run) -> timestamp.
   std::map<int, double> keyframe_time;
-  struct RawObservation {
-    int keyframe;
-    std::size_t landmark;
-    Vec3 centroid_in_cam;
-  };
   std::vector<RawObservation> raw;
+};
+
+// The landmarks: objects observed by >= 1 keyframe, at their models' centroids (objects.json's
+// centroid for an empty model); into rp.problem.landmarks and rp.object_ids.
+ObjectsRead read_objects(const fs::path& run, const json& objects, const fs::path& objects_file,
+                         RunProblem& rp) {
+  ObjectsRead read;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const json& o = objects[i];
     const std::string where = "objects[" + std::to_string(i) + "]";
@@ -605,17 +655,25 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
         continue;
       const int kf = field<int>(e, "keyframe", objects_file, w);
       const double t = field<double>(e, "timestamp", objects_file, w);
-      keyframe_time.emplace(kf, t);
-      raw.push_back({kf, rp.problem.landmarks.size(),
-                     vec3(e["centroid_in_cam"], objects_file, w + ".centroid_in_cam")});
+      read.keyframe_time.emplace(kf, t);
+      read.raw.push_back({kf, rp.problem.landmarks.size(),
+                          vec3(e["centroid_in_cam"], objects_file, w + ".centroid_in_cam")});
       ++used;
     }
     if (used == 0) continue;
     rp.problem.landmarks.push_back(landmark);
     rp.object_ids.push_back(id);
-    models.push_back(std::move(model));
+    read.models.push_back(std::move(model));
   }
-  // Keyframes in the run's order, their poses from `trajectory` as fuse looked them up.
+  return read;
+}
+
+// Keyframes in the run's order, their poses from `trajectory` as fuse looked them up; returns the
+// problem slot of each run keyframe.
+std::map<int, std::size_t> add_keyframes(const Trajectory& trajectory,
+                                         const std::map<int, double>& keyframe_time,
+                                         double max_diff_s, const fs::path& objects_file,
+                                         RunProblem& rp) {
   io::PoseLookupOptions lookup;
   lookup.max_diff_s = max_diff_s;
   lookup.interpolate = true;
@@ -629,45 +687,34 @@ RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
     keyframe_slot[kf] = rp.problem.keyframes.size();
     rp.problem.keyframes.push_back({t, *pose});
   }
-  rp.keyframe_objects.resize(rp.problem.keyframes.size());
-  for (const RawObservation& r : raw) {
-    pose::Observation o;
-    o.keyframe = keyframe_slot.at(r.keyframe);
-    o.landmark = r.landmark;
-    o.centroid_in_cam = r.centroid_in_cam;
-    rp.problem.observations.push_back(o);
-    rp.keyframe_objects[o.keyframe].push_back(rp.object_ids[r.landmark]);
-  }
-  // The partial-view bias of each observation: render every model from the keyframe's pose.
-  if (view_model == "visible" || view_model == "icp") {
-    std::vector<const PointCloud*> model_ptrs;
-    for (const auto& m : models) model_ptrs.push_back(&m);
-    std::vector<std::vector<std::size_t>> of_keyframe(rp.problem.keyframes.size());
-    for (std::size_t i = 0; i < rp.problem.observations.size(); ++i)
-      of_keyframe[rp.problem.observations[i].keyframe].push_back(i);
-    for (std::size_t k = 0; k < rp.problem.keyframes.size(); ++k) {
-      if (of_keyframe[k].empty()) continue;
-      const auto visible = pose::visible_centroids(
-          model_ptrs, rp.problem.keyframes[k].world_from_cam, camera, options.visibility);
-      for (std::size_t i : of_keyframe[k]) {
-        pose::Observation& o = rp.problem.observations[i];
-        if (visible[o.landmark])
-          o.bias_in_world =
-              *visible[o.landmark] - rp.problem.landmarks[o.landmark].position_in_world;
-        else
-          ++rp.observations_without_view;
-      }
-    }
-  }
-  // ICP: each observation's points, made again from the run's inputs, aligned to an earlier view
-  // of the same object (its anchor).
-  if (view_model == "icp") icp_landmarks(run, run_doc, options, keyframe_time, rp);
-  return rp;
+  return keyframe_slot;
 }
 
-CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progress) {
-  given.check();
-  io::require_replaceable(given.out, io::kRunFolder);  // before the work, not after it
+// The partial-view bias of each observation: render every model from the keyframe's pose.
+void visible_part_bias(const std::vector<PointCloud>& models, const Camera& camera,
+                       const CorrectOptions& options, RunProblem& rp) {
+  std::vector<const PointCloud*> model_ptrs;
+  for (const auto& m : models) model_ptrs.push_back(&m);
+  std::vector<std::vector<std::size_t>> of_keyframe(rp.problem.keyframes.size());
+  for (std::size_t i = 0; i < rp.problem.observations.size(); ++i)
+    of_keyframe[rp.problem.observations[i].keyframe].push_back(i);
+  for (std::size_t k = 0; k < rp.problem.keyframes.size(); ++k) {
+    if (of_keyframe[k].empty()) continue;
+    const auto visible = pose::visible_centroids(model_ptrs, rp.problem.keyframes[k].world_from_cam,
+                                                 camera, options.visibility);
+    for (std::size_t i : of_keyframe[k]) {
+      pose::Observation& o = rp.problem.observations[i];
+      if (visible[o.landmark])
+        o.bias_in_world = *visible[o.landmark] - rp.problem.landmarks[o.landmark].position_in_world;
+      else
+        ++rp.observations_without_view;
+    }
+  }
+}
+
+// The options as run: the view model's thresholds (unless given), view links for the graph with
+// the icp view model only.
+CorrectOptions options_as_run(const CorrectOptions& given) {
   CorrectOptions options = given;
   if (options.view_model_thresholds) {
     const bool icp = options.view_model == "icp";
@@ -676,25 +723,20 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
   }
   // View links serve the pose graph only.
   if (options.view_model != "icp" || options.correction.method != "graph") options.icp_links = 0;
-  const auto t_start = Clock::now();
-  CorrectResult result;
-  const fs::path run_file = options.run / "run.json";
-  const json run_doc = read_json_file(run_file);
-  const std::string trajectory_path = input_path(run_doc, run_file, "trajectory");
-  const Trajectory trajectory = io::read_trajectory(trajectory_path);
+  return options;
+}
 
-  // 1. The problem: keyframes, object landmarks, observations (with their partial-view bias).
-  const RunProblem rp = problem_from_run(options.run, trajectory, options);
-  result.landmarks = rp.problem.landmarks.size();
-  result.observations = rp.problem.observations.size();
-  result.observations_without_view = rp.observations_without_view;
-  result.observations_aligned = rp.observations_aligned;
-  result.links = rp.problem.links.size();
-  result.links_tried = rp.links_tried;
+// The median object scatter of a run problem at its own keyframe poses.
+double median_scatter_m(const RunProblem& rp) {
+  std::vector<Pose> poses;
+  for (const auto& k : rp.problem.keyframes) poses.push_back(k.world_from_cam);
+  return pose::median_scatter_m(rp.problem, poses);
+}
 
-  // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage. With
-  //    view links first (bounds that grow with the path, as the links confirm large corrections);
-  //    when the links do not confirm it, the same problem without them, with the fixed bounds.
+// Correct the keyframe poses (graph or paper), with the guardrails of the pose stage. With view
+// links first (bounds that grow with the path, as the links confirm large corrections); when the
+// links do not confirm it, the same problem without them, with the fixed bounds.
+void correct_keyframes(const RunProblem& rp, const CorrectOptions& options, CorrectResult& result) {
   if (!rp.problem.links.empty()) {
     pose::CorrectionOptions with_links = options.correction;
     if (options.link_bounds) {
@@ -715,62 +757,29 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
   result.reason = result.correction.reason;
   if (!result.reason_with_links.empty())
     result.reason += " (with view links: " + result.reason_with_links + ")";
-  {
-    std::vector<Pose> poses;
-    for (const auto& k : rp.problem.keyframes) poses.push_back(k.world_from_cam);
-    result.map_rms_before_m = pose::median_scatter_m(rp.problem, poses);
-  }
-  result.seconds_correct = seconds_since(t_start);
+}
 
-  ScratchDir scratch(options.out, "correct");
-  Trajectory corrected = trajectory;
-  if (result.accepted) {
-    // 3. Every pose of the trajectory, corrections interpolated between keyframes.
-    corrected =
-        pose::apply_corrections(trajectory, rp.problem.keyframes, result.correction.world_from_cam);
-    const fs::path corrected_tmp = scratch.path() / "trajectory_corrected.txt";
-    io::write_trajectory(
-        corrected_tmp, corrected,
-        "corrected by objmap correct (" + options.correction.method + ") from " + trajectory_path);
-    // 4. Fuse again with the corrected trajectory.
-    FuseOptions fo = fuse_options_of(options.run, run_doc, scratch.path());
-    fo.trajectory = corrected_tmp;
-    fo.out = options.out;
-    fo.threads = options.threads;
-    result.fuse = run_fuse(fo, progress);
-    result.refused_map = true;
-    // 5. The re-fused map's own consistency must not get worse.
-    if (options.check_map) {
-      CorrectOptions no_links = options;
-      no_links.icp_links = 0;  // the scatter needs no links
-      const RunProblem again = problem_from_run(options.out, corrected, no_links);
-      std::vector<Pose> poses;
-      for (const auto& k : again.problem.keyframes) poses.push_back(k.world_from_cam);
-      result.map_rms_after_m = pose::median_scatter_m(again.problem, poses);
-      // Scatters compare like with like only when the objects are the same; fewer objects (one
-      // that the drift had split, joined again) spread their observations around the whole object.
-      result.map_objects_before = rp.problem.landmarks.size();
-      result.map_objects_after = again.problem.landmarks.size();
-      const bool fewer = result.links_used && result.map_objects_after < result.map_objects_before;
-      if (result.map_rms_after_m > result.map_rms_before_m && !fewer) {
-        result.accepted = false;
-        char buffer[200];
-        std::snprintf(buffer, sizeof buffer,
-                      "refused: the re-fused map is less consistent (median object scatter %.4f -> "
-                      "%.4f m)",
-                      result.map_rms_before_m, result.map_rms_after_m);
-        result.reason = buffer;
-      }
-    }
-  }
-  if (!result.accepted) {
-    // Refused: OUT is the input run, the trajectory unchanged.
-    corrected = trajectory;
-    io::StagingDir staging(options.out, io::kRunFolder);
-    copy_run(options.run, staging.path());
-    staging.commit();
-  }
-  // 6. OUT/trajectory_corrected.txt, OUT/correction.json; run.json names the trajectory used.
+// Fuse the run again with the corrected trajectory (written to `scratch`) into OUT.
+void fuse_again(const CorrectOptions& options, const json& run_doc, const Trajectory& corrected,
+                const std::string& trajectory_path, const fs::path& scratch,
+                const FuseProgress& progress, CorrectResult& result) {
+  const fs::path corrected_tmp = scratch / "trajectory_corrected.txt";
+  io::write_trajectory(
+      corrected_tmp, corrected,
+      "corrected by objmap correct (" + options.correction.method + ") from " + trajectory_path);
+  FuseOptions fo = fuse_options_of(options.run, run_doc, scratch);
+  fo.trajectory = corrected_tmp;
+  fo.out = options.out;
+  fo.threads = options.threads;
+  result.fuse = run_fuse(fo, progress);
+  result.refused_map = true;
+}
+
+// OUT/trajectory_corrected.txt and OUT/correction.json; an accepted correction's run.json names the
+// corrected trajectory.
+void write_outputs(const CorrectOptions& options, const Trajectory& corrected,
+                   const std::string& trajectory_path, const RunProblem& rp,
+                   Clock::time_point t_start, CorrectResult& result) {
   const fs::path trajectory_out = options.out / "trajectory_corrected.txt";
   io::write_trajectory(trajectory_out, corrected,
                        std::string(result.accepted ? "corrected" : "not corrected (refused)") +
@@ -785,6 +794,160 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
   result.seconds_total = seconds_since(t_start);
   io::write_file_atomic(options.out / "correction.json",
                         correction_json(options, result, rp, trajectory_path));
+}
+
+}  // namespace
+
+// view_model icp: every object's observations grouped by view. In keyframe order, an observation
+// is aligned (point-to-plane ICP) to the anchor observations of its object that look at it from
+// within max_view_angle_deg; the first that aligns takes it into its group, else it anchors a new
+// group. Each group with >= 2 members becomes a landmark at its anchor's centroid, and each member
+// observes that point where its alignment puts it (centroid_in_cam = (ΔT·world_from_cam)⁻¹·anchor
+// centroid). Two views of the same side of an object are compared point by point, at the
+// resolution of the depth image, not through the 1 cm model (which the drift itself blurs).
+void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOptions& options,
+                   const std::map<int, double>& keyframe_time, RunProblem& rp) {
+  ScratchDir scratch(options.out, "icp");
+  const pose::Problem& problem = rp.problem;
+  // 1. Each observation's points, made again from the run's inputs.
+  const RemadeViews views =
+      remade_views(run, run_doc, options, keyframe_time, problem, scratch.path());
+  const std::vector<const fusion::Observation*>& source = views.source;
+  // 2. Per object, its observations in keyframe order.
+  const std::vector<std::vector<std::size_t>> of_landmark = in_keyframe_order(problem, source);
+  // 3. Each view aligned to an anchor view of its object: its first view, or groups.
+  std::vector<std::vector<Group>> groups(problem.landmarks.size());
+  if (options.icp_groups)
+    align_in_groups(problem, source, of_landmark, options, groups);
+  else
+    align_to_first_views(problem, source, of_landmark, options, groups);
+  // 4. View links between the views of each object.
+  std::vector<pose::ViewLink> links;
+  if (options.icp_links > 0)
+    links = view_links(problem, source, of_landmark, options, rp.links_tried);
+  // 5. The aligned views observe their anchor's centroid: in place with one anchor per object, a
+  //    new problem with a landmark per group.
+  if (!options.icp_groups) {
+    rp.problem.links = links;
+    observe_first_views(groups, rp);
+    return;
+  }
+  rp = problem_of_groups(groups, links, source, rp);
+}
+
+RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,
+                            const CorrectOptions& options) {
+  const std::string& view_model = options.view_model;
+  const fs::path run_file = run / "run.json";
+  const fs::path objects_file = run / "objects.json";
+  const json run_doc = read_json_file(run_file);
+  const Camera camera = camera_from_run(run_doc, run_file);
+  double max_diff_s = 0.02;
+  if (run_doc.contains("options") && run_doc["options"].contains("max_diff_s"))
+    max_diff_s = field<double>(run_doc["options"], "max_diff_s", run_file, "options");
+  const json doc = read_json_file(objects_file);
+  const json objects = field<json>(doc, "objects", objects_file, "");
+  require(objects.is_array(), objects_file.string() + ": objects", "expected an array");
+
+  RunProblem rp;
+  // 1. Landmarks: the objects with observations, at their models' centroids.
+  const ObjectsRead read = read_objects(run, objects, objects_file, rp);
+  // 2. Keyframes in the run's order, their poses from `trajectory`.
+  const std::map<int, std::size_t> keyframe_slot =
+      add_keyframes(trajectory, read.keyframe_time, max_diff_s, objects_file, rp);
+  // 3. Observations: each object's centroid_in_cam in its keyframe.
+  rp.keyframe_objects.resize(rp.problem.keyframes.size());
+  for (const RawObservation& r : read.raw) {
+    pose::Observation o;
+    o.keyframe = keyframe_slot.at(r.keyframe);
+    o.landmark = r.landmark;
+    o.centroid_in_cam = r.centroid_in_cam;
+    rp.problem.observations.push_back(o);
+    rp.keyframe_objects[o.keyframe].push_back(rp.object_ids[r.landmark]);
+  }
+  // 4. The partial-view bias of each observation: render every model from the keyframe's pose.
+  if (view_model == "visible" || view_model == "icp")
+    visible_part_bias(read.models, camera, options, rp);
+  // 5. ICP: each observation's points, made again from the run's inputs, aligned to an earlier
+  //    view of the same object (its anchor).
+  if (view_model == "icp") icp_landmarks(run, run_doc, options, read.keyframe_time, rp);
+  return rp;
+}
+
+namespace {
+
+// The re-fused map's own consistency must not get worse (the median object scatter of OUT against
+// the input run's); refuses the result when it does.
+void check_map_consistency(const CorrectOptions& options, const Trajectory& corrected,
+                           const RunProblem& rp, CorrectResult& result) {
+  CorrectOptions no_links = options;
+  no_links.icp_links = 0;  // the scatter needs no links
+  const RunProblem again = problem_from_run(options.out, corrected, no_links);
+  result.map_rms_after_m = median_scatter_m(again);
+  // Scatters compare like with like only when the objects are the same; fewer objects (one that
+  // the drift had split, joined again) spread their observations around the whole object.
+  result.map_objects_before = rp.problem.landmarks.size();
+  result.map_objects_after = again.problem.landmarks.size();
+  const bool fewer = result.links_used && result.map_objects_after < result.map_objects_before;
+  if (result.map_rms_after_m > result.map_rms_before_m && !fewer) {
+    result.accepted = false;
+    char buffer[200];
+    std::snprintf(buffer, sizeof buffer,
+                  "refused: the re-fused map is less consistent (median object scatter %.4f -> "
+                  "%.4f m)",
+                  result.map_rms_before_m, result.map_rms_after_m);
+    result.reason = buffer;
+  }
+}
+
+}  // namespace
+
+CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progress) {
+  given.check();
+  io::require_replaceable(given.out, io::kRunFolder);  // before the work, not after it
+  const CorrectOptions options = options_as_run(given);
+  const auto t_start = Clock::now();
+  CorrectResult result;
+  const fs::path run_file = options.run / "run.json";
+  const json run_doc = read_json_file(run_file);
+  const std::string trajectory_path = input_path(run_doc, run_file, "trajectory");
+  const Trajectory trajectory = io::read_trajectory(trajectory_path);
+
+  // 1. The problem: keyframes, object landmarks, observations (with their partial-view bias).
+  const RunProblem rp = problem_from_run(options.run, trajectory, options);
+  result.landmarks = rp.problem.landmarks.size();
+  result.observations = rp.problem.observations.size();
+  result.observations_without_view = rp.observations_without_view;
+  result.observations_aligned = rp.observations_aligned;
+  result.links = rp.problem.links.size();
+  result.links_tried = rp.links_tried;
+
+  // 2. Correct the keyframe poses (graph or paper), with the guardrails of the pose stage: with
+  //    view links first, without them when the links do not confirm it.
+  correct_keyframes(rp, options, result);
+  result.map_rms_before_m = median_scatter_m(rp);
+  result.seconds_correct = seconds_since(t_start);
+
+  ScratchDir scratch(options.out, "correct");
+  Trajectory corrected = trajectory;
+  if (result.accepted) {
+    // 3. Every pose of the trajectory, corrections interpolated between keyframes.
+    corrected =
+        pose::apply_corrections(trajectory, rp.problem.keyframes, result.correction.world_from_cam);
+    // 4. Fuse again with the corrected trajectory.
+    fuse_again(options, run_doc, corrected, trajectory_path, scratch.path(), progress, result);
+    // 5. The re-fused map's own consistency must not get worse.
+    if (options.check_map) check_map_consistency(options, corrected, rp, result);
+  }
+  if (!result.accepted) {
+    // Refused: OUT is the input run, the trajectory unchanged.
+    corrected = trajectory;
+    io::StagingDir staging(options.out, io::kRunFolder);
+    copy_run(options.run, staging.path());
+    staging.commit();
+  }
+  // 6. OUT/trajectory_corrected.txt, OUT/correction.json; run.json names the trajectory used.
+  write_outputs(options, corrected, trajectory_path, rp, t_start, result);
   return result;
 }
 

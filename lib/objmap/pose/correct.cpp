@@ -497,92 +497,95 @@ Solution solve(const Problem& problem, const CorrectionOptions& options,
   return s;
 }
 
-}  // namespace
+// The problem's input: keyframe poses, landmark positions and each keyframe's observations.
+struct Inputs {
+  std::vector<Pose> poses;
+  std::vector<Vec3> landmarks;
+  std::vector<std::vector<std::size_t>> of_keyframe;
+};
 
-CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& options) {
-  options.check();
-  validate(problem);
-  const auto t_start = std::chrono::steady_clock::now();
-  CorrectionResult result;
-  result.method = options.method;
+Inputs inputs_of(const Problem& problem) {
   const std::size_t n_kf = problem.keyframes.size();
   const std::size_t n_lm = problem.landmarks.size();
-  std::vector<Pose> input(n_kf);
-  for (std::size_t k = 0; k < n_kf; ++k) input[k] = problem.keyframes[k].world_from_cam;
-  std::vector<Vec3> landmarks_in(n_lm);
-  for (std::size_t j = 0; j < n_lm; ++j) landmarks_in[j] = problem.landmarks[j].position_in_world;
-  std::vector<std::vector<std::size_t>> of_keyframe(n_kf);
+  Inputs in;
+  in.poses.resize(n_kf);
+  for (std::size_t k = 0; k < n_kf; ++k) in.poses[k] = problem.keyframes[k].world_from_cam;
+  in.landmarks.resize(n_lm);
+  for (std::size_t j = 0; j < n_lm; ++j) in.landmarks[j] = problem.landmarks[j].position_in_world;
+  in.of_keyframe.resize(n_kf);
   for (std::size_t i = 0; i < problem.observations.size(); ++i)
-    of_keyframe[problem.observations[i].keyframe].push_back(i);
-  const auto matched_landmarks = [&](std::size_t k, const std::vector<Vec3>& landmarks) {
-    std::vector<Vec3> out;
-    for (std::size_t i : of_keyframe[k]) out.push_back(landmarks[problem.observations[i].landmark]);
-    return out;
-  };
+    in.of_keyframe[problem.observations[i].keyframe].push_back(i);
+  return in;
+}
 
-  // 1. Solve with every landmark.
+// The held-out check's figures: RMS of the held-out observations (m) and view links (sigmas)
+// before and after, and the solver's iterations.
+struct HeldOut {
+  double before = 0.0, after = 0.0, link_before = 0.0, link_after = 0.0;
+  int iterations = 0;
+};
+
+// Held-out check, two folds: corrections fitted to one half of the observations must make the
+// other half more consistent too. Fitting noise does not; drift does. The folds split the objects
+// (>= 4 objects), else the keyframes (alternately).
+HeldOut held_out_check(const Problem& problem, const CorrectionOptions& options, const Inputs& in,
+                       const std::vector<double>& sigma_in) {
+  HeldOut h;
+  if (!options.held_out_check) return h;
   const std::size_t n_obs = problem.observations.size();
   const std::size_t n_links = problem.links.size();
-  const Solution all = solve(problem, options, input, landmarks_in, std::vector<bool>(n_obs, true),
-                             std::vector<bool>(n_links, true));
-  const std::vector<Pose>& proposed = all.poses;
-  int iterations = all.iterations;
-
-  // 2. Held-out check, two folds: corrections fitted to one half of the observations must make the
-  //    other half more consistent too. Fitting noise does not; drift does. The folds split the
-  //    objects (>= 4 objects), else the keyframes (alternately).
-  const std::vector<double> sigma_in =
-      landmark_sigmas_m(problem, input, options.observation_sigma_m);
-  double held_before = 0.0, held_after = 0.0, held_link_before = 0.0, held_link_after = 0.0;
-  if (options.held_out_check) {
-    const bool by_object = n_lm >= 4;
-    for (int fold = 0; fold < 2; ++fold) {
-      std::vector<bool> fit(n_obs), test(n_obs);
-      for (std::size_t i = 0; i < n_obs; ++i) {
-        const Observation& o = problem.observations[i];
-        test[i] = static_cast<int>((by_object ? o.landmark : o.keyframe) % 2) == fold;
-        fit[i] = !test[i];
-      }
-      std::vector<bool> fit_link(n_links);
-      // Links by a hash of their index: the order of links follows their kind (the previous
-      // view, the earliest...), and each fold must have some of every kind.
-      for (std::size_t i = 0; i < n_links; ++i)
-        fit_link[i] = static_cast<int>(((i * 2654435761u) >> 16) & 1u) != fold;
-      const Solution s = solve(problem, options, input, landmarks_in, fit, fit_link);
-      iterations += s.iterations;
-      const double b = observation_rms_m(problem, input, sigma_in, test);
-      const double a = observation_rms_m(problem, s.poses, sigma_in, test);
-      held_before += b * b;
-      held_after += a * a;
-      std::vector<bool> test_link(n_links);
-      for (std::size_t i = 0; i < n_links; ++i) test_link[i] = !fit_link[i];
-      const double lb = link_rms_sigmas(problem, input, options, test_link);
-      const double la = link_rms_sigmas(problem, s.poses, options, test_link);
-      held_link_before += lb * lb;
-      held_link_after += la * la;
+  const bool by_object = problem.landmarks.size() >= 4;
+  for (int fold = 0; fold < 2; ++fold) {
+    std::vector<bool> fit(n_obs), test(n_obs);
+    for (std::size_t i = 0; i < n_obs; ++i) {
+      const Observation& o = problem.observations[i];
+      test[i] = static_cast<int>((by_object ? o.landmark : o.keyframe) % 2) == fold;
+      fit[i] = !test[i];
     }
-    held_before = std::sqrt(held_before / 2.0);
-    held_after = std::sqrt(held_after / 2.0);
-    held_link_before = std::sqrt(held_link_before / 2.0);
-    held_link_after = std::sqrt(held_link_after / 2.0);
+    std::vector<bool> fit_link(n_links);
+    // Links by a hash of their index: the order of links follows their kind (the previous
+    // view, the earliest...), and each fold must have some of every kind.
+    for (std::size_t i = 0; i < n_links; ++i)
+      fit_link[i] = static_cast<int>(((i * 2654435761u) >> 16) & 1u) != fold;
+    const Solution s = solve(problem, options, in.poses, in.landmarks, fit, fit_link);
+    h.iterations += s.iterations;
+    const double b = observation_rms_m(problem, in.poses, sigma_in, test);
+    const double a = observation_rms_m(problem, s.poses, sigma_in, test);
+    h.before += b * b;
+    h.after += a * a;
+    std::vector<bool> test_link(n_links);
+    for (std::size_t i = 0; i < n_links; ++i) test_link[i] = !fit_link[i];
+    const double lb = link_rms_sigmas(problem, in.poses, options, test_link);
+    const double la = link_rms_sigmas(problem, s.poses, options, test_link);
+    h.link_before += lb * lb;
+    h.link_after += la * la;
   }
-  result.held_out_link_before_sigmas = held_link_before;
-  result.held_out_link_after_sigmas = held_link_after;
-  result.held_out_before_m = held_before;
-  result.held_out_after_m = held_after;
+  h.before = std::sqrt(h.before / 2.0);
+  h.after = std::sqrt(h.after / 2.0);
+  h.link_before = std::sqrt(h.link_before / 2.0);
+  h.link_after = std::sqrt(h.link_after / 2.0);
+  return h;
+}
 
-  // 3. Per-keyframe report and the bounds (which grow with the path travelled, as drift does).
-  result.proposed = proposed;
+// Per-keyframe report and the bounds (which grow with the path travelled, as drift does); returns
+// why the result is over the bounds (empty when it is not).
+std::string keyframe_report(const Problem& problem, const CorrectionOptions& options,
+                            const Inputs& in, const Solution& all, CorrectionResult& result) {
+  const std::vector<Pose>& input = in.poses;
+  const std::vector<Pose>& proposed = all.poses;
   double travelled = 0.0;
   std::string over_bounds;
-  for (std::size_t k = 0; k < n_kf; ++k) {
+  for (std::size_t k = 0; k < problem.keyframes.size(); ++k) {
+    std::vector<Vec3> matched;
+    for (std::size_t i : in.of_keyframe[k])
+      matched.push_back(in.landmarks[problem.observations[i].landmark]);
     KeyframeCorrection kc;
     kc.index = k;
     kc.timestamp = problem.keyframes[k].timestamp;
-    kc.matched = static_cast<int>(of_keyframe[k].size());
-    kc.spread_m = spread_m(matched_landmarks(k, landmarks_in));
-    kc.residual_before_m = keyframe_rms(problem, of_keyframe[k], input[k], landmarks_in);
-    kc.residual_after_m = keyframe_rms(problem, of_keyframe[k], proposed[k], all.landmarks);
+    kc.matched = static_cast<int>(in.of_keyframe[k].size());
+    kc.spread_m = spread_m(matched);
+    kc.residual_before_m = keyframe_rms(problem, in.of_keyframe[k], input[k], in.landmarks);
+    kc.residual_after_m = keyframe_rms(problem, in.of_keyframe[k], proposed[k], all.landmarks);
     kc.translation_m = (proposed[k].translation() - input[k].translation()).norm();
     kc.rotation_deg = angle_deg(proposed[k].linear() * input[k].linear().transpose());
     if (k > 0) travelled += (input[k].translation() - input[k - 1].translation()).norm();
@@ -601,27 +604,39 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
     result.corrected_keyframes += kc.corrected;
     result.keyframes.push_back(kc);
   }
+  return over_bounds;
+}
+
+// The consistency of the whole result: observation RMS before and after; with the graph, the
+// odometry RMS and the view links' RMS in sigmas.
+void consistency(const Problem& problem, const CorrectionOptions& options, const Inputs& in,
+                 const std::vector<double>& sigma_in, const std::vector<Pose>& proposed,
+                 CorrectionResult& result) {
+  const std::vector<Pose>& input = in.poses;
+  const std::size_t n_kf = problem.keyframes.size();
   result.residual_before_m = observation_rms_m(problem, input, sigma_in);
   result.residual_after_m = observation_rms_m(problem, proposed, sigma_in);
-  result.iterations = iterations;
-  if (options.method == "graph") {
-    double sum = 0.0;
-    for (std::size_t k = 0; k + 1 < n_kf; ++k) {
-      const Pose i_from_j = input[k].inverse() * input[k + 1];
-      const double e = relative_pose_sigmas(i_from_j, proposed[k], proposed[k + 1],
-                                            odometry_sigma_m(options, i_from_j),
-                                            odometry_sigma_deg(options, i_from_j));
-      sum += e * e;
-    }
-    result.odometry_rms_sigmas = n_kf > 1 ? std::sqrt(sum / (n_kf - 1)) : 0.0;
-    result.link_rms_before_sigmas = link_rms_sigmas(problem, input, options);
-    result.link_rms_after_sigmas = link_rms_sigmas(problem, proposed, options);
+  if (options.method != "graph") return;
+  double sum = 0.0;
+  for (std::size_t k = 0; k + 1 < n_kf; ++k) {
+    const Pose i_from_j = input[k].inverse() * input[k + 1];
+    const double e = relative_pose_sigmas(i_from_j, proposed[k], proposed[k + 1],
+                                          odometry_sigma_m(options, i_from_j),
+                                          odometry_sigma_deg(options, i_from_j));
+    sum += e * e;
   }
+  result.odometry_rms_sigmas = n_kf > 1 ? std::sqrt(sum / (n_kf - 1)) : 0.0;
+  result.link_rms_before_sigmas = link_rms_sigmas(problem, input, options);
+  result.link_rms_after_sigmas = link_rms_sigmas(problem, proposed, options);
+}
 
-  // 4. The whole result: refused when it moves a pose beyond the bounds, does not make the
-  //    observations consistent enough, or does not generalise to held-out objects.
+// The guardrails: the result is refused when it moves a pose beyond the bounds, does not make the
+// observations consistent enough, or does not generalise to held-out objects. Sets accepted and
+// the reason.
+void guardrails(const Problem& problem, const CorrectionOptions& options, const HeldOut& held,
+                const std::string& over_bounds, CorrectionResult& result) {
   const double needed = result.residual_before_m * (1.0 - options.min_improvement);
-  const double held_needed = held_before * (1.0 - options.min_held_out_improvement);
+  const double held_needed = held.before * (1.0 - options.min_held_out_improvement);
   if (result.corrected_keyframes == 0) {
     result.reason = "refused: no keyframe has enough evidence for a correction";
   } else if (!over_bounds.empty()) {
@@ -631,19 +646,19 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
         "refused: object observations not consistent enough: residual RMS %.4f -> %.4f m, needs "
         "<= %.4f m",
         result.residual_before_m, result.residual_after_m, needed);
-  } else if (options.held_out_check && n_links > 0 &&
-             !(held_link_after <=
-               held_link_before * (1.0 - options.min_held_out_link_improvement))) {
+  } else if (options.held_out_check && !problem.links.empty() &&
+             !(held.link_after <=
+               held.link_before * (1.0 - options.min_held_out_link_improvement))) {
     result.reason =
         fmt("refused: too little gain on held-out view links (RMS %.2f -> %.2f sigmas, needs <= "
             "%.2f): the views of the objects do not confirm the correction",
-            held_link_before, held_link_after,
-            held_link_before * (1.0 - options.min_held_out_link_improvement));
-  } else if (options.held_out_check && !(held_after <= held_needed)) {
+            held.link_before, held.link_after,
+            held.link_before * (1.0 - options.min_held_out_link_improvement));
+  } else if (options.held_out_check && !(held.after <= held_needed)) {
     result.reason =
         fmt("refused: too little gain on held-out observations (residual RMS %.4f -> %.4f m, needs "
             "<= %.4f m): the correction would fit noise or a systematic bias, not drift",
-            held_before, held_after, held_needed);
+            held.before, held.after, held_needed);
   } else if (result.max_translation_m < options.min_translation_m &&
              result.max_rotation_deg < options.min_rotation_deg) {
     result.reason =
@@ -653,12 +668,46 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
   } else {
     result.accepted = true;
     result.reason = fmt("accepted: residual RMS %.4f -> %.4f m, held-out %.4f",
-                        result.residual_before_m, result.residual_after_m, held_before) +
-                    fmt(" -> %.4f m, ", held_after) + std::to_string(result.corrected_keyframes) +
+                        result.residual_before_m, result.residual_after_m, held.before) +
+                    fmt(" -> %.4f m, ", held.after) + std::to_string(result.corrected_keyframes) +
                     " keyframes corrected";
   }
-  result.world_from_cam = result.accepted ? proposed : input;
-  result.landmarks_in_world = result.accepted ? all.landmarks : landmarks_in;
+}
+
+}  // namespace
+
+CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& options) {
+  options.check();
+  validate(problem);
+  const auto t_start = std::chrono::steady_clock::now();
+  CorrectionResult result;
+  result.method = options.method;
+  const Inputs in = inputs_of(problem);
+
+  // 1. Solve with every landmark.
+  const Solution all = solve(problem, options, in.poses, in.landmarks,
+                             std::vector<bool>(problem.observations.size(), true),
+                             std::vector<bool>(problem.links.size(), true));
+
+  // 2. Held-out check, two folds: fitted to one half, the other half must get more consistent.
+  const std::vector<double> sigma_in =
+      landmark_sigmas_m(problem, in.poses, options.observation_sigma_m);
+  const HeldOut held = held_out_check(problem, options, in, sigma_in);
+  result.held_out_link_before_sigmas = held.link_before;
+  result.held_out_link_after_sigmas = held.link_after;
+  result.held_out_before_m = held.before;
+  result.held_out_after_m = held.after;
+
+  // 3. Per-keyframe report, the bounds and the consistency of the proposed poses.
+  result.proposed = all.poses;
+  const std::string over_bounds = keyframe_report(problem, options, in, all, result);
+  consistency(problem, options, in, sigma_in, all.poses, result);
+  result.iterations = all.iterations + held.iterations;
+
+  // 4. The guardrails: a refused result keeps the input poses.
+  guardrails(problem, options, held, over_bounds, result);
+  result.world_from_cam = result.accepted ? all.poses : in.poses;
+  result.landmarks_in_world = result.accepted ? all.landmarks : in.landmarks;
   if (!result.accepted)
     for (auto& kc : result.keyframes) kc.corrected = false;
   result.seconds =

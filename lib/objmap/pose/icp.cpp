@@ -103,76 +103,101 @@ ModelAligner& ModelAligner::operator=(ModelAligner&&) noexcept = default;
 
 std::size_t ModelAligner::model_points() const { return impl_->points.size(); }
 
-IcpResult ModelAligner::align(const PointCloud& observation) const {
-  const IcpOptions& o = impl_->options;
-  IcpResult result;
-  if (impl_->points.size() < static_cast<std::size_t>(o.normal_neighbours) || observation.empty())
-    return result;
-  // Thinned observation, in the world frame.
-  const std::size_t stride = (observation.size() + o.max_points - 1) / o.max_points;
-  std::vector<Vec3> source;
-  for (std::size_t i = 0; i < observation.size(); i += stride)
-    source.push_back(observation.points[i].cast<double>());
-  result.points = source.size();
-  Vec3 centre = Vec3::Zero();
-  for (const Vec3& p : source) centre += p;
-  centre /= static_cast<double>(source.size());
+namespace {
 
-  // Rotations are scaled by the observation's radius, so that both halves of the update have
-  // comparable units (metres of motion of its points).
-  double radius_sq = 0.0;
-  for (const Vec3& p : source) radius_sq += (p - centre).squaredNorm();
-  const double radius = std::max(1e-3, std::sqrt(radius_sq / static_cast<double>(source.size())));
-  Pose total = Pose::Identity();
-  double max_sq = o.max_correspondence_m * o.max_correspondence_m;
-  const std::size_t m = source.size();
-  std::vector<float> query(3 * m), sq(m);
-  std::vector<int> nearest(m);
-  std::vector<Vec3> placed(m);
-  flann::Matrix<float> query_mat(query.data(), m, 3), sq_mat(sq.data(), m, 1);
-  flann::Matrix<int> nearest_mat(nearest.data(), m, 1);
-  const flann::SearchParams params(-1, 0.0f, /*sorted=*/false);
-  auto pairs = [&](const Pose& t, std::size_t& inliers, double& sum_sq,
-                   Eigen::Matrix<double, 6, 6>* jtj, Eigen::Matrix<double, 6, 1>* jtr) {
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+
+// The view's points against the model: each point's nearest model point (the whole cloud in one
+// kd-tree query), its distance along the model normal there, and on request the Gauss–Newton
+// system of the (radius-scaled rotation, translation) update, with Huber weights.
+class PointToPlane {
+ public:
+  PointToPlane(KdIndex& index, const std::vector<Vec3>& model_points,
+               const std::vector<Vec3>& normals, const std::vector<Vec3>& source, double huber_m,
+               double radius)
+      : index_(index),
+        model_points_(model_points),
+        normals_(normals),
+        source_(source),
+        huber_m_(huber_m),
+        radius_(radius),
+        query_(3 * source.size()),
+        sq_(source.size()),
+        nearest_(source.size()),
+        placed_(source.size()) {}
+
+  std::size_t inliers = 0;
+  double sum_sq = 0;
+
+  // Pairs of the view moved by t, within sqrt(max_sq) of the model; rotations about `centre`.
+  void pair(const Pose& t, const Vec3& centre, double max_sq, Matrix6* jtj, Vector6* jtr) {
+    const std::size_t m = source_.size();
+    flann::Matrix<float> query_mat(query_.data(), m, 3), sq_mat(sq_.data(), m, 1);
+    flann::Matrix<int> nearest_mat(nearest_.data(), m, 1);
+    const flann::SearchParams params(-1, 0.0f, /*sorted=*/false);
     inliers = 0;
     sum_sq = 0;
     if (jtj) jtj->setZero(), jtr->setZero();
     // Every point's nearest model point in one query.
     for (std::size_t i = 0; i < m; ++i) {
-      placed[i] = t * source[i];
-      for (int c = 0; c < 3; ++c) query[3 * i + c] = static_cast<float>(placed[i][c]);
+      placed_[i] = t * source_[i];
+      for (int c = 0; c < 3; ++c) query_[3 * i + c] = static_cast<float>(placed_[i][c]);
     }
-    impl_->index->knnSearch(query_mat, nearest_mat, sq_mat, 1, params);
+    index_.knnSearch(query_mat, nearest_mat, sq_mat, 1, params);
     for (std::size_t i = 0; i < m; ++i) {
-      const Vec3& p = placed[i];
-      if (nearest[i] < 0 || sq[i] > max_sq) continue;
-      const Vec3& n = impl_->normals[nearest[i]];
+      const Vec3& p = placed_[i];
+      if (nearest_[i] < 0 || sq_[i] > max_sq) continue;
+      const Vec3& n = normals_[nearest_[i]];
       if (n.isZero()) continue;
       ++inliers;
-      const double r = n.dot(p - impl_->points[nearest[i]]);
+      const double r = n.dot(p - model_points_[nearest_[i]]);
       sum_sq += r * r;
       if (!jtj) continue;
-      const double w = std::abs(r) <= o.huber_m ? 1.0 : o.huber_m / std::abs(r);
-      Eigen::Matrix<double, 6, 1> j;
-      j.head<3>() = (p - centre).cross(n) / radius;
+      const double w = std::abs(r) <= huber_m_ ? 1.0 : huber_m_ / std::abs(r);
+      Vector6 j;
+      j.head<3>() = (p - centre).cross(n) / radius_;
       j.tail<3>() = n;
       *jtj += w * j * j.transpose();
       *jtr += w * j * r;
     }
-  };
-  std::size_t inliers = 0;
-  double sum_sq = 0;
+  }
+
+ private:
+  KdIndex& index_;
+  const std::vector<Vec3>& model_points_;
+  const std::vector<Vec3>& normals_;
+  const std::vector<Vec3>& source_;
+  double huber_m_, radius_;
+  std::vector<float> query_, sq_;
+  std::vector<int> nearest_;
+  std::vector<Vec3> placed_;
+};
+
+// The observation thinned to at most max_points points, in the world frame.
+std::vector<Vec3> thinned(const PointCloud& observation, std::size_t max_points) {
+  const std::size_t stride = (observation.size() + max_points - 1) / max_points;
+  std::vector<Vec3> source;
+  for (std::size_t i = 0; i < observation.size(); i += stride)
+    source.push_back(observation.points[i].cast<double>());
+  return source;
+}
+
+// Gauss–Newton on the point-to-plane distances. Directions the surface does not constrain (a plane
+// sliding in itself, a bottle turning about its axis) are left out of the update: they stay where
+// they are. `centre` moves with the points; returns the correction.
+Pose gauss_newton(PointToPlane& fit, const IcpOptions& o, double radius, double max_sq,
+                  Vec3& centre, IcpResult& result) {
+  Pose total = Pose::Identity();
   for (int it = 0; it < o.max_iterations; ++it) {
-    Eigen::Matrix<double, 6, 6> jtj;
-    Eigen::Matrix<double, 6, 1> jtr;
-    pairs(total, inliers, sum_sq, &jtj, &jtr);
+    Matrix6 jtj;
+    Vector6 jtr;
+    fit.pair(total, centre, max_sq, &jtj, &jtr);
     result.iterations = it + 1;
-    if (inliers < 6) break;
-    // Directions the surface does not constrain (a plane sliding in itself, a bottle turning
-    // about its axis) are left out of the update: they stay where they are.
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(jtj);
+    if (fit.inliers < 6) break;
+    const Eigen::SelfAdjointEigenSolver<Matrix6> eig(jtj);
     const double largest = eig.eigenvalues()(5);
-    Eigen::Matrix<double, 6, 1> xi = Eigen::Matrix<double, 6, 1>::Zero();
+    Vector6 xi = Vector6::Zero();
     for (int k = 0; k < 6; ++k) {
       const double l = eig.eigenvalues()(k);
       if (l > o.min_constraint * largest)
@@ -188,38 +213,71 @@ IcpResult ModelAligner::align(const PointCloud& observation) const {
     centre = step * centre;
     if (xi.norm() < o.convergence_m) break;
   }
-  // The uncertainty at the end: covariance rms² · H⁻¹ of the (radius-scaled rotation,
-  // translation) update.
-  {
-    Eigen::Matrix<double, 6, 6> jtj;
-    Eigen::Matrix<double, 6, 1> jtr;
-    pairs(total, inliers, sum_sq, &jtj, &jtr);
-    const double variance = inliers > 6 ? sum_sq / static_cast<double>(inliers - 6) : 0.0;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(jtj);
-    const double largest = eig.eigenvalues()(5);
-    if (inliers <= 6 || !(eig.eigenvalues()(0) > 1e-12 * largest)) {
-      result.rotation_sigma_deg = result.translation_sigma_m =
-          std::numeric_limits<double>::infinity();
-    } else {
-      const Eigen::Matrix<double, 6, 6> cov = variance * eig.eigenvectors() *
-                                              eig.eigenvalues().cwiseInverse().asDiagonal() *
-                                              eig.eigenvectors().transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> trans(cov.bottomRightCorner<3, 3>());
-      result.rotation_sigma_deg =
-          std::sqrt(std::max(0.0, rot.eigenvalues()(2))) / radius * 180.0 / kPi;
-      result.translation_sigma_m = std::sqrt(std::max(0.0, trans.eigenvalues()(2)));
-    }
+  return total;
+}
+
+// The uncertainty at the end: covariance rms² · H⁻¹ of the (radius-scaled rotation, translation)
+// update; infinite when fewer than 7 points pair or a direction is not constrained.
+void uncertainty(PointToPlane& fit, const Pose& total, const Vec3& centre, double radius,
+                 double max_sq, IcpResult& result) {
+  Matrix6 jtj;
+  Vector6 jtr;
+  fit.pair(total, centre, max_sq, &jtj, &jtr);
+  const std::size_t inliers = fit.inliers;
+  const double variance = inliers > 6 ? fit.sum_sq / static_cast<double>(inliers - 6) : 0.0;
+  const Eigen::SelfAdjointEigenSolver<Matrix6> eig(jtj);
+  const double largest = eig.eigenvalues()(5);
+  if (inliers <= 6 || !(eig.eigenvalues()(0) > 1e-12 * largest)) {
+    result.rotation_sigma_deg = result.translation_sigma_m =
+        std::numeric_limits<double>::infinity();
+    return;
   }
+  const Matrix6 cov = variance * eig.eigenvectors() *
+                      eig.eigenvalues().cwiseInverse().asDiagonal() *
+                      eig.eigenvectors().transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> trans(cov.bottomRightCorner<3, 3>());
+  result.rotation_sigma_deg = std::sqrt(std::max(0.0, rot.eigenvalues()(2))) / radius * 180.0 / kPi;
+  result.translation_sigma_m = std::sqrt(std::max(0.0, trans.eigenvalues()(2)));
+}
+
+}  // namespace
+
+IcpResult ModelAligner::align(const PointCloud& observation) const {
+  const IcpOptions& o = impl_->options;
+  IcpResult result;
+  if (impl_->points.size() < static_cast<std::size_t>(o.normal_neighbours) || observation.empty())
+    return result;
+  // 1. The thinned observation, its centre and radius: rotations are scaled by the radius, so
+  //    that both halves of the update have comparable units (metres of motion of its points).
+  const std::vector<Vec3> source = thinned(observation, o.max_points);
+  result.points = source.size();
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : source) centre += p;
+  centre /= static_cast<double>(source.size());
+  double radius_sq = 0.0;
+  for (const Vec3& p : source) radius_sq += (p - centre).squaredNorm();
+  const double radius = std::max(1e-3, std::sqrt(radius_sq / static_cast<double>(source.size())));
+  PointToPlane fit(*impl_->index, impl_->points, impl_->normals, source, o.huber_m, radius);
+
+  // 2. Point-to-plane Gauss–Newton within the correspondence distance.
+  const double max_sq = o.max_correspondence_m * o.max_correspondence_m;
+  const Pose total = gauss_newton(fit, o, radius, max_sq, centre, result);
+
+  // 3. The uncertainty of the correction.
+  uncertainty(fit, total, centre, radius, max_sq, result);
   result.centre = centre;
-  // The final pairs: only points within inlier_distance_m of the model count.
-  max_sq = std::min(max_sq, o.inlier_distance_m * o.inlier_distance_m);
-  pairs(total, inliers, sum_sq, nullptr, nullptr);
+
+  // 4. The final pairs: only points within inlier_distance_m of the model count.
+  fit.pair(total, centre, std::min(max_sq, o.inlier_distance_m * o.inlier_distance_m), nullptr,
+           nullptr);
   result.correction = total;
-  result.inlier_share = static_cast<double>(inliers) / static_cast<double>(source.size());
-  result.rms_m = inliers > 0 ? std::sqrt(sum_sq / static_cast<double>(inliers)) : 0.0;
+  result.inlier_share = static_cast<double>(fit.inliers) / static_cast<double>(source.size());
+  result.rms_m = fit.inliers > 0 ? std::sqrt(fit.sum_sq / static_cast<double>(fit.inliers)) : 0.0;
+
+  // 5. Aligned when enough points pair and the model moves within the bounds; the translation
+  //    that matters is how far the model's centroid moves relative to the view.
   const double turned = Eigen::AngleAxisd(total.linear()).angle() * 180.0 / kPi;
-  // The translation that matters: how far the model's centroid moves relative to the view.
   const Vec3 moved_point = total.inverse() * impl_->centroid;
   const double moved = (moved_point - impl_->centroid).norm();
   result.aligned = result.inlier_share >= o.min_inlier_share && moved <= o.max_translation_m &&

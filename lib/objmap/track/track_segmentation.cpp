@@ -15,71 +15,71 @@ namespace objmap::track {
 
 namespace fs = std::filesystem;
 
-TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
-                               const FrameImage& image, const TrackProgress& progress,
-                               const FramePositionsFn& positions) {
-  options.check();
-  const std::string where = input.source.empty() ? "segmentation" : input.source;
-  require(!input.frames.empty(), where, "no frame; expected at least one frame of detections");
-  std::size_t instances = 0;
-  for (const auto& f : input.frames) instances += f.instances.size();
-  require(instances > 0, where,
-          "no instance in any of the " + std::to_string(input.frames.size()) +
-              " frames; expected detections to track");
-  const bool appearance = options.tracker.use_appearance;
-  require(!appearance || static_cast<bool>(image), "track_segmentation",
-          "appearance is on but no image source was given; expected rgb images or "
-          "use_appearance = false");
-  const bool gate_3d = options.tracker.use_gate_3d;
-  require(!gate_3d || static_cast<bool>(positions), "track_segmentation",
-          "the 3D gate is on but no position source was given; expected depth and a trajectory "
-          "or use_gate_3d = false");
-  TrackResult result;
+namespace {
 
-  // 1. Online DeepSORT over the frames in time order.
+// The frame's instances as detections, with their colour descriptors when appearance is on.
+std::vector<Detection> detections_of(const segmentation::FrameSegmentation& frame,
+                                     const cv::Mat& bgr, bool appearance,
+                                     const TrackOptions& options) {
+  std::vector<Detection> detections;
+  detections.reserve(frame.instances.size());
+  for (const auto& inst : frame.instances) {
+    Detection d;
+    d.box = inst.bbox;
+    d.class_name = inst.class_name;
+    d.score = inst.score;
+    if (appearance) d.descriptor = colour_descriptor(bgr, inst, options.tracker.appearance);
+    detections.push_back(std::move(d));
+  }
+  return detections;
+}
+
+// The 3D gate's input: each detection's point in the world (when the frame has a pose), counted.
+void add_positions(const FramePositions& p, std::vector<Detection>& detections,
+                   TrackResult& result) {
+  ++(p.has_pose ? result.frames_with_pose : result.frames_without_pose);
+  if (!p.has_pose) return;
+  require(p.instances.size() == detections.size(), "track_segmentation",
+          "the position source gave " + std::to_string(p.instances.size()) +
+              " positions for a frame of " + std::to_string(detections.size()) +
+              " instances; expected one per instance");
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const InstancePosition& ip = p.instances[i];
+    detections[i].point_in_world = ip.point_in_world;
+    if (ip.point_in_world) {
+      ++result.instances_with_position;
+      if (ip.mask_from_box) ++result.instances_mask_from_box;
+    }
+    if (ip.status == PositionStatus::kNoMaskFromBox) ++result.instances_no_mask_from_box;
+    if (ip.status == PositionStatus::kTooFewDepthPixels) ++result.instances_few_depth_pixels;
+  }
+}
+
+// Online DeepSORT over the frames in time order: each frame's associations.
+std::vector<std::vector<Association>> run_tracker(
+    const segmentation::Segmentation& input, const TrackOptions& options, const FrameImage& image,
+    const TrackProgress& progress, const FramePositionsFn& positions, TrackResult& result) {
+  const bool appearance = options.tracker.use_appearance;
   Tracker tracker(options.tracker);
   std::vector<std::vector<Association>> associations(input.frames.size());
   for (std::size_t f = 0; f < input.frames.size(); ++f) {
     const auto& frame = input.frames[f];
     cv::Mat bgr;
     if (appearance && !frame.instances.empty()) bgr = image(f);
-    std::vector<Detection> detections;
-    detections.reserve(frame.instances.size());
-    for (const auto& inst : frame.instances) {
-      Detection d;
-      d.box = inst.bbox;
-      d.class_name = inst.class_name;
-      d.score = inst.score;
-      if (appearance) d.descriptor = colour_descriptor(bgr, inst, options.tracker.appearance);
-      detections.push_back(std::move(d));
-    }
-    if (gate_3d) {
-      const FramePositions p = positions(f);
-      ++(p.has_pose ? result.frames_with_pose : result.frames_without_pose);
-      if (p.has_pose) {
-        require(p.instances.size() == detections.size(), "track_segmentation",
-                "the position source gave " + std::to_string(p.instances.size()) +
-                    " positions for a frame of " + std::to_string(detections.size()) +
-                    " instances; expected one per instance");
-        for (std::size_t i = 0; i < detections.size(); ++i) {
-          const InstancePosition& ip = p.instances[i];
-          detections[i].point_in_world = ip.point_in_world;
-          if (ip.point_in_world) {
-            ++result.instances_with_position;
-            if (ip.mask_from_box) ++result.instances_mask_from_box;
-          }
-          if (ip.status == PositionStatus::kNoMaskFromBox) ++result.instances_no_mask_from_box;
-          if (ip.status == PositionStatus::kTooFewDepthPixels) ++result.instances_few_depth_pixels;
-        }
-      }
-    }
+    std::vector<Detection> detections = detections_of(frame, bgr, appearance, options);
+    if (options.tracker.use_gate_3d) add_positions(positions(f), detections, result);
     associations[f] = tracker.step(detections, frame.timestamp);
     if (progress) progress(f + 1, input.frames.size());
   }
+  return associations;
+}
 
-  // 2. Output ids: the confirmed tracks numbered 1, 2, ... in order of confirmation.
+// Output ids: the confirmed tracks numbered 1, 2, ... in order of confirmation (internal id ->
+// output id); `started`: the tracks started (the largest internal id).
+std::map<int, int> output_ids(const std::vector<std::vector<Association>>& associations,
+                              int& started) {
   std::map<int, std::pair<std::size_t, int>> confirmed_at;  // internal id -> (frame, internal id)
-  int started = 0;
+  started = 0;
   for (std::size_t f = 0; f < associations.size(); ++f)
     for (const Association& a : associations[f]) {
       if (a.track_id == 0) continue;
@@ -93,16 +93,14 @@ TrackResult track_segmentation(const segmentation::Segmentation& input, const Tr
   std::map<int, int> output_id;
   for (std::size_t i = 0; i < order.size(); ++i)
     output_id[order[i].second] = static_cast<int>(i) + 1;
+  return output_id;
+}
 
-  // 3. Track ids into the instances, and the per-track summary.
-  result.tracked = input;
-  result.frames = input.frames.size();
-  result.instances = instances;
-  result.tracks_started = static_cast<std::size_t>(started);
-  result.used_appearance = appearance;
-  result.used_gate_3d = gate_3d;
-  result.tracks.resize(order.size());
-  std::vector<std::map<std::string, int>> votes(order.size());
+// Track ids into result.tracked's instances, and each track's frames and class votes.
+std::vector<std::map<std::string, int>> label_instances(
+    const std::vector<std::vector<Association>>& associations, const std::map<int, int>& output_id,
+    const TrackOptions& options, TrackResult& result) {
+  std::vector<std::map<std::string, int>> votes(result.tracks.size());
   for (std::size_t f = 0; f < associations.size(); ++f) {
     auto& frame = result.tracked.frames[f];
     for (std::size_t i = 0; i < frame.instances.size(); ++i) {
@@ -125,6 +123,51 @@ TrackResult track_segmentation(const segmentation::Segmentation& input, const Tr
       ++votes[it->second - 1][inst.class_name];
     }
   }
+  return votes;
+}
+
+}  // namespace
+
+TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
+                               const FrameImage& image, const TrackProgress& progress,
+                               const FramePositionsFn& positions) {
+  options.check();
+  const std::string where = input.source.empty() ? "segmentation" : input.source;
+  require(!input.frames.empty(), where, "no frame; expected at least one frame of detections");
+  std::size_t instances = 0;
+  for (const auto& f : input.frames) instances += f.instances.size();
+  require(instances > 0, where,
+          "no instance in any of the " + std::to_string(input.frames.size()) +
+              " frames; expected detections to track");
+  const bool appearance = options.tracker.use_appearance;
+  require(!appearance || static_cast<bool>(image), "track_segmentation",
+          "appearance is on but no image source was given; expected rgb images or "
+          "use_appearance = false");
+  const bool gate_3d = options.tracker.use_gate_3d;
+  require(!gate_3d || static_cast<bool>(positions), "track_segmentation",
+          "the 3D gate is on but no position source was given; expected depth and a trajectory "
+          "or use_gate_3d = false");
+  TrackResult result;
+
+  // 1. Online DeepSORT over the frames in time order.
+  const std::vector<std::vector<Association>> associations =
+      run_tracker(input, options, image, progress, positions, result);
+
+  // 2. Output ids: the confirmed tracks numbered 1, 2, ... in order of confirmation.
+  int started = 0;
+  const std::map<int, int> output_id = output_ids(associations, started);
+
+  // 3. Track ids into the instances, and the per-track summary; a track's class is the majority
+  //    vote of its instances.
+  result.tracked = input;
+  result.frames = input.frames.size();
+  result.instances = instances;
+  result.tracks_started = static_cast<std::size_t>(started);
+  result.used_appearance = appearance;
+  result.used_gate_3d = gate_3d;
+  result.tracks.resize(output_id.size());
+  const std::vector<std::map<std::string, int>> votes =
+      label_instances(associations, output_id, options, result);
   for (std::size_t i = 0; i < result.tracks.size(); ++i) {
     int best = -1;
     for (const auto& [name, n] : votes[i])
