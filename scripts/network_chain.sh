@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The whole chain on real sequences with two front ends, side by side: the detector's boxes (fuse
 # makes masks from boxes and depth) and YOLOv5n-seg's instance masks (ONNX, objmap detect), each
-# detect -> track -> fuse with groundtruth.txt. Prints one Markdown table (docs/benchmarks.md,
-# "Real-data maps with network masks").
+# detect -> track -> fuse with groundtruth.txt, then objmap eval masks (the share of each object's
+# seen points inside its own masks). Prints one Markdown table (docs/benchmarks.md, "Real-data maps
+# with network masks").
 #   bash scripts/network_chain.sh [OBJMAP] [DATA] [OUT]
 set -euo pipefail
 objmap=${1:-build/bin/objmap}
@@ -33,13 +34,14 @@ run() {
   "$objmap" fuse --dataset "$dataset" --trajectory "$dataset/groundtruth.txt" \
     --segmentation "$dir/track" --out "$dir/run" > "$dir/fuse.log" 2> "$dir/fuse.err"
   t3=$(now)
+  "$objmap" eval masks --run "$dir/run" --json "$dir/masks.json" > "$dir/masks.log"
   echo "$t0 $t1 $t2 $t3" > "$dir/times"
 }
 
 frames_of() { grep -vc '^#' "$1/rgb.txt"; }
 
-echo "| sequence | front end | objects by class | suspected duplicates | points per object (median) | detect / track / fuse, ms per frame |"
-echo "|---|---|---|---|---|---|"
+echo "| sequence | front end | objects by class | suspected duplicates | points per object (median) | seen points inside their own masks | detect / track / fuse, ms per frame |"
+echo "|---|---|---|---|---|---|---|"
 for seq in tum/fr1_desk_9 tum/fr1_rpy_every4 tum/fr3_cabinet_58kf ycbv_0000_10f; do
   d=$data/$seq
   [ -d "$d" ] || continue
@@ -65,7 +67,8 @@ t0, t1, t2, t3 = map(float, open(dir + "/times").read().split())
 ms = lambda a, b: 1000 * (b - a) / frames
 det = "given" if t1 - t0 < 0.05 else f"{ms(t0, t1):.0f}"
 label = "detector boxes" if front == "boxes" else "YOLOv5n-seg masks"
-print(f"| {name} | {label} | {len(objs)}: {by_class} | {run['duplicates']['count']} | {points:.0f} | {det} / {ms(t1, t2):.0f} / {ms(t2, t3):.0f} |")
+share = json.load(open(dir + "/masks.json"))["share"]
+print(f"| {name} | {label} | {len(objs)}: {by_class} | {run['duplicates']['count']} | {points:.0f} | {100 * share:.1f}% | {det} / {ms(t1, t2):.0f} / {ms(t2, t3):.0f} |")
 PY
   done
 done

@@ -194,6 +194,30 @@ TEST(FuseReal, YcbVideoMaskBleedOntoTheFarBackgroundDoesNotMoveTheObjects) {
   EXPECT_GT(ycbv_position_errors(data, dir / "plain").at("009 gelatin box"), 0.04);
 }
 
+TEST(FuseReal, YcbVideoObjectsAgreeWithTheirOwnLabelMasks) {
+  // objmap eval masks on the label masks, the best masks there are: nearly every point of each
+  // object that a keyframe sees falls inside that keyframe's label mask (measured 99.2-99.8%).
+  OBJMAP_DATA_OR_SKIP(data, "ycbv_0000_10f");
+  TempDir dir;
+  ASSERT_EQ(fuse_real(data, "masks", dir / "run").exit_code, 0);
+  const auto r = run_objmap(
+      {"eval", "masks", "--run", (dir / "run").string(), "--json", (dir / "masks.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto doc = read_json(dir / "masks.json");
+  ASSERT_EQ(doc["objects"].size(), 3u);
+  for (const auto& o : doc["objects"]) {
+    EXPECT_EQ(o["keyframes"].get<int>(), 10) << o;
+    EXPECT_GT(o["visible"].get<int>(), 1000) << o;
+    EXPECT_GE(o["share"].get<double>(), 0.97) << o;
+  }
+  EXPECT_EQ(doc["unmatched_observations"].get<int>(), 0);
+  const auto bad = run_objmap({"eval", "masks", "--run", data.string()});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("no run.json; expected a folder written by objmap fuse"),
+            std::string::npos)
+      << bad.err;
+}
+
 TEST(FuseReal, Fr1RpyEveryFrameGivesTheSameObjectsAsTheKeyframes) {
   // Issue 17: fr1_rpy_every4 with its detector boxes; motion keeps 145 of the 174 frames. Fusing
   // all 174 confirmed 21 objects where the keyframes gave 18 (a false positive lasting 3 frames,

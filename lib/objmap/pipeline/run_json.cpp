@@ -1,0 +1,48 @@
+#include "objmap/pipeline/run_json.h"
+
+#include <array>
+#include <fstream>
+
+namespace objmap::pipeline::run_json {
+
+namespace fs = std::filesystem;
+
+json read_file(const fs::path& file) {
+  std::ifstream in(file);
+  require(static_cast<bool>(in), file.string(), "cannot be read; expected a file of a fuse run");
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
+  }
+}
+
+Vec3 vec3(const json& a, const fs::path& file, const std::string& where) {
+  require(a.is_array() && a.size() == 3 && a[0].is_number() && a[1].is_number() && a[2].is_number(),
+          file.string() + ": " + where, "expected an array of 3 numbers");
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+
+Camera camera(const json& run, const fs::path& file) {
+  const json cam = field<json>(field<json>(run, "inputs", file, ""), "camera", file, "inputs");
+  Camera c;
+  c.name = field<std::string>(cam, "name", file, "inputs.camera");
+  c.width = field<int>(cam, "width", file, "inputs.camera");
+  c.height = field<int>(cam, "height", file, "inputs.camera");
+  c.fx = field<double>(cam, "fx", file, "inputs.camera");
+  c.fy = field<double>(cam, "fy", file, "inputs.camera");
+  c.cx = field<double>(cam, "cx", file, "inputs.camera");
+  c.cy = field<double>(cam, "cy", file, "inputs.camera");
+  c.distortion = field<std::array<double, 5>>(cam, "distortion", file, "inputs.camera");
+  c.depth_factor = field<double>(cam, "depth_factor", file, "inputs.camera");
+  c.check(file.string() + ": inputs.camera");
+  return c;
+}
+
+std::string input_path(const json& run, const fs::path& file, const std::string& which) {
+  const json inputs = field<json>(run, "inputs", file, "");
+  return field<std::string>(field<json>(inputs, which, file, "inputs"), "path", file,
+                            "inputs." + which);
+}
+
+}  // namespace objmap::pipeline::run_json
