@@ -23,7 +23,8 @@
 # 3. scripts/bench_tables.py writes the tables between <!-- bench:begin --> and <!-- bench:end -->
 #    of docs/benchmarks.md (the rest of the file is untouched) and out/bench/tables.md.
 # Outputs: out/bench/<sequence>/ (runs, every eval JSON, logs). Environment: BENCH_OUT, BENCH_SEEDS,
-# BENCH_REPEAT (timing rounds, default 3), BENCH_PERF=0 (skip part 2), BENCH_DOC (the Markdown file),
+# BENCH_REPEAT (timing rounds, default 3), BENCH_PERF=0 (skip part 2), BENCH_NETWORK=0 (skip the
+# network chain, scripts/network_chain.sh), BENCH_DOC (the Markdown file),
 # BENCH_PROGRAMS=1 (also run every build/bin/bench_* program and print its output).
 set -uo pipefail
 objmap=${1:-build/bin/objmap}
@@ -287,6 +288,15 @@ if [ "${BENCH_PERF:-1}" != 0 ] && [ -n "$rpy" ]; then
     echo "python3-open3d not installed (scripts/install-deps.sh --bench)" >"$perf/open3d.log"
     step "perf: Open3D n/a (python3-open3d not installed)"
   fi
+fi
+
+# 2b. The network chain (scripts/network_chain.sh): detect -> track -> fuse -> eval masks on the
+#     real sequences with detector boxes and with YOLOv5n-seg masks (BENCH_NETWORK=0 skips it).
+if [ "${BENCH_NETWORK:-1}" != 0 ] && [ -f "$data/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx" ]; then
+  step "network chain: detect (YOLOv5n-seg) -> track -> fuse -> eval masks, beside the boxes"
+  bash "$(dirname "$0")/network_chain.sh" "$objmap" "$data" "$out/network_chain" \
+    >"$out/network_chain.md" 2>"$out/network_chain.log" ||
+    { tail -n 3 "$out/network_chain.log" >&2; rm -f "$out/network_chain.md"; }
 fi
 
 if [ "${BENCH_PROGRAMS:-0}" = 1 ]; then

@@ -593,6 +593,28 @@ def performance(bench):
     return table + "\n\n" + " ".join(summary), meta["dataset"]
 
 
+def network_chain(bench):
+    """The network chain's table (scripts/network_chain.sh), when the bench ran it."""
+    path = os.path.join(bench, "network_chain.md")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        table = f.read().strip()
+    if not table:
+        return []
+    return [
+        "### Real-data maps: detector boxes beside YOLOv5n-seg masks",
+        "",
+        "`scripts/network_chain.sh`: detect -> track -> fuse (groundtruth.txt) -> `eval masks` on "
+        "each real sequence, with the sequence's detector boxes and with YOLOv5n-seg's instance "
+        "masks (480x640 ONNX). The mask column: of each object's points that a keyframe where it "
+        "was observed sees, the share inside that observation's own mask (no ground truth needed).",
+        "",
+        table,
+        "",
+    ]
+
+
 def render(args):
     bench = os.path.abspath(args.bench)
     data = os.path.abspath(args.data) if args.data else ""
@@ -656,6 +678,7 @@ def render(args):
         "",
         perf_text,
         "",
+    ] + network_chain(bench) + [
         END,
     ]
     section = "\n".join(parts)

@@ -266,6 +266,16 @@ TEST(BenchTables, RenderReplacesOnlyTheGeneratedSection) {
   EXPECT_NE(doc.find("| 1: 3+7 book (shared frames) |"), std::string::npos) << doc;
   EXPECT_NE(doc.find("0.0321"), std::string::npos) << doc;
   EXPECT_NE(doc.find("0.0115"), std::string::npos) << "the paper's Table 7 beside ours";
+  EXPECT_EQ(doc.find("YOLOv5n-seg masks"), std::string::npos) << "no network chain was run";
+
+  // The network chain's table (scripts/network_chain.sh) goes in when the bench made it.
+  write_text(dir / "bench" / "network_chain.md",
+             "| sequence | front end |\n|---|---|\n| fr1_desk_9 | YOLOv5n-seg masks |\n");
+  ASSERT_EQ(bench_tables(args, dir / "log"), 0) << read_text(dir / "log");
+  const std::string with_chain = read_text(dir / "doc.md");
+  EXPECT_NE(with_chain.find("| fr1_desk_9 | YOLOv5n-seg masks |"), std::string::npos) << with_chain;
+  EXPECT_LT(with_chain.find("YOLOv5n-seg masks |"), with_chain.find("<!-- bench:end -->"));
+  fs::remove(dir / "bench" / "network_chain.md");
 
   // Without markers the section goes after the intro, before the first "## " heading.
   write_text(dir / "doc.md", head + "## Analysis\n\nkept\n");
