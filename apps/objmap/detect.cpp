@@ -84,6 +84,11 @@ std::vector<segmentation::DetectFrame> frames_to_detect(const DetectCommand& cmd
 void run_detect(DetectCommand& cmd) {
   // OpenCV's dnn may log warnings on stderr; the user sees objmap's lines only.
   cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+  io::require_not_an_input({"--out", cmd.out}, {{"--dataset", cmd.dataset},
+                                                {"--model", cmd.model},
+                                                {"--config", cmd.config},
+                                                {"--classes-file", cmd.classes_file},
+                                                {"--trajectory", cmd.trajectory}});
   io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
   segmentation::DetectOptions& o = cmd.options;
   o.model = cmd.model;

@@ -65,6 +65,9 @@ void run_eval_ate(const EvalAteArgs& args) {
   check_naming_flags(
       [&] { args.options.check(); },  // bad options before reading the files
       {{"AteOptions.max_diff_s", "--max-diff"}, {"AteOptions.offset_s", "--offset"}});
+  const std::vector<io::NamedPath> inputs{{"--gt", args.gt_file}, {"--est", args.est_file}};
+  io::require_not_an_input({"--json", args.json_file}, inputs);
+  io::require_not_an_input({"--save-aligned", args.save_aligned_file}, inputs);
   const Trajectory gt = io::read_trajectory(args.gt_file);
   const Trajectory est = io::read_trajectory(args.est_file);
   const eval::AteResult result = eval::evaluate_ate(gt, est, args.options);
@@ -133,6 +136,8 @@ void run_eval_rpe(EvalRpeArgs args) {
                      {{"RpeOptions.delta", "--delta"},
                       {"RpeOptions.offset_s", "--offset"},
                       {"RpeOptions.max_diff_s", "--max-diff"}});
+  io::require_not_an_input({"--json", args.json_file},
+                           {{"--gt", args.gt_file}, {"--est", args.est_file}});
   const Trajectory gt = io::read_trajectory(args.gt_file);
   const Trajectory est = io::read_trajectory(args.est_file);
   const eval::RpeResult result = eval::evaluate_rpe(gt, est, args.options);
@@ -194,6 +199,10 @@ void run_eval_objects(const EvalObjectsArgs& args) {
     throw CLI::ValidationError("eval objects",
                                "give one of --gt-objects F or --reference RUN_GT/objects.json");
   check_naming_flags([&] { args.options.check(); }, {{"ObjectEvalOptions.gate_m", "--gate"}});
+  io::require_not_an_input({"--json", args.json_file}, {{"--map", args.map_file},
+                                                        {"--gt-objects", args.gt_objects_file},
+                                                        {"--reference", args.reference_file},
+                                                        {"--run", args.run_dir}});
   eval::ObjectEvalReport report;
   report.options = args.options;
   report.map_source = args.map_file;

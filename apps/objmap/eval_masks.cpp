@@ -44,6 +44,7 @@ std::string masks_json(const pipeline::MaskCheckResult& r, const EvalMasksArgs& 
 void run_eval_masks(const EvalMasksArgs& args) {
   check_naming_flags([&] { args.options.check(); },
                      {{"MaskCheckOptions.depth_tolerance_m", "--depth-tolerance"}});
+  io::require_not_an_input({"--json", args.json_file}, {{"--run", args.run}});
   const pipeline::MaskCheckResult r = pipeline::check_run_masks(args.run, args.options);
   if (!args.json_file.empty()) io::write_file_atomic(args.json_file, masks_json(r, args));
   std::printf(

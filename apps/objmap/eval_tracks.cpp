@@ -22,6 +22,8 @@ struct EvalTracksArgs {
 
 void run_eval_tracks(const EvalTracksArgs& args) {
   args.options.check();
+  io::require_not_an_input({"--json", args.json_file},
+                           {{"--gt", args.gt_dir}, {"--est", args.est_dir}});
   const segmentation::Segmentation gt = segmentation::read_segmentation(args.gt_dir);
   const segmentation::Segmentation est = segmentation::read_segmentation(args.est_dir);
   const eval::TrackEvalResult r = eval::evaluate_tracks(gt, est, args.options);

@@ -53,6 +53,10 @@ void run_track(TrackCommand& cmd) {
                       {"TrackerOptions.min_score", "--min-score"},
                       {"KalmanOptions.std_weight_position", "--std-position"},
                       {"KalmanOptions.std_weight_velocity", "--std-velocity"}});
+  io::require_not_an_input({"--out", cmd.out}, {{"--dataset", cmd.dataset},
+                                                {"--segmentation", cmd.segmentation},
+                                                {"--trajectory", cmd.trajectory},
+                                                {"--camera", cmd.camera}});
   io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
   require(fs::is_directory(cmd.dataset), cmd.dataset,
           "no such folder; expected a TUM RGB-D folder with rgb.txt");

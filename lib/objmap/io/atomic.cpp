@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <iterator>
 #include <mutex>
 #include <system_error>
 
@@ -208,6 +209,39 @@ void require_replaceable(const fs::path& out_given, const OutputKind& kind) {
                        expected +
                        "), so it is not replaced; expected a new or empty folder, or an "
                        "earlier output to replace");
+}
+
+namespace {
+// `inner` is `outer` or lies inside it (both absolute and normal).
+bool within(const fs::path& inner, const fs::path& outer) {
+  auto i = inner.begin();
+  for (auto o = outer.begin(); o != outer.end(); ++o, ++i)
+    if (o->empty() && std::next(o) == outer.end())
+      return true;  // a trailing separator
+    else if (i == inner.end() || *i != *o)
+      return false;
+  return true;
+}
+}  // namespace
+
+void require_not_an_input(const NamedPath& out, const std::vector<NamedPath>& inputs) {
+  if (out.path.empty()) return;
+  std::error_code ec;
+  const fs::path o = fs::weakly_canonical(fs::absolute(out.path), ec);
+  if (ec) return;  // a path that cannot be resolved is refused by the writer itself
+  for (const NamedPath& in : inputs) {
+    if (in.path.empty()) continue;
+    const fs::path i = fs::weakly_canonical(fs::absolute(in.path), ec);
+    if (ec) continue;
+    // An output inside an input folder (a run in the dataset's folder) replaces nothing of it.
+    const bool same = o == i, holds = within(i, o);
+    if (!same && !holds) continue;
+    const std::string how = same ? "is" : "holds";
+    throw InputError(out.flag, out.path.string() + " " + how + " the input of " + in.flag + " (" +
+                                   in.path.string() +
+                                   "); expected an output apart from the inputs (objmap never "
+                                   "writes over what it reads)");
+  }
 }
 
 StagingDir::StagingDir(const fs::path& out, const OutputKind& kind)

@@ -75,6 +75,18 @@ extern const OutputKind kReportFolder;        // report: report.html
 // their work, so that a refused --out costs nothing.
 void require_replaceable(const std::filesystem::path& out, const OutputKind& kind);
 
+// An input of a command: the flag that names it and the path given.
+struct NamedPath {
+  std::string flag;  // e.g. "--segmentation"
+  std::filesystem::path path;
+};
+
+// No command writes over what it reads: throws InputError naming both flags when the output `out`
+// is one of `inputs` or a folder that holds one (replacing it would delete the input); paths are
+// compared after resolving symbolic links, ".." and ".", for outputs that do not exist yet too. An
+// output inside an input folder is fine. Empty paths are left out.
+void require_not_an_input(const NamedPath& out, const std::vector<NamedPath>& inputs);
+
 // A run folder written atomically: files go to "<out>.tmp-<pid>" (created, empty, by the
 // constructor); commit() renames it to `out`, replacing an existing `out` folder if it is an
 // earlier output of `kind` (require_replaceable, checked by the constructor and again by commit).

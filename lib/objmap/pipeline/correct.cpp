@@ -861,6 +861,7 @@ void check_map_consistency(const CorrectOptions& options, const Trajectory& corr
 
 CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progress) {
   given.check();
+  io::require_not_an_input({"--out", given.out}, {{"--run", given.run}});
   io::require_replaceable(given.out, io::kRunFolder);  // before the work, not after it
   const CorrectOptions options = options_as_run(given);
   const auto t_start = Clock::now();
@@ -911,6 +912,9 @@ CorrectResult run_correct(const CorrectOptions& given, const FuseProgress& progr
 CorrectResult run_fuse_and_correct(const FuseOptions& fuse, const CorrectOptions& correct,
                                    const FuseProgress& progress) {
   fuse.check();
+  io::require_not_an_input({"--out", fuse.out}, {{"--dataset", fuse.dataset},
+                                                 {"--trajectory", fuse.trajectory},
+                                                 {"--segmentation", fuse.segmentation}});
   io::require_replaceable(fuse.out, io::kRunFolder);  // before the two fuses, not after them
   ScratchDir first(fuse.out, "first-fuse");
   FuseOptions fo = fuse;

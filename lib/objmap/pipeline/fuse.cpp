@@ -802,6 +802,9 @@ const segmentation::FrameSegmentation* keyframe_segmentation(
 
 FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   options.check();
+  io::require_not_an_input({"--out", options.out}, {{"--dataset", options.dataset},
+                                                    {"--trajectory", options.trajectory},
+                                                    {"--segmentation", options.segmentation}});
   io::require_replaceable(options.out, io::kRunFolder);  // before the work, not after it
   const auto t_start = Clock::now();
   FuseResult result;
