@@ -29,6 +29,13 @@ void setup_eval_masks(CLI::App& eval_app);
 
 namespace {
 
+// A trajectory, its reader's warnings (a repeated timestamp) on stderr, one line each.
+Trajectory read_trajectory_warning(const std::string& file) {
+  Trajectory t = io::read_trajectory(file);
+  for (const auto& w : t.warnings) std::fprintf(stderr, "objmap: warning: %s\n", w.c_str());
+  return t;
+}
+
 // One row "  rmse    0.013473" per statistic; `columns` are printed side by side.
 void print_stats_rows(std::ostream& out, const std::vector<const eval::ErrorStats*>& columns) {
   const auto row = [&](const char* name, double eval::ErrorStats::*field) {
@@ -68,8 +75,8 @@ void run_eval_ate(const EvalAteArgs& args) {
   const std::vector<io::NamedPath> inputs{{"--gt", args.gt_file}, {"--est", args.est_file}};
   io::require_not_an_input({"--json", args.json_file}, inputs);
   io::require_not_an_input({"--save-aligned", args.save_aligned_file}, inputs);
-  const Trajectory gt = io::read_trajectory(args.gt_file);
-  const Trajectory est = io::read_trajectory(args.est_file);
+  const Trajectory gt = read_trajectory_warning(args.gt_file);
+  const Trajectory est = read_trajectory_warning(args.est_file);
   const eval::AteResult result = eval::evaluate_ate(gt, est, args.options);
 
   const eval::Similarity& a = result.gt_from_est;
@@ -138,8 +145,8 @@ void run_eval_rpe(EvalRpeArgs args) {
                       {"RpeOptions.max_diff_s", "--max-diff"}});
   io::require_not_an_input({"--json", args.json_file},
                            {{"--gt", args.gt_file}, {"--est", args.est_file}});
-  const Trajectory gt = io::read_trajectory(args.gt_file);
-  const Trajectory est = io::read_trajectory(args.est_file);
+  const Trajectory gt = read_trajectory_warning(args.gt_file);
+  const Trajectory est = read_trajectory_warning(args.est_file);
   const eval::RpeResult result = eval::evaluate_rpe(gt, est, args.options);
   if (!args.json_file.empty())
     io::write_file_atomic(args.json_file, eval::rpe_json(result, args.options));

@@ -12,6 +12,7 @@ namespace objmap::app {
 namespace {
 
 void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseResult& r) {
+  for (const auto& w : r.warnings) std::fprintf(stderr, "objmap: warning: %s\n", w.c_str());
   std::printf("camera      %s (%s)\n", r.camera.name.c_str(), r.camera_reason.c_str());
   const auto& kf = r.keyframes;
   std::printf("keyframes   %zu of %zu frames (%zu with a pose; mode %s%s%s)\n", kf.keyframes.size(),

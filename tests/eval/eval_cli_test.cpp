@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "objmap/io/trajectory.h"
 #include "support/test_support.h"
@@ -54,6 +55,40 @@ TEST(EvalCli, RpeOnFr1XyzPrintsAndWritesTheReferenceNumbers) {
   EXPECT_NEAR(json.at("translational").at("rmse").get<double>(), 0.005763, 1e-6);
   EXPECT_EQ(json.at("rotational").at("unit"), "deg");
   EXPECT_EQ(json.at("delta_unit"), "f");
+}
+
+TEST(EvalCli, ARepeatedGroundTruthStampGivesTheTumToolsNumbers) {
+  // As freiburg2_desk's groundtruth.txt (line 10863 repeats 1311868229.5760): fr1_xyz's ground
+  // truth with one stamp written twice, first with a pose 1 m off. TUM's tools keep the later line
+  // (a dictionary); so does objmap, with one warning line: the reference numbers are unchanged.
+  OBJMAP_DATA_OR_SKIP(dir, "trajectories/fr1_xyz");
+  TempDir tmp;
+  std::istringstream in(read_text(dir / "freiburg1_xyz-groundtruth.txt"));
+  std::string line, gt;
+  int data_lines = 0;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#' && ++data_lines == 400) {
+      std::istringstream fields(line);
+      std::string stamp;
+      fields >> stamp;
+      gt += stamp + " 9 9 9 0 0 0 1\n";  // the earlier, wrong pose
+    }
+    gt += line + "\n";
+  }
+  write_text(tmp / "gt.txt", gt);
+  const std::string est = (dir / "freiburg1_xyz-rgbdslam.txt").string();
+  const auto ate = run_objmap({"eval", "ate", "--gt", (tmp / "gt.txt").string(), "--est", est});
+  ASSERT_EQ(ate.exit_code, 0) << ate.err;
+  EXPECT_TRUE(has(ate.out, "786")) << ate.out;
+  EXPECT_TRUE(has(ate.out, "0.013473")) << ate.out;
+  EXPECT_EQ(std::count(ate.err.begin(), ate.err.end(), '\n'), 1) << ate.err;
+  EXPECT_TRUE(has(ate.err, "objmap: warning: " + (tmp / "gt.txt").string() + ":")) << ate.err;
+  EXPECT_TRUE(has(ate.err, "this later pose is used, as the TUM benchmark's tools do")) << ate.err;
+  const auto rpe = run_objmap({"eval", "rpe", "--gt", (tmp / "gt.txt").string(), "--est", est,
+                               "--delta", "1", "--delta-unit", "f"});
+  ASSERT_EQ(rpe.exit_code, 0) << rpe.err;
+  EXPECT_TRUE(has(rpe.out, "783")) << rpe.out;
+  EXPECT_TRUE(has(rpe.out, "0.005763")) << rpe.out;
 }
 
 // A small pair of files: gt on a line, the estimate shifted by (1, 2, 3) m.

@@ -117,12 +117,26 @@ TEST(ReadTrajectory, QuaternionNorm) {
 
 TEST(ReadTrajectory, TimestampsOutOfOrderOrDuplicated) {
   std::string where;
-  EXPECT_EQ(read_error("1.0 0 0 0 0 0 0 1\n# c\n1.0 0 0 0 0 0 0 1\n", &where),
-            "timestamp 1.0 duplicates line 1; expected strictly increasing timestamps");
-  EXPECT_EQ(where, ":3");
   EXPECT_EQ(read_error("2.0 0 0 0 0 0 0 1\n1.5 0 0 0 0 0 0 1\n", &where),
             "timestamp 1.5 is before 2 of line 1; expected strictly increasing timestamps");
   EXPECT_EQ(where, ":2");
+}
+
+TEST(ReadTrajectory, ARepeatedTimestampIsTheLaterPoseAsInTheTumTools) {
+  // freiburg2_desk's groundtruth.txt repeats 1311868229.5760 (line 10863): TUM's evaluate_ate.py
+  // reads the file into a dictionary, so the later line replaces the earlier one.
+  test::TempDir dir;
+  test::write_text(
+      dir / "t.txt",
+      "1.0 0 0 0 0 0 0 1\n2.0 5 0 0 0 0 0 1\n# c\n2.0 1 2 3 0 0 0 1\n3.0 0 0 0 0 0 0 1\n");
+  const Trajectory t = read_trajectory(dir / "t.txt");
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t.poses[1].timestamp, 2.0);
+  EXPECT_EQ(t.poses[1].world_from_cam.translation(), Vec3(1, 2, 3));
+  ASSERT_EQ(t.warnings.size(), 1u);
+  EXPECT_EQ(t.warnings[0], (dir / "t.txt").string() +
+                               ":4: timestamp 2.0 repeats line 2; this later pose is used, as the "
+                               "TUM benchmark's tools do");
 }
 
 TEST(ReadTrajectory, EmptyOrMissingFile) {

@@ -17,6 +17,8 @@ struct StampedPose {
 struct Trajectory {
   std::vector<StampedPose> poses;
   std::string source;  // file it came from, for messages
+  // What the reader accepted but a user should know, one line each ("<file>:<line>: ...").
+  std::vector<std::string> warnings;
 
   std::size_t size() const { return poses.size(); }
   bool empty() const { return poses.empty(); }

@@ -126,10 +126,17 @@ Trajectory read_trajectory(const std::filesystem::path& file) {
                                        shortest(kMaxQuaternionNormError) + " of 1)");
     if (!trajectory.poses.empty()) {
       const double before = trajectory.poses.back().timestamp;
-      if (v[0] == before)
-        throw InputError(in.where(), "timestamp " + in.field(0) + " duplicates line " +
-                                         std::to_string(previous_line) +
-                                         "; expected strictly increasing timestamps");
+      if (v[0] == before) {
+        // TUM's own tools read a trajectory into a dictionary: a later line with the same stamp
+        // replaces the earlier one (freiburg2_desk's groundtruth has one such pair).
+        trajectory.warnings.push_back(in.where() + ": timestamp " + in.field(0) + " repeats line " +
+                                      std::to_string(previous_line) +
+                                      "; this later pose is used, as the TUM benchmark's tools do");
+        trajectory.poses.back().world_from_cam =
+            pose_from_tum(v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+        previous_line = in.line_number();
+        continue;
+      }
       if (v[0] < before)
         throw InputError(in.where(), "timestamp " + in.field(0) + " is before " + shortest(before) +
                                          " of line " + std::to_string(previous_line) +

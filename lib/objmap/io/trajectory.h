@@ -18,8 +18,9 @@ constexpr double kMaxQuaternionNormError = 1e-3;
 
 // Reads a trajectory. Throws InputError("<file>:<line>", ...) for a line without exactly 8 fields,
 // a field that is not a finite number, a quaternion whose norm is off by more than
-// kMaxQuaternionNormError, a timestamp not strictly after the previous one, and a file with no
-// pose.
+// kMaxQuaternionNormError, a timestamp before the previous one, and a file with no pose. A
+// timestamp equal to the previous one replaces that pose, as the TUM benchmark's evaluate_ate.py
+// and associate.py do (they read the file into a dictionary), with a line in `warnings`.
 Trajectory read_trajectory(const std::filesystem::path& file);
 
 // Writes `trajectory` in the TUM format, atomically (see atomic.h). `header_comment` (may span

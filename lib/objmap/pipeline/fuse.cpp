@@ -726,6 +726,8 @@ FuseInputs load_inputs(const FuseOptions& options, FuseResult& result) {
   result.camera_reason = choice.reason;
   const Camera& camera = result.camera;
   in.trajectory = io::read_trajectory(options.trajectory);
+  result.warnings.insert(result.warnings.end(), in.trajectory.warnings.begin(),
+                         in.trajectory.warnings.end());
   const Trajectory& trajectory = in.trajectory;
   segmentation::ReadOptions& read = in.read;
   read.format = options.seg_format;

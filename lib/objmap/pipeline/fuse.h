@@ -62,6 +62,7 @@ struct StageTime {
 struct FuseResult {
   Camera camera;
   std::string camera_reason;
+  std::vector<std::string> warnings;  // what the readers accepted but the user should know
   std::string seg_format;
   std::size_t frames = 0;  // associated rgb/depth pairs
   KeyframeSelection keyframes;
