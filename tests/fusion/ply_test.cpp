@@ -122,6 +122,21 @@ TEST(Ply, MalformedFilesSayWhatIsWrong) {
   } catch (const InputError& e) {
     EXPECT_NE(e.reason().find("truncated"), std::string::npos) << e.what();
   }
+  // A count no file of this size can hold is an error before anything is allocated (it was
+  // std::bad_alloc, exit 1).
+  for (const char* format : {"binary_little_endian", "ascii"}) {
+    write_text(dir / "huge.ply", std::string("ply\nformat ") + format +
+                                     " 1.0\nelement vertex 4000000000\nproperty float x\n"
+                                     "property float y\nproperty float z\nend_header\n1 2 3\n");
+    try {
+      read_ply(dir / "huge.ply");
+      FAIL() << format;
+    } catch (const InputError& e) {
+      EXPECT_NE(e.reason().find("the header says 4000000000 vertices, but only 6 bytes follow it"),
+                std::string::npos)
+          << e.what();
+    }
+  }
   write_text(dir / "noxyz.ply",
              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n");
   EXPECT_THROW(read_ply(dir / "noxyz.ply"), InputError);

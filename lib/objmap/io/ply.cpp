@@ -206,6 +206,22 @@ PointCloud read_ply(const fs::path& path) {
   if (ix < 0 || iy < 0 || iz < 0) throw InputError(where, "vertex has no x, y and z properties");
   const bool colour = ir >= 0 && ig >= 0 && ib >= 0;
 
+  // The count is checked against the bytes that follow the header before anything is allocated:
+  // a header's count is not to be trusted (a 4-billion-vertex header on a small file).
+  const std::streamoff body_start = f.tellg();
+  f.seekg(0, std::ios::end);
+  const auto remaining =
+      static_cast<std::size_t>(std::max<std::streamoff>(0, f.tellg() - body_start));
+  f.seekg(body_start);
+  const bool binary = format == "binary_little_endian";
+  const std::size_t least_per_vertex = binary ? stride : 2 * props.size();  // ascii: "0 " each
+  if (least_per_vertex > 0 && vertices > remaining / least_per_vertex)
+    throw InputError(where, "the header says " + std::to_string(vertices) + " vertices, but only " +
+                                std::to_string(remaining) + " bytes follow it (at least " +
+                                std::to_string(least_per_vertex) +
+                                " per vertex): truncated, or a wrong count; expected the file "
+                                "to hold every vertex it counts");
+
   PointCloud cloud;
   cloud.points.resize(vertices);
   if (colour) cloud.colors.resize(vertices);
