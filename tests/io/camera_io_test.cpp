@@ -158,6 +158,19 @@ TEST(ReadCameraFile, JsonMissingOrBadField) {
   EXPECT_EQ(camera_error(dir / "none.json"), "camera file not found");
 }
 
+TEST(ReadCameraFile, ANumberBeyondADoubleIsNamed) {
+  // "fx": 1e999 overflows a double: nlohmann's out_of_range error was exit 1 naming no file.
+  TempDir dir;
+  write_text(dir / "camera.json", R"({"fx": 1e999, "fy": 525, "cx": 320, "cy": 240})");
+  try {
+    read_camera_file(dir / "camera.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (dir / "camera.json").string());
+    EXPECT_NE(e.reason().find("number overflow parsing '1e999'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(WriteCameraJson, RoundTrip) {
   TempDir dir;
   Camera c = camera_preset("fr1");

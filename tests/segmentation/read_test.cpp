@@ -519,5 +519,19 @@ TEST(ReadPaper, PixelListsToMasks) {
                    "two.txt: not a track file; expected <track_id>.txt");
 }
 
+TEST(ReadJson, ANumberBeyondADoubleIsNamed) {
+  // "score": 1e999 overflows a double: nlohmann's out_of_range error was exit 1 naming no file.
+  test::TempDir dir;
+  test::write_text(dir / "1.000000.json",
+                   R"({"instances":[{"class":"cup","score":1e999,"bbox":[1,2,3,4]}]})");
+  try {
+    read_segmentation(dir.path());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (dir / "1.000000.json").string());
+    EXPECT_NE(e.reason().find("number overflow parsing '1e999'"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace objmap::segmentation

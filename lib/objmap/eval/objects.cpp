@@ -228,7 +228,7 @@ std::vector<ReferenceObject> read_objects_gt_json(const std::filesystem::path& f
   json doc;
   try {
     doc = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
   }
   const json& objects = gt_field(doc, "objects", file.string());
@@ -475,7 +475,7 @@ PointCounts read_point_counts(const std::filesystem::path& run_json) {
   json doc;
   try {
     doc = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw InputError(run_json.string(), std::string("malformed JSON: ") + e.what());
   }
   if (!doc.is_object() || !doc.contains("points") || !doc["points"].is_object())

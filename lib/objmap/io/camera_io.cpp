@@ -57,7 +57,7 @@ Camera read_camera_json(const fs::path& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
     throw InputError(file, std::string("not valid JSON (") + e.what() + ")");
   }
   if (!j.is_object()) throw InputError(file, "expected a JSON object {\"fx\": .., ...}");

@@ -38,7 +38,7 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
   json doc;
   try {
     doc = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
   }
   const json& objects = field(doc, "objects", file.string());

@@ -42,7 +42,7 @@ void apply_config_file(const fs::path& file, const std::vector<ConfigField>& fie
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
     throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
   }
   if (!j.is_object()) throw InputError(file.string(), "expected a JSON object at the top level");

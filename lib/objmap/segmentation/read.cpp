@@ -242,6 +242,9 @@ nlohmann::json parse_json_file(const fs::path& file) {
     throw InputError(
         file.string() + ":" + std::to_string(line),
         "malformed JSON at column " + std::to_string(column) + ": " + parse_error_reason(e.what()));
+  } catch (const json::exception& e) {  // e.g. a number beyond a double's range (1e999)
+    throw InputError(file.string(), "malformed JSON: " + parse_error_reason(e.what()) +
+                                        "; expected numbers a double can hold");
   }
 }
 
