@@ -54,7 +54,7 @@ json read_json(const fs::path& file) {
   if (!in) throw InputError(file.string(), "cannot open");
   try {
     return json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
   }
 }
@@ -144,7 +144,8 @@ std::vector<report::TopViewObject> top_view_objects(
   return drawn;
 }
 
-void run_report(const ReportOptions& options) {
+// Whether the options are sound and the output may be replaced; throws the usage error otherwise.
+void check_report_options(const ReportOptions& options) {
   require(options.up == "x" || options.up == "y" || options.up == "z", "--up",
           "'" + options.up + "'; expected x, y or z");
   require(options.thumbnail_px >= 32 && options.thumbnail_px <= 1024, "--thumbnail",
@@ -153,22 +154,34 @@ void run_report(const ReportOptions& options) {
           "--pixel", std::to_string(options.pixel_m) + "; expected 0.0005 to 1 metres per pixel");
   io::require_replaceable(options.out.empty() ? options.run / "report" : options.out,
                           io::kReportFolder);
-  const int up_axis = options.up[0] - 'x';
-  report::PageContent page;
-  page.title = "objmap report: " + fs::absolute(options.run).lexically_normal().filename().string();
-  if (page.title == "objmap report: ")
-    page.title += fs::absolute(options.run).lexically_normal().parent_path().filename().string();
-  page.run_path = options.run.string();
+}
 
-  // 1. The run: objects (required), run.json (counts, inputs, Table 6). Every small input is read
-  //    before the big ones (the maps), so that a bad one fails fast.
-  const fs::path objects_file = options.run / "objects.json";
-  const std::vector<io::MappedObject> objects = io::read_objects_json(objects_file);
-  const json objects_doc = read_json(objects_file);
-  json run;
+// "objmap report: <the run folder's name>" (its parent's name when the path ends in a slash).
+std::string page_title(const fs::path& run) {
+  std::string title = "objmap report: " + fs::absolute(run).lexically_normal().filename().string();
+  if (title == "objmap report: ")
+    title += fs::absolute(run).lexically_normal().parent_path().filename().string();
+  return title;
+}
+
+// What the report reads of the run folder itself.
+struct RunFiles {
+  fs::path objects_file;
+  std::vector<io::MappedObject> objects;
+  json objects_doc;
+  json run;  // run.json, null when there is none
+};
+
+// Step 1: the objects (required) and run.json (counts, inputs, Table 6, duplicates).
+RunFiles read_run(const ReportOptions& options, report::PageContent& page) {
+  RunFiles files;
+  files.objects_file = options.run / "objects.json";
+  files.objects = io::read_objects_json(files.objects_file);
+  files.objects_doc = read_json(files.objects_file);
   const fs::path run_file = options.run / "run.json";
   if (fs::exists(run_file)) {
-    run = read_json(run_file);
+    files.run = read_json(run_file);
+    const json& run = files.run;
     if (run.contains("counts") && run["counts"].is_object()) {
       const json& c = run["counts"];
       report::RunCounts counts;
@@ -185,12 +198,20 @@ void run_report(const ReportOptions& options) {
     page.notes.push_back(run_file.string() + " not found: no counts, no trajectory, no Table 6");
   }
   page.inputs.push_back("run: " + options.run.string());
+  return files;
+}
 
-  // 2. Trajectories: the run's estimate, the ground truth, the corrected one.
+// The trajectories of the report: the run's estimate, the ground truth, the corrected one.
+struct Trajectories {
   std::optional<Trajectory> est, gt, corrected;
+  fs::path gt_path;
+};
+
+// The trajectory the run was fused with, from run.json; for a run made by `objmap correct` (or fuse
+// --correct-poses), fused with its corrected trajectory, the input of the correction
+// (correction.json).
+std::optional<fs::path> run_trajectory_path(const ReportOptions& options, const json& run) {
   std::optional<fs::path> run_trajectory = input_path(run, "trajectory");
-  // A run made by `objmap correct` (or fuse --correct-poses) was fused with its corrected
-  // trajectory; its estimate is then the input of the correction (correction.json).
   if (std::ifstream cin(options.run / "correction.json"); cin) {
     const json correction = json::parse(cin, nullptr, false);
     if (correction.is_object() && correction.contains("input_trajectory") &&
@@ -199,20 +220,16 @@ void run_report(const ReportOptions& options) {
       if (fs::exists(input)) run_trajectory = input;
     }
   }
-  if (const auto est_path = run_trajectory) {
-    if (fs::exists(*est_path)) {
-      est = io::read_trajectory(*est_path);
-      page.inputs.push_back("estimated trajectory: " + est_path->string());
-    } else {
-      page.notes.push_back("the run's trajectory " + est_path->string() +
-                           " is not there: no trajectory plots");
-    }
-  }
+  return run_trajectory;
+}
+
+// --gt, or the dataset's groundtruth.txt unless the run was fused with that very file.
+fs::path ground_truth_path(const ReportOptions& options, const json& run,
+                           const std::optional<fs::path>& est_path, report::PageContent& page) {
   fs::path gt_path = options.gt;
   if (gt_path.empty()) {
     if (const auto dataset = input_path(run, "dataset")) {
       const fs::path candidate = *dataset / "groundtruth.txt";
-      const auto& est_path = run_trajectory;
       if (fs::exists(candidate) && !(est_path && same_file(candidate, *est_path)))
         gt_path = candidate;
       else if (fs::exists(candidate))
@@ -221,66 +238,104 @@ void run_report(const ReportOptions& options) {
             "trajectory error to show (give --gt F to compare with another)");
     }
   }
-  if (!gt_path.empty()) {
-    gt = io::read_trajectory(gt_path);
-    page.inputs.push_back("ground-truth trajectory: " + gt_path.string());
+  return gt_path;
+}
+
+// Step 2: the trajectories that are there, each named in the page's inputs.
+Trajectories read_trajectories(const ReportOptions& options, const json& run,
+                               report::PageContent& page) {
+  Trajectories t;
+  const std::optional<fs::path> est_path = run_trajectory_path(options, run);
+  if (est_path) {
+    if (fs::exists(*est_path)) {
+      t.est = io::read_trajectory(*est_path);
+      page.inputs.push_back("estimated trajectory: " + est_path->string());
+    } else {
+      page.notes.push_back("the run's trajectory " + est_path->string() +
+                           " is not there: no trajectory plots");
+    }
+  }
+  t.gt_path = ground_truth_path(options, run, est_path, page);
+  if (!t.gt_path.empty()) {
+    t.gt = io::read_trajectory(t.gt_path);
+    page.inputs.push_back("ground-truth trajectory: " + t.gt_path.string());
   }
   fs::path corrected_path = options.corrected;
   if (corrected_path.empty() && fs::exists(options.run / "trajectory_corrected.txt"))
     corrected_path = options.run / "trajectory_corrected.txt";
   if (!corrected_path.empty()) {
-    corrected = io::read_trajectory(corrected_path);
+    t.corrected = io::read_trajectory(corrected_path);
     page.inputs.push_back("corrected trajectory: " + corrected_path.string());
   }
+  return t;
+}
 
-  // 3. ATE per pose and the plots.
-  struct Estimate {
-    std::string name;
-    const std::optional<Trajectory>* trajectory;
-    Rgb color;
-  };
-  const Estimate estimates[] = {{"estimated", &est, kEstColor},
-                                {"corrected", &corrected, kCorrectedColor}};
-  std::vector<report::PlotSeries> series;
-  if (gt && (est || corrected)) {
-    report::PlotSeries g;
-    g.name = "ground truth";
-    g.color = kGtColor;
-    g.dashed = true;
-    std::vector<report::PlotSeries> coloured;
-    double t0 = std::numeric_limits<double>::infinity(), t1 = -t0;
-    for (const Estimate& e : estimates) {
-      const auto& [name, traj, color] = e;
-      if (!*traj) continue;
-      const eval::AteResult ate = eval::evaluate_ate(*gt, **traj, eval::AteOptions{});
-      page.ate.push_back({name, gt_path.string(), (*traj)->source, ate.stats});
-      coloured.push_back(aligned_series(name, color, ate));
-      for (const eval::StampMatch& m : ate.matches) {
-        t0 = std::min(t0, gt->poses[m.gt_index].timestamp);
-        t1 = std::max(t1, gt->poses[m.gt_index].timestamp);
-      }
-    }
-    for (const StampedPose& p : gt->poses)  // the ground truth over the compared span
-      if (p.timestamp >= t0 && p.timestamp <= t1) {
-        g.stamps_s.push_back(p.timestamp);
-        g.positions_m.push_back(p.world_from_cam.translation());
-      }
-    series.push_back(g);
-    series.insert(series.end(), coloured.begin(), coloured.end());
-  } else {
-    for (const Estimate& e : estimates) {
-      const auto& [name, traj, color] = e;
-      if (!*traj) continue;
-      report::PlotSeries s;
-      s.name = name;
-      s.color = color;
-      for (const StampedPose& p : (*traj)->poses) {
-        s.stamps_s.push_back(p.timestamp);
-        s.positions_m.push_back(p.world_from_cam.translation());
-      }
-      series.push_back(s);
+// An estimate to plot: the run's or the corrected trajectory.
+struct Estimate {
+  std::string name;
+  const std::optional<Trajectory>* trajectory;
+  Rgb color;
+};
+
+// With a ground truth: the ground truth over the compared span (dashed) and each estimate aligned
+// to it and coloured by its error; the ATE of each goes to the page.
+std::vector<report::PlotSeries> aligned_plot_series(const Trajectories& t,
+                                                    const Estimate (&estimates)[2],
+                                                    report::PageContent& page) {
+  report::PlotSeries g;
+  g.name = "ground truth";
+  g.color = kGtColor;
+  g.dashed = true;
+  std::vector<report::PlotSeries> coloured;
+  double t0 = std::numeric_limits<double>::infinity(), t1 = -t0;
+  for (const Estimate& e : estimates) {
+    const auto& [name, traj, color] = e;
+    if (!*traj) continue;
+    const eval::AteResult ate = eval::evaluate_ate(*t.gt, **traj, eval::AteOptions{});
+    page.ate.push_back({name, t.gt_path.string(), (*traj)->source, ate.stats});
+    coloured.push_back(aligned_series(name, color, ate));
+    for (const eval::StampMatch& m : ate.matches) {
+      t0 = std::min(t0, t.gt->poses[m.gt_index].timestamp);
+      t1 = std::max(t1, t.gt->poses[m.gt_index].timestamp);
     }
   }
+  for (const StampedPose& p : t.gt->poses)  // the ground truth over the compared span
+    if (p.timestamp >= t0 && p.timestamp <= t1) {
+      g.stamps_s.push_back(p.timestamp);
+      g.positions_m.push_back(p.world_from_cam.translation());
+    }
+  std::vector<report::PlotSeries> series;
+  series.push_back(g);
+  series.insert(series.end(), coloured.begin(), coloured.end());
+  return series;
+}
+
+// Without a ground truth: each estimate as it is.
+std::vector<report::PlotSeries> plain_plot_series(const Estimate (&estimates)[2]) {
+  std::vector<report::PlotSeries> series;
+  for (const Estimate& e : estimates) {
+    const auto& [name, traj, color] = e;
+    if (!*traj) continue;
+    report::PlotSeries s;
+    s.name = name;
+    s.color = color;
+    for (const StampedPose& p : (*traj)->poses) {
+      s.stamps_s.push_back(p.timestamp);
+      s.positions_m.push_back(p.world_from_cam.translation());
+    }
+    series.push_back(s);
+  }
+  return series;
+}
+
+// Step 3: the ATE per pose and the plots (the trajectories from above, the error over time).
+void add_trajectory_plots(const ReportOptions& options, const Trajectories& t, int up_axis,
+                          report::PageContent& page) {
+  const Estimate estimates[] = {{"estimated", &t.est, kEstColor},
+                                {"corrected", &t.corrected, kCorrectedColor}};
+  const std::vector<report::PlotSeries> series = t.gt && (t.est || t.corrected)
+                                                     ? aligned_plot_series(t, estimates, page)
+                                                     : plain_plot_series(estimates);
   report::PlotOptions plot_options;
   plot_options.up_axis = up_axis;
   if (!series.empty()) {
@@ -298,34 +353,48 @@ void run_report(const ReportOptions& options) {
     page.ate_plot.bytes = report::error_over_time_svg(series, plot_options);
     page.ate_plot.caption = "Absolute trajectory error over time.";
   }
+}
 
-  // 4. Tables 3-5 against ground-truth objects (--gt-objects, --reference, or the dataset's
-  //    objects_gt.json).
+// Step 4: Tables 3-5 against ground-truth objects (--gt-objects, --reference, or the dataset's
+// objects_gt.json), when there are any.
+void add_object_tables(const ReportOptions& options, const RunFiles& files,
+                       report::PageContent& page) {
   fs::path gt_objects = options.gt_objects;
   if (gt_objects.empty() && options.reference.empty())
-    if (const auto dataset = input_path(run, "dataset"))
+    if (const auto dataset = input_path(files.run, "dataset"))
       if (fs::exists(*dataset / "objects_gt.json")) gt_objects = *dataset / "objects_gt.json";
-  if (!gt_objects.empty() || !options.reference.empty()) {
-    eval::ObjectEvalReport e;
-    e.map_source = objects_file.string();
-    std::vector<eval::ReferenceObject> reference;
-    if (!options.reference.empty()) {
-      e.mode = "reference";
-      e.reference_source = options.reference.string();
-      reference = eval::to_reference(io::read_objects_json(options.reference));
-      page.inputs.push_back("reference map: " + options.reference.string());
-    } else {
-      e.mode = "ground_truth";
-      e.reference_source = gt_objects.string();
-      reference = eval::read_objects_gt(gt_objects, options.gt_class);
-      page.inputs.push_back("ground-truth objects: " + gt_objects.string());
-    }
-    e.result = eval::evaluate_objects(objects, reference, e.options);
-    page.object_eval = e;
+  if (gt_objects.empty() && options.reference.empty()) return;
+  eval::ObjectEvalReport e;
+  e.map_source = files.objects_file.string();
+  std::vector<eval::ReferenceObject> reference;
+  if (!options.reference.empty()) {
+    e.mode = "reference";
+    e.reference_source = options.reference.string();
+    reference = eval::to_reference(io::read_objects_json(options.reference));
+    page.inputs.push_back("reference map: " + options.reference.string());
+  } else {
+    e.mode = "ground_truth";
+    e.reference_source = gt_objects.string();
+    reference = eval::read_objects_gt(gt_objects, options.gt_class);
+    page.inputs.push_back("ground-truth objects: " + gt_objects.string());
   }
+  e.result = eval::evaluate_objects(files.objects, reference, e.options);
+  page.object_eval = e;
+}
 
-  // 5. The top view with the objects and the camera path (in the map's frame: the run's estimate).
-  // A run fused with --dense-map false has no semantic map: the objects-only map is drawn.
+// run.json "options.<section>.voxel_m", when there.
+std::optional<double> run_voxel_m(const json& run, const char* section) {
+  if (run.is_object() && run.contains("options") && run["options"].contains(section) &&
+      run["options"][section].contains("voxel_m") && run["options"][section]["voxel_m"].is_number())
+    return run["options"][section]["voxel_m"].get<double>();
+  return std::nullopt;
+}
+
+// Step 5: the top view with the objects and the camera path, in the map's frame: the run's
+// estimate, or the corrected trajectory for a corrected run (fused with it). A run fused with
+// --dense-map false has no semantic map: the objects-only map is drawn.
+void add_top_view(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
+                  int up_axis, report::PageContent& page) {
   const bool has_semantic = fs::exists(options.run / "map_semantic.ply");
   const std::string map_name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
   const PointCloud map = io::read_ply(options.run / map_name);
@@ -333,14 +402,11 @@ void run_report(const ReportOptions& options) {
   view_options.up_axis = up_axis;
   view_options.pixel_m = options.pixel_m;
   view_options.fade = 0.2;
-  if (run.is_object() && run.contains("options") && run["options"].contains("map") &&
-      run["options"]["map"].contains("voxel_m") && run["options"]["map"]["voxel_m"].is_number())
-    view_options.point_size_m = run["options"]["map"]["voxel_m"].get<double>();
-  const std::vector<report::TopViewObject> drawn = top_view_objects(objects, page.duplicates);
+  if (const auto voxel_m = run_voxel_m(files.run, "map")) view_options.point_size_m = *voxel_m;
+  const std::vector<report::TopViewObject> drawn = top_view_objects(files.objects, page.duplicates);
   std::vector<report::TopViewPath> paths;
-  // The map was fused with the run's own trajectory: the corrected one for a corrected run.
   const std::optional<Trajectory>& map_trajectory =
-      fs::exists(options.run / "correction.json") && corrected ? corrected : est;
+      fs::exists(options.run / "correction.json") && t.corrected ? t.corrected : t.est;
   if (map_trajectory) {
     report::TopViewPath path;
     path.color = Rgb{230, 0, 120};
@@ -359,48 +425,53 @@ void run_report(const ReportOptions& options) {
                 "object's oriented box outlined in its class colour and labelled \"id class\" "
                 "(\"(dup N)\": a suspected duplicate of object N)%s; the bar is 1 m.",
                 map_name.c_str(), options.up.c_str(), view.pixel_m * 1000, map.size(),
-                est ? ", the camera path in magenta (ring: start)" : "");
+                t.est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;
+}
 
-  // 6. A thumbnail per object, the point counts before the filters from objects.json.
+// One object of the page: its thumbnail and the point counts before the filters (objects.json).
+report::PageObject page_object(const ReportOptions& options, const io::MappedObject& o,
+                               const json& record, const report::ThumbnailOptions& thumb_options) {
+  report::PageObject p;
+  p.object = o;
+  if (record.contains("points") && record["points"].is_object()) {
+    const json& pts = record["points"];
+    if (pts.contains("raw") && pts["raw"].is_number_unsigned())
+      p.points_raw = pts["raw"].get<std::size_t>();
+    if (pts.contains("voxel_filtered") && pts["voxel_filtered"].is_number_unsigned())
+      p.points_voxel = pts["voxel_filtered"].get<std::size_t>();
+  }
+  const fs::path ply =
+      options.run / (o.ply.empty() ? "objects/" + std::to_string(o.id) + ".ply" : o.ply);
+  const PointCloud cloud = io::read_ply(ply);
+  const std::string label = std::to_string(o.id) + " " + o.class_name;
+  const cv::Mat thumb = report::render_thumbnail(cloud, label, thumb_options);
+  p.thumbnail.file = "thumbnails/" + ply.stem().string() + ".png";
+  p.thumbnail.bytes = png_bytes(thumb);
+  p.thumbnail.width_px = thumb.cols;
+  p.thumbnail.height_px = thumb.rows;
+  const Vec3 size_cm = 200.0 * o.obb.half_extent;
+  char text[256];
+  std::snprintf(text, sizeof text, "%s: %zu points, %d observations, %.0f×%.0f×%.0f cm",
+                label.c_str(), cloud.size(), o.observations, size_cm.x(), size_cm.y(), size_cm.z());
+  p.thumbnail.caption = text;
+  return p;
+}
+
+// Step 6: a thumbnail per object.
+void add_thumbnails(const ReportOptions& options, const RunFiles& files, int up_axis,
+                    report::PageContent& page) {
   report::ThumbnailOptions thumb_options;
   thumb_options.size_px = options.thumbnail_px;
   thumb_options.up_axis = up_axis;
-  if (run.is_object() && run.contains("options") && run["options"].contains("objects") &&
-      run["options"]["objects"].contains("voxel_m") &&
-      run["options"]["objects"]["voxel_m"].is_number())
-    thumb_options.point_size_m = run["options"]["objects"]["voxel_m"].get<double>();
-  for (std::size_t i = 0; i < objects.size(); ++i) {
-    const io::MappedObject& o = objects[i];
-    report::PageObject p;
-    p.object = o;
-    const json& record = objects_doc["objects"][i];
-    if (record.contains("points") && record["points"].is_object()) {
-      const json& pts = record["points"];
-      if (pts.contains("raw") && pts["raw"].is_number_unsigned())
-        p.points_raw = pts["raw"].get<std::size_t>();
-      if (pts.contains("voxel_filtered") && pts["voxel_filtered"].is_number_unsigned())
-        p.points_voxel = pts["voxel_filtered"].get<std::size_t>();
-    }
-    const fs::path ply =
-        options.run / (o.ply.empty() ? "objects/" + std::to_string(o.id) + ".ply" : o.ply);
-    const PointCloud cloud = io::read_ply(ply);
-    const std::string label = std::to_string(o.id) + " " + o.class_name;
-    const cv::Mat thumb = report::render_thumbnail(cloud, label, thumb_options);
-    p.thumbnail.file = "thumbnails/" + ply.stem().string() + ".png";
-    p.thumbnail.bytes = png_bytes(thumb);
-    p.thumbnail.width_px = thumb.cols;
-    p.thumbnail.height_px = thumb.rows;
-    const Vec3 size_cm = 200.0 * o.obb.half_extent;
-    char text[256];
-    std::snprintf(text, sizeof text, "%s: %zu points, %d observations, %.0f×%.0f×%.0f cm",
-                  label.c_str(), cloud.size(), o.observations, size_cm.x(), size_cm.y(),
-                  size_cm.z());
-    p.thumbnail.caption = text;
-    page.objects.push_back(std::move(p));
-  }
+  if (const auto voxel_m = run_voxel_m(files.run, "objects")) thumb_options.point_size_m = *voxel_m;
+  for (std::size_t i = 0; i < files.objects.size(); ++i)
+    page.objects.push_back(
+        page_object(options, files.objects[i], files.objects_doc["objects"][i], thumb_options));
+}
 
-  // 7. The files: the page, the summary and every picture beside them.
+// Step 7: the page, the summary and every picture beside them, staged and renamed into OUT.
+fs::path write_report(const ReportOptions& options, const report::PageContent& page) {
   const fs::path out = options.out.empty() ? options.run / "report" : options.out;
   io::StagingDir staging(out, io::kReportFolder);
   io::write_file_atomic(staging.path() / page.topview.file, page.topview.bytes);
@@ -411,13 +482,42 @@ void run_report(const ReportOptions& options) {
   io::write_file_atomic(staging.path() / "report.md", report::page_markdown(page));
   io::write_file_atomic(staging.path() / "report.html", report::page_html(page));
   staging.commit();
+  return out;
+}
 
+// The summary on stdout: the figures, the notes, what was written where.
+void print_report_summary(const report::PageContent& page, const fs::path& out) {
   std::printf("%s\n", report::summary_line(page).c_str());
   for (const std::string& note : page.notes) std::printf("note: %s\n", note.c_str());
   std::printf("written     %s/{report.md, topview.png%s%s, thumbnails/ (%zu)}\n", out.c_str(),
               page.trajectory_plot.bytes.empty() ? "" : ", trajectory.svg",
               page.ate_plot.bytes.empty() ? "" : ", ate.svg", page.objects.size());
   std::printf("report      %s\n", (out / "report.html").c_str());
+}
+
+void run_report(const ReportOptions& options) {
+  check_report_options(options);
+  const int up_axis = options.up[0] - 'x';
+  report::PageContent page;
+  page.title = page_title(options.run);
+  page.run_path = options.run.string();
+
+  // 1. The run: objects (required), run.json (counts, inputs, Table 6). Every small input is read
+  //    before the big ones (the maps), so that a bad one fails fast.
+  const RunFiles files = read_run(options, page);
+  // 2. Trajectories: the run's estimate, the ground truth, the corrected one.
+  const Trajectories trajectories = read_trajectories(options, files.run, page);
+  // 3. ATE per pose and the plots.
+  add_trajectory_plots(options, trajectories, up_axis, page);
+  // 4. Tables 3-5 against ground-truth objects.
+  add_object_tables(options, files, page);
+  // 5. The top view with the objects and the camera path.
+  add_top_view(options, files, trajectories, up_axis, page);
+  // 6. A thumbnail per object.
+  add_thumbnails(options, files, up_axis, page);
+  // 7. The files: the page, the summary and every picture beside them.
+  const fs::path out = write_report(options, page);
+  print_report_summary(page, out);
 }
 
 void setup_report(CLI::App& app) {

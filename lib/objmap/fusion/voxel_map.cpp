@@ -45,6 +45,234 @@ void add_in_order(std::size_t n, Prefetch&& prefetch, Add&& add) {
   }
 }
 
+// A batch of points in voxel units, structure of arrays: voxel coordinates, offsets inside the
+// voxel, valid (finite and in the key range).
+struct BatchCells {
+  std::int32_t *cx, *cy, *cz;
+  float *fx, *fy, *fz;
+  std::uint8_t* valid;
+};
+
+// Step 1 of an insert: the voxel coordinates and in-voxel offsets of `count` points: four points
+// at a time with SSE2 (the same float operations as the scalar loop, so the same bits), the rest
+// one by one.
+inline void batch_cells(const Vec3f* points, std::size_t count, float inv_voxel,
+                        const BatchCells& b) {
+  constexpr float lim = static_cast<float>(geometry::kVoxelCoordLimit);
+  std::int32_t *const cx = b.cx, *const cy = b.cy, *const cz = b.cz;
+  float *const fx = b.fx, *const fy = b.fy, *const fz = b.fz;
+  std::uint8_t* const valid = b.valid;
+  std::size_t j = 0;
+#if defined(__SSE2__)
+  {
+    const float* src = points->data();  // Vec3f: 3 packed floats per point
+    const __m128 inv = _mm_set1_ps(inv_voxel);
+    for (; j + 4 <= count; j += 4) {
+      const __m128 a = _mm_loadu_ps(src + 3 * j);                        // x0 y0 z0 x1
+      const __m128 b4 = _mm_loadu_ps(src + 3 * j + 4);                   // y1 z1 x2 y2
+      const __m128 c = _mm_loadu_ps(src + 3 * j + 8);                    // z2 x3 y3 z3
+      const __m128 bc = _mm_shuffle_ps(b4, c, _MM_SHUFFLE(1, 0, 3, 2));  // x2 y2 z2 x3
+      const __m128 ab = _mm_shuffle_ps(a, b4, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
+      const __m128 cd = _mm_shuffle_ps(b4, c, _MM_SHUFFLE(2, 2, 3, 3));  // y2 y2 y3 y3
+      const geometry::VoxelCoords4 v4 =
+          geometry::voxel_coords4(_mm_mul_ps(_mm_shuffle_ps(a, bc, _MM_SHUFFLE(3, 0, 3, 0)), inv),
+                                  _mm_mul_ps(_mm_shuffle_ps(ab, cd, _MM_SHUFFLE(2, 0, 2, 0)), inv),
+                                  _mm_mul_ps(_mm_shuffle_ps(ab, c, _MM_SHUFFLE(3, 0, 3, 1)), inv));
+      _mm_storeu_ps(fx + j, v4.fx);
+      _mm_storeu_ps(fy + j, v4.fy);
+      _mm_storeu_ps(fz + j, v4.fz);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(cx + j), v4.ix);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(cy + j), v4.iy);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(cz + j), v4.iz);
+      const int bits = _mm_movemask_ps(v4.ok);
+      for (int k = 0; k < 4; ++k) valid[j + k] = static_cast<std::uint8_t>((bits >> k) & 1);
+    }
+  }
+#endif
+  for (; j < count; ++j) {
+    const Vec3f& p = points[j];
+    float sx = p.x() * inv_voxel, sy = p.y() * inv_voxel, sz = p.z() * inv_voxel;
+    const bool ok = sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim;
+    if (!ok) sx = sy = sz = 0.f;  // no float-to-int conversion of NaN or huge values
+    const std::int32_t ix = geometry::fast_floor(sx), iy = geometry::fast_floor(sy),
+                       iz = geometry::fast_floor(sz);
+    cx[j] = ix;
+    cy[j] = iy;
+    cz[j] = iz;
+    fx[j] = sx - static_cast<float>(ix);
+    fy[j] = sy - static_cast<float>(iy);
+    fz[j] = sz - static_cast<float>(iz);
+    valid[j] = ok;
+  }
+}
+
+// A batch's runs and the points of the batch dropped (not valid).
+struct BatchRuns {
+  std::size_t runs = 0;
+  std::size_t dropped = 0;
+};
+
+// Step 2 of an insert: the batch's runs of consecutive points in one voxel, only those of the
+// voxels that ours(key) keeps, into runs[0..]. The open run is summed in locals and appended when
+// it ends (no store-to-load round trip through the run list per point); the additions are the
+// same, in the same order. colors: the batch's colours, nullptr without.
+template <typename Run, typename Ours>
+inline BatchRuns batch_runs(const BatchCells& b, std::size_t count, const Rgb* colors,
+                            const Ours& ours, Run* runs) {
+  const bool colour = colors != nullptr;
+  const std::int32_t *const cx = b.cx, *const cy = b.cy, *const cz = b.cz;
+  const float *const fx = b.fx, *const fy = b.fy, *const fz = b.fz;
+  const std::uint8_t* const valid = b.valid;
+  BatchRuns out;
+  std::size_t m = 0, dropped = 0;
+  VoxelKey run_key = kNoVoxel;
+  bool run_ours = false;
+  float s0 = 0.f, s1 = 0.f, s2 = 0.f;
+  std::uint32_t c0 = 0, c1 = 0, c2 = 0, points = 0;
+  for (std::size_t i = 0; i <= count; ++i) {
+    VoxelKey key = kNoVoxel;  // i == count: closes the last run
+    if (i < count) {
+      if (!valid[i]) {
+        ++dropped;
+        continue;
+      }
+      key = geometry::pack_voxel(cx[i], cy[i], cz[i]);
+    }
+    if (key != run_key) {
+      if (run_ours) {
+        Run& r = runs[m++];
+        r.key = run_key;
+        r.sum.offset_sum[0] = s0;
+        r.sum.offset_sum[1] = s1;
+        r.sum.offset_sum[2] = s2;
+        r.sum.count = points;
+        r.sum.color_sum[0] = c0;  // 0 without colours
+        r.sum.color_sum[1] = c1;
+        r.sum.color_sum[2] = c2;
+        r.sum.color_count = colour ? points : 0;
+      }
+      if (i == count) break;
+      run_key = key;
+      run_ours = ours(key);
+      s0 = s1 = s2 = 0.f;
+      c0 = c1 = c2 = points = 0;
+    }
+    if (!run_ours) continue;
+    s0 += fx[i];
+    s1 += fy[i];
+    s2 += fz[i];
+    ++points;
+    if (colour) {
+      c0 += colors[i].r;
+      c1 += colors[i].g;
+      c2 += colors[i].b;
+    }
+  }
+  out.runs = m;
+  out.dropped = dropped;
+  return out;
+}
+
+// work(t) on threads 0..threads-1 (0 on this thread), joined.
+template <typename Work>
+void on_threads(std::size_t threads, const Work& work) {
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back([&, t] { work(t); });
+  work(0);
+  for (auto& th : pool) th.join();
+}
+
+using Tables = std::vector<geometry::VoxelHashTable<VoxelData>>;
+
+// The x slices of a sorted list: the range of the keys' x, over every table.
+struct XRange {
+  std::uint64_t x0 = 0, x1 = 0;
+};
+
+// Step 1 of a sorted list: the x range, thread t reading tables t, t + threads, ...
+XRange x_range(const Tables& shards, std::size_t threads) {
+  std::vector<std::uint64_t> lo(threads, ~std::uint64_t{0}), hi(threads, 0);
+  on_threads(threads, [&](std::size_t t) {
+    for (std::size_t s = t; s < shards.size(); s += threads)
+      shards[s].for_each([&](VoxelKey key, const VoxelData&) {
+        lo[t] = std::min<std::uint64_t>(lo[t], key >> 42);
+        hi[t] = std::max<std::uint64_t>(hi[t], key >> 42);
+      });
+  });
+  return {*std::min_element(lo.begin(), lo.end()), *std::max_element(hi.begin(), hi.end())};
+}
+
+// Step 2 of a sorted list: the voxels per (thread, x slice), as offsets: at[t][i] is where thread
+// t's part of slice i starts (after the earlier threads' parts); start[i] where slice i starts
+// (start[slices]: the total).
+void slice_offsets(const Tables& shards, std::size_t threads, std::uint64_t x0,
+                   std::vector<std::vector<std::size_t>>& at, std::vector<std::size_t>& start) {
+  const std::size_t slices = start.size() - 1;
+  on_threads(threads, [&](std::size_t t) {
+    for (std::size_t s = t; s < shards.size(); s += threads)
+      shards[s].for_each([&](VoxelKey key, const VoxelData&) { ++at[t][(key >> 42) - x0]; });
+  });
+  for (std::size_t i = 0; i < slices; ++i) {
+    std::size_t next = start[i];
+    for (std::size_t t = 0; t < threads; ++t) {
+      const std::size_t c = at[t][i];
+      at[t][i] = next;
+      next += c;
+    }
+    start[i + 1] = next;
+  }
+}
+
+// Step 4 of a sorted list: the m points of one x slice sorted by key: bucketed by y (a counting
+// sort into `scratch`), then each (x, y) row — a few dozen voxels — sorted by key (= by z). Keys
+// are unique, so the order is the one a comparison sort of the whole list gives. `scratch` and
+// `row` are kept from one slice to the next.
+void sort_slice(VoxelMap::VoxelPoint* const first, std::size_t m,
+                std::vector<VoxelMap::VoxelPoint>& scratch, std::vector<std::uint32_t>& row) {
+  using VoxelPoint = VoxelMap::VoxelPoint;
+  constexpr VoxelKey kAxis = (VoxelKey{1} << 21) - 1;
+  const auto by_key = [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; };
+  if (m < 64) {
+    std::sort(first, first + m, by_key);
+    return;
+  }
+  VoxelKey y0 = kAxis, y1 = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const VoxelKey y = (first[j].key >> 21) & kAxis;
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y);
+  }
+  // The buffers through local pointers: the stores below (VoxelPoint holds bytes) may then not
+  // alias the vectors' own pointers, as they could through the references.
+  row.assign(static_cast<std::size_t>(y1 - y0) + 2, 0);
+  std::uint32_t* const rows = row.data();
+  const std::size_t nrows = row.size();
+  for (std::size_t j = 0; j < m; ++j) ++rows[((first[j].key >> 21) & kAxis) - y0 + 1];
+  for (std::size_t r = 1; r < nrows; ++r) rows[r] += rows[r - 1];
+  scratch.resize(m);
+  VoxelPoint* const sorted = scratch.data();
+  for (std::size_t j = 0; j < m; ++j)
+    sorted[rows[((first[j].key >> 21) & kAxis) - y0]++] = first[j];
+  // rows[r] is now the end of row r (the start of row r + 1).
+  std::size_t begin = 0;
+  for (std::size_t r = 0; r + 1 < nrows; ++r) {
+    const std::size_t end = rows[r];
+    if (end - begin > 32) {  // a long row (a wall along z)
+      std::sort(sorted + begin, sorted + end, by_key);
+      begin = end;
+      continue;
+    }
+    for (std::size_t j = begin + 1; j < end; ++j) {  // insertion sort: rows are short
+      const VoxelPoint v = sorted[j];
+      std::size_t k = j;
+      for (; k > begin && v.key < sorted[k - 1].key; --k) sorted[k] = sorted[k - 1];
+      sorted[k] = v;
+    }
+    begin = end;
+  }
+  std::copy(sorted, sorted + m, first);
+}
+
 }  // namespace
 
 VoxelMap::VoxelMap(const VoxelMapOptions& options) {
@@ -95,9 +323,9 @@ Vec3 VoxelMap::mean_position(VoxelKey key, const VoxelData& v) const {
 // batch size is fixed, so the sums (and the map) do not depend on anything but the input. Returns
 // the number of points dropped (not finite or out of range).
 std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud) {
-  const bool all = shard == kAllShards;
   const bool colour = cloud.has_colors();
-  const bool sharded = !all && shards_.size() > 1;
+  const bool sharded = shard != kAllShards && shards_.size() > 1;
+  const auto ours = [&](VoxelKey key) { return !sharded || shard_of(key) == shard; };
   std::vector<std::size_t> per_shard;
   std::vector<std::uint32_t> run_shard;
   const std::size_t n = cloud.size();
@@ -108,110 +336,19 @@ std::size_t VoxelMap::insert_shard(std::size_t shard, const PointCloud& cloud) {
   std::vector<std::int32_t> cell(3 * kBatch);
   std::vector<float> frac(3 * kBatch);
   std::vector<std::uint8_t> valid(kBatch);
-  std::int32_t* const cx = cell.data();
-  std::int32_t* const cy = cx + kBatch;
-  std::int32_t* const cz = cy + kBatch;
-  float* const fx = frac.data();
-  float* const fy = fx + kBatch;
-  float* const fz = fy + kBatch;
-  constexpr float lim = static_cast<float>(geometry::kVoxelCoordLimit);
+  const BatchCells cells{cell.data(), cell.data() + kBatch, cell.data() + 2 * kBatch,
+                         frac.data(), frac.data() + kBatch, frac.data() + 2 * kBatch,
+                         valid.data()};
   for (std::size_t begin = 0; begin < n; begin += kBatch) {
-    const std::size_t end = std::min(n, begin + kBatch);
-    // 1. Voxel coordinates and in-voxel offsets of the batch: four points at a time with SSE2 (the
-    //    same float operations as the scalar loop, so the same bits), the rest one by one.
-    const std::size_t count = end - begin;
-    std::size_t j = 0;
-#if defined(__SSE2__)
-    {
-      const float* src = cloud.points[begin].data();  // Vec3f: 3 packed floats per point
-      const __m128 inv = _mm_set1_ps(inv_voxel_m_);
-      for (; j + 4 <= count; j += 4) {
-        const __m128 a = _mm_loadu_ps(src + 3 * j);                       // x0 y0 z0 x1
-        const __m128 b = _mm_loadu_ps(src + 3 * j + 4);                   // y1 z1 x2 y2
-        const __m128 c = _mm_loadu_ps(src + 3 * j + 8);                   // z2 x3 y3 z3
-        const __m128 bc = _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2));  // x2 y2 z2 x3
-        const __m128 ab = _mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
-        const __m128 cd = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3));  // y2 y2 y3 y3
-        const geometry::VoxelCoords4 v4 = geometry::voxel_coords4(
-            _mm_mul_ps(_mm_shuffle_ps(a, bc, _MM_SHUFFLE(3, 0, 3, 0)), inv),
-            _mm_mul_ps(_mm_shuffle_ps(ab, cd, _MM_SHUFFLE(2, 0, 2, 0)), inv),
-            _mm_mul_ps(_mm_shuffle_ps(ab, c, _MM_SHUFFLE(3, 0, 3, 1)), inv));
-        _mm_storeu_ps(fx + j, v4.fx);
-        _mm_storeu_ps(fy + j, v4.fy);
-        _mm_storeu_ps(fz + j, v4.fz);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cx + j), v4.ix);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cy + j), v4.iy);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cz + j), v4.iz);
-        const int bits = _mm_movemask_ps(v4.ok);
-        for (int k = 0; k < 4; ++k) valid[j + k] = static_cast<std::uint8_t>((bits >> k) & 1);
-      }
-    }
-#endif
-    for (; j < count; ++j) {
-      const Vec3f& p = cloud.points[begin + j];
-      float sx = p.x() * inv_voxel_m_, sy = p.y() * inv_voxel_m_, sz = p.z() * inv_voxel_m_;
-      const bool ok = sx >= -lim && sx < lim && sy >= -lim && sy < lim && sz >= -lim && sz < lim;
-      if (!ok) sx = sy = sz = 0.f;  // no float-to-int conversion of NaN or huge values
-      const std::int32_t ix = geometry::fast_floor(sx), iy = geometry::fast_floor(sy),
-                         iz = geometry::fast_floor(sz);
-      cx[j] = ix;
-      cy[j] = iy;
-      cz[j] = iz;
-      fx[j] = sx - static_cast<float>(ix);
-      fy[j] = sy - static_cast<float>(iy);
-      fz[j] = sz - static_cast<float>(iz);
-      valid[j] = ok;
-    }
-    // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels). The open
-    //    run is summed in locals and appended when it ends (no store-to-load round trip through
-    //    the run list per point); the additions are the same, in the same order.
-    std::size_t m = 0;  // runs of this batch
+    const std::size_t count = std::min(n, begin + kBatch) - begin;
+    // 1. Voxel coordinates and in-voxel offsets of the batch (SSE2, the same bits as scalar).
+    batch_cells(cloud.points.data() + begin, count, inv_voxel_m_, cells);
+    // 2. The batch's runs of consecutive points in one voxel (only this shard's voxels).
     const Rgb* colors = colour ? cloud.colors.data() + begin : nullptr;
-    VoxelKey run_key = kNoVoxel;
-    bool run_ours = false;
-    float s0 = 0.f, s1 = 0.f, s2 = 0.f;
-    std::uint32_t c0 = 0, c1 = 0, c2 = 0, points = 0;
-    for (std::size_t i = 0; i <= count; ++i) {
-      VoxelKey key = kNoVoxel;  // i == count: closes the last run
-      if (i < count) {
-        if (!valid[i]) {
-          ++dropped;
-          continue;
-        }
-        key = geometry::pack_voxel(cx[i], cy[i], cz[i]);
-      }
-      if (key != run_key) {
-        if (run_ours) {
-          Run& r = runs[m++];
-          r.key = run_key;
-          r.sum.offset_sum[0] = s0;
-          r.sum.offset_sum[1] = s1;
-          r.sum.offset_sum[2] = s2;
-          r.sum.count = points;
-          r.sum.color_sum[0] = c0;  // 0 without colours
-          r.sum.color_sum[1] = c1;
-          r.sum.color_sum[2] = c2;
-          r.sum.color_count = colour ? points : 0;
-        }
-        if (i == count) break;
-        run_key = key;
-        run_ours = !sharded || shard_of(key) == shard;
-        s0 = s1 = s2 = 0.f;
-        c0 = c1 = c2 = points = 0;
-      }
-      if (!run_ours) continue;
-      s0 += fx[i];
-      s1 += fy[i];
-      s2 += fz[i];
-      ++points;
-      if (colour) {
-        c0 += colors[i].r;
-        c1 += colors[i].g;
-        c2 += colors[i].b;
-      }
-    }
+    const BatchRuns batch = batch_runs(cells, count, colors, ours, runs.data());
+    dropped += batch.dropped;
     // 3. The runs into the table(s), in order, prefetching ahead.
-    write_runs(runs.data(), m, shard, run_shard, per_shard);
+    write_runs(runs.data(), batch.runs, shard, run_shard, per_shard);
   }
   return dropped;
 }
@@ -410,102 +547,35 @@ VoxelMap::VoxelPoints VoxelMap::sorted_points_impl(bool release) {
   VoxelPoints out;
   const std::size_t n = size();
   if (n == 0) return out;
+  // Thread t takes shards t, t + threads, ... and slices t, t + threads, ...
   const std::size_t threads = std::max<std::size_t>(1, std::min(threads_, shards_.size()));
-  auto run = [&](auto&& work) {  // work(t) on threads 0..threads-1, thread t taking shards t + kT
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < threads; ++t) pool.emplace_back([&, t] { work(t); });
-    work(0);
-    for (auto& th : pool) th.join();
-  };
   // 1. The x range.
-  std::vector<std::uint64_t> lo(threads, ~std::uint64_t{0}), hi(threads, 0);
-  run([&](std::size_t t) {
-    for (std::size_t s = t; s < shards_.size(); s += threads)
-      shards_[s].for_each([&](VoxelKey key, const VoxelData&) {
-        lo[t] = std::min<std::uint64_t>(lo[t], key >> 42);
-        hi[t] = std::max<std::uint64_t>(hi[t], key >> 42);
-      });
-  });
-  const std::uint64_t x0 = *std::min_element(lo.begin(), lo.end());
-  const std::uint64_t x1 = *std::max_element(hi.begin(), hi.end());
-  const std::size_t slices = static_cast<std::size_t>(x1 - x0 + 1);
+  const XRange x = x_range(shards_, threads);
+  const std::size_t slices = static_cast<std::size_t>(x.x1 - x.x0 + 1);
   // 2. Voxels per (thread, x slice); each thread's part of each slice starts after the earlier
   //    threads' parts.
   std::vector<std::vector<std::size_t>> at(threads, std::vector<std::size_t>(slices, 0));
-  run([&](std::size_t t) {
-    for (std::size_t s = t; s < shards_.size(); s += threads)
-      shards_[s].for_each([&](VoxelKey key, const VoxelData&) { ++at[t][(key >> 42) - x0]; });
-  });
   std::vector<std::size_t> start(slices + 1, 0);
-  for (std::size_t i = 0; i < slices; ++i) {
-    std::size_t next = start[i];
-    for (std::size_t t = 0; t < threads; ++t) {
-      const std::size_t c = at[t][i];
-      at[t][i] = next;
-      next += c;
-    }
-    start[i + 1] = next;
-  }
-  // 3. Each voxel's point into its slice, then each slice sorted by key.
+  slice_offsets(shards_, threads, x.x0, at, start);
+  // 3. Each voxel's point into its slice (a shard freed once read when `release`).
   out.resize(n);
-  run([&](std::size_t t) {
+  on_threads(threads, [&](std::size_t t) {
     std::vector<std::size_t>& mine = at[t];
     for (std::size_t s = t; s < shards_.size(); s += threads) {
       shards_[s].for_each([&](VoxelKey key, const VoxelData& v) {
         const Rgb c = v.mean_color();
-        out[mine[(key >> 42) - x0]++] =
+        out[mine[(key >> 42) - x.x0]++] =
             VoxelPoint{key, mean_position(key, v).cast<float>(), c.r, c.g, c.b};
       });
       if (release) shards_[s].clear();  // this shard is read: free its memory
     }
   });
-  // Within a slice: bucketed by y (a counting sort into a scratch list), then each (x, y) row —
-  // a few dozen voxels — sorted by key (= by z). Keys are unique, so the order is the one a
-  // comparison sort of the whole list gives.
-  run([&](std::size_t t) {
-    constexpr VoxelKey kAxis = (VoxelKey{1} << 21) - 1;
+  // 4. Each slice sorted by key: bucketed by y, then each (x, y) row sorted by z.
+  on_threads(threads, [&](std::size_t t) {
     std::vector<VoxelPoint> scratch;
     std::vector<std::uint32_t> row;
-    const auto by_key = [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; };
-    for (std::size_t i = t; i < slices; i += threads) {
-      VoxelPoint* const first = out.data() + start[i];
-      const std::size_t m = start[i + 1] - start[i];
-      if (m < 64) {
-        std::sort(first, first + m, by_key);
-        continue;
-      }
-      VoxelKey y0 = kAxis, y1 = 0;
-      for (std::size_t j = 0; j < m; ++j) {
-        const VoxelKey y = (first[j].key >> 21) & kAxis;
-        y0 = std::min(y0, y);
-        y1 = std::max(y1, y);
-      }
-      row.assign(static_cast<std::size_t>(y1 - y0) + 2, 0);
-      for (std::size_t j = 0; j < m; ++j) ++row[((first[j].key >> 21) & kAxis) - y0 + 1];
-      for (std::size_t r = 1; r < row.size(); ++r) row[r] += row[r - 1];
-      scratch.resize(m);
-      for (std::size_t j = 0; j < m; ++j)
-        scratch[row[((first[j].key >> 21) & kAxis) - y0]++] = first[j];
-      // row[r] is now the end of row r (the start of row r + 1).
-      std::size_t begin = 0;
-      for (std::size_t r = 0; r + 1 < row.size(); ++r) {
-        const std::size_t end = row[r];
-        if (end - begin > 32) {  // a long row (a wall along z)
-          std::sort(scratch.begin() + static_cast<std::ptrdiff_t>(begin),
-                    scratch.begin() + static_cast<std::ptrdiff_t>(end), by_key);
-          begin = end;
-          continue;
-        }
-        for (std::size_t j = begin + 1; j < end; ++j) {  // insertion sort: rows are short
-          const VoxelPoint v = scratch[j];
-          std::size_t k = j;
-          for (; k > begin && v.key < scratch[k - 1].key; --k) scratch[k] = scratch[k - 1];
-          scratch[k] = v;
-        }
-        begin = end;
-      }
-      std::copy(scratch.begin(), scratch.end(), first);
-    }
+    for (std::size_t i = t; i < slices; i += threads)
+      sort_slice(out.data() + start[i], start[i + 1] - start[i], scratch, row);
   });
   return out;
 }

@@ -802,45 +802,57 @@ const segmentation::FrameSegmentation* keyframe_segmentation(
   return &lazy;
 }
 
-FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
-  options.check();
-  io::require_not_an_input({"--out", options.out}, {{"--dataset", options.dataset},
-                                                    {"--trajectory", options.trajectory},
-                                                    {"--segmentation", options.segmentation}});
-  io::require_replaceable(options.out, io::kRunFolder);  // before the work, not after it
-  const auto t_start = Clock::now();
-  FuseResult result;
-  const FuseInputs inputs = load_inputs(options, result);
-  const io::TumDataset& dataset = inputs.dataset;
-  const Camera& camera = result.camera;
-  const int threads = fuse_threads(options.threads);
-  result.threads = threads;
-  const auto& keyframes = result.keyframes.keyframes;
-  auto t0 = Clock::now();
+namespace {
 
-  // 3. Back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead; this
-  //    thread merges their results strictly in keyframe order, so the maps do not depend on the
-  //    thread count.
-  t0 = Clock::now();
-  const geometry::RayTable rays = geometry::make_ray_table(camera, threads);
+// The dense map's options: voxels come from the workers via merge_shard; threads for the sort on
+// export.
+fusion::VoxelMapOptions dense_map_options(const FuseOptions& options, int threads) {
   fusion::VoxelMapOptions dense_options;
   dense_options.voxel_m = options.map_voxel_m;
   dense_options.threads = threads;  // for sorting on export; voxels come via merge_shard
   dense_options.shards = kDenseShards;
-  fusion::VoxelMap dense(dense_options);
-  ShardedMergeOrder merge_order(kDenseShards);
-  FrameVoxelsPool frame_voxels;
+  return dense_options;
+}
+
+// The object map's options: a camera that hardly moves has one viewpoint, its frames are the views.
+fusion::ObjectMapOptions object_map_options(const FuseOptions& options, bool still_camera) {
   fusion::ObjectMapOptions object_options = options.objects;
   object_options.overlap_measure =
       fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
-  if (result.keyframes.still_camera) {
+  if (still_camera) {
     // A camera that hardly moves has one viewpoint: its frames are the views.
     object_options.view_min_translation_m = 0.0;
     object_options.view_min_rotation_deg = 0.0;
   }
-  fusion::ObjectMap objects(object_options);
+  return object_options;
+}
 
-  const std::size_t window = static_cast<std::size_t>(threads);
+// A keyframe's counts into the run's.
+void add_counts(const FrameWork& work, FuseResult& result) {
+  result.dense_points_raw += work.dense_points;
+  result.instances_seen += work.instances;
+  result.instances_skipped_score += work.skipped_score;
+  result.instances_from_box += work.from_box;
+  result.instances_refined += work.refined;
+  result.instances_duplicate += work.duplicates;
+  result.mask_pixels_removed += work.mask_pixels_removed;
+  result.instances_depth_gated += work.depth_gated;
+  result.depth_gate_pixels_removed += work.depth_gate_pixels_removed;
+  result.instances_empty += work.empty;
+}
+
+// Step 3: back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead (one
+// keyframe more than threads in flight); this thread merges their results strictly in keyframe
+// order, so the maps do not depend on the thread count. Without `dense`, the observations only.
+void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
+                    const FuseInputs& inputs, fusion::VoxelMap* dense, fusion::ObjectMap& objects,
+                    FuseResult& result) {
+  const Camera& camera = result.camera;
+  const auto& keyframes = result.keyframes.keyframes;
+  const geometry::RayTable rays = geometry::make_ray_table(camera, result.threads);
+  ShardedMergeOrder merge_order(kDenseShards);
+  FrameVoxelsPool frame_voxels;
+  const std::size_t window = static_cast<std::size_t>(result.threads);
   std::deque<std::future<FrameWork>> pending;
   std::size_t next = 0;
   auto launch = [&](std::size_t i) {
@@ -850,9 +862,9 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
         // segmentation.
         segmentation::FrameSegmentation lazy;
         const segmentation::FrameSegmentation* seg_frame = keyframe_segmentation(inputs, i, lazy);
-        return process_keyframe(options, camera, rays, dataset.frames[keyframes[i].frame],
-                                keyframes[i], static_cast<int>(i), seg_frame,
-                                options.dense_map ? &dense : nullptr, &merge_order, &frame_voxels);
+        return process_keyframe(options, camera, rays, inputs.dataset.frames[keyframes[i].frame],
+                                keyframes[i], static_cast<int>(i), seg_frame, dense, &merge_order,
+                                &frame_voxels);
       } catch (...) {
         merge_order.fail();  // later keyframes must not wait for this one's merge
         throw;
@@ -869,16 +881,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
         pending.push_back(launch(next++));
       FrameWork work = pending.front().get();
       pending.pop_front();
-      result.dense_points_raw += work.dense_points;
-      result.instances_seen += work.instances;
-      result.instances_skipped_score += work.skipped_score;
-      result.instances_from_box += work.from_box;
-      result.instances_refined += work.refined;
-      result.instances_duplicate += work.duplicates;
-      result.mask_pixels_removed += work.mask_pixels_removed;
-      result.instances_depth_gated += work.depth_gated;
-      result.depth_gate_pixels_removed += work.depth_gate_pixels_removed;
-      result.instances_empty += work.empty;
+      add_counts(work, result);
       // The keyframe's observations are associated together, best match first.
       for (const auto& added : objects.add_frame(work.observations)) {
         if (added.object_id >= 0)
@@ -892,34 +895,18 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     drain();
     throw;
   }
-  result.times.push_back({"back-project and fuse", seconds_since(t0)});
+}
 
-  // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
-  //      map's cloud is made on a second thread meanwhile the objects are merged and filtered
-  //      (they do not depend on each other).
-  io::StagingDir staging(options.out, io::kRunFolder);
-  const fs::path dir = staging.path();
-  io::PlyWriteOptions ply;
-  ply.comment = std::string("objmap ") + objmap::version();
-  auto t_dense = Clock::now();
-  double dense_seconds = 0.0;
-  std::future<DenseCloud> dense_future;
-  if (options.dense_map)
-    dense_future = std::async(std::launch::async, [&] {
-      DenseCloud cloud = take_dense_cloud(dense, dense_options);
-      dense_seconds = seconds_since(t_dense);
-      return cloud;
-    });
-
-  // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
-  t0 = Clock::now();
+// Step 4: the final merge pass (ID-switch repair), then each confirmed object's filtered record.
+void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& objects,
+                              FuseResult& result) {
   result.merges = objects.merge_pass();
   result.objects_total = objects.size();
   fusion::RecordOptions record_options;
   record_options.confirmed_only = true;
   record_options.outlier_filter = options.outlier_filter;
   record_options.outlier = options.outlier;
-  record_options.outlier.threads = threads;
+  record_options.outlier.threads = result.threads;
   record_options.min_voxel_support = options.min_voxel_support;
   result.objects = objects.records(record_options);
   for (const auto& r : result.objects) {
@@ -927,21 +914,21 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     result.object_points_voxel += r.points_voxel;
     result.object_points_filtered += r.points_filtered;
   }
-  result.times.push_back({"merge and filter objects", seconds_since(t0)});
+}
 
-  // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
-  //     pass's reason for keeping them apart (no ground truth needed).
-  t0 = Clock::now();
-  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
-  result.times.push_back({"duplicate check", seconds_since(t0)});
+// The point counts of the written maps (run.json "points").
+struct MapPoints {
+  std::size_t semantic = 0;
+  std::size_t objects = 0;
+};
 
-  // 5. The maps: map_dense.ply and the semantic map (the dense points with the objects' colours)
-  //    on two more threads, the objects meanwhile.
-  t0 = Clock::now();
-  DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
-  result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
-  result.dense_points_map = dense_cloud.cloud.size();
-  const std::size_t semantic_points = dense_cloud.cloud.size();
+// Step 5: the maps: map_dense.ply and the semantic map (the dense points with the objects'
+// colours) on two more threads, the objects-only map and a PLY per object meanwhile; returns the
+// objects' records of objects.json.
+ordered_json write_maps(const FuseOptions& options, const fs::path& dir,
+                        const io::PlyWriteOptions& ply, const DenseCloud& dense_cloud,
+                        const FuseResult& result, MapPoints& points) {
+  points.semantic = dense_cloud.cloud.size();
   std::vector<Rgb> record_color(result.objects.size());
   for (std::size_t i = 0; i < result.objects.size(); ++i)
     record_color[i] = fusion::class_color(result.objects[i].class_name);
@@ -963,7 +950,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     for (const Vec3f& p : result.objects[i].cloud.points)
       objects_only.push_back(p, record_color[i]);
   }
-  const std::size_t objects_points = objects_only.size();
+  points.objects = objects_only.size();
   io::write_ply(dir / "map_objects.ply", objects_only, ply);
   objects_only = PointCloud();
   fs::create_directories(dir / "objects");
@@ -978,7 +965,11 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
     dense_write_future.get();
     semantic_future.get();
   }
-  dense_cloud = DenseCloud();
+  return objects_json;
+}
+
+// objects.json: the records of the confirmed objects.
+void write_objects_json(const fs::path& dir, const ordered_json& objects_json) {
   ordered_json doc;
   doc["schema_version"] = 1;
   doc["generator"] = std::string("objmap ") + objmap::version();
@@ -986,17 +977,11 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   doc["units"] = "metres";
   doc["objects"] = objects_json;
   io::write_file_atomic(dir / "objects.json", doc.dump(2) + "\n");
-  result.times.push_back({"write outputs", seconds_since(t0)});
-  result.seconds_total = seconds_since(t_start);
-  result.peak_rss_kb = peak_rss_kb();
+}
 
-  // run.json: options, inputs with checksums, counts per stage, Table 6, time per stage, memory.
-  FuseOptions echo = options;
-  ordered_json run;
-  run["schema_version"] = 1;
-  run["generator"] = std::string("objmap ") + objmap::version();
-  run["command"] = "fuse";
-  run["inputs"] = {
+// run.json "inputs": the paths with their checksums, the camera and why it was chosen.
+ordered_json inputs_json(const FuseOptions& options, const FuseResult& result) {
+  return {
       {"dataset",
        {{"path", options.dataset.string()},
         {"rgb.txt", file_checksum(options.dataset / "rgb.txt")},
@@ -1007,45 +992,56 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
        {{"path", options.segmentation.string()},
         {"format", result.seg_format},
         {"checksum", folder_checksum(options.segmentation)}}},
-      {"camera", nlohmann::ordered_json::parse(io::camera_json(camera))},
+      {"camera", nlohmann::ordered_json::parse(io::camera_json(result.camera))},
       {"camera_reason", result.camera_reason}};
-  run["options"] = ordered_json::parse(config_to_json(fuse_config_fields(echo)));
-  run["counts"] = {{"frames", result.frames},
-                   {"frames_with_pose", result.keyframes.frames_with_pose},
-                   {"keyframe_mode", result.keyframes.mode},
-                   {"keyframe_mode_reason", result.keyframes.reason},
-                   {"keyframes", keyframes.size()},
-                   {"keyframes_with_segmentation", inputs.with_seg},
-                   {"instances", result.instances_seen},
-                   {"instances_below_min_score", result.instances_skipped_score},
-                   {"instances_mask_from_box", result.instances_from_box},
-                   {"instances_mask_refined", result.instances_refined},
-                   {"instances_duplicate", result.instances_duplicate},
-                   {"mask_pixels_removed", result.mask_pixels_removed},
-                   {"instances_depth_gated", result.instances_depth_gated},
-                   {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
-                   {"instances_without_points", result.instances_empty},
-                   {"observations", result.observations},
-                   {"objects_before_confirmation", result.objects_total},
-                   {"objects_confirmed", result.objects.size()},
-                   {"merges", result.merges.size()}};
+}
+
+// run.json "counts": per stage.
+ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
+  return {{"frames", result.frames},
+          {"frames_with_pose", result.keyframes.frames_with_pose},
+          {"keyframe_mode", result.keyframes.mode},
+          {"keyframe_mode_reason", result.keyframes.reason},
+          {"keyframes", result.keyframes.keyframes.size()},
+          {"keyframes_with_segmentation", inputs.with_seg},
+          {"instances", result.instances_seen},
+          {"instances_below_min_score", result.instances_skipped_score},
+          {"instances_mask_from_box", result.instances_from_box},
+          {"instances_mask_refined", result.instances_refined},
+          {"instances_duplicate", result.instances_duplicate},
+          {"mask_pixels_removed", result.mask_pixels_removed},
+          {"instances_depth_gated", result.instances_depth_gated},
+          {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
+          {"instances_without_points", result.instances_empty},
+          {"observations", result.observations},
+          {"objects_before_confirmation", result.objects_total},
+          {"objects_confirmed", result.objects.size()},
+          {"merges", result.merges.size()}};
+}
+
+// run.json "points": Table 6, the point counts and their reductions.
+ordered_json points_json(const FuseResult& result, const MapPoints& maps) {
   const auto reduction = [](double before, double after) {
     return before > 0 ? 1.0 - after / before : 0.0;
   };
-  run["points"] = {
+  return {
       {"dense_back_projected", result.dense_points_raw},
       {"dense_map", result.dense_points_map},
       {"objects_raw", result.object_points_raw},
       {"objects_voxel_filtered", result.object_points_voxel},
       {"objects_outlier_filtered", result.object_points_filtered},
-      {"semantic_map", semantic_points},
-      {"objects_map", objects_points},
+      {"semantic_map", maps.semantic},
+      {"objects_map", maps.objects},
       {"reduction_objects_voxel", reduction(result.object_points_raw, result.object_points_voxel)},
       {"reduction_objects_total",
        reduction(result.object_points_raw, result.object_points_filtered)},
       {"reduction_dense", reduction(result.dense_points_raw, result.dense_points_map)}};
-  run["duplicates"] = duplicates_json(result.duplicates, options.duplicates, object_options);
-  // The only part of the run folder that differs between two runs of the same inputs.
+}
+
+// run.json "performance": time per stage and memory; the only part of the run folder that differs
+// between two runs of the same inputs.
+ordered_json performance_json(const FuseResult& result) {
+  const auto& keyframes = result.keyframes.keyframes;
   ordered_json perf;
   for (const auto& t : result.times) perf["seconds"][t.stage] = t.seconds;
   perf["seconds"]["total"] = result.seconds_total;
@@ -1053,8 +1049,96 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
       keyframes.empty() ? 0.0 : 1000.0 * result.seconds_total / keyframes.size();
   perf["peak_rss_mb"] = result.peak_rss_kb / 1024.0;
   perf["threads"] = result.threads;
-  run["performance"] = perf;
+  return perf;
+}
+
+// run.json: options, inputs with checksums, counts per stage, Table 6, time per stage, memory.
+void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseInputs& inputs,
+                    const fusion::ObjectMapOptions& object_options, const MapPoints& maps,
+                    const FuseResult& result) {
+  FuseOptions echo = options;
+  ordered_json run;
+  run["schema_version"] = 1;
+  run["generator"] = std::string("objmap ") + objmap::version();
+  run["command"] = "fuse";
+  run["inputs"] = inputs_json(options, result);
+  run["options"] = ordered_json::parse(config_to_json(fuse_config_fields(echo)));
+  run["counts"] = counts_json(inputs, result);
+  run["points"] = points_json(result, maps);
+  run["duplicates"] = duplicates_json(result.duplicates, options.duplicates, object_options);
+  run["performance"] = performance_json(result);
   io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+}
+
+}  // namespace
+
+FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
+  options.check();
+  io::require_not_an_input({"--out", options.out}, {{"--dataset", options.dataset},
+                                                    {"--trajectory", options.trajectory},
+                                                    {"--segmentation", options.segmentation}});
+  io::require_replaceable(options.out, io::kRunFolder);  // before the work, not after it
+  const auto t_start = Clock::now();
+  FuseResult result;
+  // 1-2. Inputs (the TUM folder, the camera, the trajectory, the segmentation) and keyframes.
+  const FuseInputs inputs = load_inputs(options, result);
+  result.threads = fuse_threads(options.threads);
+
+  // 3. Back-project and fuse, keyframe by keyframe, with the worker pipeline; the maps do not
+  //    depend on the thread count.
+  auto t0 = Clock::now();
+  const fusion::VoxelMapOptions dense_options = dense_map_options(options, result.threads);
+  fusion::VoxelMap dense(dense_options);
+  const fusion::ObjectMapOptions object_options =
+      object_map_options(options, result.keyframes.still_camera);
+  fusion::ObjectMap objects(object_options);
+  fuse_keyframes(options, progress, inputs, options.dense_map ? &dense : nullptr, objects, result);
+  result.times.push_back({"back-project and fuse", seconds_since(t0)});
+
+  // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
+  //      map's cloud is made on a second thread meanwhile the objects are merged and filtered
+  //      (they do not depend on each other).
+  io::StagingDir staging(options.out, io::kRunFolder);
+  const fs::path dir = staging.path();
+  io::PlyWriteOptions ply;
+  ply.comment = std::string("objmap ") + objmap::version();
+  auto t_dense = Clock::now();
+  double dense_seconds = 0.0;
+  std::future<DenseCloud> dense_future;
+  if (options.dense_map)
+    dense_future = std::async(std::launch::async, [&] {
+      DenseCloud cloud = take_dense_cloud(dense, dense_options);
+      dense_seconds = seconds_since(t_dense);
+      return cloud;
+    });
+
+  // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
+  t0 = Clock::now();
+  merge_and_filter_objects(options, objects, result);
+  result.times.push_back({"merge and filter objects", seconds_since(t0)});
+
+  // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
+  //     pass's reason for keeping them apart (no ground truth needed).
+  t0 = Clock::now();
+  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
+  result.times.push_back({"duplicate check", seconds_since(t0)});
+
+  // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.
+  t0 = Clock::now();
+  DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
+  result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
+  result.dense_points_map = dense_cloud.cloud.size();
+  MapPoints map_points;
+  const ordered_json objects_json = write_maps(options, dir, ply, dense_cloud, result, map_points);
+  dense_cloud = DenseCloud();
+  write_objects_json(dir, objects_json);
+  result.times.push_back({"write outputs", seconds_since(t0)});
+  result.seconds_total = seconds_since(t_start);
+  result.peak_rss_kb = peak_rss_kb();
+
+  // 5b. run.json: options, inputs with checksums, counts per stage, Table 6, time per stage,
+  //     memory.
+  write_run_json(dir, options, inputs, object_options, map_points, result);
   staging.commit();
   return result;
 }

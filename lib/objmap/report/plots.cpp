@@ -129,13 +129,18 @@ void color_bar(Svg& svg, double x, double top, double bottom, double max_error) 
 
 std::string axis_name(int axis) { return std::string(1, static_cast<char>('x' + axis)) + " [m]"; }
 
-}  // namespace
-
-std::string trajectory_svg(const std::vector<PlotSeries>& series, const PlotOptions& options) {
-  options.check();
-  const int ax = (options.up_axis + 1) % 3, bx = (options.up_axis + 2) % 3;
+// What a trajectory plot shows: the data's extent on the two horizontal axes and, when a series
+// carries errors, the top of the colour scale.
+struct PlanData {
+  double a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  double max_error = 0;
   bool colored = false;
-  double max_error = 0.0;
+};
+
+// The extent of every series on the axes ax and bx (0..1 when there is none), and the largest
+// error rounded up to a tick, so that the colour bar's top is labelled.
+PlanData plan_data(const std::vector<PlotSeries>& series, int ax, int bx) {
+  PlanData d;
   double a0 = std::numeric_limits<double>::infinity(), a1 = -a0, b0 = a0, b1 = -a0;
   for (const PlotSeries& s : series) {
     for (const Vec3& p : s.positions_m) {
@@ -143,65 +148,78 @@ std::string trajectory_svg(const std::vector<PlotSeries>& series, const PlotOpti
       b0 = std::min(b0, p[bx]), b1 = std::max(b1, p[bx]);
     }
     if (has_errors(s)) {
-      colored = true;
+      d.colored = true;
       for (const double e : s.errors_m)
-        if (std::isfinite(e)) max_error = std::max(max_error, e);
+        if (std::isfinite(e)) d.max_error = std::max(d.max_error, e);
     }
   }
   if (!std::isfinite(a0)) a0 = b0 = 0, a1 = b1 = 1;
-  if (max_error <= 0) max_error = 1e-3;
-  // The colour scale ends on a tick, so the bar's top is labelled.
-  {
-    const auto t = nice_ticks(0.0, max_error, 4);
-    const double step = step_of(t);
-    max_error = std::ceil(max_error / step - 1e-9) * step;
-  }
+  if (d.max_error <= 0) d.max_error = 1e-3;
+  const auto t = nice_ticks(0.0, d.max_error, 4);
+  const double step = step_of(t);
+  d.max_error = std::ceil(d.max_error / step - 1e-9) * step;
+  d.a0 = a0, d.a1 = a1, d.b0 = b0, d.b1 = b1;
+  return d;
+}
 
-  // 1. Plot area and an equal-axis fit of the data (5% padding, at least 10 cm).
-  const double left = 58, top = 34, right = options.width_px - (colored ? 78 : 16),
-               bottom = options.height_px - 42;
-  const double pw = right - left, ph = bottom - top;
-  const double ra = std::max(0.1, (a1 - a0) * 1.1), rb = std::max(0.1, (b1 - b0) * 1.1);
-  const double scale = std::min(pw / ra, ph / rb);
-  const double ca = 0.5 * (a0 + a1), cb = 0.5 * (b0 + b1);
-  const double va0 = ca - pw / (2 * scale), va1 = ca + pw / (2 * scale);
-  const double vb0 = cb - ph / (2 * scale), vb1 = cb + ph / (2 * scale);
-  const auto X = [&](double a) { return left + (a - va0) * scale; };
-  const auto Y = [&](double b) { return bottom - (b - vb0) * scale; };
+// The plot area in SVG units and the visible metres of an equal-axis fit.
+struct PlanArea {
+  double left = 0, top = 0, right = 0, bottom = 0, pw = 0, ph = 0;
+  double scale = 0, va0 = 0, va1 = 0, vb0 = 0, vb1 = 0;
+  double X(double a) const { return left + (a - va0) * scale; }
+  double Y(double b) const { return bottom - (b - vb0) * scale; }
+};
 
-  Svg svg(options.width_px, options.height_px);
-  svg.rect(0, 0, options.width_px, options.height_px, {{"fill", "#ffffff"}});
-  // 2. Metre grid and axes.
-  const int target = std::max(3, static_cast<int>(std::min(pw, ph) / 70));
-  const auto ta = nice_ticks(va0, va1, target), tb = nice_ticks(vb0, vb1, target);
+// Step 1: the plot area (room for the colour bar when coloured) and an equal-axis fit of the data
+// (5% padding, at least 10 cm).
+PlanArea fit_plan_area(const PlanData& d, const PlotOptions& options) {
+  PlanArea v;
+  v.left = 58, v.top = 34, v.right = options.width_px - (d.colored ? 78 : 16),
+  v.bottom = options.height_px - 42;
+  v.pw = v.right - v.left, v.ph = v.bottom - v.top;
+  const double ra = std::max(0.1, (d.a1 - d.a0) * 1.1), rb = std::max(0.1, (d.b1 - d.b0) * 1.1);
+  v.scale = std::min(v.pw / ra, v.ph / rb);
+  const double ca = 0.5 * (d.a0 + d.a1), cb = 0.5 * (d.b0 + d.b1);
+  v.va0 = ca - v.pw / (2 * v.scale), v.va1 = ca + v.pw / (2 * v.scale);
+  v.vb0 = cb - v.ph / (2 * v.scale), v.vb1 = cb + v.ph / (2 * v.scale);
+  return v;
+}
+
+// Step 2: the metre grid (one step on both axes), its labels, the frame and the axis names.
+void plan_grid(Svg& svg, const PlanArea& v, int ax, int bx) {
+  const int target = std::max(3, static_cast<int>(std::min(v.pw, v.ph) / 70));
+  const auto ta = nice_ticks(v.va0, v.va1, target), tb = nice_ticks(v.vb0, v.vb1, target);
   const double step = std::min(step_of(ta), step_of(tb));
-  const auto ga = ticks_with_step(va0, va1, step), gb = ticks_with_step(vb0, vb1, step);
+  const auto ga = ticks_with_step(v.va0, v.va1, step), gb = ticks_with_step(v.vb0, v.vb1, step);
   svg.open_group({{"stroke", kGrid}, {"stroke-width", "1"}});
-  for (const double v : ga) svg.line(X(v), top, X(v), bottom, {});
-  for (const double v : gb) svg.line(left, Y(v), right, Y(v), {});
+  for (const double x : ga) svg.line(v.X(x), v.top, v.X(x), v.bottom, {});
+  for (const double y : gb) svg.line(v.left, v.Y(y), v.right, v.Y(y), {});
   svg.close_group();
   svg.open_group({{"fill", kText}, {"font-size", "11"}});
-  for (const double v : ga)
-    svg.text(X(v), bottom + 15, tick_text(v, step), {{"text-anchor", "middle"}});
-  for (const double v : gb)
-    svg.text(left - 5, Y(v) + 4, tick_text(v, step), {{"text-anchor", "end"}});
+  for (const double x : ga)
+    svg.text(v.X(x), v.bottom + 15, tick_text(x, step), {{"text-anchor", "middle"}});
+  for (const double y : gb)
+    svg.text(v.left - 5, v.Y(y) + 4, tick_text(y, step), {{"text-anchor", "end"}});
   svg.close_group();
-  svg.rect(left, top, pw, ph, {{"fill", "none"}, {"stroke", kFrame}});
-  svg.text(0.5 * (left + right), bottom + 33, axis_name(ax),
+  svg.rect(v.left, v.top, v.pw, v.ph, {{"fill", "none"}, {"stroke", kFrame}});
+  svg.text(0.5 * (v.left + v.right), v.bottom + 33, axis_name(ax),
            {{"fill", kText}, {"text-anchor", "middle"}});
-  const std::string ylabel_y = svg_number(0.5 * (top + bottom));
-  svg.text(16, 0.5 * (top + bottom), axis_name(bx),
+  const std::string ylabel_y = svg_number(0.5 * (v.top + v.bottom));
+  svg.text(16, 0.5 * (v.top + v.bottom), axis_name(bx),
            {{"fill", kText},
             {"text-anchor", "middle"},
             {"transform", "rotate(-90 16 " + ylabel_y + ")"}});
+}
 
-  // 3. The series: one polyline each (a casing under the error colours for coloured series; each
-  //    further coloured series narrower, so that one drawn over another leaves it visible).
+// Step 3: the series: one polyline each (a casing under the error colours for coloured series;
+// each further coloured series narrower, so that one drawn over another leaves it visible).
+void plan_series(Svg& svg, const std::vector<PlotSeries>& series, const PlanArea& v, int ax, int bx,
+                 double max_error) {
   int coloured_index = 0;
   for (const PlotSeries& s : series) {
     std::vector<std::pair<double, double>> pts;
     pts.reserve(s.positions_m.size());
-    for (const Vec3& p : s.positions_m) pts.emplace_back(X(p[ax]), Y(p[bx]));
+    for (const Vec3& p : s.positions_m) pts.emplace_back(v.X(p[ax]), v.Y(p[bx]));
     const bool c = has_errors(s);
     const double casing = std::max(3.0, 6.5 - 2.5 * coloured_index);
     if (c) ++coloured_index;
@@ -224,12 +242,28 @@ std::string trajectory_svg(const std::vector<PlotSeries>& series, const PlotOpti
       svg.circle(pts.front().first, pts.front().second, 4,
                  {{"fill", "#ffffff"}, {"stroke", hex_color(s.color)}, {"stroke-width", "1.5"}});
   }
+}
 
+}  // namespace
+
+std::string trajectory_svg(const std::vector<PlotSeries>& series, const PlotOptions& options) {
+  options.check();
+  const int ax = (options.up_axis + 1) % 3, bx = (options.up_axis + 2) % 3;
+  const PlanData data = plan_data(series, ax, bx);
+
+  // 1. Plot area and an equal-axis fit of the data (5% padding, at least 10 cm).
+  const PlanArea area = fit_plan_area(data, options);
+  Svg svg(options.width_px, options.height_px);
+  svg.rect(0, 0, options.width_px, options.height_px, {{"fill", "#ffffff"}});
+  // 2. Metre grid and axes.
+  plan_grid(svg, area, ax, bx);
+  // 3. The series: one polyline each, coloured by the error where there is one.
+  plan_series(svg, series, area, ax, bx, data.max_error);
   // 4. Legend and colour bar.
   std::vector<std::string> labels;
   for (const PlotSeries& s : series) labels.push_back(s.name);
-  legend(svg, series, left, 20, labels);
-  if (colored) color_bar(svg, right + 16, top + 14, bottom, max_error);
+  legend(svg, series, area.left, 20, labels);
+  if (data.colored) color_bar(svg, area.right + 16, area.top + 14, area.bottom, data.max_error);
   return svg.str();
 }
 

@@ -39,16 +39,21 @@ double percentile(std::vector<float>& v, double p) {
   return v[k];
 }
 
-}  // namespace
+// Where a point of the two horizontal axes falls in the view, in pixels (not rounded).
+cv::Point2d to_pixel(const TopView& view, double pa, double pb) {
+  return cv::Point2d((pa - view.origin_a) / view.pixel_m, (view.origin_b - pb) / view.pixel_m);
+}
 
-TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
-                        const TopViewOptions& options, const std::vector<TopViewPath>& paths) {
-  options.check();
-  int a = 0, b = 1;
-  horizontal_axes(options.up_axis, a, b);
-  const int up = options.up_axis;
+// The extent of a view on its two horizontal axes a and b, in metres.
+struct Extent {
+  double a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+};
 
-  // 1. Extent of the map on the two horizontal axes (stray points clipped).
+// Step 1: the extent of the map on the two horizontal axes (stray points clipped), widened so that
+// every object and every path is in view.
+Extent map_extent(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
+                  const std::vector<TopViewPath>& paths, const TopViewOptions& options, int a,
+                  int b) {
   std::vector<float> va, vb;
   va.reserve(cloud.size());
   vb.reserve(cloud.size());
@@ -73,28 +78,37 @@ TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject
     }
   if (a1 - a0 < 0.1) a1 = a0 + 0.1;
   if (b1 - b0 < 0.1) b1 = b0 + 0.1;
-  const double extent = std::max(a1 - a0, b1 - b0);
-  const double pixel_m = std::max(options.pixel_m, extent / options.max_size_px);
-  const int width = static_cast<int>(std::ceil((a1 - a0) / pixel_m)) + 2 * options.margin_px;
-  const int height = static_cast<int>(std::ceil((b1 - b0) / pixel_m)) + 2 * options.margin_px;
+  return {a0, a1, b0, b1};
+}
 
+// A white view of the extent with its margins: the pixel size grows when the extent would
+// exceed max_size_px.
+TopView blank_view(const Extent& e, const TopViewOptions& options) {
+  const double extent = std::max(e.a1 - e.a0, e.b1 - e.b0);
+  const double pixel_m = std::max(options.pixel_m, extent / options.max_size_px);
+  const int width = static_cast<int>(std::ceil((e.a1 - e.a0) / pixel_m)) + 2 * options.margin_px;
+  const int height = static_cast<int>(std::ceil((e.b1 - e.b0) / pixel_m)) + 2 * options.margin_px;
   TopView view;
   view.pixel_m = pixel_m;
-  view.origin_a = a0 - options.margin_px * pixel_m;
-  view.origin_b = b1 + options.margin_px * pixel_m;  // image rows go toward -b (b up in the image)
+  view.origin_a = e.a0 - options.margin_px * pixel_m;
+  view.origin_b =
+      e.b1 + options.margin_px * pixel_m;  // image rows go toward -b (b up in the image)
   view.image = cv::Mat(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-  auto to_pixel = [&](double pa, double pb) {
-    return cv::Point2d((pa - view.origin_a) / pixel_m, (view.origin_b - pb) / pixel_m);
-  };
+  return view;
+}
 
-  // 2. Z-buffer: the highest point of each pixel; each point a square of point_size_m.
+// Step 2: z-buffer: the highest point of each pixel; each point a square of point_size_m. Then
+// faded towards white, so that boxes, labels and paths stand out.
+void draw_points(TopView& view, const PointCloud& cloud, const TopViewOptions& options, int a,
+                 int b, int up) {
+  const int width = view.image.cols, height = view.image.rows;
   cv::Mat top(height, width, CV_32F, cv::Scalar(-std::numeric_limits<float>::infinity()));
   const bool colors = cloud.has_colors();
   const int half =
-      std::clamp(static_cast<int>(std::lround(options.point_size_m / pixel_m / 2)), 0, 8);
+      std::clamp(static_cast<int>(std::lround(options.point_size_m / view.pixel_m / 2)), 0, 8);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const auto& p = cloud.points[i];
-    const cv::Point2d px = to_pixel(p[a], p[b]);
+    const cv::Point2d px = to_pixel(view, p[a], p[b]);
     const int u = static_cast<int>(px.x), v = static_cast<int>(px.y);
     if (u + half < 0 || v + half < 0 || u - half >= width || v - half >= height) continue;
     const Rgb c = colors ? cloud.colors[i] : Rgb{90, 90, 90};
@@ -106,96 +120,127 @@ TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject
         view.image.at<cv::Vec3b>(vv, uu) = cv::Vec3b(c.b, c.g, c.r);
       }
   }
-  // Faded towards white, so that boxes, labels and paths stand out.
   if (options.fade > 0)
     view.image.convertTo(view.image, CV_8UC3, 1.0 - options.fade, 255.0 * options.fade);
+}
 
-  // 3. Paths (the camera), under the objects.
-  for (const TopViewPath& path : paths) draw_path(view, path.points_in_world, path.color, up);
+// Step 4: the outline of each oriented box seen from above; returns the centres in pixels.
+std::vector<cv::Point> draw_object_boxes(TopView& view, const std::vector<TopViewObject>& objects,
+                                         int a, int b) {
+  std::vector<cv::Point> centers;
+  for (const auto& o : objects) {
+    std::vector<cv::Point2f> corners;
+    for (int i = 0; i < 8; ++i) {
+      const Vec3 local((i & 1 ? 1 : -1) * o.obb.half_extent.x(),
+                       (i & 2 ? 1 : -1) * o.obb.half_extent.y(),
+                       (i & 4 ? 1 : -1) * o.obb.half_extent.z());
+      const Vec3 w = o.obb.center + o.obb.rotation * local;
+      corners.push_back(to_pixel(view, w[a], w[b]));
+    }
+    std::vector<cv::Point2f> hull;
+    cv::convexHull(corners, hull);
+    std::vector<cv::Point> poly(hull.begin(), hull.end());
+    const cv::Scalar color(o.color.b, o.color.g, o.color.r);
+    cv::polylines(view.image, poly, true, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
+    cv::polylines(view.image, poly, true, color, 2, cv::LINE_AA);
+    const cv::Point2d c = to_pixel(view, o.obb.center[a], o.obb.center[b]);
+    centers.emplace_back(static_cast<int>(std::lround(c.x)), static_cast<int>(std::lround(c.y)));
+  }
+  return centers;
+}
 
-  // 4. Objects: the outline of each oriented box seen from above, a dot at its centre.
-  if (options.draw_objects) {
-    std::vector<cv::Point> centers;
-    for (const auto& o : objects) {
-      std::vector<cv::Point2f> corners;
-      for (int i = 0; i < 8; ++i) {
-        const Vec3 local((i & 1 ? 1 : -1) * o.obb.half_extent.x(),
-                         (i & 2 ? 1 : -1) * o.obb.half_extent.y(),
-                         (i & 4 ? 1 : -1) * o.obb.half_extent.z());
-        const Vec3 w = o.obb.center + o.obb.rotation * local;
-        corners.push_back(to_pixel(w[a], w[b]));
-      }
-      std::vector<cv::Point2f> hull;
-      cv::convexHull(corners, hull);
-      std::vector<cv::Point> poly(hull.begin(), hull.end());
-      const cv::Scalar color(o.color.b, o.color.g, o.color.r);
-      cv::polylines(view.image, poly, true, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
-      cv::polylines(view.image, poly, true, color, 2, cv::LINE_AA);
-      const cv::Point2d c = to_pixel(o.obb.center[a], o.obb.center[b]);
-      centers.emplace_back(static_cast<int>(std::lround(c.x)), static_cast<int>(std::lround(c.y)));
-    }
-    // 5. Labels: each at the first free place on rings around its centre (none hides another),
-    //    with a leader line when moved away; a white box with a border in the class colour.
-    for (std::size_t k = 0; k < objects.size(); ++k) {
-      cv::circle(view.image, centers[k], 4, cv::Scalar(0, 0, 0), -1, cv::LINE_AA);
-      cv::circle(view.image, centers[k], 2,
-                 cv::Scalar(objects[k].color.b, objects[k].color.g, objects[k].color.r), -1,
-                 cv::LINE_AA);
-    }
-    std::vector<cv::Rect> placed;
-    const double font_scale = options.label_scale;
-    for (std::size_t k = 0; k < objects.size(); ++k) {
-      const auto& o = objects[k];
-      const cv::Point c = centers[k];
-      const cv::Scalar color(o.color.b, o.color.g, o.color.r);
-      int baseline = 0;
-      const cv::Size text =
-          cv::getTextSize(o.label, cv::FONT_HERSHEY_SIMPLEX, font_scale, 1, &baseline);
-      const cv::Size box(text.width + 8, text.height + baseline + 6);
-      cv::Rect chosen;
-      bool found = false;
-      for (int ring = 0; ring <= 8 && !found; ++ring) {
-        const int r = ring * (box.height + 2);
-        const int steps = ring == 0 ? 1 : 12;
-        for (int s = 0; s < steps && !found; ++s) {
-          const double angle = -M_PI / 4 + 2 * M_PI * s / steps;
-          const cv::Point p(
-              c.x + 7 + static_cast<int>(std::lround(r * std::cos(angle))),
-              c.y - box.height / 2 + static_cast<int>(std::lround(r * std::sin(angle))));
-          const bool left = std::cos(angle) < -0.3;
-          const cv::Rect rect(left ? p.x - 14 - box.width : p.x, p.y, box.width, box.height);
-          if (rect.x < 0 || rect.y < 0 || rect.x + rect.width > width ||
-              rect.y + rect.height > height)
-            continue;
-          bool free = true;
-          for (const cv::Rect& q : placed)
-            if ((rect & cv::Rect(q.x - 2, q.y - 2, q.width + 4, q.height + 4)).area() > 0)
-              free = false;
-          if (!free) continue;
-          chosen = rect;
-          found = true;
-        }
-      }
-      if (!found) chosen = cv::Rect(c.x + 7, c.y - box.height / 2, box.width, box.height);
-      placed.push_back(chosen);
-      const cv::Point near(std::clamp(c.x, chosen.x, chosen.x + chosen.width),
-                           std::clamp(c.y, chosen.y, chosen.y + chosen.height));
-      if (cv::norm(near - c) > 9)
-        cv::line(view.image, c, near, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
-      cv::rectangle(view.image, chosen, cv::Scalar(255, 255, 255), cv::FILLED);
-      cv::rectangle(view.image, chosen, color, 2);
-      cv::putText(view.image, o.label, cv::Point(chosen.x + 4, chosen.y + 3 + text.height),
-                  cv::FONT_HERSHEY_SIMPLEX, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+// A label box's place: the first free place on rings around the centre c that lies inside the
+// image and keeps 2 px from every placed box; right of c when there is none.
+cv::Rect place_label(const cv::Point& c, const cv::Size& box, const std::vector<cv::Rect>& placed,
+                     int width, int height) {
+  for (int ring = 0; ring <= 8; ++ring) {
+    const int r = ring * (box.height + 2);
+    const int steps = ring == 0 ? 1 : 12;
+    for (int s = 0; s < steps; ++s) {
+      const double angle = -M_PI / 4 + 2 * M_PI * s / steps;
+      const cv::Point p(c.x + 7 + static_cast<int>(std::lround(r * std::cos(angle))),
+                        c.y - box.height / 2 + static_cast<int>(std::lround(r * std::sin(angle))));
+      const bool left = std::cos(angle) < -0.3;
+      const cv::Rect rect(left ? p.x - 14 - box.width : p.x, p.y, box.width, box.height);
+      if (rect.x < 0 || rect.y < 0 || rect.x + rect.width > width || rect.y + rect.height > height)
+        continue;
+      bool free = true;
+      for (const cv::Rect& q : placed)
+        if ((rect & cv::Rect(q.x - 2, q.y - 2, q.width + 4, q.height + 4)).area() > 0) free = false;
+      if (free) return rect;
     }
   }
-  // A 1 m scale bar in the bottom-left corner.
-  const int bar = static_cast<int>(1.0 / pixel_m);
-  const cv::Point s0(options.margin_px / 2 + 4, height - 8);
+  return cv::Rect(c.x + 7, c.y - box.height / 2, box.width, box.height);
+}
+
+// Step 5: a dot at each centre, then the labels: each at the first free place on rings around its
+// centre (none hides another), with a leader line when moved away; a white box with a border in
+// the class colour.
+void draw_labels(TopView& view, const std::vector<TopViewObject>& objects,
+                 const std::vector<cv::Point>& centers, const TopViewOptions& options) {
+  for (std::size_t k = 0; k < objects.size(); ++k) {
+    cv::circle(view.image, centers[k], 4, cv::Scalar(0, 0, 0), -1, cv::LINE_AA);
+    cv::circle(view.image, centers[k], 2,
+               cv::Scalar(objects[k].color.b, objects[k].color.g, objects[k].color.r), -1,
+               cv::LINE_AA);
+  }
+  std::vector<cv::Rect> placed;
+  const double font_scale = options.label_scale;
+  for (std::size_t k = 0; k < objects.size(); ++k) {
+    const auto& o = objects[k];
+    const cv::Point c = centers[k];
+    const cv::Scalar color(o.color.b, o.color.g, o.color.r);
+    int baseline = 0;
+    const cv::Size text =
+        cv::getTextSize(o.label, cv::FONT_HERSHEY_SIMPLEX, font_scale, 1, &baseline);
+    const cv::Size box(text.width + 8, text.height + baseline + 6);
+    const cv::Rect chosen = place_label(c, box, placed, view.image.cols, view.image.rows);
+    placed.push_back(chosen);
+    const cv::Point near(std::clamp(c.x, chosen.x, chosen.x + chosen.width),
+                         std::clamp(c.y, chosen.y, chosen.y + chosen.height));
+    if (cv::norm(near - c) > 9)
+      cv::line(view.image, c, near, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+    cv::rectangle(view.image, chosen, cv::Scalar(255, 255, 255), cv::FILLED);
+    cv::rectangle(view.image, chosen, color, 2);
+    cv::putText(view.image, o.label, cv::Point(chosen.x + 4, chosen.y + 3 + text.height),
+                cv::FONT_HERSHEY_SIMPLEX, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+}
+
+// Step 6: a 1 m scale bar in the bottom-left corner.
+void draw_scale_bar(TopView& view, const TopViewOptions& options) {
+  const int bar = static_cast<int>(1.0 / view.pixel_m);
+  const cv::Point s0(options.margin_px / 2 + 4, view.image.rows - 8);
   cv::rectangle(view.image, cv::Rect(s0.x - 4, s0.y - 22, bar + 8, 28), cv::Scalar(255, 255, 255),
                 cv::FILLED);
   cv::line(view.image, s0, s0 + cv::Point(bar, 0), cv::Scalar(0, 0, 0), 2);
   cv::putText(view.image, "1 m", s0 + cv::Point(4, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
+                        const TopViewOptions& options, const std::vector<TopViewPath>& paths) {
+  options.check();
+  int a = 0, b = 1;
+  horizontal_axes(options.up_axis, a, b);
+  const int up = options.up_axis;
+
+  // 1. Extent of the map on the two horizontal axes (stray points clipped), objects and paths in.
+  TopView view = blank_view(map_extent(cloud, objects, paths, options, a, b), options);
+  // 2. Z-buffer: the highest point of each pixel, faded towards white.
+  draw_points(view, cloud, options, a, b, up);
+  // 3. Paths (the camera), under the objects.
+  for (const TopViewPath& path : paths) draw_path(view, path.points_in_world, path.color, up);
+  if (options.draw_objects) {
+    // 4. Objects: the outline of each oriented box seen from above.
+    const std::vector<cv::Point> centers = draw_object_boxes(view, objects, a, b);
+    // 5. Labels: a dot at each centre, each label at the first free place around it.
+    draw_labels(view, objects, centers, options);
+  }
+  // 6. A 1 m scale bar in the bottom-left corner.
+  draw_scale_bar(view, options);
   return view;
 }
 
