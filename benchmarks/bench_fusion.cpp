@@ -4,7 +4,6 @@
 //   build-*/bin/bench_fusion --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
 #include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -18,7 +17,6 @@
 #include <vector>
 
 #include "objmap/filters/outlier.h"
-#include "objmap/filters/voxel.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/fusion/voxel_map.h"
@@ -180,7 +178,7 @@ BENCHMARK(BM_BackprojectFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Dense voxel map: one back-projected frame inserted into a map that already holds it (steady
-// state of a slowly moving camera), 1 and 2 threads.
+// state of a slowly moving camera).
 
 void BM_VoxelMapInsertFrame(benchmark::State& state) {
   const Frame& f = test_frame();
@@ -194,7 +192,7 @@ void BM_VoxelMapInsertFrame(benchmark::State& state) {
   state.counters["Mpts/s"] = benchmark::Counter(
       static_cast<double>(cloud.size()) * state.iterations() / 1e6, benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The first n real frames, decoded (empty without the data).
 std::vector<Frame> decoded_real_frames(std::size_t n) {
@@ -223,7 +221,7 @@ void BM_DenseMapRealFrames(benchmark::State& state) {
   state.counters["voxels"] = static_cast<double>(map.size());
   state.counters["MB"] = static_cast<double>(map.memory_bytes()) / 1e6;
 }
-BENCHMARK(BM_DenseMapRealFrames)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DenseMapRealFrames)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The same frames as fuse sums them (fusion/frame_voxels.h: back-projection and voxel sums in one
 // pass over the depth image, no point cloud, no per-frame hash table), added to a 16-shard map.
@@ -275,29 +273,6 @@ void BM_OutlierPclSor100k(benchmark::State& state) {
   state.counters["kept"] = static_cast<double>(kept);
 }
 BENCHMARK(BM_OutlierPclSor100k)->Unit(benchmark::kMillisecond);
-
-void BM_VoxelFilterObjmap100k(benchmark::State& state) {
-  const PointCloud c = surface_cloud(100000);
-  std::size_t kept = 0;
-  for (auto _ : state) kept = filters::voxel_filter(c, {0.01}).kept.size();
-  state.counters["kept"] = static_cast<double>(kept);
-}
-BENCHMARK(BM_VoxelFilterObjmap100k)->Unit(benchmark::kMillisecond);
-
-void BM_VoxelFilterPclVoxelGrid100k(benchmark::State& state) {
-  const auto c = to_pcl(surface_cloud(100000));
-  std::size_t kept = 0;
-  for (auto _ : state) {
-    pcl::VoxelGrid<pcl::PointXYZ> grid;
-    grid.setInputCloud(c);
-    grid.setLeafSize(0.01f, 0.01f, 0.01f);
-    pcl::PointCloud<pcl::PointXYZ> out;
-    grid.filter(out);
-    kept = out.size();
-  }
-  state.counters["kept"] = static_cast<double>(kept);
-}
-BENCHMARK(BM_VoxelFilterPclVoxelGrid100k)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Segmentation: masks from boxes, and reading a long box sequence.
@@ -394,13 +369,13 @@ void BM_ObjectMapAdd(benchmark::State& state) {
     o.track_id = 100 + k;
     for (const Vec3f& p : points.points)
       o.points_in_world.push_back(p + Vec3f(0.3f * (k + 1), 0, 0));
-    map.add(o);
+    map.add_frame({o});
   }
   fusion::Observation o;
   o.class_name = "cup";
   o.track_id = 1;
   o.points_in_world = points;
-  for (auto _ : state) benchmark::DoNotOptimize(map.add(o).object_id);
+  for (auto _ : state) benchmark::DoNotOptimize(map.add_frame({o}).front().object_id);
   state.counters["points"] = static_cast<double>(points.size());
 }
 BENCHMARK(BM_ObjectMapAdd)->Unit(benchmark::kMillisecond);
