@@ -1,11 +1,8 @@
-// Hot paths of `objmap fuse` on 640×480 frames, with PCL's filters on the same data for comparison.
+// Hot paths of `objmap fuse` on 640×480 frames.
 // Real frames come from $OBJMAP_DATA (default <repo>/../shared/data)/tum/fr1_rpy_every4; without
 // them the frame benchmarks use a synthetic depth image (a tilted plane with a box).
 //   build-*/bin/bench_fusion --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
-#include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -25,6 +22,7 @@
 #include "objmap/io/tum_dataset.h"
 #include "objmap/segmentation/box_mask.h"
 #include "objmap/segmentation/read.h"
+#include "surface_cloud.h"
 
 namespace fs = std::filesystem;
 using namespace objmap;
@@ -87,35 +85,6 @@ const Frame& test_frame() {
 const geometry::RayTable& rays() {
   static const geometry::RayTable table = geometry::make_ray_table(camera_preset("fr1"));
   return table;
-}
-
-// A surface-like cloud of n points (noisy sphere patches) with 0.5% scattered outliers.
-PointCloud surface_cloud(std::size_t n) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> uni(0.f, 1.f);
-  std::normal_distribution<float> noise(0.f, 0.002f);
-  PointCloud c;
-  c.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i % 200 == 199) {
-      c.push_back(Vec3f(uni(rng) * 3, uni(rng) * 3, uni(rng) * 3), Rgb{1, 2, 3});
-      continue;
-    }
-    const float th = uni(rng) * 3.14159f, ph = uni(rng) * 6.28318f;
-    c.push_back(Vec3f(1.5f + 0.5f * std::sin(th) * std::cos(ph) + noise(rng),
-                      1.5f + 0.5f * std::sin(th) * std::sin(ph) + noise(rng),
-                      1.5f + 0.5f * std::cos(th) + noise(rng)),
-                Rgb{static_cast<std::uint8_t>(i), 100, 200});
-  }
-  return c;
-}
-
-pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const PointCloud& c) {
-  auto out = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  out->resize(c.size());
-  for (std::size_t i = 0; i < c.size(); ++i)
-    (*out)[i] = pcl::PointXYZ(c.points[i].x(), c.points[i].y(), c.points[i].z());
-  return out;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -246,10 +215,11 @@ void BM_FrameVoxelsRealFrames(benchmark::State& state) {
 BENCHMARK(BM_FrameVoxelsRealFrames)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // ---------------------------------------------------------------------------------------------
-// Filters on 100k points: objmap's (PCL kd-tree, own statistics) against PCL's classes.
+// The outlier filter on 100k points (PCL's StatisticalOutlierRemoval on the same cloud:
+// compare_pcl_sor.cpp).
 
 void BM_OutlierObjmap100k(benchmark::State& state) {
-  const PointCloud c = surface_cloud(100000);
+  const PointCloud c = bench::surface_cloud(100000);
   filters::OutlierOptions options;
   options.threads = static_cast<int>(state.range(0));
   std::size_t kept = 0;
@@ -257,22 +227,6 @@ void BM_OutlierObjmap100k(benchmark::State& state) {
   state.counters["kept"] = static_cast<double>(kept);
 }
 BENCHMARK(BM_OutlierObjmap100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
-
-void BM_OutlierPclSor100k(benchmark::State& state) {
-  const auto c = to_pcl(surface_cloud(100000));
-  std::size_t kept = 0;
-  for (auto _ : state) {
-    pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
-    sor.setInputCloud(c);
-    sor.setMeanK(20);
-    sor.setStddevMulThresh(1.0);
-    pcl::PointCloud<pcl::PointXYZ> out;
-    sor.filter(out);
-    kept = out.size();
-  }
-  state.counters["kept"] = static_cast<double>(kept);
-}
-BENCHMARK(BM_OutlierPclSor100k)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Segmentation: masks from boxes, and reading a long box sequence.
