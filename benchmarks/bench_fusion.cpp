@@ -1,12 +1,8 @@
-// Hot paths of `objmap fuse` on 640×480 frames, with PCL's filters on the same data for comparison.
+// Hot paths of `objmap fuse` on 640×480 frames.
 // Real frames come from $OBJMAP_DATA (default <repo>/../shared/data)/tum/fr1_rpy_every4; without
 // them the frame benchmarks use a synthetic depth image (a tilted plane with a box).
 //   build-*/bin/bench_fusion --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
-#include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/filters/voxel_grid.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -18,7 +14,6 @@
 #include <vector>
 
 #include "objmap/filters/outlier.h"
-#include "objmap/filters/voxel.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/fusion/voxel_map.h"
@@ -29,6 +24,7 @@
 #include "objmap/segmentation/depth_gate.h"
 #include "objmap/segmentation/mask_refine.h"
 #include "objmap/segmentation/read.h"
+#include "surface_cloud.h"
 
 namespace fs = std::filesystem;
 using namespace objmap;
@@ -93,35 +89,6 @@ const geometry::RayTable& rays() {
   return table;
 }
 
-// A surface-like cloud of n points (noisy sphere patches) with 0.5% scattered outliers.
-PointCloud surface_cloud(std::size_t n) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> uni(0.f, 1.f);
-  std::normal_distribution<float> noise(0.f, 0.002f);
-  PointCloud c;
-  c.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i % 200 == 199) {
-      c.push_back(Vec3f(uni(rng) * 3, uni(rng) * 3, uni(rng) * 3), Rgb{1, 2, 3});
-      continue;
-    }
-    const float th = uni(rng) * 3.14159f, ph = uni(rng) * 6.28318f;
-    c.push_back(Vec3f(1.5f + 0.5f * std::sin(th) * std::cos(ph) + noise(rng),
-                      1.5f + 0.5f * std::sin(th) * std::sin(ph) + noise(rng),
-                      1.5f + 0.5f * std::cos(th) + noise(rng)),
-                Rgb{static_cast<std::uint8_t>(i), 100, 200});
-  }
-  return c;
-}
-
-pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const PointCloud& c) {
-  auto out = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  out->resize(c.size());
-  for (std::size_t i = 0; i < c.size(); ++i)
-    (*out)[i] = pcl::PointXYZ(c.points[i].x(), c.points[i].y(), c.points[i].z());
-  return out;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Reference: decoding one frame's PNGs (what `fuse` must read anyway).
 
@@ -182,7 +149,7 @@ BENCHMARK(BM_BackprojectFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Dense voxel map: one back-projected frame inserted into a map that already holds it (steady
-// state of a slowly moving camera), 1 and 2 threads.
+// state of a slowly moving camera).
 
 void BM_VoxelMapInsertFrame(benchmark::State& state) {
   const Frame& f = test_frame();
@@ -196,7 +163,7 @@ void BM_VoxelMapInsertFrame(benchmark::State& state) {
   state.counters["Mpts/s"] = benchmark::Counter(
       static_cast<double>(cloud.size()) * state.iterations() / 1e6, benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_VoxelMapInsertFrame)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The first n real frames, decoded (empty without the data).
 std::vector<Frame> decoded_real_frames(std::size_t n) {
@@ -225,7 +192,7 @@ void BM_DenseMapRealFrames(benchmark::State& state) {
   state.counters["voxels"] = static_cast<double>(map.size());
   state.counters["MB"] = static_cast<double>(map.memory_bytes()) / 1e6;
 }
-BENCHMARK(BM_DenseMapRealFrames)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DenseMapRealFrames)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The same frames as fuse sums them (fusion/frame_voxels.h: back-projection and voxel sums in one
 // pass over the depth image, no point cloud, no per-frame hash table), added to a 16-shard map.
@@ -250,10 +217,11 @@ void BM_FrameVoxelsRealFrames(benchmark::State& state) {
 BENCHMARK(BM_FrameVoxelsRealFrames)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // ---------------------------------------------------------------------------------------------
-// Filters on 100k points: objmap's (PCL kd-tree, own statistics) against PCL's classes.
+// The outlier filter on 100k points (PCL's StatisticalOutlierRemoval on the same cloud:
+// compare_pcl_sor.cpp).
 
 void BM_OutlierObjmap100k(benchmark::State& state) {
-  const PointCloud c = surface_cloud(100000);
+  const PointCloud c = bench::surface_cloud(100000);
   filters::OutlierOptions options;
   options.threads = static_cast<int>(state.range(0));
   std::size_t kept = 0;
@@ -261,45 +229,6 @@ void BM_OutlierObjmap100k(benchmark::State& state) {
   state.counters["kept"] = static_cast<double>(kept);
 }
 BENCHMARK(BM_OutlierObjmap100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
-
-void BM_OutlierPclSor100k(benchmark::State& state) {
-  const auto c = to_pcl(surface_cloud(100000));
-  std::size_t kept = 0;
-  for (auto _ : state) {
-    pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
-    sor.setInputCloud(c);
-    sor.setMeanK(20);
-    sor.setStddevMulThresh(1.0);
-    pcl::PointCloud<pcl::PointXYZ> out;
-    sor.filter(out);
-    kept = out.size();
-  }
-  state.counters["kept"] = static_cast<double>(kept);
-}
-BENCHMARK(BM_OutlierPclSor100k)->Unit(benchmark::kMillisecond);
-
-void BM_VoxelFilterObjmap100k(benchmark::State& state) {
-  const PointCloud c = surface_cloud(100000);
-  std::size_t kept = 0;
-  for (auto _ : state) kept = filters::voxel_filter(c, {0.01}).kept.size();
-  state.counters["kept"] = static_cast<double>(kept);
-}
-BENCHMARK(BM_VoxelFilterObjmap100k)->Unit(benchmark::kMillisecond);
-
-void BM_VoxelFilterPclVoxelGrid100k(benchmark::State& state) {
-  const auto c = to_pcl(surface_cloud(100000));
-  std::size_t kept = 0;
-  for (auto _ : state) {
-    pcl::VoxelGrid<pcl::PointXYZ> grid;
-    grid.setInputCloud(c);
-    grid.setLeafSize(0.01f, 0.01f, 0.01f);
-    pcl::PointCloud<pcl::PointXYZ> out;
-    grid.filter(out);
-    kept = out.size();
-  }
-  state.counters["kept"] = static_cast<double>(kept);
-}
-BENCHMARK(BM_VoxelFilterPclVoxelGrid100k)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Segmentation: masks from boxes, and reading a long box sequence.
@@ -451,13 +380,13 @@ void BM_ObjectMapAdd(benchmark::State& state) {
     o.track_id = 100 + k;
     for (const Vec3f& p : points.points)
       o.points_in_world.push_back(p + Vec3f(0.3f * (k + 1), 0, 0));
-    map.add(o);
+    map.add_frame({o});
   }
   fusion::Observation o;
   o.class_name = "cup";
   o.track_id = 1;
   o.points_in_world = points;
-  for (auto _ : state) benchmark::DoNotOptimize(map.add(o).object_id);
+  for (auto _ : state) benchmark::DoNotOptimize(map.add_frame({o}).front().object_id);
   state.counters["points"] = static_cast<double>(points.size());
 }
 BENCHMARK(BM_ObjectMapAdd)->Unit(benchmark::kMillisecond);

@@ -18,12 +18,12 @@
 #include "objmap/io/atomic.h"
 #include "objmap/io/objects_json.h"
 #include "objmap/io/ply.h"
+#include "objmap/io/png_encode.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/report/page.h"
 #include "objmap/report/plots.h"
 #include "objmap/report/thumbnail.h"
 #include "objmap/report/topview.h"
-#include "objmap/sim/png.h"
 
 namespace objmap::app {
 namespace {
@@ -62,7 +62,7 @@ json read_json(const fs::path& file) {
 // The pictures are CV_8UC3; objmap's PNG encoder (also that of `objmap synth`) writes them.
 std::string png_bytes(const cv::Mat& image) {
   std::vector<std::uint8_t> png;
-  sim::encode_png(image, &png);
+  io::encode_png(image, &png);
   return std::string(png.begin(), png.end());
 }
 

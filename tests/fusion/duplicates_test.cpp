@@ -7,6 +7,11 @@
 namespace objmap::fusion {
 namespace {
 
+// One observation as a keyframe of its own: what the removed ObjectMap::add(observation) did.
+AddResult add_one(ObjectMap& map, const Observation& observation) {
+  return map.add_frame({observation}).front();
+}
+
 // Surface points of an axis-aligned box at 1 cm steps: `half` cells to each side of `center`
 // along each axis (distinct halves give distinct PCA axes, so the record's OBB is the box).
 PointCloud brick(const Vec3& center, const Eigen::Vector3i& half) {
@@ -96,8 +101,8 @@ TEST(Duplicates, PartlyOverlappingObjectsBelowTheMergeContainmentAreReported) {
   options.match_threshold = 0.95;
   ObjectMap map(options);
   const Vec3 shift(0.15, 0.0, 0.0);
-  for (int f = 0; f < 4; ++f) map.add(seen(f, 7, "book", brick(kCentre, kHalf)));
-  for (int f = 4; f < 8; ++f) map.add(seen(f, 7, "book", brick(kCentre + shift, kHalf)));
+  for (int f = 0; f < 4; ++f) add_one(map, seen(f, 7, "book", brick(kCentre, kHalf)));
+  for (int f = 4; f < 8; ++f) add_one(map, seen(f, 7, "book", brick(kCentre + shift, kHalf)));
   const auto records = records_of(map);
   ASSERT_EQ(records.size(), 2u);
   const DuplicateReport report = find_duplicates(records, map);
@@ -127,8 +132,8 @@ TwoObjects two_objects(const std::string& class_a, const PointCloud& a, const st
                        const PointCloud& b) {
   TwoObjects t;
   for (int f = 0; f < 4; ++f) {
-    t.map.add(seen(f, 1, class_a, a));
-    t.map.add(seen(f, 2, class_b, b));
+    add_one(t.map, seen(f, 1, class_a, a));
+    add_one(t.map, seen(f, 2, class_b, b));
   }
   t.records = records_of(t.map);
   return t;
@@ -174,10 +179,10 @@ TEST(Duplicates, VerdictAgreesWithTheMergePass) {
   // whole): the pass joins them; its verdict before the pass says so, with the same scores.
   ObjectMap map;
   const PointCloud whole = brick(kCentre, kHalf);
-  for (int f = 0; f < 3; ++f) map.add(seen(f, 1, "tv", keep_if(whole, kCentre.x() + 0.051)));
-  for (int f = 3; f < 6; ++f) map.add(seen(f, 2, "tv", keep_if(whole, -1.0)));
+  for (int f = 0; f < 3; ++f) add_one(map, seen(f, 1, "tv", keep_if(whole, kCentre.x() + 0.051)));
+  for (int f = 3; f < 6; ++f) add_one(map, seen(f, 2, "tv", keep_if(whole, -1.0)));
   // A second tv far away, seen later: never joined, for its score.
-  for (int f = 6; f < 9; ++f) map.add(seen(f, 3, "tv", brick(kCentre + Vec3(2, 0, 0), kHalf)));
+  for (int f = 6; f < 9; ++f) add_one(map, seen(f, 3, "tv", brick(kCentre + Vec3(2, 0, 0), kHalf)));
   ASSERT_EQ(map.size(), 3u);
   const MergeVerdict before = map.merge_verdict(1, 0);  // either order: the pass's (0, 1)
   EXPECT_EQ(before.a, 0);
@@ -209,8 +214,9 @@ TEST(Duplicates, VerdictAndMergePassAgreeOnAClutteredMap) {
   const PointCloud whole = brick(kCentre, kHalf);
   for (int f = 0; f < 12; ++f) {
     const Vec3 step(0.04 * (f % 4), 0.0, 0.0);
-    map.add(seen(f, 1 + f / 3, "chair", keep_if(brick(kCentre + step, kHalf), kCentre.x() + 0.02)));
-    map.add(seen(f, 9, f % 2 ? "chair" : "book", brick(kCentre + Vec3(0.0, 0.3, 0.0), kHalf)));
+    add_one(map,
+            seen(f, 1 + f / 3, "chair", keep_if(brick(kCentre + step, kHalf), kCentre.x() + 0.02)));
+    add_one(map, seen(f, 9, f % 2 ? "chair" : "book", brick(kCentre + Vec3(0.0, 0.3, 0.0), kHalf)));
   }
   RecordOptions all;
   all.confirmed_only = false;

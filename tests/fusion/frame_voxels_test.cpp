@@ -82,7 +82,7 @@ struct Case {
 TEST(FrameVoxels, SameMapAsBackprojectAndInsert) {
   const Camera camera = camera_preset("fr1");
   const geometry::RayTable rays = geometry::make_ray_table(camera);
-  segmentation::Mask mask;
+  Mask mask;
   mask.width = 640;
   mask.height = 480;
   mask.data.assign(640 * 480, 0);

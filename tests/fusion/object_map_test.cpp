@@ -11,6 +11,11 @@
 namespace objmap::fusion {
 namespace {
 
+// One observation as a keyframe of its own: what the removed ObjectMap::add(observation) did.
+AddResult add_one(ObjectMap& map, const Observation& observation) {
+  return map.add_frame({observation}).front();
+}
+
 // Surface points of an axis-aligned box at 1 cm voxel centres: `center` must be a voxel centre
 // (x.xx5) and `half_cells` the half size in voxels, so the box is symmetric about `center`.
 // `faces`: bit 0 = -x, 1 = +x, 2 = -y, 3 = +y, 4 = -z, 5 = +z.
@@ -50,14 +55,14 @@ RecordOptions no_outlier_filter() {
 // over, also with track 1 (P = 0.3 + 0.2 · 0.95 + 0.5 = 0.99), then the box itself (P = 1).
 TEST(ObjectMap, AddFrameFusesTheBestMatchOfAKeyframeFirst) {
   const Vec3 a(0.505, 0.205, 1.005);
-  const auto first_frame = [&](ObjectMap& map) { map.add(obs(0, 1, "book", 0.9, box(a, 5))); };
+  const auto first_frame = [&](ObjectMap& map) { add_one(map, obs(0, 1, "book", 0.9, box(a, 5))); };
   const std::vector<Observation> frame{obs(1, 1, "book", 0.9, box(a + Vec3(0.01, 0, 0), 5)),
                                        obs(1, 1, "book", 0.9, box(a, 5))};
 
   ObjectMap in_order;
   first_frame(in_order);
-  const AddResult r0 = in_order.add(frame[0]);
-  const AddResult r1 = in_order.add(frame[1]);
+  const AddResult r0 = add_one(in_order, frame[0]);
+  const AddResult r1 = add_one(in_order, frame[1]);
   EXPECT_EQ(r0.object_id, 0);  // the offset box takes the object: listed first
   EXPECT_NEAR(r0.score_p, 0.99, 1e-9);
   EXPECT_TRUE(r1.created);  // and the box itself starts a second one
@@ -77,7 +82,7 @@ TEST(ObjectMap, AddFrameFusesTheBestMatchOfAKeyframeFirst) {
   ObjectMap single_a, single_b;
   first_frame(single_a);
   first_frame(single_b);
-  const AddResult x = single_a.add(frame[0]);
+  const AddResult x = add_one(single_a, frame[0]);
   const std::vector<AddResult> y = single_b.add_frame({frame[0]});
   ASSERT_EQ(y.size(), 1u);
   EXPECT_EQ(x.object_id, y[0].object_id);
@@ -91,8 +96,8 @@ TEST(ObjectMap, TwoSeparateBoxesGiveTwoConfirmedObjectsWithExactCentroids) {
   ObjectMap map;
   const Vec3 a(0.505, 0.205, 1.005), b(1.505, -0.195, 1.205);
   for (int f = 0; f < 5; ++f) {
-    map.add(obs(f, 1, "cup", 0.9, box(a, 5)));
-    map.add(obs(f, 2, "book", 0.8, box(b, 8)));
+    add_one(map, obs(f, 1, "cup", 0.9, box(a, 5)));
+    add_one(map, obs(f, 2, "book", 0.8, box(b, 8)));
   }
   map.merge_pass();
   for (const RecordOptions& options : {RecordOptions{}, no_outlier_filter()}) {
@@ -123,12 +128,13 @@ TEST(ObjectMap, TwoSeparateBoxesGiveTwoConfirmedObjectsWithExactCentroids) {
 TEST(ObjectMap, IdSwitchWithHighOverlapJoinsTheSameObject) {
   ObjectMap map;
   const Vec3 c(0.305, 0.105, 0.905);
-  for (int f = 0; f < 3; ++f) map.add(obs(f, 4, "chair", 0.7, box(c, 10)));
-  const AddResult switched = map.add(obs(3, 11, "chair", 0.7, box(c, 10)));  // new id, same object
+  for (int f = 0; f < 3; ++f) add_one(map, obs(f, 4, "chair", 0.7, box(c, 10)));
+  const AddResult switched =
+      add_one(map, obs(3, 11, "chair", 0.7, box(c, 10)));  // new id, same object
   EXPECT_FALSE(switched.created);
   EXPECT_EQ(switched.p_id, 0.0);
   EXPECT_GT(switched.overlap, 0.8);
-  map.add(obs(4, 11, "chair", 0.7, box(c, 10)));
+  add_one(map, obs(4, 11, "chair", 0.7, box(c, 10)));
   map.merge_pass();
   const auto records = map.records();
   ASSERT_EQ(records.size(), 1u);
@@ -141,11 +147,13 @@ TEST(ObjectMap, FinalMergePassRepairsAnIdSwitchTheOnlineStepMissed) {
   const Vec3 c(0.305, 0.105, 0.905);
   // Track 1 sees one half of a box, then the track switches to id 2, which sees the other half:
   // little overlap, so two objects at first.
-  for (int f = 0; f < 3; ++f) map.add(obs(f, 1, "tv", 0.8, box(c, 10, 1 | 4 | 16)));  // -x -y -z
-  for (int f = 3; f < 6; ++f) map.add(obs(f, 2, "tv", 0.6, box(c, 10, 2 | 8 | 32)));  // +x +y +z
+  for (int f = 0; f < 3; ++f)
+    add_one(map, obs(f, 1, "tv", 0.8, box(c, 10, 1 | 4 | 16)));  // -x -y -z
+  for (int f = 3; f < 6; ++f)
+    add_one(map, obs(f, 2, "tv", 0.6, box(c, 10, 2 | 8 | 32)));  // +x +y +z
   EXPECT_EQ(map.size(), 2u);
   // Later id 2 sees the whole box: its object now contains the first one.
-  map.add(obs(6, 2, "tv", 0.6, box(c, 10)));
+  add_one(map, obs(6, 2, "tv", 0.6, box(c, 10)));
   EXPECT_EQ(map.size(), 2u);
   const auto merges = map.merge_pass();
   ASSERT_EQ(merges.size(), 1u);
@@ -168,8 +176,8 @@ TEST(ObjectMap, TwoObjectsFiveCentimetresApartWithDifferentIdsStayTwo) {
   const Vec3 a(0.005, 0.005, 1.005),
       b(0.055, 0.005, 1.005);  // 3 cm boxes, 2 cm gap, no shared voxel
   for (int f = 0; f < 4; ++f) {
-    map.add(obs(f, 1, "cup", 0.9, box(a, 1)));
-    const AddResult r = map.add(obs(f, 2, "cup", 0.9, box(b, 1)));
+    add_one(map, obs(f, 1, "cup", 0.9, box(a, 1)));
+    const AddResult r = add_one(map, obs(f, 2, "cup", 0.9, box(b, 1)));
     if (f == 0) {
       EXPECT_TRUE(r.created);
     }
@@ -184,8 +192,8 @@ TEST(ObjectMap, TwoObjectsFiveCentimetresApartWithDifferentIdsStayTwo) {
 TEST(ObjectMap, ClassIsTheScoreWeightedVote) {
   ObjectMap map;
   const Vec3 c(0.105, 0.105, 0.705);
-  for (int f = 0; f < 3; ++f) map.add(obs(f, 3, "teddy bear", 0.9, box(c, 6)));
-  for (int f = 3; f < 5; ++f) map.add(obs(f, 3, "person", 0.5, box(c, 6)));
+  for (int f = 0; f < 3; ++f) add_one(map, obs(f, 3, "teddy bear", 0.9, box(c, 6)));
+  for (int f = 3; f < 5; ++f) add_one(map, obs(f, 3, "person", 0.5, box(c, 6)));
   const auto records = map.records();
   ASSERT_EQ(records.size(), 1u);
   EXPECT_EQ(records[0].class_name, "teddy bear");
@@ -198,9 +206,10 @@ TEST(ObjectMap, ClassIsTheScoreWeightedVote) {
 
 TEST(ObjectMap, ObjectSeenFewerThanThreeTimesIsNotConfirmed) {
   ObjectMap map;
-  map.add(obs(0, 1, "cup", 0.9, box(Vec3(0.005, 0.005, 0.505), 3)));
-  map.add(obs(1, 1, "cup", 0.9, box(Vec3(0.005, 0.005, 0.505), 3)));
-  for (int f = 0; f < 3; ++f) map.add(obs(f, 2, "book", 0.9, box(Vec3(1.005, 0.005, 0.505), 3)));
+  add_one(map, obs(0, 1, "cup", 0.9, box(Vec3(0.005, 0.005, 0.505), 3)));
+  add_one(map, obs(1, 1, "cup", 0.9, box(Vec3(0.005, 0.005, 0.505), 3)));
+  for (int f = 0; f < 3; ++f)
+    add_one(map, obs(f, 2, "book", 0.9, box(Vec3(1.005, 0.005, 0.505), 3)));
   EXPECT_EQ(map.size(), 2u);
   EXPECT_EQ(map.confirmed_count(), 1u);
   const auto confirmed = map.records();
@@ -212,7 +221,7 @@ TEST(ObjectMap, ObjectSeenFewerThanThreeTimesIsNotConfirmed) {
   ASSERT_EQ(both.size(), 2u);
   EXPECT_FALSE(both[0].confirmed);
   // Too small observations are ignored.
-  EXPECT_EQ(map.add(obs(5, 3, "cup", 0.9, box(Vec3(3.005, 0, 0), 0))).object_id, -1);
+  EXPECT_EQ(add_one(map, obs(5, 3, "cup", 0.9, box(Vec3(3.005, 0, 0), 0))).object_id, -1);
 }
 
 // A noisy sequence: several objects, jittered points, random ids with switches.
@@ -234,7 +243,7 @@ std::vector<Observation> noisy_sequence() {
 TEST(ObjectMap, DeterministicRecords) {
   auto run = [] {
     ObjectMap map;
-    for (const Observation& o : noisy_sequence()) map.add(o);
+    for (const Observation& o : noisy_sequence()) add_one(map, o);
     map.merge_pass();
     return map.records();
   };
@@ -260,7 +269,7 @@ TEST(ObjectMap, SemanticMapsPaintObjectVoxelsByClass) {
     for (int j = 0; j < 50; ++j)
       wall.push_back(Vec3f(0.01f * i + 0.005f, 0.01f * j + 0.005f, 2.005f), Rgb{50, 50, 50});
   for (int f = 0; f < 3; ++f) {
-    map.add(obs(f, 1, "cup", 0.9, box(c, 5)));
+    add_one(map, obs(f, 1, "cup", 0.9, box(c, 5)));
     dense.insert(box(c, 5));
     dense.insert(wall);
   }
@@ -303,8 +312,8 @@ TEST(ObjectMap, ContainmentMatchesAPartialViewOfALargeFusedObjectIouDoesNot) {
     ObjectMapOptions options;
     options.overlap_measure = m;
     ObjectMap map(options);
-    for (int f = 0; f < 3; ++f) map.add(obs(f, 1, "cabinet", 0.9, box(c, 20)));
-    const AddResult r = map.add(obs(3, 7, "cabinet", 0.9, box(c, 20, 2)));  // +x face only
+    for (int f = 0; f < 3; ++f) add_one(map, obs(f, 1, "cabinet", 0.9, box(c, 20)));
+    const AddResult r = add_one(map, obs(3, 7, "cabinet", 0.9, box(c, 20, 2)));  // +x face only
     if (m == OverlapMeasure::kContainment) {
       EXPECT_FALSE(r.created);
       EXPECT_DOUBLE_EQ(r.overlap, 1.0);
@@ -322,8 +331,9 @@ TEST(ObjectMap, OneVoxelToleranceMatchesAViewShiftedByDepthNoise) {
     ObjectMapOptions options;
     options.overlap_tolerance_voxels = tolerance;
     ObjectMap map(options);
-    for (int f = 0; f < 3; ++f) map.add(obs(f, 1, "cup", 0.9, box(c, 5)));
-    const AddResult r = map.add(obs(3, 2, "cup", 0.9, shifted(box(c, 5), Vec3(0.01, 0.01, 0))));
+    for (int f = 0; f < 3; ++f) add_one(map, obs(f, 1, "cup", 0.9, box(c, 5)));
+    const AddResult r =
+        add_one(map, obs(3, 2, "cup", 0.9, shifted(box(c, 5), Vec3(0.01, 0.01, 0))));
     if (tolerance == 1) {
       EXPECT_FALSE(r.created);
       EXPECT_DOUBLE_EQ(r.overlap, 1.0);
@@ -346,8 +356,8 @@ TEST(ObjectMap, DistanceGateGrowsWithTheObjectsRadius) {
     options.gate_radius_factor = factor;
     // A 0.8 m cabinet: RMS radius of its surface ~0.52 m, so G = 0.26 m with factor 0.5.
     ObjectMap big(options);
-    for (int f = 0; f < 3; ++f) big.add(obs(f, 1, "cabinet", 0.9, box(c, 40)));
-    const AddResult r = big.add(obs(3, 1, "cabinet", 0.9, cluster));
+    for (int f = 0; f < 3; ++f) add_one(big, obs(f, 1, "cabinet", 0.9, box(c, 40)));
+    const AddResult r = add_one(big, obs(3, 1, "cabinet", 0.9, cluster));
     EXPECT_EQ(r.created, factor == 0.0) << factor;
     if (!r.created) {
       EXPECT_NEAR(r.distance_m, 0.2, 1e-3);
@@ -355,8 +365,8 @@ TEST(ObjectMap, DistanceGateGrowsWithTheObjectsRadius) {
     }
     // A 6 cm cup: G stays the paper's 0.1 m, the same offset is a new object.
     ObjectMap small(options);
-    for (int f = 0; f < 3; ++f) small.add(obs(f, 1, "cup", 0.9, box(c, 3)));
-    EXPECT_TRUE(small.add(obs(3, 1, "cup", 0.9, cluster)).created);
+    for (int f = 0; f < 3; ++f) add_one(small, obs(f, 1, "cup", 0.9, box(c, 3)));
+    EXPECT_TRUE(add_one(small, obs(3, 1, "cup", 0.9, cluster)).created);
   }
 }
 
@@ -366,8 +376,8 @@ TEST(ObjectMap, StackedBooksSeenTogetherStayTwoEvenAfterIdSwitches) {
   ObjectMap map;
   for (int f = 0; f < 8; ++f) {
     const int shift = f < 4 ? 0 : 10;
-    map.add(obs(f, 1 + shift, "book", 0.8, slab(lower, 10, 1)));
-    map.add(obs(f, 2 + shift, "book", 0.8, slab(upper, 10, 1)));
+    add_one(map, obs(f, 1 + shift, "book", 0.8, slab(lower, 10, 1)));
+    add_one(map, obs(f, 2 + shift, "book", 0.8, slab(upper, 10, 1)));
   }
   map.merge_pass();
   const auto records = map.records(no_outlier_filter());
@@ -384,8 +394,8 @@ TEST(ObjectMap, MergePassNeverJoinsObjectsSeenTogetherInTheSameKeyframes) {
   const Vec3 a(0.305, 0.105, 0.905), b(0.325, 0.105, 0.905);  // 2 cm apart, mostly overlapping
   ObjectMap map;
   for (int f = 0; f < 4; ++f) {
-    map.add(obs(f, 1, "book", 0.8, box(a, 5)));
-    map.add(obs(f, 2, "book", 0.8, box(b, 5)));  // object 0 already has frame f
+    add_one(map, obs(f, 1, "book", 0.8, box(a, 5)));
+    add_one(map, obs(f, 2, "book", 0.8, box(b, 5)));  // object 0 already has frame f
   }
   EXPECT_TRUE(map.merge_pass().empty());
   EXPECT_EQ(map.size(), 2u);
@@ -393,8 +403,8 @@ TEST(ObjectMap, MergePassNeverJoinsObjectsSeenTogetherInTheSameKeyframes) {
   loose.merge_max_shared_frames = 1.0;
   ObjectMap joined(loose);
   for (int f = 0; f < 4; ++f) {
-    joined.add(obs(f, 1, "book", 0.8, box(a, 5)));
-    joined.add(obs(f, 2, "book", 0.8, box(b, 5)));
+    add_one(joined, obs(f, 1, "book", 0.8, box(a, 5)));
+    add_one(joined, obs(f, 2, "book", 0.8, box(b, 5)));
   }
   EXPECT_EQ(joined.merge_pass().size(), 1u);
   EXPECT_EQ(joined.size(), 1u);
@@ -405,8 +415,8 @@ TEST(ObjectMap, TwoCupsFiveCentimetresApartStayTwoThroughIdSwitches) {
   const Vec3 a(0.005, 0.005, 1.005), b(0.055, 0.005, 1.005);
   ObjectMap map;
   for (int f = 0; f < 8; ++f) {
-    map.add(obs(f, f < 4 ? 1 : 2, "cup", 0.9, box(a, 2)));
-    map.add(obs(f, f < 4 ? 2 : 1, "cup", 0.9, box(b, 2)));
+    add_one(map, obs(f, f < 4 ? 1 : 2, "cup", 0.9, box(a, 2)));
+    add_one(map, obs(f, f < 4 ? 2 : 1, "cup", 0.9, box(b, 2)));
   }
   map.merge_pass();
   const auto records = map.records(no_outlier_filter());
@@ -420,8 +430,8 @@ TEST(ObjectMap, MouseTouchingAKeyboardStaysAMouse) {
   // A mouse next to a keyboard, seen in different frames (no keyframe rule applies), touching it.
   const Vec3 keyboard(0.005, 0.005, 0.765), mouse(0.265, 0.005, 0.775);
   ObjectMap map;
-  for (int f = 0; f < 4; ++f) map.add(obs(f, 1, "keyboard", 0.9, slab(keyboard, 22, 1)));
-  for (int f = 4; f < 8; ++f) map.add(obs(f, 2, "mouse", 0.9, box(mouse, 3)));
+  for (int f = 0; f < 4; ++f) add_one(map, obs(f, 1, "keyboard", 0.9, slab(keyboard, 22, 1)));
+  for (int f = 4; f < 8; ++f) add_one(map, obs(f, 2, "mouse", 0.9, box(mouse, 3)));
   map.merge_pass();
   const auto records = map.records(no_outlier_filter());
   ASSERT_EQ(records.size(), 2u);
@@ -434,14 +444,14 @@ TEST(ObjectMap, AnObjectTakesOneObservationPerKeyframe) {
   // Two detections of one frame on the same spot (a duplicate box) are two objects.
   const Vec3 c(0.305, 0.105, 0.905);
   ObjectMap map;
-  EXPECT_TRUE(map.add(obs(0, 1, "cup", 0.9, box(c, 5))).created);
-  EXPECT_TRUE(map.add(obs(0, 2, "cup", 0.9, box(c, 5))).created);
-  EXPECT_EQ(map.add(obs(1, 3, "cup", 0.9, box(c, 5))).object_id, 0);
+  EXPECT_TRUE(add_one(map, obs(0, 1, "cup", 0.9, box(c, 5))).created);
+  EXPECT_TRUE(add_one(map, obs(0, 2, "cup", 0.9, box(c, 5))).created);
+  EXPECT_EQ(add_one(map, obs(1, 3, "cup", 0.9, box(c, 5))).object_id, 0);
   ObjectMapOptions off;
   off.one_observation_per_frame = false;
   ObjectMap loose(off);
-  loose.add(obs(0, 1, "cup", 0.9, box(c, 5)));
-  EXPECT_FALSE(loose.add(obs(0, 2, "cup", 0.9, box(c, 5))).created);
+  add_one(loose, obs(0, 1, "cup", 0.9, box(c, 5)));
+  EXPECT_FALSE(add_one(loose, obs(0, 2, "cup", 0.9, box(c, 5))).created);
 }
 
 TEST(ObjectMap, VoxelsSeenInFewObservationsAreDroppedFromTheRecord) {
@@ -454,7 +464,7 @@ TEST(ObjectMap, VoxelsSeenInFewObservationsAreDroppedFromTheRecord) {
     for (int i = 0; i < 30; ++i)
       view.push_back(Vec3f(0.2f + 0.01f * i + 0.005f, 0.3f + 0.01f * f + 0.005f, 0.845f),
                      Rgb{1, 2, 3});
-    map.add(obs(f, 1, "cup", 0.9, std::move(view)));
+    add_one(map, obs(f, 1, "cup", 0.9, std::move(view)));
   }
   const auto kept = map.records(no_outlier_filter());
   ASSERT_EQ(kept.size(), 1u);
@@ -470,7 +480,7 @@ TEST(ObjectMap, PositionIsTheCentreOfTheSeenExtentNotThePointMean) {
   // position (centre of the percentile box) is the box centre.
   const Vec3 c(0.305, 0.105, 0.905);
   ObjectMap map;
-  for (int f = 0; f < 3; ++f) map.add(obs(f, 1, "cup", 0.9, box(c, 5, 63 & ~16)));
+  for (int f = 0; f < 3; ++f) add_one(map, obs(f, 1, "cup", 0.9, box(c, 5, 63 & ~16)));
   const auto r = map.records(no_outlier_filter());
   ASSERT_EQ(r.size(), 1u);
   EXPECT_GT(r[0].centroid.z() - c.z(), 0.005);
@@ -493,11 +503,12 @@ TEST(ObjectMap, LargeObservationsJoinTheirObject) {
   };
   ObjectMap map;
   for (int k = 0; k < 10; ++k)
-    for (int f = 0; f < 3; ++f) map.add(obs(f, 100 + k, "cup", 0.9, box(Vec3(0.2 * k, 2, 1), 4)));
-  for (int f = 0; f < 3; ++f) map.add(obs(f, 1, "chair", 0.9, view(0.01f * f)));
+    for (int f = 0; f < 3; ++f)
+      add_one(map, obs(f, 100 + k, "cup", 0.9, box(Vec3(0.2 * k, 2, 1), 4)));
+  for (int f = 0; f < 3; ++f) add_one(map, obs(f, 1, "chair", 0.9, view(0.01f * f)));
   std::vector<PointCloud> views;
   for (int f = 0; f < 10; ++f) views.push_back(view(0.01f * f));
-  for (int f = 0; f < 10; ++f) map.add(obs(10 + f, 2, "chair", 0.9, views[f]));
+  for (int f = 0; f < 10; ++f) add_one(map, obs(10 + f, 2, "chair", 0.9, views[f]));
   EXPECT_EQ(map.size(), 11u);  // the later views of the chair joined it (speed: BM_ObjectMapAdd)
   int chair_observations = 0;
   for (const auto& r : map.records(no_outlier_filter()))
@@ -546,9 +557,10 @@ TEST(ObjectMap, ConfirmationCountsViewsNotFrames) {
   // frame) is one view; the object seen from three places 5 cm apart is three.
   const Vec3 c(0.305, 0.105, 0.905);
   ObjectMap map;
-  for (int f = 0; f < 5; ++f) map.add(posed(f, 1, "cup", box(c, 3), camera_at(0.01 * f)));
+  for (int f = 0; f < 5; ++f) add_one(map, posed(f, 1, "cup", box(c, 3), camera_at(0.01 * f)));
   const Vec3 d(1.305, 0.105, 0.905);
-  for (int f = 0; f < 3; ++f) map.add(posed(10 + f, 2, "book", box(d, 3), camera_at(0.05 * f)));
+  for (int f = 0; f < 3; ++f)
+    add_one(map, posed(10 + f, 2, "book", box(d, 3), camera_at(0.05 * f)));
   ASSERT_EQ(map.size(), 2u);
   EXPECT_EQ(map.confirmed_count(), 1u);
   auto all = no_outlier_filter();
@@ -572,7 +584,7 @@ TEST(ObjectMap, ConfirmationCountsViewsNotFrames) {
   ObjectMapOptions paper;
   paper.view_min_translation_m = paper.view_min_rotation_deg = 0.0;
   ObjectMap counted(paper);
-  for (int f = 0; f < 5; ++f) counted.add(posed(f, 1, "cup", box(c, 3), camera_at(0.01 * f)));
+  for (int f = 0; f < 5; ++f) add_one(counted, posed(f, 1, "cup", box(c, 3), camera_at(0.01 * f)));
   EXPECT_EQ(counted.confirmed_count(), 1u);
 }
 

@@ -82,7 +82,7 @@ TEST(Backproject, MaskColoursStrideAndPixelIndices) {
   const RayTable rays = make_ray_table(camera_preset("fr3"));
   cv::Mat depth(480, 640, CV_16UC1, cv::Scalar(5000));
   cv::Mat bgr(480, 640, CV_8UC3, cv::Scalar(10, 20, 30));  // B G R
-  segmentation::Mask mask;
+  Mask mask;
   mask.width = 640;
   mask.height = 480;
   mask.data.assign(640 * 480, 0);
@@ -131,7 +131,7 @@ TEST(Backproject, RejectsMismatchedImagesAndBadOptions) {
 
 TEST(MaskBounds, EdgesOddWidthAndEmpty) {
   // Width 13: one 8-byte word and a 5-byte tail per row; pixels on the first and last column.
-  segmentation::Mask mask;
+  Mask mask;
   mask.width = 13;
   mask.height = 7;
   mask.data.assign(13 * 7, 0);

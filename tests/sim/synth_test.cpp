@@ -160,7 +160,7 @@ TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
   EXPECT_GT(streamed.seg_stats.id_switches, 0);
   const int compared = expect_same_files(tmp / "memory", tmp / "streamed");
   EXPECT_EQ(compared, 11 * 4 + 7);  // rgb, depth, 2 segmentations per frame + 7 files
-  // The PNGs (png.h's encoder) read back as the images in memory.
+  // The PNGs (io/png_encode.h's encoder) read back as the images in memory.
   for (const auto& f : memory.frames) {
     const cv::Mat rgb =
         cv::imread((tmp / "streamed" / "rgb" / (timestamp_name(f.timestamp) + ".png")).string(),

@@ -70,9 +70,6 @@ Eigen::Vector2d Camera::project(const Vec3& point_in_cam) const {
 
 Camera camera_preset(const std::string& name) {
   Camera c;
-  c.width = 640;
-  c.height = 480;
-  c.depth_factor = 5000.0;
   if (name == "fr1" || name == "freiburg1") {
     c = {"fr1", 640, 480, 517.3, 516.5, 318.6, 255.3, {0.2624, -0.9531, -0.0054, 0.0026, 1.1633},
          5000.0};

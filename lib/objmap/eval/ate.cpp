@@ -1,6 +1,6 @@
 #include "objmap/eval/ate.h"
 
-#include <Eigen/SVD>
+#include <Eigen/Geometry>
 #include <cmath>
 
 #include "objmap/core/error.h"
@@ -31,38 +31,23 @@ Similarity align_points(const std::vector<Vec3>& source, const std::vector<Vec3>
   require(source.size() == target.size() && !source.empty(), "align_points",
           std::to_string(source.size()) + " source and " + std::to_string(target.size()) +
               " target points; expected the same number, at least 1");
-  const double n = static_cast<double>(source.size());
-  Vec3 source_mean = Vec3::Zero(), target_mean = Vec3::Zero();
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    source_mean += source[i];
-    target_mean += target[i];
+  // Umeyama (1991), as evaluate_ate.py's `align` (model = estimate, data = ground truth): R proper,
+  // s = tr(D S) / (n σ²_source) with a scale, else 1.
+  const Eigen::Index n = static_cast<Eigen::Index>(source.size());
+  Eigen::Matrix3Xd source_m(3, n), target_m(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    source_m.col(i) = source[static_cast<std::size_t>(i)];
+    target_m.col(i) = target[static_cast<std::size_t>(i)];
   }
-  source_mean /= n;
-  target_mean /= n;
-
-  // W = Σ source_c · target_cᵀ (evaluate_ate.py: model = estimate, data = ground truth).
-  Eigen::Matrix3d w = Eigen::Matrix3d::Zero();
-  double source_spread = 0.0;  // Σ‖source_c‖², n·σ² of Umeyama
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    const Vec3 s = source[i] - source_mean;
-    w += s * (target[i] - target_mean).transpose();
-    source_spread += s.squaredNorm();
-  }
-  // Wᵀ = U D Vᵀ; R = U S Vᵀ with S = diag(1, 1, ±1) making R proper (Horn / Umeyama).
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(w.transpose(),
-                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Vector3d s_diag(1.0, 1.0, 1.0);
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0) s_diag(2) = -1.0;
-  Similarity result;
-  result.rotation = svd.matrixU() * s_diag.asDiagonal() * svd.matrixV().transpose();
-  if (with_scale) {
-    // Umeyama (1991) eq. 42: s = tr(D S) / (n σ²_source).
+  if (with_scale)
     require(
-        source_spread > 0.0, "align_points",
+        (source_m.colwise() - source_m.rowwise().mean()).squaredNorm() > 0.0, "align_points",
         "all estimate positions coincide; expected a trajectory that moves to estimate a scale");
-    result.scale = svd.singularValues().dot(s_diag) / source_spread;
-  }
-  result.translation = target_mean - result.scale * (result.rotation * source_mean);
+  const Eigen::Matrix4d target_from_source = Eigen::umeyama(source_m, target_m, with_scale);
+  Similarity result;
+  if (with_scale) result.scale = target_from_source.col(0).head<3>().norm();  // the columns of s R
+  result.rotation = target_from_source.topLeftCorner<3, 3>() / result.scale;
+  result.translation = target_from_source.topRightCorner<3, 1>();
   return result;
 }
 

@@ -36,7 +36,8 @@ struct Similarity {
 
 // Least-squares target_from_source for corresponding points (same count, >= 1; the caller requires
 // enough of them): minimises Σ‖target_i − (s R source_i + t)‖² with R a proper rotation; s = 1
-// unless `with_scale`. Throws InputError when `with_scale` and the source points all coincide.
+// unless `with_scale` (Eigen::umeyama). Throws InputError when `with_scale` and the source points
+// all coincide.
 Similarity align_points(const std::vector<Vec3>& source, const std::vector<Vec3>& target,
                         bool with_scale);
 

@@ -305,25 +305,6 @@ bool ObjectMap::candidate(const Observation& obs, const Prepared& prep, const Ob
   return s.score_p > threshold;
 }
 
-AddResult ObjectMap::add(const Observation& obs) {
-  // 1. The observation's voxel set and centroid at the map resolution.
-  Prepared prep(options_.voxel_m);
-  if (!prepare(obs, prep)) return AddResult{};
-
-  // 2. Eq 22 against every live object; the best P > K wins (ties: the lower id).
-  Object* best = nullptr;
-  Scores best_scores;
-  for (auto& object : objects_) {
-    Scores s;
-    if (candidate(obs, prep, *object, best ? best_scores.score_p : options_.match_threshold, s)) {
-      best = object.get();
-      best_scores = s;
-    }
-  }
-  // 3. No match: a new object (fuse with nullptr).
-  return fuse(obs, prep, best, best_scores);
-}
-
 std::vector<AddResult> ObjectMap::add_frame(const std::vector<Observation>& observations) {
   const std::size_t n = observations.size();
   std::vector<AddResult> results(n);

@@ -35,7 +35,8 @@ enum class OverlapMeasure {
   // is bounded by |A|/|B| (a view of a cabinet shows ~half of it: M ≤ 0.5 even when every point
   // of the view lies on the object), so well-fused objects stop matching their own new views.
   kIou,
-  // |A∩B| / |A| with |A| ≤ |B| (A = the observation in add(); the smaller object in merge_pass()):
+  // |A∩B| / |A| with |A| ≤ |B| (A = the observation in add_frame(); the smaller object in
+  // merge_pass()):
   // the share of A that lies on B. 1 for any partial view of the object, whatever the object's
   // size; small for a neighbour (only A's boundary touches it). The default: it measured best
   // (docs/fusion.md, "Object map").
@@ -82,7 +83,7 @@ struct ObjectMapOptions {
   bool merge_require_same_class = true;  // the merge pass joins only objects of one voted class
   double merge_min_overlap = 0.5;        // ... and only when M (containment of the smaller) >= this
   // Two instances of one keyframe are two objects: an object takes at most one observation per
-  // timestamp (add() skips objects that already have one), and the merge pass never joins two
+  // timestamp (add_frame() skips objects that already have one), and the merge pass never joins two
   // objects that were both observed in more than this share of the smaller one's keyframes (e.g.
   // two books stacked, seen together in every frame; a fragment of an ID switch is seen in other
   // keyframes than its object). 1: no such rule.
@@ -220,7 +221,7 @@ struct RecordOptions {
 // moved or turned that much from the last view; an observation without a pose is a view.
 int count_views(const std::vector<ObservationLink>& provenance, const ObjectMapOptions& options);
 
-// What add() did with an observation.
+// What add_frame() did with an observation.
 struct AddResult {
   int object_id = -1;  // -1: ignored (fewer than min_points points)
   bool created = false;
@@ -234,12 +235,8 @@ class ObjectMap {
   ObjectMap(ObjectMap&&) noexcept;
   ObjectMap& operator=(ObjectMap&&) noexcept;
 
-  // Associates one observation (eq 22) and fuses its points into the object, or starts an object.
-  // Observations of one frame should be added in a fixed order (e.g. the segmentation's order): the
-  // result depends on the order of add() calls, never on anything else.
-  AddResult add(const Observation& observation);
-
-  // Associates the observations of one keyframe together (all with the same timestamp): the
+  // Associates the observations of one keyframe together (all with the same timestamp) by eq 22,
+  // and fuses each into its object or starts an object with it: the
   // (observation, object) pair with the highest P > K is fused first, then the best among the
   // rest, and so on (with one_observation_per_frame an object takes one observation of the frame),
   // so that an observation's object does not depend on which instance the segmentation listed
@@ -288,14 +285,14 @@ class ObjectMap {
   // (merge_verdict), else it stops at the first refusal and scores P against merge_threshold only
   // as far as it decides (merge_pass).
   MergeVerdict judge_pair(const Object& a, const Object& b, bool full) const;
-  // An observation's voxel set at the map resolution, its bounds and centroid (add() step 1).
+  // An observation's voxel set at the map resolution, its bounds and centroid (add_frame() step 1).
   struct Prepared;
   bool prepare(const Observation& obs, Prepared& out) const;
   // May `object` take `obs` (alive, class, one per frame), and with which scores; false when P <=
   // `threshold` or the object is not a candidate.
   bool candidate(const Observation& obs, const Prepared& prep, const Object& object,
                  double threshold, Scores& s) const;
-  // add() step 4: fuses the observation into `target` (nullptr: a new object).
+  // add_frame(): fuses the observation into `target` (nullptr: a new object).
   AddResult fuse(const Observation& obs, const Prepared& prep, Object* target, const Scores& s);
   // Joins `absorbed` into `into` (voxels, votes, provenance, merges); `absorbed` dies.
   void absorb(Object& into, Object& absorbed, const MergeLink& link);

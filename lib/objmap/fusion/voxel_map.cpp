@@ -379,25 +379,8 @@ void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard,
 void VoxelMap::insert(const PointCloud& cloud) {
   const std::size_t n = cloud.size();
   if (n == 0) return;
-  const std::size_t shards = shards_.size();
-  const std::size_t threads = std::min(threads_, shards);
-  std::size_t dropped = 0;
-  if (shards == 1) {
-    dropped = insert_shard(0, cloud);
-  } else if (threads == 1 || n < 4096) {
-    dropped = insert_shard(kAllShards, cloud);  // one pass routing runs to their shard
-  } else {
-    // Every thread scans all points and adds those of its shards (shards in parallel).
-    auto work = [&](std::size_t t) {
-      std::size_t d = 0;
-      for (std::size_t s = t; s < shards; s += threads) d = insert_shard(s, cloud);
-      return d;
-    };
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < threads; ++t) pool.emplace_back([&, t] { work(t); });
-    dropped = work(0);
-    for (auto& th : pool) th.join();
-  }
+  // One pass; a sharded map gets each run routed to its shard.
+  const std::size_t dropped = insert_shard(shards_.size() == 1 ? 0 : kAllShards, cloud);
   points_inserted_ += n - dropped;
   points_dropped_ += dropped;
 }

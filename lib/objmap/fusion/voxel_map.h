@@ -18,9 +18,9 @@ class FrameVoxels;
 
 struct VoxelMapOptions {
   double voxel_m = 0.01;  // voxel edge; 1 cm as the paper's map
-  int threads = 1;  // insert() on this many threads (key-sharded); output identical for any count
-  int shards = 0;   // hash tables the voxels are split into by key hash; 0 = `threads`. Maps with
-                    // the same shard count can be merged shard by shard (merge_shard) in parallel
+  int threads = 1;        // sorted_points() on this many threads; output identical for any count
+  int shards = 0;  // hash tables the voxels are split into by key hash; 0 = `threads`. Maps with
+                   // the same shard count can be merged shard by shard (merge_shard) in parallel
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -39,9 +39,9 @@ class VoxelMap {
  public:
   explicit VoxelMap(const VoxelMapOptions& options = {});
 
-  // Adds the points (world frame). Each voxel sees its points in input order whatever `threads` is,
-  // so the map (and every export) is identical for any thread count. Points that are not finite or
-  // out of the key range (±10 km at 1 cm) are dropped and counted.
+  // Adds the points (world frame), on the calling thread; each voxel sees its points in input
+  // order. Points that are not finite or out of the key range (±10 km at 1 cm) are dropped and
+  // counted.
   void insert(const PointCloud& points_in_world);
 
   // Adds every voxel of `other` (same voxel size required): sums and counts. Used to join two
@@ -146,7 +146,7 @@ class VoxelMap {
   using Table = geometry::VoxelHashTable<VoxelData>;
   static constexpr std::size_t kNoMask = ~std::size_t{0};
   VoxelPoints sorted_points_impl(bool release);  // release: free each shard once read
-  // kAllShards: one pass that fills every shard (single-threaded insert of a sharded map).
+  // kAllShards: one pass that fills every shard (insert into a sharded map).
   static constexpr std::size_t kAllShards = ~std::size_t{0};
   std::size_t insert_shard(std::size_t shard, const PointCloud& cloud);
   // Adds a batch's m runs (in order) to shard `shard`'s table, or with kAllShards each to its own

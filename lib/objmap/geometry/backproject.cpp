@@ -49,7 +49,7 @@ void BackprojectOptions::check() const {
   require(stride >= 1, "BackprojectOptions.stride", "must be >= 1, got " + std::to_string(stride));
 }
 
-cv::Rect mask_bounds(const segmentation::Mask& mask) {
+cv::Rect mask_bounds(const Mask& mask) {
   // Rows are tested 8 bytes at a time (most of a box mask's image is zero); the first and last
   // non-zero pixel are then searched from the row's ends.
   int u0 = mask.width, v0 = mask.height, u1 = -1, v1 = -1;

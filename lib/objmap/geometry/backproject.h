@@ -4,8 +4,8 @@
 #include <vector>
 
 #include "objmap/core/camera.h"
+#include "objmap/core/mask.h"
 #include "objmap/core/types.h"
-#include "objmap/segmentation/types.h"
 
 // Back-projection of a depth image into the world (paper eqs 11-15):
 //   z = depth / depth_factor,  x = X(u, v) · z,  y = Y(u, v) · z,  point_in_world = world_from_cam
@@ -48,7 +48,7 @@ struct BackprojectOptions {
 struct DepthFrame {
   DepthFrame() = default;
   DepthFrame(const cv::Mat& depth_image, const Pose& world_from_cam_pose,
-             const cv::Mat* bgr_image = nullptr, const segmentation::Mask* instance_mask = nullptr,
+             const cv::Mat* bgr_image = nullptr, const Mask* instance_mask = nullptr,
              cv::Rect region = cv::Rect())
       : depth(&depth_image),
         world_from_cam(world_from_cam_pose),
@@ -58,9 +58,9 @@ struct DepthFrame {
 
   const cv::Mat* depth = nullptr;  // required, CV_16UC1, size of the ray table
   Pose world_from_cam = Pose::Identity();
-  const cv::Mat* bgr = nullptr;              // optional, CV_8UC3, same size
-  const segmentation::Mask* mask = nullptr;  // optional, same size
-  cv::Rect roi;                              // optional; empty = the whole image
+  const cv::Mat* bgr = nullptr;  // optional, CV_8UC3, same size
+  const Mask* mask = nullptr;    // optional, same size
+  cv::Rect roi;                  // optional; empty = the whole image
 };
 
 struct BackprojectResult {
@@ -107,6 +107,6 @@ struct FrameRow {
 };
 
 // The bounding rectangle of a mask's non-zero pixels (empty rect for an empty mask).
-cv::Rect mask_bounds(const segmentation::Mask& mask);
+cv::Rect mask_bounds(const Mask& mask);
 
 }  // namespace objmap::geometry

@@ -1,8 +1,9 @@
 #pragma once
-#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "objmap/core/mask.h"
 
 // The one in-memory form of a segmentation, whatever format it was read from.
 namespace objmap::segmentation {
@@ -12,16 +13,8 @@ struct Box {
   double x = 0, y = 0, w = 0, h = 0;
 };
 
-// Binary mask, row-major, one byte per pixel (0 or 1).
-struct Mask {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> data;
-
-  bool empty() const { return data.empty(); }
-  std::uint8_t at(int u, int v) const { return data[static_cast<std::size_t>(v) * width + u]; }
-  std::size_t area() const;
-};
+// Binary mask (core/mask.h: geometry/ back-projects masks without depending on segmentation/).
+using Mask = objmap::Mask;
 
 struct Instance {
   std::string class_name;       // COCO name with spaces, e.g. "teddy bear", "tv"

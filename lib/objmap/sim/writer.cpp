@@ -13,10 +13,10 @@
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/camera_io.h"
+#include "objmap/io/png_encode.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/segmentation/write.h"
 #include "objmap/sim/parallel.h"
-#include "objmap/sim/png.h"
 
 namespace objmap::sim {
 
@@ -38,11 +38,11 @@ void write_text(const fs::path& file, const std::string& text) {
   write_bytes(file, text.data(), text.size());
 }
 
-// png.h: Sub filter and zlib level 1 RLE, several times faster than cv::imencode. The byte buffer
-// is kept per thread: a fresh 1 MB buffer per image costs page faults.
+// io/png_encode.h: Sub filter and zlib level 1 RLE, several times faster than cv::imencode. The
+// byte buffer is kept per thread: a fresh 1 MB buffer per image costs page faults.
 void write_png(const fs::path& file, const cv::Mat& image) {
   thread_local std::vector<std::uint8_t> bytes;
-  encode_png(image, &bytes);
+  io::encode_png(image, &bytes);
   write_bytes(file, reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 

@@ -1,24 +1,24 @@
-// The fast PNG encoder of the synthetic images: any reader gives the exact pixels back.
+// objmap's fast PNG encoder (synthetic images, report pictures): any reader gives the exact pixels
+// back.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "objmap/core/error.h"
-#include "objmap/sim/png.h"
-#include "objmap/sim/random.h"
+#include "objmap/io/png_encode.h"
 
-namespace objmap::sim {
+namespace objmap::io {
 namespace {
 
 // Noise, flat areas and steps (what the filter and the run-length coding see), odd sizes.
 cv::Mat test_image(int type, std::uint64_t seed) {
   cv::Mat image(31, 45, type);
-  Rng rng(seed);
+  cv::RNG rng(seed);
   const int channels = image.channels();
   for (int v = 0; v < image.rows; ++v)
     for (int u = 0; u < image.cols; ++u)
       for (int c = 0; c < channels; ++c) {
-        const double r = rng.uniform();
+        const double r = rng.uniform(0.0, 1.0);
         const int value = u < 10 ? 0 : (r < 0.5 ? 40 * c + 3 * v : static_cast<int>(r * 65535));
         if (image.depth() == CV_16U)
           image.ptr<std::uint16_t>(v)[u * channels + c] = static_cast<std::uint16_t>(value);
@@ -28,7 +28,7 @@ cv::Mat test_image(int type, std::uint64_t seed) {
   return image;
 }
 
-TEST(Png, DecodesToTheExactPixels) {
+TEST(PngEncode, DecodesToTheExactPixels) {
   std::vector<std::uint8_t> bytes;
   for (int type : {CV_8UC3, CV_8UC1, CV_16UC1}) {
     const cv::Mat image = test_image(type, 11 + type);
@@ -41,7 +41,7 @@ TEST(Png, DecodesToTheExactPixels) {
   }
 }
 
-TEST(Png, RefusesOtherTypes) {
+TEST(PngEncode, RefusesOtherTypes) {
   std::vector<std::uint8_t> bytes;
   try {
     encode_png(cv::Mat(4, 4, CV_32FC1, cv::Scalar::all(1.0)), &bytes);
@@ -54,4 +54,4 @@ TEST(Png, RefusesOtherTypes) {
 }
 
 }  // namespace
-}  // namespace objmap::sim
+}  // namespace objmap::io

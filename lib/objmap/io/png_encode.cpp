@@ -1,4 +1,4 @@
-#include "objmap/sim/png.h"
+#include "objmap/io/png_encode.h"
 
 #include <cstring>
 #include <string>
@@ -7,7 +7,7 @@
 
 #include "objmap/core/error.h"
 
-namespace objmap::sim {
+namespace objmap::io {
 
 namespace {
 
@@ -117,4 +117,4 @@ void encode_png(const cv::Mat& image, std::vector<std::uint8_t>* png) {
   put_chunk(png, "IEND", nullptr, 0);
 }
 
-}  // namespace objmap::sim
+}  // namespace objmap::io
