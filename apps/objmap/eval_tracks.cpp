@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "command.h"
 #include "objmap/eval/tracks.h"
 #include "objmap/io/atomic.h"
 #include "objmap/segmentation/read.h"
@@ -21,7 +22,7 @@ struct EvalTracksArgs {
 };
 
 void run_eval_tracks(const EvalTracksArgs& args) {
-  args.options.check();
+  check_naming_flags([&] { args.options.check(); }, {{"TrackEvalOptions.min_iou", "--min-iou"}});
   io::require_not_an_input({"--json", args.json_file},
                            {{"--gt", args.gt_dir}, {"--est", args.est_dir}});
   const segmentation::Segmentation gt = segmentation::read_segmentation(args.gt_dir);

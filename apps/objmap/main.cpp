@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <thread>
@@ -93,6 +94,27 @@ void setup_all(CLI::App& app) {
   for (auto& e : entries) e.setup(app);
 }
 
+// The first word of argv that names no command of `app` (or of the command it names, for a
+// group such as eval), with the commands it could have been; empty when every word is known.
+std::string unknown_command(CLI::App& app, int argc, char** argv) {
+  CLI::App* group = &app;
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') return "";
+    const auto subcommands = group->get_subcommands({});
+    if (subcommands.empty()) return "";
+    CLI::App* found = nullptr;
+    std::string names;
+    for (CLI::App* sub : subcommands) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      if (sub->get_name() == word) found = sub;
+    }
+    if (!found) return "unknown command '" + word + "'; expected one of " + names;
+    group = found;
+  }
+  return "";
+}
+
 }  // namespace objmap::app
 
 int main(int argc, char** argv) {
@@ -113,10 +135,17 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "objmap: usage error: " << e.what() << " (see 'objmap --help')\n";
+    const std::string unknown = objmap::app::unknown_command(app, argc, argv);
+    std::cerr << "objmap: usage error: " << (unknown.empty() ? std::string(e.what()) : unknown)
+              << " (see 'objmap --help')\n";
     return 2;
   } catch (const objmap::InputError& e) {
     std::cerr << "objmap: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the system cannot resolve or read (a symbolic link loop, no permission): bad input.
+    std::cerr << "objmap: error: " << e.path1().string() << ": " << e.code().message()
+              << "; expected a path objmap can read or write\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "objmap: internal error: " << e.what() << "\n";

@@ -116,19 +116,30 @@ TEST_F(FuseBadInput, OutThatIsNotAnEarlierRunIsNeverReplaced) {
                        (data / "groundtruth.txt").string(), "--segmentation",
                        (dir_ / "seg").string(), "--out", out.string()});
   };
-  const RunResult r = fuse_into(data);
+  // The dataset itself is an input: refused as such.
+  const RunResult input = fuse_into(data);
+  EXPECT_EQ(input.exit_code, 2) << input.err;
+  EXPECT_NE(input.err.find("--out: " + data.string() + " is the input of --dataset"),
+            std::string::npos)
+      << input.err;
+  // Another folder that holds data: refused as not an earlier run.
+  const fs::path other = dir_ / "other";
+  fs::copy(data_, other, fs::copy_options::recursive);
+  const RunResult r = fuse_into(other);
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find(data.string() +
+  EXPECT_NE(r.err.find(other.string() +
                        ": exists and is not an earlier objmap fuse run (it holds depth, depth.txt, "
                        "detections_yolofastest and 3 more; no run.json), so it is not replaced"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-  EXPECT_TRUE(fs::exists(data / "rgb.txt"));
-  EXPECT_FALSE(fs::exists(data / "run.json"));
+  for (const fs::path& folder : {data, other}) {
+    EXPECT_TRUE(fs::exists(folder / "rgb.txt"));
+    EXPECT_FALSE(fs::exists(folder / "run.json"));
+  }
   std::size_t entries = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_.path())) ++entries;
-  EXPECT_EQ(entries, 2u);  // seg, data: no temporary folder
+  EXPECT_EQ(entries, 3u);  // seg, data, other: no temporary folder
 
   // An earlier run is replaced: its extra file goes.
   const fs::path run = dir_ / "run";

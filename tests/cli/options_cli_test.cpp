@@ -38,6 +38,49 @@ TEST(EvalFlagsCli, BadOptionNamesItsFlag) {
   expect_flags_named({"eval", "rpe", "--gt", t, "--est", t},
                      {{"--delta", "0"}, {"--offset", "nan"}, {"--max-diff", "-1"}});
   expect_flags_named({"eval", "objects", "--map", t, "--reference", t}, {{"--gate", "-1"}});
+  expect_flags_named({"eval", "tracks", "--gt", t, "--est", t}, {{"--min-iou", "2"}});
+  expect_flags_named({"eval", "masks", "--run", t}, {{"--depth-tolerance", "-1"}});
+}
+
+TEST(CommandsCli, AnUnknownCommandIsNamed) {
+  const RunResult top = run_objmap({"frobnicate", "--x"});
+  EXPECT_EQ(top.exit_code, 2);
+  EXPECT_NE(top.err.find("unknown command 'frobnicate'; expected one of synth, validate"),
+            std::string::npos)
+      << top.err;
+  const RunResult eval = run_objmap({"eval", "atee"});
+  EXPECT_EQ(eval.exit_code, 2);
+  EXPECT_NE(
+      eval.err.find("unknown command 'atee'; expected one of ate, rpe, objects, tracks, masks"),
+      std::string::npos)
+      << eval.err;
+  EXPECT_EQ(std::count(eval.err.begin(), eval.err.end(), '\n'), 1) << eval.err;
+}
+
+TEST(CommandsCli, APathTheSystemCannotResolveIsBadInput) {
+  // A symbolic link loop as the dataset: the filesystem's error was exit 1 ("internal error").
+  TempDir dir;
+  fs::create_symlink(dir / "loop", dir / "loop");
+  const RunResult r = run_objmap({"validate", "--dataset", (dir / "loop").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find((dir / "loop").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("symbolic links"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+TEST(FuseFlagsCli, AThresholdNoScoreCanPassIsRefused) {
+  // P of eq 22 is at most w_id + w_d + w_m (1 by default): --match-threshold 2 matched nothing.
+  TempDir dir;
+  const std::string t = (dir / "t").string();
+  for (const char* flag : {"--match-threshold", "--merge-threshold"}) {
+    const RunResult r = run_objmap({"fuse", "--dataset", t, "--trajectory", t, "--segmentation", t,
+                                    "--out", (dir / "o").string(), flag, "2"});
+    EXPECT_EQ(r.exit_code, 2) << flag;
+    EXPECT_NE(
+        r.err.find(std::string("(") + flag + "): must be in [0, w_id + w_d + w_m = 1.000000)"),
+        std::string::npos)
+        << r.err;
+  }
 }
 
 TEST(ReportFlagsCli, BadOptionNamesItsFlag) {

@@ -91,6 +91,28 @@ TEST(EvalCli, ARepeatedGroundTruthStampGivesTheTumToolsNumbers) {
   EXPECT_TRUE(has(rpe.out, "0.005763")) << rpe.out;
 }
 
+TEST(EvalCli, APoseFarBeyondMetresIsNamedByItsLine) {
+  // A pose at 1e300 m gave ATE inf / nan (exit 0): now exit 2 naming the file and line.
+  TempDir tmp;
+  std::string gt = "# timestamp tx ty tz qx qy qz qw\n";
+  for (int k = 0; k < 5; ++k)
+    gt += std::to_string(100 + k) + (k == 3 ? " 1e300" : " 0.5") + " 0 0 0 0 0 1\n";
+  write_text(tmp / "gt.txt", gt);
+  write_text(tmp / "est.txt",
+             "100 0 0 0 0 0 0 1\n101 0 0 0 0 0 0 1\n102 0 0 0 0 0 0 1\n"
+             "103 0 0 0 0 0 0 1\n104 0 0 0 0 0 0 1\n");
+  for (const char* what : {"ate", "rpe"}) {
+    const auto r = run_objmap({"eval", what, "--gt", (tmp / "gt.txt").string(), "--est",
+                               (tmp / "est.txt").string(), "--json", (tmp / "r.json").string()});
+    EXPECT_EQ(r.exit_code, 2) << what << r.out;
+    EXPECT_TRUE(
+        has(r.err, (tmp / "gt.txt").string() + ":5: the pose at 103 has a coordinate of 1e+300 m"))
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(objmap::test::fs::exists(tmp / "r.json"));
+  }
+}
+
 // A small pair of files: gt on a line, the estimate shifted by (1, 2, 3) m.
 void write_small_pair(const TempDir& tmp) {
   std::string gt = "# timestamp tx ty tz qx qy qz qw\n", est = gt;

@@ -158,6 +158,20 @@ TEST(ReadCameraFile, JsonMissingOrBadField) {
   EXPECT_EQ(camera_error(dir / "none.json"), "camera file not found");
 }
 
+TEST(ReadCameraFile, ABrokenYamlIsOneLine) {
+  // OpenCV's parser message spans two lines; objmap's error is one.
+  TempDir dir;
+  write_text(dir / "orb.yaml", "%YAML:1.0\nCamera.fx: [1, 2\nCamera.fy: 3\n");
+  try {
+    read_camera_file(dir / "orb.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_NE(what.find("not a readable OpenCV YAML file"), std::string::npos) << what;
+  }
+}
+
 TEST(ReadCameraFile, ANumberBeyondADoubleIsNamed) {
   // "fx": 1e999 overflows a double: nlohmann's out_of_range error was exit 1 naming no file.
   TempDir dir;

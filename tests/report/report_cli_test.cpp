@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "objmap/core/error.h"
 #include "objmap/eval/ate.h"
 #include "objmap/io/objects_json.h"
 #include "objmap/io/trajectory.h"
@@ -297,6 +298,35 @@ TEST(ObjectsJson, MissingFieldIsNamed) {
     EXPECT_NE(std::string(e.what()).find("objects[0]"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("score"), std::string::npos) << e.what();
   }
+}
+
+TEST(ObjectsJson, DuplicateIdsAndNegativeExtentsAreNamed) {
+  // eval objects took both (exit 0, garbage IoU).
+  const auto object = [](int id, const std::string& half) {
+    return R"({"id":)" + std::to_string(id) +
+           R"(,"class":"cup","score":0.9,"centroid":[0,0,0],"aabb":{"min":[0,0,0],"max":[1,1,1]},)"
+           R"("obb":{"center":[0,0,0],"half_extent":)" +
+           half +
+           R"(,"rotation":[1,0,0,0,1,0,0,0,1]},"points":{"outlier_filtered":5},)"
+           R"("observation_count":3,"ply":"objects/x.ply"})";
+  };
+  TempDir dir;
+  const auto error = [&](const std::string& objects) {
+    write_text(dir / "objects.json", R"({"objects":[)" + objects + "]}");
+    try {
+      io::read_objects_json(dir / "objects.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error(object(1, "[0.1,0.1,0.1]")), "no error");
+  EXPECT_NE(error(object(1, "[0.1,0.1,0.1]") + "," + object(1, "[0.1,0.1,0.1]"))
+                .find("objects[1].id: id 1 appears twice; expected unique ids"),
+            std::string::npos);
+  EXPECT_NE(
+      error(object(1, "[0.1,-0.1,0.1]")).find("objects[0].obb.half_extent: negative half extent"),
+      std::string::npos);
 }
 
 }  // namespace

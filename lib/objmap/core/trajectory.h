@@ -1,4 +1,5 @@
 #pragma once
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,7 @@ namespace objmap {
 struct StampedPose {
   double timestamp = 0.0;
   Pose world_from_cam = Pose::Identity();
+  std::size_t line = 0;  // its line in the file it was read from (0: not read from a file)
 };
 
 // A trajectory sorted by strictly increasing timestamp (the readers enforce it).

@@ -87,6 +87,22 @@ std::vector<StampMatch> associate(const Trajectory& gt, const Trajectory& est,
   return associate(stamps_of(gt), stamps_of(est), options);
 }
 
+void require_plausible_positions(const Trajectory& trajectory,
+                                 const std::vector<std::size_t>& indices) {
+  for (std::size_t i : indices) {
+    const StampedPose& p = trajectory.poses[i];
+    // The largest coordinate (the norm itself would overflow for such a pose).
+    const double distance = p.world_from_cam.translation().cwiseAbs().maxCoeff();
+    if (distance <= kMaxPositionM) continue;
+    const std::string file =
+        trajectory.source.empty() ? std::string("trajectory") : trajectory.source;
+    throw InputError(p.line ? file + ":" + std::to_string(p.line) : file,
+                     "the pose at " + number_text(p.timestamp) + " has a coordinate of " +
+                         number_text(distance) + " m; expected positions in metres within " +
+                         number_text(kMaxPositionM) + " m (its squares overflow the evaluation)");
+  }
+}
+
 void require_pairs(const std::vector<StampMatch>& matches, std::size_t min_pairs,
                    const Trajectory& gt, const Trajectory& est, const AssociateOptions& options) {
   if (matches.size() >= min_pairs) return;

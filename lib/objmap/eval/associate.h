@@ -30,6 +30,15 @@ std::vector<StampMatch> associate(const std::vector<double>& gt_stamps,
 std::vector<StampMatch> associate(const Trajectory& gt, const Trajectory& est,
                                   const AssociateOptions& options);
 
+// A position with a coordinate beyond this is no camera trajectory in metres: its square
+// overflows the alignment's sums (a pose at 1e300 gave an ATE of inf / nan).
+constexpr double kMaxPositionM = 1e6;
+
+// Throws InputError("<file>:<line>", ...) for the first pose of `trajectory` among `indices` whose
+// position is farther than kMaxPositionM from the origin.
+void require_plausible_positions(const Trajectory& trajectory,
+                                 const std::vector<std::size_t>& indices);
+
 // Throws InputError(est.source, "no pose pairs within max_diff ...") when `matches` has fewer than
 // `min_pairs` pairs (evaluate_ate.py needs 2); the message gives both time spans and the offset.
 void require_pairs(const std::vector<StampMatch>& matches, std::size_t min_pairs,

@@ -62,6 +62,13 @@ AteResult evaluate_ate(const Trajectory& gt, const Trajectory& est, const AteOpt
   association.offset_s = options.offset_s;
   result.matches = associate(gt, est, association);
   require_pairs(result.matches, 2, gt, est, association);
+  std::vector<std::size_t> gt_used, est_used;
+  for (const StampMatch& m : result.matches) {
+    gt_used.push_back(m.gt_index);
+    est_used.push_back(m.est_index);
+  }
+  require_plausible_positions(gt, gt_used);
+  require_plausible_positions(est, est_used);
 
   // 2. Align the estimate's positions onto the ground truth's (evaluate_ate.py `align`).
   std::vector<Vec3> est_points, gt_points;

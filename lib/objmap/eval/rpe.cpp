@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "objmap/core/error.h"
+#include "objmap/eval/associate.h"
 #include "objmap/eval/format.h"
 
 namespace objmap::eval {
@@ -127,6 +128,13 @@ RpeResult evaluate_rpe(const Trajectory& gt, const Trajectory& est, const RpeOpt
           std::to_string(gt.size()) + " pose; expected at least 2 for relative poses");
   const std::vector<double> stamps_gt = stamps_of(gt);
   const std::vector<double> stamps_est = stamps_of(est);
+  const auto all = [](const Trajectory& t) {
+    std::vector<std::size_t> i(t.size());
+    for (std::size_t k = 0; k < i.size(); ++k) i[k] = k;
+    return i;
+  };
+  require_plausible_positions(gt, all(gt));
+  require_plausible_positions(est, all(est));
 
   RpeResult result;
   result.gt_source = gt.source;

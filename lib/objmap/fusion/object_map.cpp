@@ -45,10 +45,16 @@ void ObjectMapOptions::check() const {
           "must be >= 0, got " + std::to_string(weight_overlap));
   require(weight_id + weight_distance + weight_overlap > 0.0, "ObjectMapOptions.weight_*",
           "at least one weight must be > 0");
-  require(finite_nonneg(match_threshold), "ObjectMapOptions.match_threshold",
-          "must be >= 0, got " + std::to_string(match_threshold));
-  require(finite_nonneg(merge_threshold), "ObjectMapOptions.merge_threshold",
-          "must be >= 0, got " + std::to_string(merge_threshold));
+  // P of eq 22 is at most w_id + w_d + w_m: a threshold at or above it matches nothing.
+  const double p_max = weight_id + weight_distance + weight_overlap;
+  require(finite_nonneg(match_threshold) && match_threshold < p_max,
+          "ObjectMapOptions.match_threshold",
+          "must be in [0, w_id + w_d + w_m = " + std::to_string(p_max) + "), got " +
+              std::to_string(match_threshold) + " (P of eq 22 is at most that sum)");
+  require(finite_nonneg(merge_threshold) && merge_threshold < p_max,
+          "ObjectMapOptions.merge_threshold",
+          "must be in [0, w_id + w_d + w_m = " + std::to_string(p_max) + "), got " +
+              std::to_string(merge_threshold) + " (P of eq 22 is at most that sum)");
   require(min_observations >= 1, "ObjectMapOptions.min_observations",
           "must be >= 1, got " + std::to_string(min_observations));
   require(min_points >= 1, "ObjectMapOptions.min_points",

@@ -129,7 +129,11 @@ Camera read_camera_yaml(const fs::path& path) {
     if (!storage.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML))
       throw InputError(file, "cannot open the camera file for reading");
   } catch (const cv::Exception& e) {
-    throw InputError(file, "not a readable OpenCV YAML file (" + e.msg +
+    // OpenCV's own message (its `err` part: "Incorrect indentation" and where), on one line.
+    std::string reason = e.err;
+    std::replace(reason.begin(), reason.end(), '\n', ' ');
+    while (!reason.empty() && reason.back() == ' ') reason.pop_back();
+    throw InputError(file, "not a readable OpenCV YAML file (" + reason +
                                "); expected ORB-SLAM2 settings starting with %YAML:1.0");
   }
   Camera camera;

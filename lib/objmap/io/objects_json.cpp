@@ -1,7 +1,9 @@
 #include "objmap/io/objects_json.h"
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "objmap/core/error.h"
 
@@ -44,11 +46,15 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
   const json& objects = field(doc, "objects", file.string());
   if (!objects.is_array()) throw InputError(file.string() + ": objects", "expected an array");
   std::vector<MappedObject> out;
+  std::set<int> ids;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const json& o = objects[i];
     const std::string where = file.string() + ": objects[" + std::to_string(i) + "]";
     MappedObject m;
     m.id = static_cast<int>(number(o, "id", where));
+    if (!ids.insert(m.id).second)
+      throw InputError(where + ".id",
+                       "id " + std::to_string(m.id) + " appears twice; expected unique ids");
     const json& cls = field(o, "class", where);
     if (!cls.is_string()) throw InputError(where + ".class", "expected a string");
     m.class_name = cls.get<std::string>();
@@ -60,8 +66,11 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
     const json& obb = field(o, "obb", where);
     m.obb.center = vec3(obb, "center", where + ".obb");
     m.obb.half_extent = vec3(obb, "half_extent", where + ".obb");
+    if (!(m.obb.half_extent.minCoeff() >= 0))
+      throw InputError(where + ".obb.half_extent", "negative half extent; expected >= 0");
     const json& rot = field(obb, "rotation", where + ".obb");
-    if (!rot.is_array() || rot.size() != 9)
+    if (!rot.is_array() || rot.size() != 9 ||
+        !std::all_of(rot.begin(), rot.end(), [](const json& v) { return v.is_number(); }))
       throw InputError(where + ".obb.rotation", "expected 9 numbers (row-major)");
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) m.obb.rotation(r, c) = rot[3 * r + c].get<double>();

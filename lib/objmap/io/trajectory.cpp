@@ -134,6 +134,7 @@ Trajectory read_trajectory(const std::filesystem::path& file) {
                                       "; this later pose is used, as the TUM benchmark's tools do");
         trajectory.poses.back().world_from_cam =
             pose_from_tum(v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+        trajectory.poses.back().line = in.line_number();
         previous_line = in.line_number();
         continue;
       }
@@ -143,7 +144,8 @@ Trajectory read_trajectory(const std::filesystem::path& file) {
                                          "; expected strictly increasing timestamps");
     }
     previous_line = in.line_number();
-    trajectory.poses.push_back({v[0], pose_from_tum(v[1], v[2], v[3], v[4], v[5], v[6], v[7])});
+    trajectory.poses.push_back(
+        {v[0], pose_from_tum(v[1], v[2], v[3], v[4], v[5], v[6], v[7]), in.line_number()});
   }
   if (trajectory.poses.empty())
     throw InputError(file.string(),
