@@ -126,38 +126,52 @@ double read_binary(const char* p, const std::string& type) {
 
 }  // namespace
 
-PointCloud read_ply(const fs::path& path) {
-  const std::string where = path.string();
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(where, "cannot open for reading");
-  std::string line;
+namespace {
+
+// A PLY file being read: the stream, its current line and line number.
+struct PlyReader {
+  std::ifstream f;
+  std::string where, line;
   int line_no = 0;
-  auto next_line = [&]() -> bool {
+  bool next_line() {
     if (!std::getline(f, line)) return false;
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     return true;
-  };
-  if (!next_line() || line != "ply")
-    throw InputError(where + ":1", "not a PLY file; expected 'ply'");
+  }
+};
 
+// What the header says: the format, the vertex count and the vertex properties with their
+// offsets in a binary row; the indices of x, y, z and of the colour (-1: absent).
+struct PlyHeader {
   std::string format;
   std::size_t vertices = 0;
-  bool in_vertex = false, seen_vertex = false, vertex_first = true;
   std::vector<Property> props;
+  std::vector<std::size_t> offset;
+  std::size_t stride = 0;
+  int ix = -1, iy = -1, iz = -1, ir = -1, ig = -1, ib = -1;
+  bool colour() const { return ir >= 0 && ig >= 0 && ib >= 0; }
+};
+
+// Step 1: the header lines up to end_header.
+PlyHeader read_header(PlyReader& r) {
+  if (!r.next_line() || r.line != "ply")
+    throw InputError(r.where + ":1", "not a PLY file; expected 'ply'");
+  PlyHeader h;
+  bool in_vertex = false, seen_vertex = false, vertex_first = true;
   while (true) {
-    if (!next_line()) throw InputError(where, "header has no 'end_header'");
-    std::istringstream ls(line);
+    if (!r.next_line()) throw InputError(r.where, "header has no 'end_header'");
+    std::istringstream ls(r.line);
     std::string word;
     ls >> word;
-    const std::string at = where + ":" + std::to_string(line_no);
+    const std::string at = r.where + ":" + std::to_string(r.line_no);
     if (word == "end_header") break;
     if (word == "comment" || word == "obj_info" || word.empty()) continue;
     if (word == "format") {
-      ls >> format;
-      if (format != "binary_little_endian" && format != "ascii")
+      ls >> h.format;
+      if (h.format != "binary_little_endian" && h.format != "ascii")
         throw InputError(
-            at, "format '" + format + "' not supported; expected binary_little_endian or ascii");
+            at, "format '" + h.format + "' not supported; expected binary_little_endian or ascii");
     } else if (word == "element") {
       std::string name;
       std::size_t count = 0;
@@ -166,7 +180,7 @@ PointCloud read_ply(const fs::path& path) {
       in_vertex = name == "vertex";
       if (in_vertex) {
         seen_vertex = true;
-        vertices = count;
+        h.vertices = count;
       } else if (!seen_vertex && count > 0) {
         vertex_first = false;
       }
@@ -179,83 +193,109 @@ PointCloud read_ply(const fs::path& path) {
       type = normalise_type(type);
       const int size = type_size(type);
       if (size == 0 || name.empty()) throw InputError(at, "unknown property type '" + type + "'");
-      props.push_back({type, name, size});
+      h.props.push_back({type, name, size});
     } else {
-      throw InputError(at, "unexpected header line '" + line + "'");
+      throw InputError(at, "unexpected header line '" + r.line + "'");
     }
   }
-  if (format.empty()) throw InputError(where, "header has no 'format' line");
-  if (!seen_vertex) throw InputError(where, "no 'element vertex'; expected a point cloud");
-  if (!vertex_first) throw InputError(where, "'vertex' is not the first element; not supported");
+  if (h.format.empty()) throw InputError(r.where, "header has no 'format' line");
+  if (!seen_vertex) throw InputError(r.where, "no 'element vertex'; expected a point cloud");
+  if (!vertex_first) throw InputError(r.where, "'vertex' is not the first element; not supported");
+  return h;
+}
 
-  int ix = -1, iy = -1, iz = -1, ir = -1, ig = -1, ib = -1;
-  std::vector<std::size_t> offset(props.size());
-  std::size_t stride = 0;
-  for (std::size_t i = 0; i < props.size(); ++i) {
-    offset[i] = stride;
-    stride += props[i].size;
-    const std::string& n = props[i].name;
+// Step 2: where x, y, z and the colour are, and each property's offset in a binary row.
+void locate_properties(const std::string& where, PlyHeader& h) {
+  h.offset.resize(h.props.size());
+  for (std::size_t i = 0; i < h.props.size(); ++i) {
+    h.offset[i] = h.stride;
+    h.stride += h.props[i].size;
+    const std::string& n = h.props[i].name;
     const int k = static_cast<int>(i);
-    if (n == "x") ix = k;
-    if (n == "y") iy = k;
-    if (n == "z") iz = k;
-    if (n == "red" || n == "r") ir = k;
-    if (n == "green" || n == "g") ig = k;
-    if (n == "blue" || n == "b") ib = k;
+    if (n == "x") h.ix = k;
+    if (n == "y") h.iy = k;
+    if (n == "z") h.iz = k;
+    if (n == "red" || n == "r") h.ir = k;
+    if (n == "green" || n == "g") h.ig = k;
+    if (n == "blue" || n == "b") h.ib = k;
   }
-  if (ix < 0 || iy < 0 || iz < 0) throw InputError(where, "vertex has no x, y and z properties");
-  const bool colour = ir >= 0 && ig >= 0 && ib >= 0;
+  if (h.ix < 0 || h.iy < 0 || h.iz < 0)
+    throw InputError(where, "vertex has no x, y and z properties");
+}
 
-  // The count is checked against the bytes that follow the header before anything is allocated:
-  // a header's count is not to be trusted (a 4-billion-vertex header on a small file).
-  const std::streamoff body_start = f.tellg();
-  f.seekg(0, std::ios::end);
+// Step 3: the count against the bytes that follow the header, before anything is allocated: a
+// header's count is not to be trusted (a 4-billion-vertex header on a small file).
+void check_count(PlyReader& r, const PlyHeader& h) {
+  const std::streamoff body_start = r.f.tellg();
+  r.f.seekg(0, std::ios::end);
   const auto remaining =
-      static_cast<std::size_t>(std::max<std::streamoff>(0, f.tellg() - body_start));
-  f.seekg(body_start);
-  const bool binary = format == "binary_little_endian";
-  const std::size_t least_per_vertex = binary ? stride : 2 * props.size();  // ascii: "0 " each
-  if (least_per_vertex > 0 && vertices > remaining / least_per_vertex)
-    throw InputError(where, "the header says " + std::to_string(vertices) + " vertices, but only " +
-                                std::to_string(remaining) + " bytes follow it (at least " +
-                                std::to_string(least_per_vertex) +
-                                " per vertex): truncated, or a wrong count; expected the file "
-                                "to hold every vertex it counts");
+      static_cast<std::size_t>(std::max<std::streamoff>(0, r.f.tellg() - body_start));
+  r.f.seekg(body_start);
+  const bool binary = h.format == "binary_little_endian";
+  const std::size_t least_per_vertex = binary ? h.stride : 2 * h.props.size();  // ascii: "0 "
+  if (least_per_vertex > 0 && h.vertices > remaining / least_per_vertex)
+    throw InputError(r.where, "the header says " + std::to_string(h.vertices) +
+                                  " vertices, but only " + std::to_string(remaining) +
+                                  " bytes follow it (at least " + std::to_string(least_per_vertex) +
+                                  " per vertex): truncated, or a wrong count; expected the file "
+                                  "to hold every vertex it counts");
+}
 
-  PointCloud cloud;
-  cloud.points.resize(vertices);
-  if (colour) cloud.colors.resize(vertices);
-  auto to_byte = [](double v) { return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v); };
-  if (format == "binary_little_endian") {
-    std::vector<char> body(vertices * stride);
-    f.read(body.data(), static_cast<std::streamsize>(body.size()));
-    if (static_cast<std::size_t>(f.gcount()) != body.size())
-      throw InputError(where, "file ends after " +
-                                  std::to_string(f.gcount() / (stride ? stride : 1)) + " of " +
-                                  std::to_string(vertices) + " vertices (truncated)");
-    for (std::size_t i = 0; i < vertices; ++i) {
-      const char* row = body.data() + i * stride;
-      auto value = [&](int k) { return read_binary(row + offset[k], props[k].type); };
-      cloud.points[i] = Vec3f(static_cast<float>(value(ix)), static_cast<float>(value(iy)),
-                              static_cast<float>(value(iz)));
-      if (colour) cloud.colors[i] = Rgb{to_byte(value(ir)), to_byte(value(ig)), to_byte(value(ib))};
-    }
-  } else {
-    std::vector<double> v(props.size());
-    for (std::size_t i = 0; i < vertices; ++i) {
-      if (!next_line())
-        throw InputError(where, "file ends after " + std::to_string(i) + " of " +
-                                    std::to_string(vertices) + " vertices (truncated)");
-      std::istringstream ls(line);
-      for (double& x : v) ls >> x;
-      if (!ls)
-        throw InputError(where + ":" + std::to_string(line_no),
-                         "expected " + std::to_string(props.size()) + " numbers per vertex");
-      cloud.points[i] =
-          Vec3f(static_cast<float>(v[ix]), static_cast<float>(v[iy]), static_cast<float>(v[iz]));
-      if (colour) cloud.colors[i] = Rgb{to_byte(v[ir]), to_byte(v[ig]), to_byte(v[ib])};
-    }
+std::uint8_t to_byte(double v) { return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v); }
+
+// Step 4, binary: the rows in one read.
+void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
+  std::vector<char> body(h.vertices * h.stride);
+  r.f.read(body.data(), static_cast<std::streamsize>(body.size()));
+  if (static_cast<std::size_t>(r.f.gcount()) != body.size())
+    throw InputError(r.where, "file ends after " +
+                                  std::to_string(r.f.gcount() / (h.stride ? h.stride : 1)) +
+                                  " of " + std::to_string(h.vertices) + " vertices (truncated)");
+  for (std::size_t i = 0; i < h.vertices; ++i) {
+    const char* row = body.data() + i * h.stride;
+    auto value = [&](int k) { return read_binary(row + h.offset[k], h.props[k].type); };
+    cloud.points[i] = Vec3f(static_cast<float>(value(h.ix)), static_cast<float>(value(h.iy)),
+                            static_cast<float>(value(h.iz)));
+    if (h.colour())
+      cloud.colors[i] = Rgb{to_byte(value(h.ir)), to_byte(value(h.ig)), to_byte(value(h.ib))};
   }
+}
+
+// Step 4, ascii: a line per vertex.
+void read_ascii_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
+  std::vector<double> v(h.props.size());
+  for (std::size_t i = 0; i < h.vertices; ++i) {
+    if (!r.next_line())
+      throw InputError(r.where, "file ends after " + std::to_string(i) + " of " +
+                                    std::to_string(h.vertices) + " vertices (truncated)");
+    std::istringstream ls(r.line);
+    for (double& x : v) ls >> x;
+    if (!ls)
+      throw InputError(r.where + ":" + std::to_string(r.line_no),
+                       "expected " + std::to_string(h.props.size()) + " numbers per vertex");
+    cloud.points[i] = Vec3f(static_cast<float>(v[h.ix]), static_cast<float>(v[h.iy]),
+                            static_cast<float>(v[h.iz]));
+    if (h.colour()) cloud.colors[i] = Rgb{to_byte(v[h.ir]), to_byte(v[h.ig]), to_byte(v[h.ib])};
+  }
+}
+
+}  // namespace
+
+PointCloud read_ply(const fs::path& path) {
+  PlyReader r;
+  r.where = path.string();
+  r.f.open(path, std::ios::binary);
+  if (!r.f) throw InputError(r.where, "cannot open for reading");
+  PlyHeader h = read_header(r);
+  locate_properties(r.where, h);
+  check_count(r, h);
+  PointCloud cloud;
+  cloud.points.resize(h.vertices);
+  if (h.colour()) cloud.colors.resize(h.vertices);
+  if (h.format == "binary_little_endian")
+    read_binary_body(r, h, cloud);
+  else
+    read_ascii_body(r, h, cloud);
   return cloud;
 }
 
