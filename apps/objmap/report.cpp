@@ -397,6 +397,9 @@ void add_top_view(const ReportOptions& options, const RunFiles& files, const Tra
                   int up_axis, report::PageContent& page) {
   const bool has_semantic = fs::exists(options.run / "map_semantic.ply");
   const std::string map_name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
+  require(fs::exists(options.run / map_name), (options.run / "map_semantic.ply").string(),
+          "missing, and so is map_objects.ply; expected the maps objmap fuse writes (the "
+          "semantic map, or the objects-only map of a run fused with --dense-map false)");
   const PointCloud map = io::read_ply(options.run / map_name);
   report::TopViewOptions view_options;
   view_options.up_axis = up_axis;

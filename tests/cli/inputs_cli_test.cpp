@@ -29,7 +29,9 @@ void expect_refused(const Case& c) {
   EXPECT_EQ(r.exit_code, 2) << c.message << "\n" << r.err;
   EXPECT_EQ(r.err.rfind("objmap: error: " + c.message, 0), 0u) << r.err;
   EXPECT_NE(r.err.find("objmap never writes over what it reads"), std::string::npos) << r.err;
-  if (fs::is_regular_file(c.kept)) EXPECT_EQ(read_text(c.kept), before) << c.kept;
+  if (fs::is_regular_file(c.kept)) {
+    EXPECT_EQ(read_text(c.kept), before) << c.kept;
+  }
   EXPECT_EQ(count(), files) << c.kept;
 }
 
@@ -92,6 +94,23 @@ TEST(InputsCli, NoCommandWritesOverWhatItReads) {
       {{"correct", "--run", run.string(), "--out", tmp.path().string()}, "--out: ", run},
   };
   for (const Case& c : cases) expect_refused(c);
+}
+
+TEST(InputsCli, AnOutputThatCannotBeWrittenIsRefusedBeforeTheWork) {
+  // --out inside a regular file: refused before any work (it used to fail at the final rename,
+  // naming the temporary folder).
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
+  TempDir tmp;
+  write_text(tmp / "a_file", "x");
+  const RunResult r = run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
+                                  (data / "groundtruth.txt").string(), "--segmentation",
+                                  (data / "detections_yolofastest").string(), "--out",
+                                  (tmp / "a_file" / "run").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "objmap: error: " + (tmp / "a_file" / "run").string() +
+                       ": cannot be written: " + (tmp / "a_file").string() +
+                       " is not a folder; expected an output inside a folder\n");
+  EXPECT_EQ(r.out, "") << "no work was done";
 }
 
 }  // namespace

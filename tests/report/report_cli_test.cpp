@@ -208,6 +208,17 @@ TEST(ReportCli, ARunWithoutTheDenseMapsShowsTheObjectsMap) {
   EXPECT_NE(md.find("map_objects.ply seen from above"), std::string::npos);
   EXPECT_EQ(md.find("map_semantic.ply seen from above"), std::string::npos);
   EXPECT_FALSE(cv::imread((dir / "rep" / "topview.png").string(), cv::IMREAD_COLOR).empty());
+
+  // Without either map: exit 2 naming the semantic map, nothing written (docs/cli.md).
+  fs::remove(copy / "map_objects.ply");
+  const RunResult none =
+      run_objmap({"report", "--run", copy.string(), "--out", (dir / "rep2").string()});
+  EXPECT_EQ(none.exit_code, 2) << none.err;
+  EXPECT_NE(
+      none.err.find((copy / "map_semantic.ply").string() + ": missing, and so is map_objects.ply"),
+      std::string::npos)
+      << none.err;
+  EXPECT_FALSE(fs::exists(dir / "rep2"));
 }
 
 TEST(ReportCli, TrajectoriesAgainstTheGroundTruthThenTheCorrectedOne) {

@@ -173,9 +173,28 @@ bool is_frame_file(const std::string& name) {
 
 }  // namespace
 
+namespace {
+// The output's folder must be one objmap can write in: its nearest existing ancestor is a folder
+// and writable (checked before the work, so that a run does not end in a failed rename).
+void require_writable_place(const fs::path& out) {
+  std::error_code ec;
+  fs::path ancestor = fs::absolute(out, ec).parent_path();
+  while (!ancestor.empty() && !fs::exists(ancestor, ec) && ancestor != ancestor.parent_path())
+    ancestor = ancestor.parent_path();
+  if (ancestor.empty()) return;
+  require(fs::is_directory(ancestor, ec), out.string(),
+          "cannot be written: " + ancestor.string() +
+              " is not a folder; expected an output inside a folder");
+  require(::access(ancestor.c_str(), W_OK) == 0, out.string(),
+          "cannot be written: " + ancestor.string() + " is not writable (" + std::strerror(errno) +
+              "); expected a folder objmap may write in");
+}
+}  // namespace
+
 void require_replaceable(const fs::path& out_given, const OutputKind& kind) {
   const fs::path out = output_path(out_given);
   require(!out.empty(), out_given.string(), "expected an output folder name");
+  require_writable_place(out);
   std::error_code ec;
   const fs::file_status status = fs::symlink_status(out, ec);
   if (!fs::exists(status)) return;
