@@ -33,10 +33,11 @@ namespace objmap::pipeline {
 namespace fs = std::filesystem;
 using ordered_json = nlohmann::ordered_json;
 
-std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
+namespace {
+
+// Association windows, threads, keyframes, depth range and the dense map.
+std::vector<ConfigField> inputs_fields(FuseOptions& o) {
   auto& k = o.keyframes;
-  auto& m = o.objects;
-  auto& b = o.box_mask;
   return {
       {"max_diff_s", "--max-diff", "rgb/depth and frame/pose association window, s", &o.max_diff_s},
       {"threads", "--threads",
@@ -62,6 +63,12 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "write the dense and semantic maps; false: the objects only (about 1.7x faster, 40% of "
        "the memory; objects.json is the same)",
        &o.dense_map},
+  };
+}
+
+// How the segmentation is read and which instances are kept.
+std::vector<ConfigField> segmentation_fields(FuseOptions& o) {
+  return {
       {"segmentation.format", "--seg-format",
        "auto|json|png|txt-paper|boxes-named|boxes-coco|boxes-xywh", &o.seg_format},
       {"segmentation.default_class", "--default-class", "class of box files without one",
@@ -73,6 +80,13 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "this much inside the other's are one object boxed twice: the lower score is dropped (1: "
        "keep all)",
        &o.duplicate_overlap},
+  };
+}
+
+// Association of observations with objects (eqs 17, 21).
+std::vector<ConfigField> association_fields(FuseOptions& o) {
+  auto& m = o.objects;
+  return {
       {"objects.voxel_m", "--object-voxel", "object voxel sets and overlap M (eq 21), m",
        &m.voxel_m},
       {"objects.distance_gate_m", "--distance-gate", "centroid gate D (eq 17), m",
@@ -88,6 +102,13 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        &m.gate_radius_factor},
       {"objects.one_observation_per_frame", "--one-per-frame",
        "an object takes at most one instance of a keyframe", &m.one_observation_per_frame},
+  };
+}
+
+// The merge pass and the class-confusion pass.
+std::vector<ConfigField> merging_fields(FuseOptions& o) {
+  auto& m = o.objects;
+  return {
       {"objects.merge_min_overlap", "--merge-min-overlap",
        "merge pass: containment of the smaller object in the larger at least this",
        &m.merge_min_overlap},
@@ -109,6 +130,13 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "merge pass: never join two objects both labelled their class in more than this share of "
        "the smaller one's keyframes (stacked books)",
        &m.merge_max_shared_frames},
+  };
+}
+
+// Voxel support, eq 22 and confirmation.
+std::vector<ConfigField> scoring_fields(FuseOptions& o) {
+  auto& m = o.objects;
+  return {
       {"objects.min_voxel_support", "--min-voxel-support",
        "an object keeps the voxels seen in at least this share of its observations",
        &o.min_voxel_support},
@@ -131,6 +159,13 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        &m.min_points},
       {"objects.require_same_class", "--same-class", "match only objects of the same voted class",
        &m.require_same_class},
+  };
+}
+
+// Eq 18, masks from boxes, and the clean-up of given masks.
+std::vector<ConfigField> filters_and_masks_fields(FuseOptions& o) {
+  auto& b = o.box_mask;
+  return {
       {"outlier.enabled", "--outlier-filter", "statistical outlier removal (eq 18) per object",
        &o.outlier_filter},
       {"outlier.neighbours", "--outlier-k", "K nearest neighbours of eq 18", &o.outlier.neighbours},
@@ -162,6 +197,19 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "depth)",
        &o.depth_gate.size_factor},
   };
+}
+
+}  // namespace
+
+std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
+  // In the order of the data flow (the order of --help and of run.json's options).
+  std::vector<ConfigField> fields;
+  for (auto part : {inputs_fields, segmentation_fields, association_fields, merging_fields,
+                    scoring_fields, filters_and_masks_fields}) {
+    std::vector<ConfigField> more = part(o);
+    fields.insert(fields.end(), more.begin(), more.end());
+  }
+  return fields;
 }
 
 void FuseOptions::check() const {
