@@ -664,16 +664,21 @@ void ObjectMap::merge_class_confusions(std::vector<MergeLink>& made) {
     Object* best_small = nullptr;
     Object* best_large = nullptr;
     Scores best;
+    // Each live object's views and canonical class, once per round (not once per pair).
+    std::vector<double> views(objects_.size(), 0.0);
+    std::vector<std::string> classes(objects_.size());
+    for (const auto& o : objects_)
+      if (o->alive) {
+        views[o->id] = count_views(o->provenance, options_);
+        classes[o->id] = segmentation::canonical_class(voted_class(*o));
+      }
     for (const auto& a : objects_) {
       if (!a->alive) continue;
-      const std::string class_a = segmentation::canonical_class(voted_class(*a));
-      const double views_a = count_views(a->provenance, options_);
       for (const auto& b : objects_) {
         if (!b->alive || a == b || a->voxels.size() > b->voxels.size()) continue;
         if (a->voxels.size() == b->voxels.size() && a->id > b->id) continue;
-        if (count_views(b->provenance, options_) < options_.confusion_min_view_ratio * views_a)
-          continue;
-        if (segmentation::canonical_class(voted_class(*b)) == class_a) continue;
+        if (views[b->id] < options_.confusion_min_view_ratio * views[a->id]) continue;
+        if (classes[b->id] == classes[a->id]) continue;
         // The containment of a in b (whatever the configured measure of eq 21); P is no
         // criterion here.
         const int t = options_.overlap_tolerance_voxels;
