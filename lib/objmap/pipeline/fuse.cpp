@@ -419,6 +419,18 @@ struct InstanceMask {
   std::size_t pixels = kUnknown;  // of the mask, counted when the duplicate rule needs it
 };
 
+// Takes a clean-up's mask (refine_mask, gate_mask_depth) when it removed pixels, and counts the
+// instance and the pixels.
+template <typename CleanUp>
+void adopt(CleanUp&& r, InstanceMask& m, std::size_t& instances, std::uint64_t& pixels) {
+  if (r.removed_pixels == 0) return;
+  ++instances;
+  pixels += r.removed_pixels;
+  m.owned = std::move(r.mask);
+  m.mask = &m.owned;
+  m.bounds = r.bounds;
+}
+
 // The mask of a given-mask instance after refine_mask (the parts across a depth edge from the
 // rest go, mask_refine.h) and the depth gate (pixels whose depth disagrees with the rest of the
 // observation go, depth_gate.h), each counted in `work`.
@@ -428,27 +440,15 @@ void clean_given_mask(const FuseOptions& options, const Camera& camera, const cv
     segmentation::MaskRefineOptions refine = options.mask_refine;
     refine.min_depth_m = options.depth.min_depth_m;
     refine.max_depth_m = options.depth.max_depth_m;
-    auto refined = segmentation::refine_mask(*m.mask, m.bounds, depth, camera, refine);
-    if (refined.removed_pixels > 0) {
-      ++work.refined;
-      work.mask_pixels_removed += refined.removed_pixels;
-      m.owned = std::move(refined.mask);
-      m.mask = &m.owned;
-      m.bounds = refined.bounds;
-    }
+    adopt(segmentation::refine_mask(*m.mask, m.bounds, depth, camera, refine), m, work.refined,
+          work.mask_pixels_removed);
   }
   if (options.depth_gate.enabled && !m.bounds.empty()) {
     segmentation::DepthGateOptions gate = options.depth_gate;
     gate.min_depth_m = options.depth.min_depth_m;
     gate.max_depth_m = options.depth.max_depth_m;
-    auto gated = segmentation::gate_mask_depth(*m.mask, m.bounds, depth, camera, gate);
-    if (gated.removed_pixels > 0) {
-      ++work.depth_gated;
-      work.depth_gate_pixels_removed += gated.removed_pixels;
-      m.owned = std::move(gated.mask);
-      m.mask = &m.owned;
-      m.bounds = gated.bounds;
-    }
+    adopt(segmentation::gate_mask_depth(*m.mask, m.bounds, depth, camera, gate), m,
+          work.depth_gated, work.depth_gate_pixels_removed);
   }
 }
 
