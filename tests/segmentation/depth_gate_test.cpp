@@ -5,44 +5,22 @@
 #include <cmath>
 #include <string>
 
+#include "mask_test_util.h"
 #include "objmap/core/error.h"
 #include "objmap/segmentation/mask_refine.h"
 
 namespace objmap::segmentation {
 namespace {
 
-constexpr double kFactor = 5000.0;
+using test_masks::camera;
+using test_masks::count;
+using test_masks::mask_of;
 
-Camera camera() {
-  Camera c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = c.fy = 525.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.depth_factor = kFactor;
-  return c;
-}
+constexpr double kFactor = 5000.0;
 
 std::uint16_t raw(double z_m) { return static_cast<std::uint16_t>(z_m * kFactor + 0.5); }
 
 cv::Mat flat(double z_m) { return cv::Mat(480, 640, CV_16UC1, cv::Scalar(raw(z_m))); }
-
-Mask mask_of(const cv::Rect& r) {
-  Mask m;
-  m.width = 640;
-  m.height = 480;
-  m.data.assign(640 * 480, 0);
-  for (int v = r.y; v < r.y + r.height; ++v)
-    for (int u = r.x; u < r.x + r.width; ++u) m.data[static_cast<std::size_t>(v) * 640 + u] = 1;
-  return m;
-}
-
-std::size_t count(const Mask& m) {
-  std::size_t n = 0;
-  for (auto b : m.data) n += b != 0;
-  return n;
-}
 
 TEST(DepthGate, BleedJoinedByARampIsRemovedWhereRefineKeepsIt) {
   // A can-sized object (60 × 80 px at 0.8 m: 9 × 12 cm) and a mask that bleeds 4 px over its top

@@ -4,21 +4,16 @@
 
 #include <string>
 
+#include "mask_test_util.h"
 #include "objmap/core/error.h"
 
 namespace objmap::segmentation {
 namespace {
 
-Camera camera() {
-  Camera c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = c.fy = 525.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.depth_factor = 5000.0;
-  return c;
-}
+using test_masks::add;
+using test_masks::camera;
+using test_masks::count;
+using test_masks::mask_of;
 
 // Depth image: `far_m` everywhere.
 cv::Mat flat(double far_m) {
@@ -26,25 +21,6 @@ cv::Mat flat(double far_m) {
 }
 void fill(cv::Mat& depth, const cv::Rect& r, double z_m) {
   depth(r).setTo(cv::Scalar(static_cast<int>(z_m * 5000.0)));
-}
-
-Mask mask_of(const cv::Rect& r) {
-  Mask m;
-  m.width = 640;
-  m.height = 480;
-  m.data.assign(640 * 480, 0);
-  for (int v = r.y; v < r.y + r.height; ++v)
-    for (int u = r.x; u < r.x + r.width; ++u) m.data[static_cast<std::size_t>(v) * 640 + u] = 1;
-  return m;
-}
-void add(Mask& m, const cv::Rect& r) {
-  for (int v = r.y; v < r.y + r.height; ++v)
-    for (int u = r.x; u < r.x + r.width; ++u) m.data[static_cast<std::size_t>(v) * 640 + u] = 1;
-}
-std::size_t count(const Mask& m) {
-  std::size_t n = 0;
-  for (auto b : m.data) n += b != 0;
-  return n;
 }
 
 TEST(MaskRefine, SpillOntoTheBackgroundIsRemoved) {
