@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.h"
 #include "objmap/io/image.h"
 #include "objmap/segmentation/detect.h"
 
@@ -18,10 +19,7 @@ using namespace objmap;
 
 namespace {
 
-fs::path data_dir() {
-  if (const char* env = std::getenv("OBJMAP_DATA")) return env;
-  return fs::path(OBJMAP_SOURCE_DIR) / ".." / "shared" / "data";
-}
+using objmap::bench::data_dir;
 
 // Arg 0: the model (0 Yolo-Fastest-1.1-xl 320x320, 1 YOLOv5n-seg 480x640, 2 YOLOv5n-seg 640x640
 // letterboxed); Arg 1: OpenCV's threads.

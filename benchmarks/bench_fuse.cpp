@@ -21,6 +21,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "bench_data.h"
 #include "objmap/io/image.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/fuse.h"
@@ -34,10 +35,7 @@ namespace {
 
 constexpr double kOpen3dMsPerFrame = 214.0;  // Open3D 0.16 on this machine (issue text)
 
-fs::path data_dir() {
-  if (const char* env = std::getenv("OBJMAP_DATA")) return env;
-  return fs::path(OBJMAP_SOURCE_DIR) / ".." / "shared" / "data";
-}
+using objmap::bench::data_dir;
 
 // One whole fuse in a child process, so that each run's peak RSS is its own (not that of earlier
 // runs or of this process). Returns false when the child failed.

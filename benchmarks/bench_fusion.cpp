@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.h"
 #include "objmap/filters/outlier.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/object_map.h"
@@ -31,10 +32,7 @@ using namespace objmap;
 
 namespace {
 
-fs::path data_dir() {
-  if (const char* env = std::getenv("OBJMAP_DATA")) return env;
-  return fs::path(OBJMAP_SOURCE_DIR) / ".." / "shared" / "data";
-}
+using objmap::bench::data_dir;
 
 // The first `n` (rgb, depth) file pairs of fr1_rpy_every4 (by sorted file name), or none.
 std::vector<std::pair<fs::path, fs::path>> real_frames(std::size_t n) {
