@@ -7,7 +7,7 @@
 #                                     installed the bench says n/a for it and goes on)
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
-          libeigen3-dev libflann-dev liblz4-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
+          libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev
           libpng-dev libjpeg-dev)
 bench_required=(python3)

@@ -22,8 +22,10 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/report/page.h"
 #include "objmap/report/plots.h"
+#include "objmap/report/scene_graph.h"
 #include "objmap/report/thumbnail.h"
 #include "objmap/report/topview.h"
+#include "objmap/scene/query.h"
 
 namespace objmap::app {
 namespace {
@@ -39,7 +41,7 @@ struct ReportOptions {
   fs::path gt_objects;  // ground-truth objects; default the dataset's objects_gt.json if present
   fs::path reference;   // or a reference map RUN_GT/objects.json
   std::string gt_class = "object";  // class of the objects of a cuboid list
-  std::string up = "z";             // world up axis
+  std::string up = "auto";          // world up axis: auto (objects.json), x, y or z
   double pixel_m = 0.005;           // top view resolution
   int thumbnail_px = 160;           // thumbnail side
 };
@@ -146,8 +148,8 @@ std::vector<report::TopViewObject> top_view_objects(
 
 // Whether the options are sound and the output may be replaced; throws the usage error otherwise.
 void check_report_options(const ReportOptions& options) {
-  require(options.up == "x" || options.up == "y" || options.up == "z", "--up",
-          "'" + options.up + "'; expected x, y or z");
+  require(options.up == "auto" || options.up == "x" || options.up == "y" || options.up == "z",
+          "--up", "'" + options.up + "'; expected auto, x, y or z");
   require(options.thumbnail_px >= 32 && options.thumbnail_px <= 1024, "--thumbnail",
           std::to_string(options.thumbnail_px) + "; expected 32 to 1024 pixels");
   require(std::isfinite(options.pixel_m) && options.pixel_m >= 0.0005 && options.pixel_m <= 1,
@@ -328,11 +330,52 @@ std::vector<report::PlotSeries> plain_plot_series(const Estimate (&estimates)[2]
   return series;
 }
 
+// The run's gravity_from_world (objects.json), absent in a run of an objmap before it.
+std::optional<Eigen::Matrix3d> gravity_of(const json& objects_doc) {
+  if (!objects_doc.contains("gravity_from_world")) return std::nullopt;
+  const json& g = objects_doc["gravity_from_world"];
+  if (!g.is_array() || g.size() != 9) return std::nullopt;
+  Eigen::Matrix3d r;
+  for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = g[i].get<double>();
+  return r;
+}
+
+std::string up_text(const ReportOptions& options, const std::optional<Eigen::Matrix3d>& gravity) {
+  if (options.up != "auto") return options.up;
+  return gravity ? "the run's up direction" : "z";
+}
+
+// Step 5b: the scene graph (surfaces, objects, `on` edges), for a run with a scene.
+void add_scene_graph(const ReportOptions& options, report::PageContent& page) {
+  scene::MapScene map;
+  try {
+    map = scene::read_map_scene(options.run / "objects.json");
+  } catch (const InputError&) {
+    page.notes.push_back(
+        "no scene graph: objects.json has no surfaces and relations (a run of an "
+        "objmap before them)");
+    return;
+  }
+  page.scene_graph.file = "scene_graph.svg";
+  page.scene_graph.bytes = report::scene_graph_svg(map);
+  page.scene_graph.caption =
+      "Scene graph: the support surfaces (bottom row, floor first), each object above what it "
+      "stands on, an edge to its support (objects.json relations.on).";
+}
+
 // Step 3: the ATE per pose and the plots (the trajectories from above, the error over time).
 void add_trajectory_plots(const ReportOptions& options, const Trajectories& t, int up_axis,
+                          const std::optional<Eigen::Matrix3d>& gravity,
                           report::PageContent& page) {
-  const Estimate estimates[] = {{"estimated", &t.est, kEstColor},
-                                {"corrected", &t.corrected, kCorrectedColor}};
+  // Without a ground truth the plot is in the run's frame: turned to look down its up direction
+  // (with one, the estimates are aligned to the ground truth's frame, z up).
+  Trajectories turned = t;
+  if (gravity && !t.gt)
+    for (std::optional<Trajectory>* tr : {&turned.est, &turned.corrected})
+      if (*tr)
+        for (StampedPose& p : (*tr)->poses) p.world_from_cam.prerotate(*gravity);
+  const Estimate estimates[] = {{"estimated", &turned.est, kEstColor},
+                                {"corrected", &turned.corrected, kCorrectedColor}};
   const std::vector<report::PlotSeries> series = t.gt && (t.est || t.corrected)
                                                      ? aligned_plot_series(t, estimates, page)
                                                      : plain_plot_series(estimates);
@@ -343,8 +386,8 @@ void add_trajectory_plots(const ReportOptions& options, const Trajectories& t, i
     page.trajectory_plot.bytes = report::trajectory_svg(series, plot_options);
     page.trajectory_plot.caption =
         page.ate.empty()
-            ? "Camera trajectory seen from above (" + options.up + " up)."
-            : "Trajectories seen from above (" + options.up +
+            ? "Camera trajectory seen from above (" + up_text(options, gravity) + " up)."
+            : "Trajectories seen from above (" + up_text(options, gravity) +
                   " up), each estimate aligned to the ground truth (Horn) and coloured by its "
                   "absolute error; the ring marks the start.";
   }
@@ -394,19 +437,29 @@ std::optional<double> run_voxel_m(const json& run, const char* section) {
 // estimate, or the corrected trajectory for a corrected run (fused with it). A run fused with
 // --dense-map false has no semantic map: the objects-only map is drawn.
 void add_top_view(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
-                  int up_axis, report::PageContent& page) {
+                  int up_axis, const std::optional<Eigen::Matrix3d>& gravity,
+                  report::PageContent& page) {
   const bool has_semantic = fs::exists(options.run / "map_semantic.ply");
   const std::string map_name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
   require(fs::exists(options.run / map_name), (options.run / "map_semantic.ply").string(),
           "missing, and so is map_objects.ply; expected the maps objmap fuse writes (the "
           "semantic map, or the objects-only map of a run fused with --dense-map false)");
-  const PointCloud map = io::read_ply(options.run / map_name);
+  PointCloud map = io::read_ply(options.run / map_name);
+  if (gravity) {
+    const Eigen::Matrix3f r = gravity->cast<float>();
+    for (Vec3f& p : map.points) p = r * p;
+  }
   report::TopViewOptions view_options;
   view_options.up_axis = up_axis;
   view_options.pixel_m = options.pixel_m;
   view_options.fade = 0.2;
   if (const auto voxel_m = run_voxel_m(files.run, "map")) view_options.point_size_m = *voxel_m;
-  const std::vector<report::TopViewObject> drawn = top_view_objects(files.objects, page.duplicates);
+  std::vector<report::TopViewObject> drawn = top_view_objects(files.objects, page.duplicates);
+  if (gravity)
+    for (auto& d : drawn) {
+      d.obb.center = *gravity * d.obb.center;
+      d.obb.rotation = *gravity * d.obb.rotation;
+    }
   std::vector<report::TopViewPath> paths;
   const std::optional<Trajectory>& map_trajectory =
       fs::exists(options.run / "correction.json") && t.corrected ? t.corrected : t.est;
@@ -414,7 +467,8 @@ void add_top_view(const ReportOptions& options, const RunFiles& files, const Tra
     report::TopViewPath path;
     path.color = Rgb{230, 0, 120};
     for (const StampedPose& p : map_trajectory->poses)
-      path.points_in_world.push_back(p.world_from_cam.translation());
+      path.points_in_world.push_back(gravity ? Vec3(*gravity * p.world_from_cam.translation())
+                                             : Vec3(p.world_from_cam.translation()));
     paths.push_back(path);
   }
   const report::TopView view = report::render_top_view(map, drawn, view_options, paths);
@@ -427,8 +481,8 @@ void add_top_view(const ReportOptions& options, const RunFiles& files, const Tra
                 "%s seen from above (%s up, %.1f mm per pixel, %zu points): each "
                 "object's oriented box outlined in its class colour and labelled \"id class\" "
                 "(\"(dup N)\": a suspected duplicate of object N)%s; the bar is 1 m.",
-                map_name.c_str(), options.up.c_str(), view.pixel_m * 1000, map.size(),
-                t.est ? ", the camera path in magenta (ring: start)" : "");
+                map_name.c_str(), up_text(options, gravity).c_str(), view.pixel_m * 1000,
+                map.size(), t.est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;
 }
 
@@ -478,7 +532,7 @@ fs::path write_report(const ReportOptions& options, const report::PageContent& p
   const fs::path out = options.out.empty() ? options.run / "report" : options.out;
   io::StagingDir staging(out, io::kReportFolder);
   io::write_file_atomic(staging.path() / page.topview.file, page.topview.bytes);
-  for (const report::PagePicture* p : {&page.trajectory_plot, &page.ate_plot})
+  for (const report::PagePicture* p : {&page.trajectory_plot, &page.ate_plot, &page.scene_graph})
     if (!p->bytes.empty()) io::write_file_atomic(staging.path() / p->file, p->bytes);
   for (const report::PageObject& o : page.objects)
     io::write_file_atomic(staging.path() / o.thumbnail.file, o.thumbnail.bytes);
@@ -500,22 +554,26 @@ void print_report_summary(const report::PageContent& page, const fs::path& out) 
 
 void run_report(const ReportOptions& options) {
   check_report_options(options);
-  const int up_axis = options.up[0] - 'x';
   report::PageContent page;
   page.title = page_title(options.run);
   page.run_path = options.run.string();
 
   // 1. The run: objects (required), run.json (counts, inputs, Table 6). Every small input is read
-  //    before the big ones (the maps), so that a bad one fails fast.
+  //    before the big ones (the maps), so that a bad one fails fast. With --up auto the pictures
+  //    look down the run's up direction (objects.json gravity_from_world), else down an axis.
   const RunFiles files = read_run(options, page);
+  const std::optional<Eigen::Matrix3d> gravity =
+      options.up == "auto" ? gravity_of(files.objects_doc) : std::nullopt;
+  const int up_axis = options.up == "auto" ? 2 : options.up[0] - 'x';
   // 2. Trajectories: the run's estimate, the ground truth, the corrected one.
   const Trajectories trajectories = read_trajectories(options, files.run, page);
   // 3. ATE per pose and the plots.
-  add_trajectory_plots(options, trajectories, up_axis, page);
+  add_trajectory_plots(options, trajectories, up_axis, gravity, page);
   // 4. Tables 3-5 against ground-truth objects.
   add_object_tables(options, files, page);
   // 5. The top view with the objects and the camera path.
-  add_top_view(options, files, trajectories, up_axis, page);
+  add_top_view(options, files, trajectories, up_axis, gravity, page);
+  add_scene_graph(options, page);
   // 6. A thumbnail per object.
   add_thumbnails(options, files, up_axis, page);
   // 7. The files: the page, the summary and every picture beside them.
@@ -548,7 +606,9 @@ void setup_report(CLI::App& app) {
       ->excludes(gt_objects);
   cmd->add_option("--gt-class", options->gt_class, "class of the objects of a cuboid list")
       ->capture_default_str();
-  cmd->add_option("--up", options->up, "world axis that points up: x, y or z")
+  cmd->add_option("--up", options->up,
+                  "the world's up for the pictures: auto (the run's up direction, objects.json "
+                  "gravity_from_world; z for a run without it), or an axis x, y or z")
       ->capture_default_str();
   cmd->add_option("--pixel", options->pixel_m, "top view resolution, metres per pixel")
       ->capture_default_str();

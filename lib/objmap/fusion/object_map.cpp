@@ -127,27 +127,6 @@ const std::array<VoxelKey, 27>& neighbourhood_offsets() {
   return offsets;
 }
 
-// Centre of [q-quantile, (1 − q)-quantile] of the points along each axis (0 when empty).
-Vec3 percentile_box_centre(const PointCloud& cloud, double q) {
-  Vec3 centre = Vec3::Zero();
-  if (cloud.empty()) return centre;
-  const std::size_t n = cloud.size();
-  const auto rank = [&](double f) {
-    return std::min(n - 1, static_cast<std::size_t>(std::llround(f * static_cast<double>(n - 1))));
-  };
-  q = std::clamp(q, 0.0, 0.5);
-  const std::size_t lo = rank(q), hi = rank(1.0 - q);
-  std::vector<float> v(n);
-  for (int axis = 0; axis < 3; ++axis) {
-    for (std::size_t i = 0; i < n; ++i) v[i] = cloud.points[i][axis];
-    std::nth_element(v.begin(), v.begin() + lo, v.end());
-    const double a = v[lo];
-    std::nth_element(v.begin(), v.begin() + hi, v.end());
-    centre[axis] = 0.5 * (a + static_cast<double>(v[hi]));
-  }
-  return centre;
-}
-
 }  // namespace
 
 struct ObjectMap::Object {
@@ -778,7 +757,7 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     }
     r.points_filtered = r.cloud.size();
     r.centroid = geometry::centroid(r.cloud);
-    r.position = percentile_box_centre(r.cloud, options.position_percentile);
+    r.position = geometry::percentile_box_centre(r.cloud, options.position_percentile);
     r.aabb = geometry::compute_aabb(r.cloud);
     r.obb = geometry::compute_obb(r.cloud);
     out.push_back(std::move(r));

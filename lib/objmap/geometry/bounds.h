@@ -15,4 +15,16 @@ Aabb compute_aabb(const PointCloud& cloud);
 // result), extent = the points' min/max along each axis, centre = the middle of that range.
 Obb compute_obb(const PointCloud& cloud);
 
+// Oriented box standing on the up axis (unit `up`): its third axis is `up`, its first the largest
+// horizontal variance (PCA of the points projected on the plane normal to `up`, signed so that its
+// largest component is positive), its second `up` × first. The box of an object as it stands:
+// height along up, turned only about up.
+Obb compute_upright_obb(const PointCloud& cloud, const Vec3& up);
+
+// Centre of the box spanned by the q- and (1 − q)-quantiles of the points along each axis of the
+// frame `frame_from_world` (a rotation; identity: the world axes), in world coordinates (0 when
+// empty).
+Vec3 percentile_box_centre(const PointCloud& cloud, double q,
+                           const Eigen::Matrix3d& frame_from_world = Eigen::Matrix3d::Identity());
+
 }  // namespace objmap::geometry

@@ -24,6 +24,7 @@
 #include "objmap/io/ply.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/io/tum_dataset.h"
+#include "objmap/pipeline/fuse_scene.h"
 #include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/read.h"
 #include "objmap/version.h"
@@ -199,13 +200,30 @@ std::vector<ConfigField> filters_and_masks_fields(FuseOptions& o) {
   };
 }
 
+// The scene after the objects: up direction, support surfaces, relations (docs/scene.md).
+std::vector<ConfigField> scene_fields(FuseOptions& o) {
+  return {
+      {"scene.up", "--up",
+       "the world's up: auto (the cameras, refined by the map's horizontal planes), an axis (z, "
+       "-y, ...) or a vector x,y,z; boxes turn about it, heights are along it",
+       &o.scene.up.mode},
+      {"scene.surfaces", "--surfaces",
+       "find the support surfaces (floor, tables, seats) in the dense map for the objects' `on` "
+       "relations",
+       &o.scene.surfaces.enabled},
+      {"scene.near_radius_m", "--near-radius",
+       "relations: objects whose box centres are within this distance are `near`, m",
+       &o.scene.relations.near_radius_m},
+  };
+}
+
 }  // namespace
 
 std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
   // In the order of the data flow (the order of --help and of run.json's options).
   std::vector<ConfigField> fields;
   for (auto part : {inputs_fields, segmentation_fields, association_fields, merging_fields,
-                    scoring_fields, filters_and_masks_fields}) {
+                    scoring_fields, filters_and_masks_fields, scene_fields}) {
     std::vector<ConfigField> more = part(o);
     fields.insert(fields.end(), more.begin(), more.end());
   }
@@ -238,6 +256,10 @@ void FuseOptions::check() const {
           "objects.min_voxel_support", "must be in [0, 1]");
   check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
   check_part([&] { duplicates.check(); }, "DuplicateOptions", "duplicates");
+  check_part([&] { scene.up.check(); }, "UpOptions", "scene.up", {{"mode", "scene.up"}});
+  check_part([&] { scene.surfaces.check(); }, "SurfaceOptions", "scene.surfaces");
+  check_part([&] { scene.relations.check(); }, "RelationOptions", "scene.relations",
+             {{"near_radius_m", "scene.near_radius_m"}});
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
 }
@@ -1017,13 +1039,15 @@ ordered_json write_maps(const FuseOptions& options, const fs::path& dir,
 }
 
 // objects.json: the records of the confirmed objects.
-void write_objects_json(const fs::path& dir, const ordered_json& objects_json) {
+void write_objects_json(const fs::path& dir, const ordered_json& objects_json,
+                        const scene::SceneGraph& scene) {
   ordered_json doc;
   doc["schema_version"] = 1;
   doc["generator"] = std::string("objmap ") + objmap::version();
   doc["frame"] = "world";
   doc["units"] = "metres";
   doc["objects"] = objects_json;
+  add_scene_json(scene, doc);
   io::write_file_atomic(dir / "objects.json", doc.dump(2) + "\n");
 }
 
@@ -1114,6 +1138,7 @@ void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseI
   run["counts"] = counts_json(inputs, result);
   run["points"] = points_json(result, maps);
   run["duplicates"] = duplicates_json(result.duplicates, options.duplicates, object_options);
+  run["scene"] = scene_run_json(result.scene);
   run["performance"] = performance_json(result);
   io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
 }
@@ -1165,21 +1190,37 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   merge_and_filter_objects(options, objects, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
+  DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
+  result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
+
+  // 4b. The up direction (the cameras and the map's horizontal planes); the objects' boxes stand
+  //     on it.
+  t0 = Clock::now();
+  result.scene.up = orient_to_gravity(result.keyframes.keyframes, dense_cloud.cloud.points,
+                                      options.scene.up, result.objects);
+  result.scene.seconds_up = seconds_since(t0);
+  for (const auto& w : result.scene.up.warnings) result.warnings.push_back("up direction: " + w);
+
+  // 4c. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
   //     pass's reason for keeping them apart (no ground truth needed).
   t0 = Clock::now();
   result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
   result.times.push_back({"duplicate check", seconds_since(t0)});
 
+  // 4d. Support surfaces and the objects' relations (on, near, above, under).
+  find_surfaces_and_relations(dense_cloud.cloud.points, result.objects, options.scene,
+                              result.scene);
+  result.times.push_back(
+      {"scene (up, surfaces, relations)",
+       result.scene.seconds_up + result.scene.seconds_surfaces + result.scene.seconds_relations});
+
   // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.
   t0 = Clock::now();
-  DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
-  result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
   result.dense_points_map = dense_cloud.cloud.size();
   MapPoints map_points;
   const ordered_json objects_json = write_maps(options, dir, ply, dense_cloud, result, map_points);
   dense_cloud = DenseCloud();
-  write_objects_json(dir, objects_json);
+  write_objects_json(dir, objects_json, result.scene);
   result.times.push_back({"write outputs", seconds_since(t0)});
   result.seconds_total = seconds_since(t_start);
   result.peak_rss_kb = peak_rss_kb();

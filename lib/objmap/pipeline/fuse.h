@@ -11,6 +11,7 @@
 #include "objmap/geometry/backproject.h"
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/keyframes.h"
+#include "objmap/scene/scene.h"
 #include "objmap/segmentation/box_mask.h"
 #include "objmap/segmentation/depth_gate.h"
 #include "objmap/segmentation/mask_refine.h"
@@ -50,6 +51,7 @@ struct FuseOptions {
   bool outlier_filter = true;           // eq 18 on each object's cloud
   filters::OutlierOptions outlier;      // K = 20, k = 1.0
   fusion::DuplicateOptions duplicates;  // suspected duplicates in run.json: touching = 2 cm
+  scene::SceneOptions scene;            // up direction, support surfaces, relations
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
   void check() const;  // throws InputError naming the bad field
 };
@@ -80,6 +82,7 @@ struct FuseResult {
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
+  scene::SceneGraph scene;                    // up, surfaces, each object's relations
   // Table 6: points.
   std::uint64_t dense_points_raw = 0;      // back-projected points of all keyframes
   std::size_t dense_points_map = 0;        // voxels of the dense map (= points of map_dense.ply)

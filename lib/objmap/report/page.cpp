@@ -279,6 +279,9 @@ std::string page_html(const PageContent& c) {
          image_tag(c.topview, "topview", "top view of the semantic map") + "<figcaption>" +
          xml_escape(c.topview.caption) + "</figcaption></figure>\n";
   }
+  if (!c.scene_graph.bytes.empty())
+    h += "<h2>Scene graph</h2>\n<figure class=\"scene-graph\">\n" + c.scene_graph.bytes +
+         "<figcaption>" + xml_escape(c.scene_graph.caption) + "</figcaption></figure>\n";
   // 2. Plots.
   if (!c.trajectory_plot.bytes.empty() || !c.ate_plot.bytes.empty()) {
     h += "<h2>Trajectory</h2>\n<div class=\"plots\">\n";
@@ -327,6 +330,8 @@ std::string page_markdown(const PageContent& c) {
   if (!c.notes.empty()) m += "\n";
   if (!c.topview.bytes.empty())
     m += "![top view of the semantic map](" + c.topview.file + ")\n\n" + c.topview.caption + "\n\n";
+  if (!c.scene_graph.bytes.empty())
+    m += "![scene graph](" + c.scene_graph.file + ")\n\n" + c.scene_graph.caption + "\n\n";
   for (const PagePicture* p : {&c.trajectory_plot, &c.ate_plot})
     if (!p->bytes.empty()) m += "![" + p->caption + "](" + p->file + ")\n\n";
   if (!c.ate.empty()) m += markdown_table(ate_table(c));

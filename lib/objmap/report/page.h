@@ -59,6 +59,7 @@ struct PageContent {
   PagePicture topview;                                // PNG; empty bytes: none
   PagePicture trajectory_plot;                        // SVG; empty bytes: none
   PagePicture ate_plot;                               // SVG; empty bytes: none
+  PagePicture scene_graph;                            // SVG; empty bytes: none
   std::vector<PageAte> ate;                           // one per trajectory with a ground truth
   std::vector<PageObject> objects;                    // in objects.json order
   std::optional<eval::ObjectEvalReport> object_eval;  // Tables 3–5 against ground truth

@@ -1,0 +1,142 @@
+#include "objmap/pipeline/fuse_scene.h"
+
+#include <chrono>
+
+#include "objmap/geometry/bounds.h"
+
+namespace objmap::pipeline {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::ordered_json;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+ordered_json vec(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
+
+ordered_json rows(const Eigen::Matrix3d& m) {
+  ordered_json a = ordered_json::array();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) a.push_back(m(i, j));
+  return a;
+}
+
+std::vector<scene::SceneObject> scene_objects(const std::vector<fusion::ObjectRecord>& records) {
+  std::vector<scene::SceneObject> objects;
+  for (const auto& r : records) objects.push_back({r.id, r.class_name, r.position, &r.cloud});
+  return objects;
+}
+
+ordered_json neighbours_json(const std::vector<scene::Neighbour>& list, const char* key) {
+  ordered_json a = ordered_json::array();
+  for (const auto& n : list) a.push_back({{"id", n.id}, {key, n.distance_m}});
+  return a;
+}
+
+ordered_json relations_json(const scene::Relations& r) {
+  ordered_json o;
+  if (r.on)
+    o["on"] = {
+        {"kind", r.on->kind}, {"id", r.on->id}, {"label", r.on->label}, {"gap_m", r.on->gap_m}};
+  else
+    o["on"] = nullptr;
+  o["near"] = neighbours_json(r.near, "distance_m");
+  o["above"] = neighbours_json(r.above, "gap_m");
+  o["under"] = neighbours_json(r.under, "gap_m");
+  return o;
+}
+
+ordered_json surface_json(const scene::Surface& s) {
+  ordered_json o;
+  o["id"] = s.id;
+  o["label"] = s.label;
+  o["height_m"] = s.height_m;
+  o["center"] = vec(s.center);
+  o["area_m2"] = s.area_m2;
+  ordered_json outline = ordered_json::array();
+  for (const Vec3& p : s.outline) outline.push_back(vec(p));
+  o["outline"] = outline;
+  o["points"] = s.points;
+  if (s.object) o["object"] = *s.object;
+  o["rule"] = s.label_rule;
+  return o;
+}
+
+}  // namespace
+
+scene::UpEstimate orient_to_gravity(const std::vector<Keyframe>& keyframes,
+                                    const std::vector<Vec3f>& map_points,
+                                    const scene::UpOptions& options,
+                                    std::vector<fusion::ObjectRecord>& records) {
+  std::vector<Pose> cameras;
+  cameras.reserve(keyframes.size());
+  for (const Keyframe& k : keyframes) cameras.push_back(k.world_from_cam);
+  scene::UpEstimate up = scene::estimate_up(cameras, map_points, options);
+  const fusion::RecordOptions defaults;
+  for (auto& r : records) {
+    r.position = geometry::percentile_box_centre(r.cloud, defaults.position_percentile,
+                                                 up.gravity_from_world);
+    r.obb = geometry::compute_upright_obb(r.cloud, up.up);
+  }
+  return up;
+}
+
+void find_surfaces_and_relations(const std::vector<Vec3f>& map_points,
+                                 const std::vector<fusion::ObjectRecord>& records,
+                                 const scene::SceneOptions& options, scene::SceneGraph& graph) {
+  const std::vector<scene::SceneObject> objects = scene_objects(records);
+  auto t0 = Clock::now();
+  graph.surfaces = scene::find_surfaces(map_points, graph.up.up, objects, options.surfaces);
+  graph.seconds_surfaces = seconds_since(t0);
+  t0 = Clock::now();
+  graph.relations = scene::relate_objects(objects, graph.surfaces, graph.up.up, options.surfaces,
+                                          options.relations);
+  graph.seconds_relations = seconds_since(t0);
+}
+
+void add_scene_json(const scene::SceneGraph& graph, ordered_json& doc) {
+  doc["up_in_world"] = vec(graph.up.up);
+  doc["gravity_from_world"] = rows(graph.up.gravity_from_world);
+  ordered_json surfaces = ordered_json::array();
+  for (const auto& s : graph.surfaces) surfaces.push_back(surface_json(s));
+  doc["surfaces"] = surfaces;
+  auto& objects = doc["objects"];
+  for (std::size_t i = 0; i < objects.size() && i < graph.relations.size(); ++i)
+    objects[i]["relations"] = relations_json(graph.relations[i]);
+}
+
+ordered_json scene_run_json(const scene::SceneGraph& graph) {
+  const scene::UpEstimate& u = graph.up;
+  ordered_json planes = ordered_json::array();
+  for (const auto& p : u.planes)
+    planes.push_back({{"normal", vec(p.normal)},
+                      {"offset_m", p.offset},
+                      {"inliers", p.inliers},
+                      {"angle_to_prior_deg", p.angle_to_prior_deg},
+                      {"used", p.used}});
+  ordered_json up = {{"source", u.source},
+                     {"up_in_world", vec(u.up)},
+                     {"camera_prior", vec(u.camera_prior)},
+                     {"camera_prior_rule", u.camera_prior_rule},
+                     {"camera_agreement", u.camera_agreement},
+                     {"prior_to_up_deg", u.prior_to_up_deg},
+                     {"sample_points", u.sample_points},
+                     {"planes", planes},
+                     {"warnings", u.warnings}};
+  ordered_json labels = ordered_json::object();
+  for (const auto& s : graph.surfaces) labels[s.label] = labels.value(s.label, 0) + 1;
+  std::size_t on = 0;
+  for (const auto& r : graph.relations) on += r.on ? 1 : 0;
+  return {{"up", up},
+          {"surfaces", graph.surfaces.size()},
+          {"surface_labels", labels},
+          {"objects_on_something", on},
+          {"seconds",
+           {{"up", graph.seconds_up},
+            {"surfaces", graph.seconds_surfaces},
+            {"relations", graph.seconds_relations}}}};
+}
+
+}  // namespace objmap::pipeline

@@ -1,0 +1,34 @@
+#pragma once
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "objmap/core/types.h"
+#include "objmap/fusion/object_map.h"
+#include "objmap/pipeline/keyframes.h"
+#include "objmap/scene/scene.h"
+
+// fuse's scene step (docs/scene.md): the up direction from the keyframes' cameras and the dense
+// map, the objects' boxes and positions turned to stand on it, then the support surfaces and the
+// relations; and their JSON for objects.json and run.json.
+namespace objmap::pipeline {
+
+// Step 1: the up direction; every record's position (percentile box) and oriented box are then
+// taken in the gravity frame (the box turns about up only). With up = +z the positions are those
+// of fusion::ObjectMap::records, bit for bit.
+scene::UpEstimate orient_to_gravity(const std::vector<Keyframe>& keyframes,
+                                    const std::vector<Vec3f>& map_points,
+                                    const scene::UpOptions& options,
+                                    std::vector<fusion::ObjectRecord>& records);
+
+// Step 2: surfaces and relations of the (oriented) records.
+void find_surfaces_and_relations(const std::vector<Vec3f>& map_points,
+                                 const std::vector<fusion::ObjectRecord>& records,
+                                 const scene::SceneOptions& options, scene::SceneGraph& graph);
+
+// objects.json: "up_in_world", "gravity_from_world", "surfaces" (top level) and each object's
+// "relations" (in the order of the records).
+void add_scene_json(const scene::SceneGraph& graph, nlohmann::ordered_json& objects_doc);
+// run.json "scene": the evidence for the up direction, the surfaces' count and rules, the times.
+nlohmann::ordered_json scene_run_json(const scene::SceneGraph& graph);
+
+}  // namespace objmap::pipeline

@@ -1,0 +1,27 @@
+#pragma once
+// Private to lib/objmap/scene: points seen from above (the gravity frame: z along up).
+#include <opencv2/core/types.hpp>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+namespace objmap::scene::detail {
+
+// A set of points seen from above: its outline (convex hull of the points' (x, y) in the gravity
+// frame), its centre there, and its extent along up.
+struct Footprint {
+  std::vector<cv::Point2f> hull;
+  cv::Point2f centre;
+  double bottom = 0.0, top = 0.0;  // 2nd and 98th percentiles of the heights (an object)
+  double mean_height = 0.0;
+};
+
+// `gravity_from_world` rotates world points into the gravity frame. For an object, `centre_world`
+// is its position (box centre); empty points give an empty hull.
+Footprint footprint(const std::vector<Vec3f>& points, const Eigen::Matrix3d& gravity_from_world,
+                    const Vec3& centre_world);
+
+// Signed distance of `p` to the hull's boundary: > 0 inside, < 0 outside (metres).
+double inside_distance(const std::vector<cv::Point2f>& hull, const cv::Point2f& p);
+
+}  // namespace objmap::scene::detail

@@ -1,0 +1,294 @@
+#include "objmap/scene/query.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <sstream>
+
+#include "objmap/core/error.h"
+#include "objmap/segmentation/coco_classes.h"
+
+namespace objmap::scene {
+namespace {
+
+using nlohmann::json;
+
+const char* kGrammar =
+    "expected CLASS [on|near|above|under CLASS|floor|table|seat|surface], e.g. \"cup on table\"";
+const std::set<std::string> kSurfaceLabels = {"floor", "table", "seat", "surface"};
+constexpr double kNearSurfaceM = 0.5;  // `near` a surface: within this of its outline
+
+Vec3 vec3(const json& j, const std::string& where) {
+  require(j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() && j[2].is_number(),
+          where, "expected 3 numbers");
+  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
+const json& field(const json& j, const std::string& key, const std::string& where) {
+  require(j.is_object() && j.contains(key), where + key,
+          "missing; expected an objects.json written by objmap fuse with the scene (up_in_world, "
+          "surfaces, relations)");
+  return j.at(key);
+}
+
+std::vector<std::pair<int, double>> neighbours(const json& list, const char* key) {
+  std::vector<std::pair<int, double>> out;
+  for (const auto& n : list) out.emplace_back(n.at("id").get<int>(), n.at(key).get<double>());
+  return out;
+}
+
+MapObject read_object(const json& o, const std::string& where) {
+  MapObject m;
+  m.id = field(o, "id", where).get<int>();
+  m.class_name = segmentation::canonical_class(field(o, "class", where).get<std::string>());
+  m.position = vec3(field(o, "position", where), where + "position");
+  const json& r = field(o, "relations", where);
+  const json& on = field(r, "on", where + "relations.");
+  if (!on.is_null())
+    m.on = MapRelation{on.at("kind").get<std::string>(), on.at("id").get<int>(),
+                       on.at("label").get<std::string>(), on.at("gap_m").get<double>()};
+  m.near = neighbours(field(r, "near", where + "relations."), "distance_m");
+  m.above = neighbours(field(r, "above", where + "relations."), "gap_m");
+  m.under = neighbours(field(r, "under", where + "relations."), "gap_m");
+  return m;
+}
+
+// Singular forms to try for a (possibly plural) phrase: the last word changed.
+std::vector<std::string> singulars(const std::string& phrase) {
+  std::vector<std::string> out = {phrase};
+  const auto space = phrase.rfind(' ');
+  const std::string head = space == std::string::npos ? "" : phrase.substr(0, space + 1);
+  const std::string w = space == std::string::npos ? phrase : phrase.substr(space + 1);
+  const auto ends = [&](const std::string& s) {
+    return w.size() > s.size() && w.compare(w.size() - s.size(), s.size(), s) == 0;
+  };
+  static const std::vector<std::pair<std::string, std::string>> kIrregular = {
+      {"mice", "mouse"}, {"people", "person"}, {"knives", "knife"}, {"sheep", "sheep"}};
+  for (const auto& [plural, single] : kIrregular)
+    if (w == plural) out.push_back(head + single);
+  if (ends("ies")) out.push_back(head + w.substr(0, w.size() - 3) + "y");
+  if (ends("es")) out.push_back(head + w.substr(0, w.size() - 2));
+  if (ends("s")) out.push_back(head + w.substr(0, w.size() - 1));
+  return out;
+}
+
+std::string describe_support(const MapObject& o, const MapScene& scene) {
+  if (!o.on) return "on nothing found";
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(3);
+  if (o.on->kind == "surface")
+    s << "on surface " << o.on->id << " (" << o.on->label << ")";
+  else
+    s << "on object " << o.on->id << " (" << o.on->label << ")";
+  s << ", gap " << o.on->gap_m << " m";
+  (void)scene;
+  return s.str();
+}
+
+// The surfaces under an object, following `on` through objects (a cup on a book on the table).
+std::vector<const MapSurface*> supporting_surfaces(const MapObject& o, const MapScene& scene) {
+  std::vector<const MapSurface*> out;
+  const MapObject* cur = &o;
+  for (int hop = 0; hop < 8 && cur && cur->on; ++hop) {
+    if (cur->on->kind == "surface") {
+      if (const MapSurface* s = scene.surface(cur->on->id)) out.push_back(s);
+      break;
+    }
+    cur = scene.object(cur->on->id);
+  }
+  return out;
+}
+
+bool label_matches(const MapSurface& s, const std::string& target) {
+  return target == "surface" || s.label == target;
+}
+
+// Horizontal distance from `p` to the surface's outline (0 inside), and its height above it.
+std::pair<double, double> relative_to(const MapSurface& s, const Vec3& p, const MapScene& scene) {
+  std::vector<cv::Point2f> hull;
+  for (const Vec3& q : s.outline) {
+    const Vec3 g = scene.gravity_from_world * q;
+    hull.emplace_back(static_cast<float>(g.x()), static_cast<float>(g.y()));
+  }
+  const Vec3 g = scene.gravity_from_world * p;
+  double outside = 0.0;
+  if (hull.size() >= 3)
+    outside = std::max(
+        0.0, -cv::pointPolygonTest(
+                 hull, cv::Point2f(static_cast<float>(g.x()), static_cast<float>(g.y())), true));
+  return {outside, g.z() - s.height_m};
+}
+
+std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, const MapScene& scene) {
+  const auto under_it = supporting_surfaces(o, scene);
+  for (const MapSurface* s : under_it)
+    if (label_matches(*s, q.target) &&
+        (q.relation == "on" || q.relation == "above" || q.relation == "near"))
+      return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, s->id};
+  for (const MapSurface& s : scene.surfaces) {
+    if (!label_matches(s, q.target)) continue;
+    const auto [outside, height] = relative_to(s, o.position, scene);
+    std::ostringstream why;
+    why.setf(std::ios::fixed);
+    why.precision(3);
+    if (q.relation == "near" && outside <= kNearSurfaceM) {
+      why << outside << " m beside surface " << s.id << " (" << s.label << ")";
+      return QueryMatch{&o, why.str(), outside, s.id};
+    }
+    if ((q.relation == "under" && outside == 0.0 && height < 0.0) ||
+        (q.relation == "above" && outside == 0.0 && height > 0.0)) {
+      why << std::fabs(height) << " m " << q.relation << " surface " << s.id << " (" << s.label
+          << ")";
+      return QueryMatch{&o, why.str(), std::fabs(height), s.id};
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<QueryMatch> match_object(const MapObject& o, const Query& q, const MapScene& scene) {
+  const auto is_target = [&](int id) {
+    const MapObject* t = scene.object(id);
+    return t && t->class_name == q.target;
+  };
+  std::ostringstream why;
+  why.setf(std::ios::fixed);
+  why.precision(3);
+  if (q.relation == "on" && o.on) {
+    const MapSurface* s = o.on->kind == "surface" ? scene.surface(o.on->id) : nullptr;
+    if ((o.on->kind == "object" && is_target(o.on->id)) ||
+        (s && s->object && is_target(*s->object)))
+      return QueryMatch{&o, describe_support(o, scene), o.on->gap_m, std::nullopt};
+  }
+  const std::vector<std::pair<int, double>>* list = q.relation == "near"    ? &o.near
+                                                    : q.relation == "above" ? &o.above
+                                                    : q.relation == "under" ? &o.under
+                                                                            : nullptr;
+  if (list)
+    for (const auto& [id, d] : *list)
+      if (is_target(id)) {
+        why << q.relation << " object " << id << " (" << q.target << "), " << d << " m";
+        return QueryMatch{&o, why.str(), d, std::nullopt};
+      }
+  return std::nullopt;
+}
+
+std::optional<QueryMatch> match(const MapObject& o, const Query& q, const MapScene& scene) {
+  if (q.relation.empty()) {
+    const auto surfaces = supporting_surfaces(o, scene);
+    return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0,
+                      surfaces.empty() ? std::nullopt : std::optional<int>(surfaces[0]->id)};
+  }
+  return q.target_is_surface ? match_surface(o, q, scene) : match_object(o, q, scene);
+}
+
+}  // namespace
+
+const MapObject* MapScene::object(int id) const {
+  for (const auto& o : objects)
+    if (o.id == id) return &o;
+  return nullptr;
+}
+
+const MapSurface* MapScene::surface(int id) const {
+  for (const auto& s : surfaces)
+    if (s.id == id) return &s;
+  return nullptr;
+}
+
+MapScene read_map_scene(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  require(static_cast<bool>(in), file.string(), "cannot be read; expected RUN/objects.json");
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(file.string(), std::string("not valid JSON (") + e.what() + ")");
+  }
+  const std::string where = file.string() + ": ";
+  MapScene scene;
+  try {
+    scene.up = vec3(field(doc, "up_in_world", where), where + "up_in_world").normalized();
+    const json& g = field(doc, "gravity_from_world", where);
+    require(g.is_array() && g.size() == 9, where + "gravity_from_world", "expected 9 numbers");
+    for (int i = 0; i < 9; ++i) scene.gravity_from_world(i / 3, i % 3) = g[i].get<double>();
+    for (const auto& s : field(doc, "surfaces", where)) {
+      MapSurface m;
+      m.id = s.at("id").get<int>();
+      m.label = s.at("label").get<std::string>();
+      m.height_m = s.at("height_m").get<double>();
+      m.center = vec3(s.at("center"), where + "surfaces.center");
+      for (const auto& p : s.at("outline"))
+        m.outline.push_back(vec3(p, where + "surfaces.outline"));
+      if (s.contains("object")) m.object = s.at("object").get<int>();
+      scene.surfaces.push_back(std::move(m));
+    }
+    for (const auto& o : field(doc, "objects", where))
+      scene.objects.push_back(
+          read_object(o, where + "objects[" + std::to_string(scene.objects.size()) + "]."));
+  } catch (const json::exception& e) {
+    throw InputError(file.string(), std::string("unexpected content (") + e.what() +
+                                        "); expected objects.json of objmap fuse");
+  }
+  return scene;
+}
+
+Query parse_query(const std::string& text, const MapScene& scene) {
+  Query q;
+  q.text = text;
+  std::vector<std::string> words;
+  std::istringstream in(segmentation::canonical_class(text));
+  for (std::string w; in >> w;)
+    if (w != "the" && w != "a" && w != "an") words.push_back(w);
+  require(!words.empty(), "query", std::string("empty; ") + kGrammar);
+  std::set<std::string> known(segmentation::coco80_names().begin(),
+                              segmentation::coco80_names().end());
+  for (const auto& o : scene.objects) known.insert(o.class_name);
+  const auto resolve = [&](const std::vector<std::string>& phrase, bool surface_ok) {
+    std::string joined;
+    for (const auto& w : phrase) joined += (joined.empty() ? "" : " ") + w;
+    require(!joined.empty(), "query",
+            "'" + text + "' has no " + (surface_ok ? "target" : "class") + "; " + kGrammar);
+    for (const std::string& s : singulars(joined)) {
+      if (surface_ok && kSurfaceLabels.count(s)) return std::make_pair(s, true);
+      if (known.count(segmentation::canonical_class(s)))
+        return std::make_pair(segmentation::canonical_class(s), false);
+    }
+    throw InputError("query", "'" + joined + "' is not a class of COCO-80 or of this map" +
+                                  std::string(surface_ok ? " nor floor|table|seat|surface" : "") +
+                                  "; " + kGrammar);
+  };
+  const auto rel = std::find_if(words.begin(), words.end(), [](const std::string& w) {
+    return w == "on" || w == "near" || w == "above" || w == "under";
+  });
+  q.subject = resolve({words.begin(), rel}, false).first;
+  if (rel != words.end()) {
+    q.relation = *rel;
+    const auto [target, is_surface] = resolve({rel + 1, words.end()}, true);
+    q.target = target;
+    q.target_is_surface = is_surface;
+  }
+  return q;
+}
+
+QueryResult run_query(const Query& q, const MapScene& scene) {
+  QueryResult result;
+  for (const auto& o : scene.objects)
+    if (o.class_name == q.subject)
+      if (auto m = match(o, q, scene)) result.matches.push_back(*m);
+  std::stable_sort(
+      result.matches.begin(), result.matches.end(),
+      [](const QueryMatch& a, const QueryMatch& b) { return a.distance_m < b.distance_m; });
+  if (!result.matches.empty()) return result;
+  for (const auto& o : scene.objects)
+    if (o.class_name == q.subject) result.candidates.push_back(*match(o, Query{}, scene));
+  if (result.candidates.empty() && !q.relation.empty())
+    for (const auto& o : scene.objects)
+      if (auto m = match(o, q, scene)) result.candidates.push_back(*m);
+  return result;
+}
+
+}  // namespace objmap::scene

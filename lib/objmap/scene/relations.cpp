@@ -1,0 +1,201 @@
+// Relations between objects and surfaces: on, near, above, under; the surfaces' labels
+// (docs/scene.md, "Relations" and "Labels").
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+#include "objmap/core/error.h"
+#include "objmap/scene/footprint.h"
+#include "objmap/scene/scene.h"
+#include "objmap/segmentation/coco_classes.h"
+
+namespace objmap::scene {
+namespace {
+
+// Classes that stand on the floor, not on a table: what the floor rule looks for.
+bool floor_standing(const std::string& name) {
+  const std::string c = segmentation::canonical_class(name);
+  static const std::set<std::string> kClasses = {
+      "chair", "couch",    "sofa", "bed",          "dining table", "potted plant", "person",
+      "bench", "suitcase", "dog",  "refrigerator", "toilet",       "cat"};
+  return kClasses.count(c) > 0;
+}
+
+bool seat_class(const std::string& name) {
+  const std::string c = segmentation::canonical_class(name);
+  return c == "chair" || c == "couch" || c == "sofa" || c == "bench" || c == "bed" || c == "toilet";
+}
+
+cv::Point2f xy_in_gravity(const Eigen::Matrix3d& gravity, const Vec3& p) {
+  const Vec3 g = gravity * p;
+  return {static_cast<float>(g.x()), static_cast<float>(g.y())};
+}
+
+// `on`: the highest support (a surface that is no object's top, or another object) whose
+// top lies within [bottom − on_above, bottom + on_below] and whose outline holds the object's
+// centre (seen from above, with outline_margin).
+std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>& objects,
+                                  const std::vector<detail::Footprint>& feet,
+                                  const std::vector<Surface>& surfaces,
+                                  const Eigen::Matrix3d& gravity, const RelationOptions& o) {
+  const detail::Footprint& f = feet[i];
+  std::optional<Support> best;
+  double best_top = -std::numeric_limits<double>::infinity();
+  const auto consider = [&](const std::string& kind, int id, const std::string& label, double top,
+                            const std::vector<cv::Point2f>& hull) {
+    const double gap = f.bottom - top;
+    if (gap < -o.on_below_m || gap > o.on_above_m) return;
+    if (detail::inside_distance(hull, f.centre) < -o.outline_margin_m) return;
+    if (top <= best_top) return;
+    best_top = top;
+    best = Support{kind, id, label, gap};
+  };
+  for (const Surface& s : surfaces) {
+    if (s.object) continue;  // an object's top: the object itself is the candidate below
+    std::vector<cv::Point2f> hull;
+    for (const Vec3& q : s.outline) hull.push_back(xy_in_gravity(gravity, q));
+    consider("surface", s.id, s.label, s.height_m, hull);
+  }
+  for (std::size_t j = 0; j < objects.size(); ++j) {
+    if (j == i || feet[j].hull.size() < 3) continue;
+    // The support is the larger one seen from above (two objects side by side are not stacked).
+    if (cv::contourArea(feet[j].hull) <= cv::contourArea(f.hull)) continue;
+    consider("object", objects[j].id, objects[j].class_name, feet[j].top, feet[j].hull);
+  }
+  return best;
+}
+
+// The surfaces' labels (SurfaceOptions): the floor is the lowest patch of floor_min_area that is
+// not an object's top, unless only small objects stand on it (then the floor is unseen and it is a
+// table); a table is a patch table_min_height..table_max_height above the floor, or, with the
+// floor unseen, the patch under most small objects; an object's top is a seat (chairs, couches,
+// beds) or a surface; the rest are surfaces.
+void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObject>& objects,
+                    const std::vector<Relations>& relations, const SurfaceOptions& o) {
+  std::map<int, int> small_on, standing_on;  // surface id -> objects on it
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if (relations[i].on && relations[i].on->kind == "surface")
+      ++(floor_standing(objects[i].class_name) ? standing_on : small_on)[relations[i].on->id];
+  const auto class_of = [&](int id) {
+    for (const auto& obj : objects)
+      if (obj.id == id) return obj.class_name;
+    return std::string();
+  };
+  Surface* floor = nullptr;
+  for (Surface& s : surfaces) {
+    s.label = "surface";
+    s.label_rule = "a horizontal patch";
+    if (s.object) {
+      const bool seat = seat_class(class_of(*s.object));
+      s.label = seat ? "seat" : "surface";
+      s.label_rule = "the top of object " + std::to_string(*s.object);
+      continue;
+    }
+    if (s.area_m2 >= o.floor_min_area_m2 && (!floor || s.height_m < floor->height_m)) floor = &s;
+  }
+  if (floor && small_on[floor->id] > 0 && standing_on[floor->id] == 0) floor = nullptr;
+  if (floor) {
+    floor->label = "floor";
+    floor->label_rule =
+        "the lowest patch of at least " + std::to_string(o.floor_min_area_m2) + " m2";
+    for (Surface& s : surfaces) {
+      const double above = s.height_m - floor->height_m;
+      if (!s.object && &s != floor && s.area_m2 >= o.table_min_area_m2 &&
+          above >= o.table_min_height_m && above <= o.table_max_height_m) {
+        s.label = "table";
+        s.label_rule = "a patch " + std::to_string(above).substr(0, 4) + " m above the floor";
+      }
+    }
+    return;
+  }
+  Surface* table = nullptr;
+  for (Surface& s : surfaces)
+    if (!s.object && small_on[s.id] > 0 && (!table || small_on[s.id] > small_on[table->id]))
+      table = &s;
+  if (table) {
+    table->label = "table";
+    table->label_rule = "the floor is not seen; the patch under most objects (" +
+                        std::to_string(small_on[table->id]) + ")";
+  }
+}
+
+void near_above_under(const std::vector<SceneObject>& objects,
+                      const std::vector<detail::Footprint>& feet, const RelationOptions& o,
+                      std::vector<Relations>& relations) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    for (std::size_t j = 0; j < objects.size(); ++j) {
+      if (i == j) continue;
+      const double d = (objects[i].position - objects[j].position).norm();
+      if (d <= o.near_radius_m) relations[i].near.push_back({objects[j].id, d});
+      if (feet[j].hull.size() < 3 || feet[i].bottom < feet[j].top - o.stack_tolerance_m) continue;
+      if (detail::inside_distance(feet[j].hull, feet[i].centre) < -o.outline_margin_m) continue;
+      relations[i].above.push_back({objects[j].id, feet[i].bottom - feet[j].top});
+      relations[j].under.push_back({objects[i].id, feet[i].bottom - feet[j].top});
+    }
+    std::stable_sort(
+        relations[i].near.begin(), relations[i].near.end(),
+        [](const Neighbour& a, const Neighbour& b) { return a.distance_m < b.distance_m; });
+  }
+}
+
+}  // namespace
+
+void RelationOptions::check() const {
+  require(on_below_m >= 0.0, "RelationOptions.on_below_m", "must be >= 0");
+  require(on_above_m >= 0.0, "RelationOptions.on_above_m", "must be >= 0");
+  require(outline_margin_m >= 0.0, "RelationOptions.outline_margin_m", "must be >= 0");
+  require(near_radius_m > 0.0, "RelationOptions.near_radius_m", "must be > 0");
+  require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
+}
+
+void SceneOptions::check() const {
+  up.check();
+  surfaces.check();
+  relations.check();
+}
+
+std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
+                                      std::vector<Surface>& surfaces, const Vec3& up,
+                                      const SurfaceOptions& surface_options,
+                                      const RelationOptions& options) {
+  const Eigen::Matrix3d gravity = gravity_from_world(up);
+  std::vector<detail::Footprint> feet;
+  for (const auto& obj : objects)
+    feet.push_back(detail::footprint(obj.cloud ? obj.cloud->points : std::vector<Vec3f>{}, gravity,
+                                     obj.position));
+  std::vector<Relations> relations(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    relations[i].on = support_of(i, objects, feet, surfaces, gravity, options);
+  label_surfaces(surfaces, objects, relations, surface_options);
+  for (auto& r : relations)
+    if (r.on && r.on->kind == "surface")
+      for (const Surface& s : surfaces)
+        if (s.id == r.on->id) r.on->label = s.label;
+  near_above_under(objects, feet, options, relations);
+  return relations;
+}
+
+SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+                       const std::vector<SceneObject>& objects, const SceneOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
+  SceneGraph g;
+  auto t0 = Clock::now();
+  g.up = estimate_up(cameras, map_points, options.up);
+  g.seconds_up = since(t0);
+  t0 = Clock::now();
+  g.surfaces = find_surfaces(map_points, g.up.up, objects, options.surfaces);
+  g.seconds_surfaces = since(t0);
+  t0 = Clock::now();
+  g.relations = relate_objects(objects, g.surfaces, g.up.up, options.surfaces, options.relations);
+  g.seconds_relations = since(t0);
+  return g;
+}
+
+}  // namespace objmap::scene

@@ -1,0 +1,167 @@
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+// The scene around the objects: which way is up, the horizontal surfaces things stand on (floor,
+// table tops, seats) and how the objects relate to them and to each other (`on`, `near`, `above`,
+// `under`). What a robot told "bring me the cup on the table" needs besides the objects' positions.
+// All in the trajectory's world frame, which need not be z-up (ORB-SLAM2 writes its trajectories in
+// the first camera's frame). docs/scene.md describes the method and its thresholds.
+namespace objmap::scene {
+
+// ---- Up direction --------------------------------------------------------------------------
+
+struct UpOptions {
+  // "auto": estimated from the cameras and the dense map's planes; "x", "-y", "z", ...: a world
+  // axis; "x,y,z": a given vector (normalised).
+  std::string mode = "auto";
+  double sample_voxel_m = 0.04;        // the dense map is sampled on this grid for the plane search
+  double plane_distance_m = 0.02;      // RANSAC inlier distance
+  int max_planes = 8;                  // planes taken out of the sample one after another
+  double min_plane_share = 0.02;       // a plane holds at least this share of the sample
+  double max_prior_angle_deg = 50.0;   // a plane this close to the cameras' up may be horizontal
+  double parallel_deg = 5.0;           // planes this close to the chosen one refine it
+  double disagree_warning_deg = 45.0;  // planes vs cameras beyond this: a warning
+  void check() const;                  // throws InputError naming the field
+};
+
+// One plane found in the dense map, as evidence for the up direction.
+struct PlaneEvidence {
+  Vec3 normal = Vec3::UnitZ();  // unit, signed toward the cameras' up
+  double offset = 0.0;          // normal · p for the plane's points
+  std::size_t inliers = 0;      // sample points
+  double angle_to_prior_deg = 0.0;
+  bool used = false;  // one of the horizontal planes the up direction is the mean of
+};
+
+struct UpEstimate {
+  Vec3 up = Vec3::UnitZ();                                           // unit, world frame
+  Eigen::Matrix3d gravity_from_world = Eigen::Matrix3d::Identity();  // R · up = +z
+  std::string source;  // "given", "planes" or "cameras"
+  Vec3 camera_prior = Vec3::UnitZ();
+  std::string camera_prior_rule;  // which camera axis gave the prior, and why
+  double camera_agreement = 0.0;  // |mean of the cameras' up axes| in [0, 1]
+  double prior_to_up_deg = 0.0;   // angle between the cameras' prior and the result
+  std::size_t sample_points = 0;  // points of the sampled dense map
+  std::vector<PlaneEvidence> planes;
+  std::vector<std::string> warnings;  // evidence that disagrees, said in one line each
+};
+
+// Parses UpOptions::mode; nullopt for "auto". Throws InputError(where, ...) for anything else.
+std::optional<Vec3> parse_up(const std::string& text, const std::string& where);
+
+// The rotation taking `up` (unit) to +z by the shortest arc (identity for +z, a half turn about x
+// for -z).
+Eigen::Matrix3d gravity_from_world(const Vec3& up);
+
+// The up direction of the world: given, or estimated from the cameras' poses (world_from_cam;
+// cameras are held roughly upright: their y axis points down) refined by the dominant horizontal
+// planes of `map_points` (floor, table tops).
+UpEstimate estimate_up(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+                       const UpOptions& options);
+
+// ---- Support surfaces ----------------------------------------------------------------------
+
+struct SurfaceOptions {
+  bool enabled = true;
+  double sample_voxel_m = 0.02;     // the dense map is sampled on this grid
+  double bin_m = 0.01;              // height histogram bin: a peak is a horizontal level
+  double plane_distance_m = 0.015;  // a level's points lie this close to its height
+  int max_levels = 24;              // levels taken, most points first
+  double cluster_gap_m = 0.05;      // Euclidean clustering of a level's points into patches
+  double min_area_m2 = 0.03;        // smaller patches are not surfaces
+  double min_width_m = 0.03;        // a patch's narrower spread (std): not the slice of a wall
+  double merge_height_m = 0.12;     // layers of one surface (depth noise) within this height merge
+  double merge_gap_m = 0.3;         // pieces at one level this close merge (cut by objects on it)
+  double floor_min_area_m2 = 0.3;   // the floor: the lowest patch of at least this area
+  double table_min_height_m = 0.4;  // a table top: this far above the floor ...
+  double table_max_height_m = 1.2;  // ... and at most this far
+  double table_min_area_m2 = 0.1;
+  void check() const;
+};
+
+struct Surface {
+  int id = 0;           // 1.. in descending area
+  std::string label;    // "floor", "table", "seat" or "surface"
+  double height_m = 0;  // up · p of its points (mean)
+  Vec3 center = Vec3::Zero();
+  double area_m2 = 0.0;       // occupied cells of the sample grid × cell area
+  std::vector<Vec3> outline;  // convex hull at height_m, counter-clockwise seen from above
+  std::size_t points = 0;     // sample points
+  std::optional<int> object;  // the object whose top it is (a seat, a shelf's board)
+  std::string label_rule;     // why it has its label
+};
+
+// ---- Objects and relations -----------------------------------------------------------------
+
+// What the relations need of an object: its id, class and filtered points.
+struct SceneObject {
+  int id = 0;
+  std::string class_name;
+  Vec3 position = Vec3::Zero();
+  const PointCloud* cloud = nullptr;
+};
+
+struct RelationOptions {
+  double on_below_m = 0.06;  // an object's bottom may lie this far below its support's top ...
+  double on_above_m = 0.08;  // ... or this far above it (its lowest part hidden from the camera)
+  double outline_margin_m = 0.03;   // footprint centre inside the support's outline, this margin
+  double near_radius_m = 0.5;       // `near`: box centres within this distance
+  double stack_tolerance_m = 0.03;  // `above`: bottom at least top − this
+  void check() const;
+};
+
+struct Support {
+  std::string kind;  // "surface" or "object"
+  int id = 0;
+  std::string label;   // the surface's label or the object's class
+  double gap_m = 0.0;  // object's bottom − support's top (negative: slightly into it)
+};
+
+struct Neighbour {
+  int id = 0;
+  double distance_m = 0.0;  // box centre to box centre, or the vertical gap for above/under
+};
+
+struct Relations {
+  std::optional<Support> on;
+  std::vector<Neighbour> near;   // nearest first
+  std::vector<Neighbour> above;  // objects this one is above (gap = its bottom − their top)
+  std::vector<Neighbour> under;  // objects above this one
+};
+
+struct SceneOptions {
+  UpOptions up;
+  SurfaceOptions surfaces;
+  RelationOptions relations;
+  void check() const;
+};
+
+struct SceneGraph {
+  UpEstimate up;
+  std::vector<Surface> surfaces;
+  std::vector<Relations> relations;  // one per object, in the order given
+  double seconds_up = 0.0, seconds_surfaces = 0.0, seconds_relations = 0.0;
+};
+
+// Up, surfaces and relations of a fused map: `map_points` is the dense map (may be empty: up then
+// comes from the cameras alone and there are no surfaces), `objects` the confirmed objects.
+SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+                       const std::vector<SceneObject>& objects, const SceneOptions& options);
+
+// Surfaces of the map given the up direction; `objects` tell which patch is an object's top.
+std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
+                                   const std::vector<SceneObject>& objects,
+                                   const SurfaceOptions& options);
+
+// The relations of every object, then the surfaces' labels (the table is what small objects stand
+// on when the floor is not seen), which the `on` supports then carry.
+std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
+                                      std::vector<Surface>& surfaces, const Vec3& up,
+                                      const SurfaceOptions& surface_options,
+                                      const RelationOptions& options);
+
+}  // namespace objmap::scene

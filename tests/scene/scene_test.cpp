@@ -1,0 +1,241 @@
+// The scene step on point sets made here: a room (floor, a wall, a table) seen by cameras that look
+// down at the table, in a world frame that is not z-up (as ORB-SLAM2's first-camera frame).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "objmap/core/error.h"
+#include "objmap/scene/scene.h"
+
+namespace objmap::scene {
+namespace {
+
+double angle_deg(const Vec3& a, const Vec3& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+void add_rect(std::vector<Vec3f>& pts, double x0, double x1, double y0, double y1, double z,
+              double step = 0.01) {
+  for (double x = x0; x <= x1; x += step)
+    for (double y = y0; y <= y1; y += step) pts.emplace_back(x, y, z);
+}
+
+// A z-up room: floor 3 x 3 m at z = 0, a wall at x = 3, a table top 1.2 x 0.8 m at 0.75 m.
+std::vector<Vec3f> room(bool with_floor = true) {
+  std::vector<Vec3f> pts;
+  if (with_floor) add_rect(pts, 0.0, 3.0, 0.0, 3.0, 0.0);
+  for (double y = 0.0; y <= 3.0; y += 0.01)
+    for (double z = 0.0; z <= 2.0; z += 0.01) pts.emplace_back(3.0, y, z);
+  add_rect(pts, 1.0, 2.2, 1.0, 1.8, 0.75);
+  return pts;
+}
+
+// A small object's points: a box's sides and top standing at `base` (z-up).
+PointCloud box_object(const Vec3& base, double half, double height) {
+  PointCloud c;
+  for (double x = -half; x <= half; x += 0.005)
+    for (double z = 0.0; z <= height; z += 0.005) {
+      c.push_back(Vec3f(base.x() + x, base.y() - half, base.z() + z), Rgb{});
+      c.push_back(Vec3f(base.x() + x, base.y() + half, base.z() + z), Rgb{});
+      c.push_back(Vec3f(base.x() - half, base.y() + x, base.z() + z), Rgb{});
+    }
+  for (double x = -half; x <= half; x += 0.005)
+    for (double y = -half; y <= half; y += 0.005)
+      c.push_back(Vec3f(base.x() + x, base.y() + y, base.z() + height), Rgb{});
+  return c;
+}
+
+// Cameras at 1.5 m looking down `pitch_deg` at the table from headings 0-88°, rolled by
+// ±roll_deg in turn; camera axes as TUM's: x right, y down, z forward.
+std::vector<Pose> cameras(double pitch_deg, double roll_deg = 0.0) {
+  std::vector<Pose> out;
+  for (int i = 0; i < 12; ++i) {
+    const double yaw = i * 8.0 * M_PI / 180.0;  // headings over 90°: the tilts do not cancel
+    // Level camera looking along +x of the world: z_cam = x_w, x_cam = -y_w, y_cam = -z_w.
+    Eigen::Matrix3d level;
+    level.col(0) = -Vec3::UnitY();
+    level.col(1) = -Vec3::UnitZ();
+    level.col(2) = Vec3::UnitX();
+    const Eigen::Matrix3d r =
+        Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix() * level *
+        Eigen::AngleAxisd(-pitch_deg * M_PI / 180.0, Vec3::UnitX()) *
+        Eigen::AngleAxisd((i % 2 ? 1 : -1) * roll_deg * M_PI / 180.0, Vec3::UnitZ());
+    Pose p = Pose::Identity();
+    p.linear() = r;
+    p.translation() = Vec3(1.6, 1.4, 1.5) - 1.2 * r.col(2);
+    out.push_back(p);
+  }
+  return out;
+}
+
+// The same scene in another frame: slam_from_world applied to points and cameras.
+Eigen::Isometry3d slam_from_world() {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(1.1, Vec3(0.3, -0.8, 0.5).normalized())).toRotationMatrix();
+  t.translation() = Vec3(0.4, -1.0, 2.0);
+  return t;
+}
+
+TEST(Up, ParseGivenDirections) {
+  EXPECT_EQ(*parse_up("z", "--up"), Vec3::UnitZ());
+  EXPECT_EQ(*parse_up("-y", "--up"), -Vec3::UnitY());
+  EXPECT_TRUE(parse_up("0,0,2", "--up")->isApprox(Vec3::UnitZ()));
+  EXPECT_FALSE(parse_up("auto", "--up").has_value());
+  try {
+    parse_up("upward", "--up");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--up: 'upward' is not an up direction; expected auto, an axis (x, y, z, -x, -y, -z) "
+              "or a vector x,y,z");
+  }
+  EXPECT_THROW(parse_up("0,0,0", "--up"), InputError);
+  EXPECT_THROW(parse_up("1,2", "--up"), InputError);
+}
+
+TEST(Up, GravityRotationTakesUpToZ) {
+  for (const Vec3& up : {Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(0.3, -0.5, 0.8).normalized()}) {
+    const Eigen::Matrix3d r = gravity_from_world(up);
+    EXPECT_TRUE((r * up).isApprox(Vec3::UnitZ(), 1e-12)) << up.transpose();
+    EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+  }
+  EXPECT_TRUE(gravity_from_world(Vec3::UnitZ()).isIdentity(0.0));
+}
+
+TEST(Up, FoundFromTheTableAndFloorInAFrameThatIsNotZUp) {
+  const Eigen::Isometry3d t = slam_from_world();
+  std::vector<Vec3f> pts;
+  for (const Vec3f& p : room()) pts.push_back((t * p.cast<double>()).cast<float>());
+  std::vector<Pose> cams;
+  for (const Pose& c : cameras(40.0, 20.0)) cams.push_back(t * c);  // rolled: the -y prior
+  const UpEstimate e = estimate_up(cams, pts, UpOptions{});
+  const Vec3 truth = t.linear() * Vec3::UnitZ();
+  EXPECT_EQ(e.source, "planes");
+  EXPECT_LT(angle_deg(e.up, truth), 0.5);
+  EXPECT_GT(angle_deg(e.camera_prior, truth), 10.0);  // the cameras alone are off
+  EXPECT_TRUE((e.gravity_from_world * e.up).isApprox(Vec3::UnitZ(), 1e-9));
+  int used = 0;
+  for (const auto& p : e.planes) used += p.used ? 1 : 0;
+  EXPECT_EQ(used, 2);  // floor and table top; the wall is not
+}
+
+TEST(Up, LevelCamerasGiveThePriorNormalToTheirXAxes) {
+  UpEstimate e = estimate_up(cameras(40.0), {}, UpOptions{});
+  EXPECT_EQ(e.source, "cameras");
+  EXPECT_LT(angle_deg(e.up, Vec3::UnitZ()), 1e-6);  // x axes level however far they look down
+  EXPECT_NE(e.camera_prior_rule.find("x axes"), std::string::npos);
+  ASSERT_EQ(e.warnings.size(), 1u);  // no plane: said
+  EXPECT_NE(e.warnings[0].find("no plane of the dense map"), std::string::npos);
+}
+
+TEST(Up, CamerasThatAreNotUprightAreSaid) {
+  // A camera on the ceiling looking straight down, turning about its axis: its y axes spin.
+  std::vector<Pose> cams;
+  for (int i = 0; i < 8; ++i) {
+    Pose p = Pose::Identity();
+    p.linear() = Eigen::AngleAxisd(i * M_PI / 4, Vec3::UnitZ()) *
+                 Eigen::AngleAxisd(M_PI, Vec3::UnitX()).toRotationMatrix();
+    p.translation() = Vec3(1.5, 1.5, 2.5);
+    cams.push_back(p);
+  }
+  const UpEstimate e = estimate_up(cams, room(), UpOptions{});
+  bool said = false;
+  for (const auto& w : e.warnings) said |= w.find("agreement") != std::string::npos;
+  EXPECT_TRUE(said);
+}
+
+TEST(Up, GivenDirectionIsUsedAsIs) {
+  UpOptions o;
+  o.mode = "-y";
+  const UpEstimate e = estimate_up(cameras(30.0), room(), o);
+  EXPECT_EQ(e.source, "given");
+  EXPECT_EQ(e.up, -Vec3::UnitY());
+  EXPECT_TRUE(e.planes.empty());
+}
+
+struct Fixture {
+  PointCloud cup = box_object(Vec3(1.5, 1.3, 0.75), 0.04, 0.10);
+  PointCloud chair = box_object(Vec3(0.5, 2.5, 0.0), 0.2, 0.45);
+  PointCloud book = box_object(Vec3(1.9, 1.5, 0.75), 0.1, 0.03);
+  PointCloud pen = box_object(Vec3(1.9, 1.5, 0.78), 0.02, 0.02);
+  // The room with the objects' points, as a dense map holds them.
+  std::vector<Vec3f> map(bool with_floor = true) const {
+    std::vector<Vec3f> pts = room(with_floor);
+    for (const PointCloud* c : {&cup, &chair, &book, &pen})
+      pts.insert(pts.end(), c->points.begin(), c->points.end());
+    return pts;
+  }
+  std::vector<SceneObject> objects() const {
+    return {{1, "cup", Vec3(1.5, 1.3, 0.80), &cup},
+            {2, "chair", Vec3(0.5, 2.5, 0.225), &chair},
+            {3, "book", Vec3(1.9, 1.5, 0.765), &book},
+            {4, "toothbrush", Vec3(1.9, 1.5, 0.79), &pen}};
+  }
+};
+
+TEST(Surfaces, FloorAndTableFoundAtTheirHeightsWithTheObjectsOnThem) {
+  Fixture f;
+  const auto objects = f.objects();
+  std::vector<Surface> surfaces = find_surfaces(f.map(), Vec3::UnitZ(), objects, SurfaceOptions{});
+  const auto relations =
+      relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  const Surface* floor = nullptr;
+  const Surface* table = nullptr;
+  for (const auto& s : surfaces) {
+    if (s.label == "floor") floor = &s;
+    if (s.label == "table") table = &s;
+  }
+  ASSERT_NE(floor, nullptr);
+  ASSERT_NE(table, nullptr);
+  EXPECT_NEAR(floor->height_m, 0.0, 0.01);
+  EXPECT_NEAR(table->height_m, 0.75, 0.01);
+  EXPECT_NEAR(table->area_m2, 1.2 * 0.8, 0.1);
+  ASSERT_TRUE(relations[0].on);  // the cup on the table
+  EXPECT_EQ(relations[0].on->kind, "surface");
+  EXPECT_EQ(relations[0].on->id, table->id);
+  EXPECT_EQ(relations[0].on->label, "table");
+  EXPECT_NEAR(relations[0].on->gap_m, 0.0, 0.01);
+  ASSERT_TRUE(relations[1].on);  // the chair on the floor
+  EXPECT_EQ(relations[1].on->label, "floor");
+  ASSERT_TRUE(relations[3].on);  // the toothbrush on the book, not on the table below it
+  EXPECT_EQ(relations[3].on->kind, "object");
+  EXPECT_EQ(relations[3].on->id, 3);
+  ASSERT_EQ(relations[3].above.size(), 1u);
+  EXPECT_EQ(relations[3].above[0].id, 3);
+  ASSERT_EQ(relations[2].under.size(), 1u);
+  EXPECT_EQ(relations[2].under[0].id, 4);
+  // near: the book and the toothbrush (0.03 m), the cup 0.45 m away; the chair is not near.
+  ASSERT_GE(relations[2].near.size(), 2u);
+  EXPECT_EQ(relations[2].near[0].id, 4);
+  for (const auto& n : relations[0].near) EXPECT_NE(n.id, 2);
+}
+
+TEST(Surfaces, WithTheFloorUnseenTheTableIsWhatSmallObjectsStandOn) {
+  Fixture f;
+  const auto objects = f.objects();
+  std::vector<Surface> surfaces =
+      find_surfaces(f.map(/*with_floor=*/false), Vec3::UnitZ(), objects, SurfaceOptions{});
+  relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  int tables = 0, floors = 0;
+  for (const auto& s : surfaces) {
+    tables += s.label == "table";
+    floors += s.label == "floor";
+    if (s.label == "table") {
+      EXPECT_NE(s.label_rule.find("floor is not seen"), std::string::npos);
+    }
+  }
+  EXPECT_EQ(tables, 1);
+  EXPECT_EQ(floors, 0);
+}
+
+TEST(Surfaces, OptionsAreChecked) {
+  SurfaceOptions o;
+  o.min_area_m2 = 0.0;
+  EXPECT_THROW(o.check(), InputError);
+  RelationOptions r;
+  r.near_radius_m = -1;
+  EXPECT_THROW(r.check(), InputError);
+}
+
+}  // namespace
+}  // namespace objmap::scene
