@@ -119,13 +119,33 @@ TEST(Up, FoundFromTheTableAndFloorInAFrameThatIsNotZUp) {
   EXPECT_EQ(used, 2);  // floor and table top; the wall is not
 }
 
-TEST(Up, LevelCamerasGiveThePriorNormalToTheirXAxes) {
-  UpEstimate e = estimate_up(cameras(40.0), {}, UpOptions{});
+TEST(Up, WithoutPlanesUpIsTheCamerasMeanUpAxisAndItIsSaid) {
+  const std::vector<Pose> cams = cameras(40.0);
+  UpEstimate e = estimate_up(cams, {}, UpOptions{});
   EXPECT_EQ(e.source, "cameras");
-  EXPECT_LT(angle_deg(e.up, Vec3::UnitZ()), 1e-6);  // x axes level however far they look down
-  EXPECT_NE(e.camera_prior_rule.find("x axes"), std::string::npos);
+  EXPECT_EQ(e.up, e.camera_prior);
+  Vec3 mean_up = Vec3::Zero();
+  for (const Pose& c : cams) mean_up -= c.linear().col(1);
+  EXPECT_LT(angle_deg(e.up, mean_up), 1e-9);
   ASSERT_EQ(e.warnings.size(), 1u);  // no plane: said
   EXPECT_NE(e.warnings[0].find("no plane of the dense map"), std::string::npos);
+}
+
+TEST(Up, AWallInFrontOfCamerasLookingDownIsNotTheFloor) {
+  // Cameras look 50 deg down at a table in front of a wall that is larger than the table: the wall
+  // is about as far from the cameras' up as the table, but they would look up at it.
+  std::vector<Vec3f> pts;
+  add_rect(pts, 1.0, 2.2, 1.0, 1.8, 0.75);
+  for (double y = 0.0; y <= 3.0; y += 0.01)
+    for (double z = 0.0; z <= 2.5; z += 0.01) pts.emplace_back(3.0, y, z);
+  const Eigen::Isometry3d t = slam_from_world();
+  std::vector<Vec3f> moved;
+  for (const Vec3f& p : pts) moved.push_back((t * p.cast<double>()).cast<float>());
+  std::vector<Pose> cams;
+  for (const Pose& c : cameras(50.0, 10.0)) cams.push_back(t * c);
+  const UpEstimate e = estimate_up(cams, moved, UpOptions{});
+  EXPECT_EQ(e.source, "planes");
+  EXPECT_LT(angle_deg(e.up, t.linear() * Vec3::UnitZ()), 0.5);
 }
 
 TEST(Up, CamerasThatAreNotUprightAreSaid) {

@@ -115,11 +115,12 @@ ordered_json scene_run_json(const scene::SceneGraph& graph) {
                       {"offset_m", p.offset},
                       {"inliers", p.inliers},
                       {"angle_to_prior_deg", p.angle_to_prior_deg},
+                      {"view_elevation", p.view_elevation},
                       {"used", p.used}});
   ordered_json up = {{"source", u.source},
                      {"up_in_world", vec(u.up)},
                      {"camera_prior", vec(u.camera_prior)},
-                     {"camera_prior_rule", u.camera_prior_rule},
+                     {"camera_view", vec(u.camera_view)},
                      {"camera_agreement", u.camera_agreement},
                      {"prior_to_up_deg", u.prior_to_up_deg},
                      {"sample_points", u.sample_points},

@@ -22,7 +22,8 @@ struct UpOptions {
   double plane_distance_m = 0.02;      // RANSAC inlier distance
   int max_planes = 8;                  // planes taken out of the sample one after another
   double min_plane_share = 0.02;       // a plane holds at least this share of the sample
-  double max_prior_angle_deg = 50.0;   // a plane this close to the cameras' up may be horizontal
+  double max_prior_angle_deg = 70.0;   // a plane this close to the cameras' up may be horizontal
+  double max_view_elevation = 0.25;    // ... when the cameras do not look up at it (mean sin)
   double parallel_deg = 5.0;           // planes this close to the chosen one refine it
   double disagree_warning_deg = 45.0;  // planes vs cameras beyond this: a warning
   void check() const;                  // throws InputError naming the field
@@ -34,7 +35,8 @@ struct PlaneEvidence {
   double offset = 0.0;          // normal · p for the plane's points
   std::size_t inliers = 0;      // sample points
   double angle_to_prior_deg = 0.0;
-  bool used = false;  // one of the horizontal planes the up direction is the mean of
+  double view_elevation = 0.0;  // mean of the cameras' viewing directions · normal
+  bool used = false;            // one of the horizontal planes the up direction is the mean of
 };
 
 struct UpEstimate {
@@ -42,10 +44,10 @@ struct UpEstimate {
   Eigen::Matrix3d gravity_from_world = Eigen::Matrix3d::Identity();  // R · up = +z
   std::string source;  // "given", "planes" or "cameras"
   Vec3 camera_prior = Vec3::UnitZ();
-  std::string camera_prior_rule;  // which camera axis gave the prior, and why
-  double camera_agreement = 0.0;  // |mean of the cameras' up axes| in [0, 1]
-  double prior_to_up_deg = 0.0;   // angle between the cameras' prior and the result
-  std::size_t sample_points = 0;  // points of the sampled dense map
+  Vec3 camera_view = Vec3::UnitX();  // mean of the cameras' viewing directions (z axes)
+  double camera_agreement = 0.0;     // |mean of the cameras' up axes| in [0, 1]
+  double prior_to_up_deg = 0.0;      // angle between the cameras' prior and the result
+  std::size_t sample_points = 0;     // points of the sampled dense map
   std::vector<PlaneEvidence> planes;
   std::vector<std::string> warnings;  // evidence that disagrees, said in one line each
 };

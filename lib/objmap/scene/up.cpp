@@ -24,33 +24,21 @@ std::string fixed(double v, int digits) {
   return s.str();
 }
 
-// Step 1: the cameras' prior. Cameras are held roughly upright: their y axis points down, so the
-// mean of their −y axes points up, tilted by how far they look down (30–45° for a desk). When they
-// barely roll and turn about (their x axes span a plane), up is better the normal of that plane:
-// the cameras' x axes stay horizontal however far they look down.
+// Step 1: the cameras' prior. Cameras are held roughly upright: the camera's y axis points down,
+// so the mean of the cameras' -y axes points up, tilted by how far they look down (30-50 deg at a
+// desk) but not by how they roll. The mean viewing direction (z axes) tells a floor or table top
+// (the cameras look down at it) from a wall in front of them (as far from the prior).
 void camera_prior(const std::vector<Pose>& cameras, UpEstimate& e) {
   Vec3 mean_up = Vec3::Zero();
-  Eigen::Matrix3d xx = Eigen::Matrix3d::Zero();
+  Vec3 mean_view = Vec3::Zero();
   for (const Pose& c : cameras) {
-    const Eigen::Matrix3d r = c.linear();
-    mean_up -= r.col(1);
-    xx.noalias() += r.col(0) * r.col(0).transpose();
+    mean_up -= c.linear().col(1);
+    mean_view += c.linear().col(2);
   }
   const double n = static_cast<double>(std::max<std::size_t>(cameras.size(), 1));
-  mean_up /= n;
-  xx /= n;
-  e.camera_agreement = mean_up.norm();
+  e.camera_agreement = mean_up.norm() / n;
   e.camera_prior = e.camera_agreement > 0.0 ? Vec3(mean_up.normalized()) : Vec3::UnitZ();
-  e.camera_prior_rule = "the mean of the cameras' up (-y) axes";
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(xx);
-  const Eigen::Vector3d lambda = solver.eigenvalues();  // ascending
-  if (lambda[0] < 0.02 && lambda[1] >= 0.1) {
-    Vec3 normal = solver.eigenvectors().col(0);
-    if (normal.dot(e.camera_prior) < 0) normal = -normal;
-    e.camera_prior = normal;
-    e.camera_prior_rule =
-        "normal to the cameras' x axes (they stay level: spread " + fixed(lambda[0], 4) + ")";
-  }
+  e.camera_view = mean_view / n;
 }
 
 // Step 2: the dominant planes of the sampled map, one after another (RANSAC, then the next in
@@ -71,6 +59,7 @@ std::vector<PlaneEvidence> dominant_planes(const std::vector<Vec3f>& map_points,
     p.offset = sign * plane.offset;
     p.inliers = plane.inliers.size();
     p.angle_to_prior_deg = angle_deg(p.normal, e.camera_prior);
+    p.view_elevation = e.camera_view.dot(p.normal);
     planes.push_back(p);
     std::sort(plane.inliers.begin(), plane.inliers.end());
     rest = detail::without(rest, plane.inliers);
@@ -78,7 +67,10 @@ std::vector<PlaneEvidence> dominant_planes(const std::vector<Vec3f>& map_points,
   return planes;
 }
 
-// Step 3: the horizontal planes. Candidates lie within max_prior_angle of the prior; the one with
+// Step 3: the horizontal planes. Candidates lie within max_prior_angle of the prior and the cameras
+// do not look up at them (mean view elevation <= max_view_elevation: a wall in front of cameras
+// that look down at a desk is as far from the prior as the desk, but they would look up at it as
+// if it were a ceiling); the one with
 // the most support (its inliers and those of the planes parallel to it) wins, unless a candidate
 // about perpendicular to it is closer to the prior (a wall found before the floor: both are
 // candidates when the prior leans 40°; the horizontal one is the nearer). Up is the inlier-weighted
@@ -90,10 +82,13 @@ std::optional<Vec3> horizontal_up(std::vector<PlaneEvidence>& planes, const UpOp
       if (angle_deg(p.normal, c.normal) <= o.parallel_deg) s += p.inliers;
     return s;
   };
+  const auto candidate = [&](const PlaneEvidence& c) {
+    return c.angle_to_prior_deg <= o.max_prior_angle_deg &&
+           c.view_elevation <= o.max_view_elevation;
+  };
   const PlaneEvidence* best = nullptr;
   for (const auto& c : planes)
-    if (c.angle_to_prior_deg <= o.max_prior_angle_deg && (!best || support(c) > support(*best)))
-      best = &c;
+    if (candidate(c) && (!best || support(c) > support(*best))) best = &c;
   if (!best) return std::nullopt;
   const PlaneEvidence* chosen = best;
   for (const auto& c : planes)
@@ -185,10 +180,10 @@ UpEstimate estimate_up(const std::vector<Pose>& cameras, const std::vector<Vec3f
                            " < 0.5: a camera not held upright, e.g. on a ceiling?); the up "
                            "direction rests on the map's planes alone; give --up if it is known");
     if (!planes_up)
-      e.warnings.push_back("no plane of the dense map lies within " +
-                           fixed(options.max_prior_angle_deg, 0) +
-                           " deg of the cameras' up; up is the cameras' (" + e.camera_prior_rule +
-                           "); give --up if the world's up is known");
+      e.warnings.push_back(
+          "no plane of the dense map lies within " + fixed(options.max_prior_angle_deg, 0) +
+          " deg of the cameras' up (the mean of their -y axes) that they look down "
+          "at; up is the cameras'; give --up if the world's up is known");
   }
   e.prior_to_up_deg = angle_deg(e.camera_prior, e.up);
   if (e.source == "planes" && e.prior_to_up_deg > options.disagree_warning_deg)
