@@ -26,6 +26,8 @@ namespace objmap::app {
 void setup_eval_tracks(CLI::App& eval_app);
 // apps/objmap/eval_masks.cpp: `objmap eval masks` (mask quality without ground truth).
 void setup_eval_masks(CLI::App& eval_app);
+// apps/objmap/eval_scene.cpp: `objmap eval scene` (up, support surfaces, `on` relations).
+void setup_eval_scene(CLI::App& eval_app);
 
 namespace {
 
@@ -272,14 +274,14 @@ void setup_eval_objects(CLI::App& eval_app) {
 // ------------------------------------------------------------------------------------
 
 // The subcommands of `objmap eval`, in --help order.
-const SetupFn kEvalSubcommands[] = {setup_eval_ate, setup_eval_rpe, setup_eval_objects,
-                                    setup_eval_tracks, setup_eval_masks};
+const SetupFn kEvalSubcommands[] = {setup_eval_ate,   setup_eval_rpe,    setup_eval_objects,
+                                    setup_eval_scene, setup_eval_tracks, setup_eval_masks};
 
 void setup_eval(CLI::App& app) {
   CLI::App* eval_app = app.add_subcommand(
       "eval",
-      "Evaluate against ground truth: trajectories (ate, rpe), objects, tracks; and masks "
-      "without it");
+      "Evaluate against ground truth: trajectories (ate, rpe), objects, scene structure, "
+      "tracks; and masks without it");
   eval_app->require_subcommand(1);
   for (const SetupFn& setup : kEvalSubcommands) setup(*eval_app);
 }

@@ -68,8 +68,10 @@ void setup_synth(CLI::App& app) {
   auto* c = app.add_subcommand(
       "synth",
       "Write a synthetic TUM RGB-D sequence (ray-cast room, table(s) and the paper's eight object "
-      "classes) with exact ground truth: groundtruth.txt, objects_gt.json, segmentation_gt/, and a "
-      "noisy segmentation/ and drifting estimated.txt. Same seed and options: identical files.");
+      "classes) with exact ground truth: groundtruth.txt, objects_gt.json (objects, up, support "
+      "surfaces, 'on' relations), segmentation_gt/, and a noisy segmentation/ and drifting "
+      "estimated.txt (and estimated_slam_frame.txt: the same in its first camera's frame). Same "
+      "seed and options: identical files.");
   c->add_option("--out", cmd->out,
                 "output folder (an earlier synthetic sequence there is replaced; any other folder "
                 "is refused)")

@@ -159,7 +159,7 @@ TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
   EXPECT_TRUE(streamed.frames.empty());
   EXPECT_GT(streamed.seg_stats.id_switches, 0);
   const int compared = expect_same_files(tmp / "memory", tmp / "streamed");
-  EXPECT_EQ(compared, 11 * 4 + 7);  // rgb, depth, 2 segmentations per frame + 7 files
+  EXPECT_EQ(compared, 11 * 4 + 8);  // rgb, depth, 2 segmentations per frame + 8 files
   // The PNGs (io/png_encode.h's encoder) read back as the images in memory.
   for (const auto& f : memory.frames) {
     const cv::Mat rgb =
@@ -188,7 +188,7 @@ TEST(Synth, StreamingWriterBleedsTheMasksAsTheInMemoryOne) {
   EXPECT_GT(streamed.seg_stats.bleed_pixels, 0);
   EXPECT_EQ(streamed.seg_stats.bleed_pixels, memory.seg_stats.bleed_pixels);
   const int compared = expect_same_files(tmp / "memory", tmp / "streamed");
-  EXPECT_EQ(compared, 7 * 4 + 7);
+  EXPECT_EQ(compared, 7 * 4 + 8);
 }
 
 TEST(Synth, BleedIsRecordedInSynthJsonOnlyWhenOn) {

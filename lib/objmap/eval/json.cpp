@@ -19,6 +19,13 @@ void put_stats(ordered_json& out, const ErrorStats& stats) {
 
 }  // namespace
 
+ordered_json stats_json(const ErrorStats& s) {
+  ordered_json out;
+  out["count"] = s.count;
+  put_stats(out, s);
+  return out;
+}
+
 std::string ate_json(const AteResult& result, const AteOptions& options) {
   ordered_json out;
   out["pairs"] = result.stats.count;

@@ -1,4 +1,5 @@
 #pragma once
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "objmap/eval/ate.h"
@@ -7,6 +8,9 @@
 // The JSON documents of `objmap eval ate` and `objmap eval rpe` (schemas/eval_ate.schema.json,
 // schemas/eval_rpe.schema.json). Deterministic: the same result gives the same bytes.
 namespace objmap::eval {
+
+// {"count":N,"rmse":..,"mean":..,"median":..,"std":..,"min":..,"max":..} of an error list.
+nlohmann::ordered_json stats_json(const ErrorStats& stats);
 
 // {"pairs":N,"rmse":..,"mean":..,"median":..,"std":..,"min":..,"max":.., "unit":"m",
 //  "gt":..,"est":..,"max_diff_s":..,"offset_s":..,"gt_from_est":{"type":"se3"|"sim3",

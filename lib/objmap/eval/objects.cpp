@@ -19,6 +19,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/eval/format.h"
+#include "objmap/eval/json.h"
 #include "objmap/io/text_lines.h"
 
 namespace objmap::eval {
@@ -507,18 +508,6 @@ PointCounts read_point_counts(const std::filesystem::path& run_json) {
 namespace {
 
 using nlohmann::ordered_json;
-
-ordered_json stats_json(const ErrorStats& s) {
-  ordered_json out;
-  out["count"] = s.count;
-  out["rmse"] = s.rmse;
-  out["mean"] = s.mean;
-  out["median"] = s.median;
-  out["std"] = s.stddev;
-  out["min"] = s.min;
-  out["max"] = s.max;
-  return out;
-}
 
 ordered_json vec3_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
 

@@ -69,6 +69,17 @@ double frame_timestamp(double start_time_s, double frame_rate_hz, int index) {
   return round_us(start_time_s + index / frame_rate_hz);
 }
 
+Trajectory in_first_camera_frame(const Trajectory& trajectory) {
+  Trajectory out;
+  out.source = trajectory.source;
+  if (trajectory.empty()) return out;
+  const Pose first_from_world = trajectory.poses.front().world_from_cam.inverse();
+  for (const StampedPose& p : trajectory.poses)
+    out.poses.push_back({p.timestamp, first_from_world * p.world_from_cam});
+  out.poses.front().world_from_cam = Pose::Identity();  // exactly, not to rounding
+  return out;
+}
+
 segmentation::Segmentation SynthSequence::segmentation() const {
   segmentation::Segmentation s;
   s.format = "json";

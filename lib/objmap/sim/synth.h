@@ -88,6 +88,10 @@ SynthFrame render_synth_frame(const SynthSequence& prepared, int index);
 // the stateful segmentation noise seeded as synthesize() seeds it.
 SegmentationNoise make_segmentation_noise(const SynthOptions& options);
 
+// The trajectory re-expressed in the frame of its first camera, as ORB-SLAM2 writes its
+// CameraTrajectory.txt: pose i becomes T_0^-1 · T_i (the first pose the identity).
+Trajectory in_first_camera_frame(const Trajectory& trajectory);
+
 // t0 + i / rate rounded to the microsecond.
 double frame_timestamp(double start_time_s, double frame_rate_hz, int index);
 

@@ -17,6 +17,7 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/segmentation/write.h"
 #include "objmap/sim/parallel.h"
+#include "objmap/sim/support.h"
 
 namespace objmap::sim {
 
@@ -70,9 +71,37 @@ std::string timestamp_name(double timestamp) {
   return buffer;
 }
 
+namespace {
+
+json surface_json(const SupportSurface& s) {
+  json outline = json::array();
+  for (const Vec3& corner : s.outline) outline.push_back(vec(corner));
+  json j = {{"id", s.id},
+            {"label", s.label},
+            {"height_m", s.height_m},
+            {"center", vec(s.center)},
+            {"outline", outline},
+            {"area_m2", s.area_m2}};
+  if (s.object_id > 0) j["object"] = s.object_id;
+  return j;
+}
+
+json relation_json(const std::optional<SupportRelation>& on) {
+  if (!on) return nullptr;
+  const bool surface = on->kind == SupportRelation::Kind::kSurface;
+  return {{"kind", surface ? "surface" : "object"},
+          {"id", on->id},
+          {"label", on->label},
+          {"gap_m", on->gap_m}};
+}
+
+}  // namespace
+
 std::string objects_gt_json(const Scene& scene) {
+  const SceneSupport support = scene_support(scene);
   json objects = json::array();
-  for (const auto& o : scene.objects) {
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& o = scene.objects[i];
     json rotation = json::array();
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) rotation.push_back(o.obb.rotation(r, c));
@@ -83,11 +112,16 @@ std::string objects_gt_json(const Scene& scene) {
                         {{"center", vec(o.obb.center)},
                          {"rotation", rotation},
                          {"half_extent", vec(o.obb.half_extent)}}},
-                       {"volume_m3", o.volume_m3}});
+                       {"volume_m3", o.volume_m3},
+                       {"on", relation_json(support.on[i])}});
   }
+  json surfaces = json::array();
+  for (const SupportSurface& s : support.surfaces) surfaces.push_back(surface_json(s));
   json doc = {{"schema_version", 1},
               {"frame", "world frame of groundtruth.txt (z up, metres)"},
               {"centroid_definition", "solid volume"},
+              {"up_in_world", vec(support.up)},
+              {"surfaces", surfaces},
               {"objects", objects}};
   return doc.dump(2) + "\n";
 }
@@ -191,6 +225,10 @@ void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
   io::write_trajectory(
       dir / "estimated.txt", s.estimated,
       "SLAM-like estimate with drift (" + std::string(drift) + " of the path length) of " + what);
+  io::write_trajectory(dir / "estimated_slam_frame.txt", in_first_camera_frame(s.estimated),
+                       "estimated.txt in the frame of its first camera (first pose = identity, as "
+                       "ORB-SLAM2's CameraTrajectory.txt) of " +
+                           what);
   write_text(dir / "objects_gt.json", objects_gt_json(s.scene));
   write_text(dir / "synth.json", synth_json(s));
 }

@@ -6,7 +6,8 @@
 
 // Writes a SynthSequence as a TUM RGB-D folder with ground truth:
 //   rgb/<t>.png  depth/<t>.png (16-bit, factor 5000)  rgb.txt  depth.txt  camera.json
-//   groundtruth.txt  estimated.txt  objects_gt.json  synth.json
+//   groundtruth.txt  estimated.txt  estimated_slam_frame.txt (estimated.txt in its first camera's
+//   frame)  objects_gt.json (objects, up, surfaces, `on` relations)  synth.json
 //   segmentation/<t>.json (noisy)  segmentation_gt/<t>.json (exact, track_id = object id)
 namespace objmap::sim {
 
@@ -27,7 +28,8 @@ SynthSequence write_synthetic_sequence(const std::filesystem::path& out,
                                        const SynthOptions& options,
                                        const SynthProgress& progress = {});
 
-// objects_gt.json text (schemas/objects_gt.schema.json): id, class, centroid, obb per object.
+// objects_gt.json text (schemas/objects_gt.schema.json): the world's up, the support surfaces
+// (support.h) and per object id, class, centroid, obb, volume and what it rests on.
 std::string objects_gt_json(const Scene& scene);
 
 // synth.json text: the generator's options and the counts of segmentation errors made.

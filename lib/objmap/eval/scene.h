@@ -1,0 +1,125 @@
+#pragma once
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "objmap/core/types.h"
+#include "objmap/eval/ate.h"
+#include "objmap/eval/objects.h"
+#include "objmap/eval/stats.h"
+#include "objmap/io/objects_json.h"
+
+// Evaluation of the scene structure of an object map against the ground truth of `objmap synth`
+// (issue #19): the up direction of the world, the horizontal support surfaces (floor, table tops,
+// seats) and each object's `on` relation. The map's objects are matched to the true ones as
+// `eval objects` matches them (evaluate_objects).
+namespace objmap::eval {
+
+// What an object rests on: a surface (id of a surface of the same file) or an object (its id).
+struct OnRelation {
+  enum class Kind { kSurface, kObject };
+  Kind kind = Kind::kSurface;
+  int id = 0;
+  std::string label;  // the surface's label or the object's class ("" when the file gives none)
+};
+
+struct SceneSurface {
+  int id = 0;
+  std::string label;  // "floor", "table", "seat" or "surface"
+  double height_m = 0.0;
+  Vec3 center = Vec3::Zero();
+  std::vector<Vec3> outline;  // corners in cyclic order (may be empty in a map)
+  double area_m2 = 0.0;
+  int object_id = 0;  // ground truth: the object a seat belongs to (0: none)
+};
+
+// The scene fields of objects.json (a map) or objects_gt.json (the ground truth).
+struct SceneDescription {
+  std::string source;  // the file, for messages and reports
+  Vec3 up = Vec3::UnitZ();
+  std::vector<SceneSurface> surfaces;
+  std::map<int, std::optional<OnRelation>> on;  // by object id; nullopt: rests on nothing known
+};
+
+// RUN/objects.json of `objmap fuse`: up_in_world, surfaces[] and objects[].relations.on. Throws
+// InputError naming the file and the missing or malformed field.
+SceneDescription read_map_scene(const std::filesystem::path& objects_json);
+// objects_gt.json of `objmap synth`: up_in_world, surfaces[] and objects[].on.
+SceneDescription read_gt_scene(const std::filesystem::path& objects_gt_json);
+
+// Maps a map's scene and objects from their frame into another by `target_from_source`: points,
+// directions, surface heights (h' = s·h + up'·t) and boxes.
+SceneDescription transform_scene(const SceneDescription& scene,
+                                 const Similarity& target_from_source);
+std::vector<io::MappedObject> transform_objects(const std::vector<io::MappedObject>& objects,
+                                                const Similarity& target_from_source);
+
+// A true surface and the map surface matched to it: the map surface whose centre lies inside the
+// true outline (projected along the true up), with the true label if one such has it, else any;
+// the nearest centre among several; each map surface matched at most once (floor/table matches
+// with the true label are made first).
+struct SurfaceMatch {
+  int gt_id = 0;
+  std::string gt_label;
+  double gt_height_m = 0.0;
+  std::optional<int> map_id;  // none: missed
+  std::string map_label;
+  double map_height_m = 0.0;
+  double height_error_m = 0.0;  // map − true (0 when missed)
+  bool same_label = false;
+};
+
+// `on` of one matched pair of objects.
+struct RelationCheck {
+  int gt_id = 0, map_id = 0;
+  std::string class_name;
+  std::optional<OnRelation> gt_on, map_on;
+  bool correct = false;  // both present and the map's target is the true one's
+};
+
+struct RelationScores {
+  std::size_t predicted = 0;  // matched map objects with an `on`
+  std::size_t relevant = 0;   // matched true objects with an `on`
+  std::size_t correct = 0;
+  double precision = 0.0;  // correct / predicted (0 when none predicted)
+  double recall = 0.0;     // correct / relevant (0 when none relevant)
+  std::size_t unmatched_map_with_on = 0, unmatched_gt_with_on = 0;  // outside the scores
+};
+
+struct SceneEvalResult {
+  double up_angle_deg = 0.0;
+  std::vector<SurfaceMatch> surfaces;    // one per true surface, in its order
+  std::size_t found = 0, missed = 0;     // of the true floor and table surfaces
+  ErrorStats height_abs_error_m;         // |height error| of the found floor and table surfaces
+  std::vector<RelationCheck> relations;  // one per matched object pair, by true id
+  RelationScores on;
+};
+
+// Everything in the ground truth's frame. `options` as for evaluate_objects (its matching).
+SceneEvalResult evaluate_scene(const std::vector<io::MappedObject>& map_objects,
+                               const SceneDescription& map_scene,
+                               const std::vector<ReferenceObject>& gt_objects,
+                               const SceneDescription& gt_scene, const ObjectEvalOptions& options);
+
+// The SE(3) that brought the map into the ground truth's frame: evaluate_ate of the run's
+// trajectory against the ground-truth trajectory.
+struct SceneAlignment {
+  std::string gt_trajectory, trajectory;  // the files
+  Similarity gt_from_map;
+  ErrorStats ate_m;  // the trajectory's ATE after that alignment
+};
+
+struct SceneEvalReport {
+  std::string map_source, gt_source;
+  ObjectEvalOptions options;
+  std::optional<SceneAlignment> alignment;  // none: the map is in the ground truth's frame
+  SceneEvalResult result;
+};
+
+// The JSON document of `objmap eval scene` (schemas/eval_scene.schema.json); deterministic.
+std::string scene_eval_json(const SceneEvalReport& report);
+std::string scene_eval_text(const SceneEvalReport& report);
+
+}  // namespace objmap::eval
