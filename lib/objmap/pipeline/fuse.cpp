@@ -1190,22 +1190,23 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   merge_and_filter_objects(options, objects, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
+  // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
+  //     pass's reason for keeping them apart (no ground truth needed), on the boxes of
+  //     the records (before the scene step turns them upright).
+  t0 = Clock::now();
+  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
+  result.times.push_back({"duplicate check", seconds_since(t0)});
+
   DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
 
-  // 4b. The up direction (the cameras and the map's horizontal planes); the objects' boxes stand
+  // 4c. The up direction (the cameras and the map's horizontal planes); the objects' boxes stand
   //     on it.
   t0 = Clock::now();
   result.scene.up = orient_to_gravity(result.keyframes.keyframes, dense_cloud.cloud.points,
                                       options.scene.up, result.objects);
   result.scene.seconds_up = seconds_since(t0);
   for (const auto& w : result.scene.up.warnings) result.warnings.push_back("up direction: " + w);
-
-  // 4c. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
-  //     pass's reason for keeping them apart (no ground truth needed).
-  t0 = Clock::now();
-  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
-  result.times.push_back({"duplicate check", seconds_since(t0)});
 
   // 4d. Support surfaces and the objects' relations (on, near, above, under).
   find_surfaces_and_relations(dense_cloud.cloud.points, result.objects, options.scene,

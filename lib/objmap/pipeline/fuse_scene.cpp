@@ -133,11 +133,7 @@ ordered_json scene_run_json(const scene::SceneGraph& graph) {
   return {{"up", up},
           {"surfaces", graph.surfaces.size()},
           {"surface_labels", labels},
-          {"objects_on_something", on},
-          {"seconds",
-           {{"up", graph.seconds_up},
-            {"surfaces", graph.seconds_surfaces},
-            {"relations", graph.seconds_relations}}}};
+          {"objects_on_something", on}};
 }
 
 }  // namespace objmap::pipeline
