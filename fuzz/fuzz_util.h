@@ -34,6 +34,13 @@ fs::path fresh_dir();
 // Writes `bytes` to dir / name, creating the folders of `name`; returns the path.
 fs::path write_file(const fs::path& dir, const std::string& name, std::string_view bytes);
 
+// True above 2^22 pixels: a valid image that only takes long to decode (a few dozen bytes of JPEG
+// can claim 2^30). The image targets skip such headers where no size is required, to try more
+// inputs; io/image.h refuses them by size before decoding when the camera's size is given.
+inline bool too_many_pixels(std::uint32_t width, std::uint32_t height) {
+  return std::uint64_t{width} * height > (std::uint64_t{1} << 22);
+}
+
 // Aborts with `what` on stderr: a finding that is not a crash of its own (a wrong result).
 [[noreturn]] void finding(const std::string& what);
 
