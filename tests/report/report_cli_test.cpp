@@ -344,6 +344,18 @@ TEST(ObjectsJson, DuplicateIdsAndNegativeExtentsAreNamed) {
             std::string::npos);
 }
 
+TEST(ObjectsJson, AFolderIsExit2NamingIt) {
+  // `objmap eval objects --map RUN` (the run folder, not its objects.json) was exit 1, "internal
+  // error: basic_filebuf::underflow error reading the file: Is a directory".
+  TempDir dir;
+  const auto r = run_objmap({"eval", "objects", "--map", dir.path().string(), "--gt-objects",
+                             (dir / "gt.json").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(dir.path().string() + ": is a folder; expected RUN/objects.json"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST(ObjectsJson, CountsAndIdsMustBeWholeNumbersInRange) {
   // "id": 1e300 was cast to int (undefined: UBSan float-cast-overflow in the fuzz build,
   // fuzz_objects_json); a negative or fractional count was taken as some size_t.

@@ -6,6 +6,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <system_error>
 
 #include "objmap/core/error.h"
 
@@ -54,6 +55,10 @@ Vec3 vec3(const json& j, const std::string& key, const std::string& where) {
 }  // namespace
 
 std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
+  // A folder opens as a stream on Linux; reading it then throws std::ios_base::failure.
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw InputError(file.string(), "is a folder; expected RUN/objects.json of objmap fuse");
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "cannot open; expected RUN/objects.json of objmap fuse");
   json doc;
