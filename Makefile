@@ -5,7 +5,9 @@ DATA ?= $(if $(OBJMAP_DATA),$(OBJMAP_DATA),$(abspath ../shared/data))
 DEMO ?= out/demo
 OBJMAP := $(BUILD)/bin/objmap
 
-.PHONY: all deps configure build test demo bench format clean
+FUZZ_SECONDS ?= 60
+
+.PHONY: all deps configure build test demo bench fuzz sanitize format clean
 
 all: build
 
@@ -36,8 +38,20 @@ bench: deps build
 	@BENCH_COMMAND="make bench$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
 	  bash scripts/bench.sh $(OBJMAP) $(DATA)
 
+# make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of fuzz/ (every reader of
+# outside data) for FUZZ_SECONDS under libFuzzer + ASan + UBSan, built with clang in build-fuzz/
+# (scripts/fuzz.sh; 16 targets: ~17 minutes at the default). docs/testing.md.
+fuzz:
+	@bash scripts/install-deps.sh --fuzz
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash scripts/fuzz.sh $(DATA)
+
+# make sanitize: the whole test suite on an ASan + UBSan build in build-asan/ (scripts/sanitize.sh;
+# the first build takes long: docs/testing.md gives the figures).
+sanitize: deps
+	@JOBS=$(JOBS) bash scripts/sanitize.sh $(DATA)
+
 format:
 	@bash scripts/format.sh
 
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) build-fuzz build-asan out

@@ -5,6 +5,9 @@
 #   scripts/install-deps.sh --bench   also what `make bench` uses: python3 (the table script) and
 #                                     python3-open3d (the Open3D baseline, optional: when it cannot be
 #                                     installed the bench says n/a for it and goes on)
+#   scripts/install-deps.sh --fuzz    also what `make fuzz` uses: clang with its libFuzzer and
+#                                     sanitizer runtimes (Debian 12: libclang-rt-14-dev) and
+#                                     llvm-symbolizer (llvm) for readable reports
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
@@ -12,11 +15,13 @@ packages=(build-essential cmake pkg-config ccache
           libpng-dev libjpeg-dev)
 bench_required=(python3)
 bench_optional=(python3-open3d)
+fuzz_required=(clang libclang-rt-14-dev llvm)
 bench=0
 for arg in "$@"; do
   case "$arg" in
     --bench) bench=1 ;;
-    *) echo "install-deps: unknown option $arg (expected --bench)" >&2; exit 2 ;;
+    --fuzz) packages+=("${fuzz_required[@]}") ;;
+    *) echo "install-deps: unknown option $arg (expected --bench or --fuzz)" >&2; exit 2 ;;
   esac
 done
 [ $bench -eq 1 ] && packages+=("${bench_required[@]}")

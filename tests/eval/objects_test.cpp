@@ -256,6 +256,12 @@ TEST(ObjectsGt, ReadsJsonAndRejectsBadFiles) {
   EXPECT_TRUE(has(message("e.txt", "1 2 3 0.5 0.1 0.2 abc\n"), "e.txt:1"));
   EXPECT_TRUE(has(message("f.txt", "# nothing\n"), "f.txt: no cuboid"));
   EXPECT_TRUE(has(message("g.txt", "1 2 3 0 0.1 -0.2 0.3\n"), "g.txt:1: negative half extent"));
+  // The id of a position line was a double cast to int (undefined for 1e300: UBSan
+  // float-cast-overflow in the fuzz build, fuzz_objects_gt); it is an integer now.
+  EXPECT_TRUE(has(message("h.txt", "1e300 009_gelatin_box 1 2 3\n"),
+                  "h.txt:1: id is '1e300'; expected an integer"));
+  EXPECT_TRUE(
+      has(message("i.txt", "3000000000 mug 1 2 3\n"), "i.txt:1: id 3000000000; expected an int"));
   try {
     read_objects_gt(tmp / "missing.json");
     FAIL();

@@ -172,6 +172,24 @@ TEST(ReadCameraFile, ABrokenYamlIsOneLine) {
   }
 }
 
+TEST(ReadCameraFile, ASizeBeyondAnIntIsRefused) {
+  // "width": 1e300 was cast to int to see whether it is whole
+  // (undefined: UBSan float-cast-overflow in the fuzz build, fuzz_camera_json) before its range
+  // was checked.
+  TempDir dir;
+  std::string where;
+  for (const char* width : {"1e300", "-1e300", "640.5", "2e6"}) {
+    write_text(dir / "camera.json",
+               std::string(R"({"fx": 500, "fy": 500, "cx": 320, "cy": 240, )") + R"("width": )" +
+                   width + R"(, "height": 480})");
+    const std::string reason = camera_error(dir / "camera.json", &where);
+    EXPECT_EQ(where, (dir / "camera.json").string() + ": width") << width;
+    EXPECT_NE(reason.find("; expected a whole number of pixels > 0"), std::string::npos) << reason;
+  }
+  EXPECT_EQ(camera_error(dir / "camera.json"),
+            "is 2000000.0; expected a whole number of pixels > 0");
+}
+
 TEST(ReadCameraFile, ANumberBeyondADoubleIsNamed) {
   // "fx": 1e999 overflows a double: nlohmann's out_of_range error was exit 1 naming no file.
   TempDir dir;

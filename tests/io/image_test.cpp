@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <vector>
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -68,6 +71,28 @@ TEST(ReadImage, WrongSize) {
   EXPECT_EQ(rgb_error(dir / "small_rgb.png"),
             "image is 320x240; expected 640x480 (the camera's width x height)");
   EXPECT_EQ(read_depth(dir / "small.png", 320, 240).at<std::uint16_t>(10, 10), 1000);
+}
+
+TEST(ReadImage, AJpegOfTheWrongSizeIsRefusedBeforeDecoding) {
+  // Seen with fuzz/fuzz_jpeg (8 runs/s): a JPEG of a few dozen bytes whose header claims a huge
+  // image was decoded in full (up to 2^30 pixels, gigabytes) before its size was compared with the
+  // camera's. Its header is read first now, as a PNG's is: 60000x60000 names the size, where
+  // decoding would have refused the pixel count.
+  TempDir dir;
+  std::vector<unsigned char> bytes;
+  cv::imencode(".jpg", cv::Mat(8, 8, CV_8UC3, cv::Scalar(10, 20, 30)), bytes);
+  std::size_t sof = 2;
+  while (sof + 9 < bytes.size() && !(bytes[sof] == 0xFF && bytes[sof + 1] == 0xC0)) ++sof;
+  ASSERT_LT(sof + 9, bytes.size()) << "no SOF0 marker";
+  for (std::size_t at : {sof + 5, sof + 7}) {  // height, then width: 60000 = 0xEA60
+    bytes[at] = 0xEA;
+    bytes[at + 1] = 0x60;
+  }
+  std::ofstream(dir / "huge.jpg", std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
+  EXPECT_EQ(rgb_error(dir / "huge.jpg"),
+            "image is 60000x60000; expected 640x480 (the camera's width x height)");
 }
 
 TEST(ReadImage, EightBitOrColourDepth) {

@@ -311,33 +311,68 @@ TEST(ObjectsJson, MissingFieldIsNamed) {
   }
 }
 
+// One object of an objects.json with these id, half extent, point count and observation count.
+std::string object_json(const std::string& id, const std::string& half = "[0.1,0.1,0.1]",
+                        const std::string& points = "5", const std::string& seen = "3") {
+  return R"({"id":)" + id +
+         R"(,"class":"cup","score":0.9,"centroid":[0,0,0],"aabb":{"min":[0,0,0],"max":[1,1,1]},)"
+         R"("obb":{"center":[0,0,0],"half_extent":)" +
+         half + R"(,"rotation":[1,0,0,0,1,0,0,0,1]},"points":{"outlier_filtered":)" + points +
+         R"(},"observation_count":)" + seen + R"(,"ply":"objects/x.ply"})";
+}
+
+// The message of read_objects_json on {"objects":[<objects>]} written in `dir`, or "no error".
+std::string objects_json_error(const fs::path& dir, const std::string& objects) {
+  write_text(dir / "objects.json", R"({"objects":[)" + objects + "]}");
+  try {
+    io::read_objects_json(dir / "objects.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 TEST(ObjectsJson, DuplicateIdsAndNegativeExtentsAreNamed) {
   // eval objects took both (exit 0, garbage IoU).
-  const auto object = [](int id, const std::string& half) {
-    return R"({"id":)" + std::to_string(id) +
-           R"(,"class":"cup","score":0.9,"centroid":[0,0,0],"aabb":{"min":[0,0,0],"max":[1,1,1]},)"
-           R"("obb":{"center":[0,0,0],"half_extent":)" +
-           half +
-           R"(,"rotation":[1,0,0,0,1,0,0,0,1]},"points":{"outlier_filtered":5},)"
-           R"("observation_count":3,"ply":"objects/x.ply"})";
-  };
   TempDir dir;
-  const auto error = [&](const std::string& objects) {
-    write_text(dir / "objects.json", R"({"objects":[)" + objects + "]}");
-    try {
-      io::read_objects_json(dir / "objects.json");
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  EXPECT_EQ(error(object(1, "[0.1,0.1,0.1]")), "no error");
-  EXPECT_NE(error(object(1, "[0.1,0.1,0.1]") + "," + object(1, "[0.1,0.1,0.1]"))
+  EXPECT_EQ(objects_json_error(dir.path(), object_json("1")), "no error");
+  EXPECT_NE(objects_json_error(dir.path(), object_json("1") + "," + object_json("1"))
                 .find("objects[1].id: id 1 appears twice; expected unique ids"),
             std::string::npos);
-  EXPECT_NE(
-      error(object(1, "[0.1,-0.1,0.1]")).find("objects[0].obb.half_extent: negative half extent"),
-      std::string::npos);
+  EXPECT_NE(objects_json_error(dir.path(), object_json("1", "[0.1,-0.1,0.1]"))
+                .find("objects[0].obb.half_extent: negative half extent"),
+            std::string::npos);
+}
+
+TEST(ObjectsJson, AFolderIsExit2NamingIt) {
+  // `objmap eval objects --map RUN` (the run folder, not its objects.json) was exit 1, "internal
+  // error: basic_filebuf::underflow error reading the file: Is a directory".
+  TempDir dir;
+  const auto r = run_objmap({"eval", "objects", "--map", dir.path().string(), "--gt-objects",
+                             (dir / "gt.json").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(dir.path().string() + ": is a folder; expected RUN/objects.json"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST(ObjectsJson, CountsAndIdsMustBeWholeNumbersInRange) {
+  // "id": 1e300 was cast to int (undefined: UBSan float-cast-overflow in the fuzz build,
+  // fuzz_objects_json); a negative or fractional count was taken as some size_t.
+  TempDir dir;
+  EXPECT_EQ(objects_json_error(dir.path(), object_json("7")), "no error");
+  EXPECT_EQ(
+      objects_json_error(dir.path(), object_json("1e300")),
+      (dir / "objects.json").string() +
+          ": objects[0].id: expected a whole number in [-2147483648, 2147483647], got 1e+300");
+  EXPECT_NE(objects_json_error(dir.path(), object_json("7", "[1,1,1]", "-1"))
+                .find("objects[0].points.outlier_filtered: expected a whole number in [0, "
+                      "9007199254740992], got -1"),
+            std::string::npos);
+  EXPECT_NE(objects_json_error(dir.path(), object_json("7", "[1,1,1]", "5", "2.5"))
+                .find("objects[0].observation_count: expected a whole number in [0, 2147483647], "
+                      "got 2.5"),
+            std::string::npos);
 }
 
 }  // namespace

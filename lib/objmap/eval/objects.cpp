@@ -280,7 +280,10 @@ std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path
     std::strtod(second.c_str(), &end);
     if (in.fields().size() >= 5 && *end != '\0') {  // not wholly a number ("009_gelatin_box")
       ReferenceObject r;
-      r.id = static_cast<int>(in.number(0, "id"));
+      const std::int64_t id = in.integer(0, "id");
+      if (id < std::numeric_limits<int>::min() || id > std::numeric_limits<int>::max())
+        throw InputError(in.where(), "id " + std::to_string(id) + "; expected an int");
+      r.id = static_cast<int>(id);
       r.class_name = second;  // '_' for spaces, as objmap names classes ("009 gelatin box")
       std::replace(r.class_name.begin(), r.class_name.end(), '_', ' ');
       r.centroid = {in.number(2, "x"), in.number(3, "y"), in.number(4, "z")};

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <regex>
@@ -41,9 +42,10 @@ double json_number(const nlohmann::json& j, const std::string& key, const std::s
 
 int json_size(const nlohmann::json& j, const std::string& key, const std::string& file) {
   const auto& v = j.at(key);
-  const bool whole = v.is_number_integer() ||
-                     (v.is_number_float() && v.get<double>() == static_cast<int>(v.get<double>()));
-  if (!whole || v.get<double>() <= 0 || v.get<double>() > 1e6)
+  // The range before the cast: a double outside int's range (1e300) has no int value.
+  const double d = v.is_number() ? v.get<double>() : 0.0;
+  const bool whole = d > 0 && d <= 1e6 && d == std::floor(d);
+  if (!whole)
     throw InputError(file + ": " + key,
                      "is " + v.dump() + "; expected a whole number of pixels > 0");
   return static_cast<int>(v.get<double>());

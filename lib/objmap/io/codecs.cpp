@@ -214,6 +214,17 @@ cv::Mat decode_png(const unsigned char* data, std::size_t size, std::string& err
   return image;
 }
 
+bool jpeg_size(const unsigned char* data, std::size_t size, std::uint32_t& width,
+               std::uint32_t& height) {
+  JpegRead r;
+  r.data = data;
+  r.size = size;
+  if (!step_ok(r.errors.jump, jpeg_header, r)) return false;
+  width = r.info.image_width;
+  height = r.info.image_height;
+  return true;
+}
+
 cv::Mat decode_jpeg(const unsigned char* data, std::size_t size, std::string& error) {
   JpegRead r;
   r.data = data;

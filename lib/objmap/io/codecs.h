@@ -1,5 +1,6 @@
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include <opencv2/core/mat.hpp>
@@ -23,5 +24,10 @@ cv::Mat decode_png(const unsigned char* data, std::size_t size, std::string& err
 // CV_8UC1) or three (YCbCr or RGB, CV_8UC3 BGR). A CMYK or YCCK JPEG (four components, which
 // OpenCV would convert) is an error here.
 cv::Mat decode_jpeg(const unsigned char* data, std::size_t size, std::string& error);
+
+// The width and height in a JPEG's header (its frame marker), read without decoding; false when
+// libjpeg cannot read the header.
+bool jpeg_size(const unsigned char* data, std::size_t size, std::uint32_t& width,
+               std::uint32_t& height);
 
 }  // namespace objmap::io

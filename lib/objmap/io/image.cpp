@@ -69,8 +69,8 @@ void check_size(const fs::path& file, long cols, long rows, int width, int heigh
                                         " (the camera's width x height)");
 }
 
-// width/height > 0: the size required; a PNG's header is checked before the image is decoded (a
-// header claiming a huge image costs no memory).
+// width/height > 0: the size required; a PNG's or JPEG's header is checked before the image is
+// decoded (a header claiming a huge image costs no memory and no time).
 cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bool allow_jpeg,
                int width, int height) {
   const Format format = format_of(bytes);
@@ -83,7 +83,10 @@ cv::Mat decode(const fs::path& file, const std::vector<unsigned char>& bytes, bo
   if (format == Format::kJpeg && !jpeg_complete(bytes))
     throw InputError(file.string(), "truncated JPEG (no end marker); expected " + expected);
   std::uint32_t header_width = 0, header_height = 0;
-  if (format == Format::kPng && png_size(bytes.data(), bytes.size(), header_width, header_height))
+  if ((format == Format::kPng &&
+       png_size(bytes.data(), bytes.size(), header_width, header_height)) ||
+      (format == Format::kJpeg &&
+       jpeg_size(bytes.data(), bytes.size(), header_width, header_height)))
     check_size(file, header_width, header_height, width, height);
   // The PNGs of RGB-D recordings go through the faster decoder (same pixels); the other PNGs, and
   // any PNG it refuses (also a damaged one: libpng then says what is wrong), through libpng.

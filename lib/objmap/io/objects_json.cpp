@@ -1,9 +1,12 @@
 #include "objmap/io/objects_json.h"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <system_error>
 
 #include "objmap/core/error.h"
 
@@ -12,6 +15,10 @@ namespace objmap::io {
 namespace {
 
 using nlohmann::json;
+
+constexpr double kIntMin = std::numeric_limits<int>::min();
+constexpr double kIntMax = std::numeric_limits<int>::max();
+constexpr double kMaxCount = 9007199254740992.0;  // 2^53: every whole double up to it is exact
 
 const json& field(const json& j, const std::string& key, const std::string& where) {
   if (!j.is_object() || !j.contains(key))
@@ -25,6 +32,19 @@ double number(const json& j, const std::string& key, const std::string& where) {
   return v.get<double>();
 }
 
+// A whole number in [low, high]; checked before any cast (a double outside an integer type's range,
+// 1e300 or -1 for a count, has no value of that type).
+double whole_number(const json& j, const std::string& key, const std::string& where, double low,
+                    double high) {
+  const double v = number(j, key, where);
+  if (!(v >= low && v <= high) || v != std::floor(v))
+    throw InputError(where + "." + key, "expected a whole number in [" +
+                                            std::to_string(static_cast<long long>(low)) + ", " +
+                                            std::to_string(static_cast<long long>(high)) +
+                                            "], got " + field(j, key, where).dump());
+  return v;
+}
+
 Vec3 vec3(const json& j, const std::string& key, const std::string& where) {
   const json& v = field(j, key, where);
   if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
@@ -35,6 +55,10 @@ Vec3 vec3(const json& j, const std::string& key, const std::string& where) {
 }  // namespace
 
 std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
+  // A folder opens as a stream on Linux; reading it then throws std::ios_base::failure.
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw InputError(file.string(), "is a folder; expected RUN/objects.json of objmap fuse");
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "cannot open; expected RUN/objects.json of objmap fuse");
   json doc;
@@ -51,7 +75,7 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
     const json& o = objects[i];
     const std::string where = file.string() + ": objects[" + std::to_string(i) + "]";
     MappedObject m;
-    m.id = static_cast<int>(number(o, "id", where));
+    m.id = static_cast<int>(whole_number(o, "id", where, kIntMin, kIntMax));
     if (!ids.insert(m.id).second)
       throw InputError(where + ".id",
                        "id " + std::to_string(m.id) + " appears twice; expected unique ids");
@@ -74,9 +98,9 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
       throw InputError(where + ".obb.rotation", "expected 9 numbers (row-major)");
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) m.obb.rotation(r, c) = rot[3 * r + c].get<double>();
-    m.points = static_cast<std::size_t>(
-        number(field(o, "points", where), "outlier_filtered", where + ".points"));
-    m.observations = static_cast<int>(number(o, "observation_count", where));
+    m.points = static_cast<std::size_t>(whole_number(field(o, "points", where), "outlier_filtered",
+                                                     where + ".points", 0, kMaxCount));
+    m.observations = static_cast<int>(whole_number(o, "observation_count", where, 0, kIntMax));
     const json& ply = field(o, "ply", where);
     if (ply.is_string()) m.ply = ply.get<std::string>();
     out.push_back(std::move(m));

@@ -1,0 +1,21 @@
+// RUN/objects.json (io/objects_json.h, read_objects_json); a map that reads is then evaluated
+// against itself as the reference (eval/objects.h), as `objmap eval objects --reference` does.
+#include <cstddef>
+#include <cstdint>
+
+#include "fuzz_util.h"
+#include "objmap/eval/objects.h"
+#include "objmap/io/objects_json.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace objmap;
+  const auto file = fuzz::write_file(fuzz::fresh_dir(), "objects.json", fuzz::whole(data, size));
+  fuzz::accept_input_error([&] {
+    const auto objects = io::read_objects_json(file);
+    eval::ObjectEvalReport report;
+    report.mode = "reference";
+    report.result = eval::evaluate_objects(objects, eval::to_reference(objects), report.options);
+    eval::objects_eval_json(report);
+  });
+  return 0;
+}
