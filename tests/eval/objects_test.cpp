@@ -733,6 +733,18 @@ TEST(EvalObjectsCli, SynthFuseEvalEndToEnd) {
       EXPECT_LE(m.at("iou").get<double>(), 1.0);
     }
     EXPECT_GT(json.at("points").at("reduction").get<double>(), 0.0);
+    // Table 6 as the paper defines it (objects-only map vs dense map) and eq 18's own reduction
+    // (outlier- vs voxel-filtered object points): the same figures in run.json and eval objects.
+    const auto run = nlohmann::json::parse(read_text(run_est / "run.json")).at("points");
+    const auto& points = json.at("points");
+    EXPECT_DOUBLE_EQ(points.at("reduction").get<double>(),
+                     run.at("reduction_objects_vs_dense").get<double>());
+    EXPECT_DOUBLE_EQ(points.at("reduction_eq18").get<double>(),
+                     run.at("reduction_eq18").get<double>());
+    EXPECT_DOUBLE_EQ(points.at("reduction_eq18").get<double>(),
+                     1.0 - run.at("objects_outlier_filtered").get<double>() /
+                               run.at("objects_voxel_filtered").get<double>());
+    EXPECT_LT(points.at("reduction_eq18").get<double>(), points.at("reduction").get<double>());
     if (with_gt) {
       EXPECT_EQ(json.at("counts").back().at("reference"), 12);  // tabletop: 12 objects
     }
