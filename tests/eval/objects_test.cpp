@@ -457,6 +457,20 @@ TEST(EvaluateObjects, ClassNamesAreComparedCanonically) {
   EXPECT_EQ(match_by_class(map, gt, 0.3).size(), 3u);
 }
 
+TEST(EvaluateObjects, ReferenceObjectsSharingAnIdAreEachListed) {
+  // A position list ("id class x y z") does not check its ids: two lines with id 5.
+  const Vec3 h(0.05, 0.05, 0.05);
+  const std::vector<ReferenceObject> gt = {ref(5, "cup", {0, 0, 0}, h),
+                                           ref(5, "book", {1, 0, 0}, h)};
+  const std::vector<io::MappedObject> map = {mapped(1, "book", {1, 0, 0.01}, h)};
+  const ObjectEvalResult r = evaluate_objects(map, gt, ObjectEvalOptions{});
+  ASSERT_EQ(r.reference_objects.size(), 2u);
+  EXPECT_EQ(r.reference_objects[0].class_name, "cup");
+  EXPECT_EQ(r.reference_objects[0].status, "missed");
+  EXPECT_EQ(r.reference_objects[1].class_name, "book");
+  EXPECT_EQ(r.reference_objects[1].status, "matched");
+}
+
 // A scene of 8 objects (3 cups, 2 books) and a map of it: the same objects a few cm off, one true
 // object missing and one extra map object.
 struct AlignScene {

@@ -421,11 +421,15 @@ void pair_objects(const std::map<std::string, ClassMembers>& classes,
                   const std::vector<ReferenceObject>& reference, double gate_m,
                   ObjectEvalResult& result) {
   std::vector<char> map_matched(map.size(), 0), ref_matched(reference.size(), 0);
-  std::vector<char> ref_paired(reference.size(), 0);
+  std::vector<ReferenceOutcome> outcomes;  // per reference index
+  for (const ReferenceObject& r : reference)
+    outcomes.push_back({r.id, segmentation::canonical_class(r.class_name), "missed", std::nullopt});
   for (const auto& [name, members] : classes) {
     for (const auto& [i, j] : assign_class(members, map, reference, gate_m)) {
       result.matches.push_back(make_match(map[i], reference[j], name));
-      map_matched[i] = ref_matched[j] = ref_paired[j] = 1;
+      outcomes[j].status = "matched";
+      outcomes[j].match = result.matches.back();
+      map_matched[i] = ref_matched[j] = 1;
     }
     ClassMembers left;
     for (const std::size_t i : members.map)
@@ -434,7 +438,8 @@ void pair_objects(const std::map<std::string, ClassMembers>& classes,
       if (!ref_matched[j]) left.reference.push_back(j);
     for (const auto& [i, j] : assign_class(left, map, reference, kInf)) {
       result.beyond_gate.push_back(make_match(map[i], reference[j], name));
-      ref_paired[j] = 1;
+      outcomes[j].status = "beyond_gate";
+      outcomes[j].match = result.beyond_gate.back();
     }
   }
   std::sort(result.matches.begin(), result.matches.end(), by_reference_id);
@@ -443,21 +448,16 @@ void pair_objects(const std::map<std::string, ClassMembers>& classes,
     if (!map_matched[i]) result.unmatched_map_ids.push_back(map[i].id);
   for (std::size_t j = 0; j < reference.size(); ++j) {
     if (!ref_matched[j]) result.unmatched_reference_ids.push_back(reference[j].id);
-    if (!ref_paired[j]) result.missed_reference_ids.push_back(reference[j].id);
+    if (!outcomes[j].match) result.missed_reference_ids.push_back(reference[j].id);
   }
   std::sort(result.unmatched_map_ids.begin(), result.unmatched_map_ids.end());
   std::sort(result.unmatched_reference_ids.begin(), result.unmatched_reference_ids.end());
   std::sort(result.missed_reference_ids.begin(), result.missed_reference_ids.end());
-
-  std::map<int, ReferenceOutcome> outcomes;  // by reference id
-  for (const ReferenceObject& r : reference)
-    outcomes[r.id] = {r.id, segmentation::canonical_class(r.class_name), "missed", std::nullopt};
-  for (const ObjectMatch& m : result.matches) outcomes[m.reference_id].match = m;
-  for (const ObjectMatch& m : result.beyond_gate) outcomes[m.reference_id].match = m;
-  for (auto& [id, o] : outcomes) {
-    if (o.match) o.status = o.match->distance_m <= gate_m ? "matched" : "beyond_gate";
-    result.reference_objects.push_back(o);
-  }
+  std::stable_sort(outcomes.begin(), outcomes.end(),
+                   [](const ReferenceOutcome& a, const ReferenceOutcome& b) {
+                     return a.reference_id < b.reference_id;
+                   });
+  result.reference_objects = std::move(outcomes);
 }
 
 // Tables 4–5, one row: the pairs within the gate, the pairs beyond it, the missed objects.
