@@ -200,18 +200,48 @@ struct EvalObjectsArgs {
   std::string gt_class = "object";  // class of cuboid-list objects (they carry none)
   std::string run_dir;              // empty: the folder of --map, if it has run.json
   std::string json_file;            // empty: not written
+  std::string align = "none";       // none, trajectory or objects
+  std::string gt_trajectory_file, trajectory_file;  // --align trajectory
   eval::ObjectEvalOptions options;
 };
+
+// --align: how the map is brought into the reference's frame (checked flags first).
+eval::ObjectAlignment find_alignment(const EvalObjectsArgs& args,
+                                     const std::vector<io::MappedObject>& map,
+                                     const std::vector<eval::ReferenceObject>& reference) {
+  if (args.align == "trajectory")
+    return eval::align_by_trajectories(read_trajectory_warning(args.gt_trajectory_file),
+                                       read_trajectory_warning(args.trajectory_file));
+  if (args.align == "objects") return eval::align_by_objects(map, reference, args.options.gate_m);
+  return eval::ObjectAlignment{};
+}
+
+void check_align_flags(const EvalObjectsArgs& args) {
+  const bool trajectories = !args.gt_trajectory_file.empty() || !args.trajectory_file.empty();
+  if (args.align == "trajectory" &&
+      (args.gt_trajectory_file.empty() || args.trajectory_file.empty()))
+    throw CLI::ValidationError("--align trajectory",
+                               "needs --gt-trajectory GT.txt and --trajectory EST.txt (the "
+                               "trajectory the map was fused with)");
+  if (args.align != "trajectory" && trajectories)
+    throw CLI::ValidationError(
+        "--gt-trajectory/--trajectory",
+        "given with --align " + args.align + "; expected them only with --align trajectory");
+}
 
 void run_eval_objects(const EvalObjectsArgs& args) {
   if (args.gt_objects_file.empty() == args.reference_file.empty())
     throw CLI::ValidationError("eval objects",
                                "give one of --gt-objects F or --reference RUN_GT/objects.json");
   check_naming_flags([&] { args.options.check(); }, {{"ObjectEvalOptions.gate_m", "--gate"}});
-  io::require_not_an_input({"--json", args.json_file}, {{"--map", args.map_file},
-                                                        {"--gt-objects", args.gt_objects_file},
-                                                        {"--reference", args.reference_file},
-                                                        {"--run", args.run_dir}});
+  check_align_flags(args);
+  io::require_not_an_input({"--json", args.json_file},
+                           {{"--map", args.map_file},
+                            {"--gt-objects", args.gt_objects_file},
+                            {"--reference", args.reference_file},
+                            {"--run", args.run_dir},
+                            {"--gt-trajectory", args.gt_trajectory_file},
+                            {"--trajectory", args.trajectory_file}});
   eval::ObjectEvalReport report;
   report.options = args.options;
   report.map_source = args.map_file;
@@ -234,7 +264,12 @@ void run_eval_objects(const EvalObjectsArgs& args) {
     const fs::path beside = fs::path(args.map_file).parent_path() / "run.json";
     if (fs::exists(beside)) report.points = eval::read_point_counts(beside);
   }
-  report.result = eval::evaluate_objects(map, reference, args.options);
+  report.alignment = find_alignment(args, map, reference);
+  report.result = eval::evaluate_objects(
+      report.alignment.method == "none"
+          ? map
+          : eval::transform_objects(map, report.alignment.reference_from_map),
+      reference, args.options);
   if (!args.json_file.empty())
     io::write_file_atomic(args.json_file, eval::objects_eval_json(report));
   std::cout << eval::objects_eval_text(report);
@@ -266,6 +301,16 @@ void setup_eval_objects(CLI::App& eval_app) {
       ->capture_default_str();
   cmd->add_option("--run", args->run_dir,
                   "Run folder whose run.json gives Table 6 (default: the folder of --map)");
+  cmd->add_option("--align", args->align,
+                  "Bring a map of another frame into the reference's by SE(3) before evaluating: "
+                  "'trajectory' (eval ate's alignment of --trajectory onto --gt-trajectory) or "
+                  "'objects' (Umeyama on the objects matched by class; needs 3)")
+      ->check(CLI::IsMember({"none", "trajectory", "objects"}))
+      ->capture_default_str();
+  cmd->add_option("--gt-trajectory", args->gt_trajectory_file,
+                  "--align trajectory: the ground-truth trajectory (the reference's frame)");
+  cmd->add_option("--trajectory", args->trajectory_file,
+                  "--align trajectory: the trajectory the map was fused with (the map's frame)");
   cmd->add_option("--json", args->json_file, "Write the result as JSON here");
   cmd->callback([args] { run_eval_objects(*args); });
 }

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "objmap/core/error.h"
+#include "objmap/io/trajectory.h"
 #include "support/schema_check.h"
 #include "support/test_support.h"
 
@@ -318,7 +319,7 @@ TEST(EvaluateObjects, KnownCountsErrorsAndPrecisionRecall) {
   EXPECT_DOUBLE_EQ(*r.counts[1].error, 1.0);
   EXPECT_EQ(r.counts[2].class_name, "cup");
   EXPECT_DOUBLE_EQ(*r.counts[2].error, 0.0);
-  EXPECT_EQ(r.counts[3].class_name, "tv");
+  EXPECT_EQ(r.counts[3].class_name, "tv monitor");  // "tv", canonical
   EXPECT_FALSE(r.counts[3].error.has_value());
   EXPECT_EQ(r.counts[4].class_name, "overall");
   EXPECT_EQ(r.counts[4].reference, 4u);
@@ -374,6 +375,230 @@ TEST(EvaluateObjects, KnownCountsErrorsAndPrecisionRecall) {
   EXPECT_EQ(evaluate_objects(map, gt, tight).matches.size(), 2u);
   tight.gate_m = 0;
   EXPECT_THROW(evaluate_objects(map, gt, tight), InputError);
+}
+
+TEST(EvaluateObjects, EveryReferenceObjectIsMatchedBeyondTheGateOrMissed) {
+  const Vec3 h(0.05, 0.05, 0.05);
+  // Ground truth: cups 1 (0,0,0) and 2 (1,0,0), book 3, chair 4.
+  const std::vector<ReferenceObject> gt = {ref(1, "cup", {0, 0, 0}, h), ref(2, "cup", {1, 0, 0}, h),
+                                           ref(3, "book", {4, 4, 4}, h),
+                                           ref(4, "chair", {0, 3, 0}, h)};
+  // Map: cup 10 0.05 from gt 1; cup 11 0.5 from gt 2 (beyond the 0.3 m gate); chair 12 0.1 from
+  // gt 4; couch 13 with no true couch. No book: gt 3 is missed.
+  const std::vector<io::MappedObject> map = {
+      mapped(10, "cup", {0.05, 0, 0}, h), mapped(11, "cup", {1.5, 0, 0}, h),
+      mapped(12, "chair", {0, 3, 0.1}, h), mapped(13, "couch", {9, 9, 9}, h)};
+  const ObjectEvalResult r = evaluate_objects(map, gt, ObjectEvalOptions{});
+  ASSERT_EQ(r.matches.size(), 2u);
+  ASSERT_EQ(r.beyond_gate.size(), 1u);
+  EXPECT_EQ(r.beyond_gate[0].map_id, 11);
+  EXPECT_EQ(r.beyond_gate[0].reference_id, 2);
+  EXPECT_NEAR(r.beyond_gate[0].distance_m, 0.5, 1e-12);
+  EXPECT_EQ(r.unmatched_map_ids, (std::vector<int>{11, 13}));  // the false positives
+  EXPECT_EQ(r.unmatched_reference_ids, (std::vector<int>{2, 3}));
+  EXPECT_EQ(r.missed_reference_ids, (std::vector<int>{3}));
+  ASSERT_EQ(r.reference_objects.size(), 4u);
+  const std::vector<std::string> status = {"matched", "beyond_gate", "missed", "matched"};
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(r.reference_objects[k].reference_id, static_cast<int>(k) + 1);
+    EXPECT_EQ(r.reference_objects[k].status, status[k]) << k;
+  }
+  EXPECT_EQ(r.reference_objects[1].match->map_id, 11);
+  EXPECT_NEAR(r.reference_objects[1].match->distance_m, 0.5, 1e-12);
+  EXPECT_FALSE(r.reference_objects[2].match.has_value());
+  EXPECT_EQ(r.reference_objects[2].class_name, "book");
+
+  // Rows: book, chair, couch, cup, overall.
+  ASSERT_EQ(r.errors.size(), 5u);
+  const ErrorRow& cup = r.errors[3];
+  EXPECT_EQ(cup.class_name, "cup");
+  EXPECT_EQ(cup.matched, 1u);
+  EXPECT_EQ(cup.beyond_gate, 1u);
+  EXPECT_EQ(cup.missed, 0u);
+  EXPECT_EQ(cup.false_positives, 1u);
+  EXPECT_NEAR(cup.distance_m.mean, 0.05, 1e-12);
+  EXPECT_NEAR(cup.distance_all_m.mean, (0.05 + 0.5) / 2, 1e-12);
+  EXPECT_EQ(r.errors[0].missed, 1u);
+  EXPECT_NEAR(r.errors[0].distance_all_m.mean, 0.3, 1e-12);  // a miss counts at the gate
+  EXPECT_EQ(r.errors[2].false_positives, 1u);                // the couch
+  EXPECT_EQ(r.errors[2].distance_all_m.count, 0u);           // no true couch
+  const ErrorRow& all = r.errors[4];
+  EXPECT_EQ(all.matched, 2u);
+  EXPECT_EQ(all.beyond_gate, 1u);
+  EXPECT_EQ(all.missed, 1u);
+  EXPECT_EQ(all.false_positives, 2u);
+  EXPECT_NEAR(all.distance_m.mean, (0.05 + 0.1) / 2, 1e-12);
+  EXPECT_EQ(all.distance_all_m.count, 4u);
+  EXPECT_NEAR(all.distance_all_m.mean, (0.05 + 0.5 + 0.3 + 0.1) / 4, 1e-12);
+  EXPECT_NEAR(all.distance_all_m.max, 0.5, 1e-12);
+  EXPECT_EQ(all.iou_all.count, 4u);
+  EXPECT_NEAR(all.iou_all.mean, (r.matches[0].iou + r.matches[1].iou) / 4, 1e-12);
+
+  // A gate of 0.6 m takes the second cup in: nothing beyond any more.
+  ObjectEvalOptions wide;
+  wide.gate_m = 0.6;
+  const ObjectEvalResult w = evaluate_objects(map, gt, wide);
+  EXPECT_EQ(w.matches.size(), 3u);
+  EXPECT_TRUE(w.beyond_gate.empty());
+  EXPECT_EQ(w.reference_objects[1].status, "matched");
+}
+
+TEST(EvaluateObjects, ClassNamesAreComparedCanonically) {
+  const Vec3 h(0.05, 0.05, 0.05);
+  const std::vector<ReferenceObject> gt = {ref(1, "tvmonitor", {0, 0, 0}, h),
+                                           ref(2, "Potted_Plant", {1, 0, 0}, h),
+                                           ref(3, "diningtable", {2, 0, 0}, h)};
+  const std::vector<io::MappedObject> map = {mapped(7, "tv monitor", {0, 0, 0.02}, h),
+                                             mapped(8, "potted plant", {1, 0, 0.02}, h),
+                                             mapped(9, "dining_table", {2, 0, 0.02}, h)};
+  const ObjectEvalResult r = evaluate_objects(map, gt, ObjectEvalOptions{});
+  ASSERT_EQ(r.matches.size(), 3u);
+  EXPECT_TRUE(r.unmatched_map_ids.empty());
+  ASSERT_EQ(r.counts.size(), 4u);  // one row per class, not one per spelling
+  EXPECT_EQ(r.counts[0].class_name, "dining table");
+  EXPECT_EQ(r.counts[1].class_name, "potted plant");
+  EXPECT_EQ(r.counts[2].class_name, "tv monitor");
+  EXPECT_EQ(r.matches[0].class_name, "tv monitor");
+  EXPECT_DOUBLE_EQ(*r.counts[3].error, 0.0);
+  EXPECT_EQ(match_by_class(map, gt, 0.3).size(), 3u);
+}
+
+TEST(EvaluateObjects, ReferenceObjectsSharingAnIdAreEachListed) {
+  // A position list ("id class x y z") does not check its ids: two lines with id 5.
+  const Vec3 h(0.05, 0.05, 0.05);
+  const std::vector<ReferenceObject> gt = {ref(5, "cup", {0, 0, 0}, h),
+                                           ref(5, "book", {1, 0, 0}, h)};
+  const std::vector<io::MappedObject> map = {mapped(1, "book", {1, 0, 0.01}, h)};
+  const ObjectEvalResult r = evaluate_objects(map, gt, ObjectEvalOptions{});
+  ASSERT_EQ(r.reference_objects.size(), 2u);
+  EXPECT_EQ(r.reference_objects[0].class_name, "cup");
+  EXPECT_EQ(r.reference_objects[0].status, "missed");
+  EXPECT_EQ(r.reference_objects[1].class_name, "book");
+  EXPECT_EQ(r.reference_objects[1].status, "matched");
+}
+
+// A scene of 8 objects (3 cups, 2 books) and a map of it: the same objects a few cm off, one true
+// object missing and one extra map object.
+struct AlignScene {
+  std::vector<ReferenceObject> gt;
+  std::vector<io::MappedObject> map;
+};
+
+AlignScene align_scene() {
+  const Vec3 h(0.05, 0.05, 0.05);
+  AlignScene s;
+  const std::vector<std::pair<std::string, Vec3>> objects = {
+      {"cup", {0.1, 0.2, 0.8}},   {"cup", {0.5, -0.3, 0.8}},    {"cup", {-0.4, 0.1, 0.8}},
+      {"book", {0.3, 0.4, 0.78}}, {"book", {-0.2, -0.35, 0.8}}, {"chair", {1.0, 0.0, 0.45}},
+      {"tv", {0.0, 0.45, 1.0}},   {"bottle", {-0.6, 0.4, 0.85}}};
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  for (std::size_t k = 0; k < objects.size(); ++k) {
+    const int id = static_cast<int>(k) + 1;
+    s.gt.push_back(ref(id, objects[k].first, objects[k].second, h));
+    if (k == 7) continue;  // the bottle is missed
+    const Vec3 off(noise(rng), noise(rng), noise(rng));
+    s.map.push_back(mapped(10 + id, objects[k].first, objects[k].second + off, h));
+  }
+  s.map.push_back(mapped(30, "cup", {2.0, 2.0, 0.8}, h));  // a false positive
+  return s;
+}
+
+Similarity known_transform() {
+  Similarity t;
+  t.rotation = (Eigen::AngleAxisd(1.1, Vec3::UnitZ()) * Eigen::AngleAxisd(0.3, Vec3::UnitX()))
+                   .toRotationMatrix();
+  t.translation = Vec3(2.5, -1.0, 0.4);
+  return t;
+}
+
+Similarity inverse(const Similarity& t) {
+  Similarity inv;
+  inv.rotation = t.rotation.transpose();
+  inv.translation = -(inv.rotation * t.translation);
+  return inv;
+}
+
+void expect_same_evaluation(const ObjectEvalResult& a, const ObjectEvalResult& b) {
+  ASSERT_EQ(a.matches.size(), b.matches.size());
+  for (std::size_t k = 0; k < a.matches.size(); ++k) {
+    EXPECT_EQ(a.matches[k].map_id, b.matches[k].map_id);
+    EXPECT_EQ(a.matches[k].reference_id, b.matches[k].reference_id);
+    EXPECT_NEAR(a.matches[k].distance_m, b.matches[k].distance_m, 1e-9);
+    EXPECT_NEAR(a.matches[k].iou, b.matches[k].iou, 1e-6);
+  }
+  EXPECT_EQ(a.unmatched_map_ids, b.unmatched_map_ids);
+  EXPECT_EQ(a.missed_reference_ids, b.missed_reference_ids);
+  EXPECT_NEAR(a.errors.back().distance_all_m.mean, b.errors.back().distance_all_m.mean, 1e-9);
+}
+
+TEST(AlignObjects, RecoversAKnownRigidTransform) {
+  const AlignScene s = align_scene();
+  // The map in a frame turned by 63° about z and 17° about x and moved by 2.7 m: no object is
+  // within the gate of its true position before the alignment.
+  const Similarity map_from_truth = known_transform();
+  const std::vector<io::MappedObject> moved = transform_objects(s.map, map_from_truth);
+  EXPECT_TRUE(evaluate_objects(moved, s.gt, ObjectEvalOptions{}).matches.empty());
+  const ObjectAlignment a = align_by_objects(moved, s.gt, 0.3);
+  EXPECT_EQ(a.method, "objects");
+  EXPECT_EQ(a.pairs, 7u);  // every mapped true object; not the bottle, not the extra cup
+  const Similarity expected = inverse(map_from_truth);
+  EXPECT_LT(
+      Eigen::AngleAxisd(a.reference_from_map.rotation.transpose() * expected.rotation).angle(),
+      0.05);
+  // The translation is the inverse's −Rᵀt: its error grows with the 2.7 m of the move, so check
+  // what it does to the objects instead: back within the noise of where they were.
+  const std::vector<io::MappedObject> back = transform_objects(moved, a.reference_from_map);
+  double worst = 0.0;
+  for (std::size_t k = 0; k + 1 < back.size(); ++k)  // the true objects, not the extra cup
+    worst = std::max(worst, (back[k].centroid - s.map[k].centroid).norm());
+  EXPECT_LT(worst, 0.04) << worst;
+  EXPECT_GT(a.rmse_m, 0.005);  // the 2 cm noise stays
+  EXPECT_LT(a.rmse_m, 0.05);
+  // The moved map, aligned, evaluates as the original map aligned the same way: the result does
+  // not depend on the frame the map came in.
+  const ObjectAlignment direct = align_by_objects(s.map, s.gt, 0.3);
+  EXPECT_TRUE((a.reference_from_map.rotation * map_from_truth.rotation)
+                  .isApprox(direct.reference_from_map.rotation, 1e-9));
+  EXPECT_LT(
+      (a.reference_from_map * map_from_truth.translation - direct.reference_from_map.translation)
+          .norm(),
+      1e-9);
+  expect_same_evaluation(
+      evaluate_objects(transform_objects(moved, a.reference_from_map), s.gt, ObjectEvalOptions{}),
+      evaluate_objects(transform_objects(s.map, direct.reference_from_map), s.gt,
+                       ObjectEvalOptions{}));
+}
+
+TEST(AlignObjects, FewerThanThreeMatchesIsAnError) {
+  const Vec3 h(0.05, 0.05, 0.05);
+  const std::vector<ReferenceObject> gt = {ref(1, "cup", {0, 0, 0}, h),
+                                           ref(2, "book", {1, 0, 0}, h)};
+  const std::vector<io::MappedObject> map = {mapped(1, "cup", {5, 0, 0}, h),
+                                             mapped(2, "book", {6, 0, 0}, h)};
+  try {
+    align_by_objects(map, gt, 0.3);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(has(e.what(), "--align objects")) << e.what();
+    EXPECT_TRUE(has(e.what(), "only 0 objects")) << e.what();
+    EXPECT_TRUE(has(e.what(), "expected at least 3")) << e.what();
+  }
+}
+
+TEST(AlignObjects, TransformMovesCentroidsAndBoxes) {
+  io::MappedObject o = mapped(1, "cup", {1, 0, 0}, {0.1, 0.2, 0.3});
+  o.aabb = {Vec3(0.9, -0.2, -0.3), Vec3(1.1, 0.2, 0.3)};
+  Similarity quarter;  // 90° about z, then 1 m up
+  quarter.rotation = Eigen::AngleAxisd(kPi / 2, Vec3::UnitZ()).toRotationMatrix();
+  quarter.translation = Vec3(0, 0, 1);
+  const io::MappedObject m = transform_objects({o}, quarter)[0];
+  EXPECT_TRUE(m.centroid.isApprox(Vec3(0, 1, 1), 1e-12));
+  EXPECT_TRUE(m.obb.center.isApprox(Vec3(0, 1, 1), 1e-12));
+  EXPECT_TRUE(m.obb.rotation.isApprox(quarter.rotation, 1e-12));
+  EXPECT_TRUE(m.aabb.min.isApprox(Vec3(-0.2, 0.9, 0.7), 1e-12));
+  EXPECT_TRUE(m.aabb.max.isApprox(Vec3(0.2, 1.1, 1.3), 1e-12));
+  EXPECT_NEAR(obb_iou(m.obb, transform_objects({o}, quarter)[0].obb), 1.0, 1e-9);
 }
 
 TEST(EvaluateObjects, EmptyInputsGiveZeros) {
@@ -528,10 +753,174 @@ TEST(EvalObjectsCli, SynthFuseEvalEndToEnd) {
       EXPECT_LE(m.at("iou").get<double>(), 1.0);
     }
     EXPECT_GT(json.at("points").at("reduction").get<double>(), 0.0);
+    // Table 6 as the paper defines it (objects-only map vs dense map) and eq 18's own reduction
+    // (outlier- vs voxel-filtered object points): the same figures in run.json and eval objects.
+    const auto run = nlohmann::json::parse(read_text(run_est / "run.json")).at("points");
+    const auto& points = json.at("points");
+    EXPECT_DOUBLE_EQ(points.at("reduction").get<double>(),
+                     run.at("reduction_objects_vs_dense").get<double>());
+    EXPECT_DOUBLE_EQ(points.at("reduction_eq18").get<double>(),
+                     run.at("reduction_eq18").get<double>());
+    EXPECT_DOUBLE_EQ(points.at("reduction_eq18").get<double>(),
+                     1.0 - run.at("objects_outlier_filtered").get<double>() /
+                               run.at("objects_voxel_filtered").get<double>());
+    EXPECT_LT(points.at("reduction_eq18").get<double>(), points.at("reduction").get<double>());
     if (with_gt) {
       EXPECT_EQ(json.at("counts").back().at("reference"), 12);  // tabletop: 12 objects
     }
   }
+}
+
+// ---- --align on a fused synthetic run
+// -------------------------------------------------------------
+
+// The run's objects.json with every centroid, position and box moved by `t`.
+nlohmann::json moved_objects_json(const fs::path& file, const Similarity& t) {
+  nlohmann::json doc = nlohmann::json::parse(read_text(file));
+  const auto point = [&](nlohmann::json& j) {
+    const Vec3 p = t * Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+    j = {p.x(), p.y(), p.z()};
+  };
+  for (auto& o : doc.at("objects")) {
+    point(o.at("centroid"));
+    if (o.contains("position")) point(o.at("position"));
+    point(o.at("obb").at("center"));
+    Eigen::Matrix3d r;
+    for (int k = 0; k < 9; ++k) r(k / 3, k % 3) = o.at("obb").at("rotation")[k].get<double>();
+    r = t.rotation * r;
+    for (int k = 0; k < 9; ++k) o["obb"]["rotation"][k] = r(k / 3, k % 3);
+    io::MappedObject box;  // the AABB around the moved one
+    for (int k = 0; k < 3; ++k) {
+      box.aabb.min[k] = o.at("aabb").at("min")[k].get<double>();
+      box.aabb.max[k] = o.at("aabb").at("max")[k].get<double>();
+    }
+    box = transform_objects({box}, t)[0];
+    o["aabb"] = {{"min", {box.aabb.min.x(), box.aabb.min.y(), box.aabb.min.z()}},
+                 {"max", {box.aabb.max.x(), box.aabb.max.y(), box.aabb.max.z()}}};
+  }
+  return doc;
+}
+
+// The two evaluations list the same objects with the same statuses, pairs and errors.
+void expect_same_eval_json(const nlohmann::json& a, const nlohmann::json& b) {
+  EXPECT_EQ(a.at("counts"), b.at("counts"));
+  EXPECT_EQ(a.at("unmatched_map_ids"), b.at("unmatched_map_ids"));
+  EXPECT_EQ(a.at("missed_reference_ids"), b.at("missed_reference_ids"));
+  ASSERT_EQ(a.at("reference_objects").size(), b.at("reference_objects").size());
+  for (std::size_t k = 0; k < a.at("reference_objects").size(); ++k) {
+    const auto &x = a.at("reference_objects")[k], &y = b.at("reference_objects")[k];
+    EXPECT_EQ(x.at("status"), y.at("status")) << k;
+    EXPECT_EQ(x.at("map_id"), y.at("map_id")) << k;
+    if (x.at("distance_m").is_number()) {
+      EXPECT_NEAR(x.at("distance_m").get<double>(), y.at("distance_m").get<double>(), 1e-9) << k;
+    }
+    if (x.at("iou").is_number()) {
+      EXPECT_NEAR(x.at("iou").get<double>(), y.at("iou").get<double>(), 1e-6) << k;
+    }
+  }
+  const auto &ra = a.at("centroid_error").back(), &rb = b.at("centroid_error").back();
+  for (const char* key : {"distance_m", "distance_all_m"})
+    for (const char* stat : {"mean", "rmse", "max"})
+      EXPECT_NEAR(ra.at(key).at(stat).get<double>(), rb.at(key).at(stat).get<double>(), 1e-9)
+          << key << "." << stat;
+}
+
+TEST(EvalObjectsCli, AlignBringsAMovedMapBack) {
+  objmap::test::RunResult failure;
+  const fs::path scene = objmap::test::cached_output(
+      "evalobj_synth20", {"synth", "--out", "{OUT}", "--frames", "20"}, &failure);
+  ASSERT_FALSE(scene.empty()) << failure.err;
+  const fs::path run = objmap::test::cached_output(
+      "evalobj_fuse_gt",
+      {"fuse", "--dataset", scene.string(), "--trajectory", (scene / "groundtruth.txt").string(),
+       "--segmentation", (scene / "segmentation").string(), "--out", "{OUT}"},
+      &failure);
+  ASSERT_FALSE(run.empty()) << failure.err;
+  // The map and the trajectory it was fused with, in a frame turned by 63° about z and 17° about
+  // x and moved by 2.7 m (a SLAM run's own frame).
+  TempDir tmp;
+  const Similarity t = known_transform();
+  fs::create_directories(tmp / "moved");
+  write_text(tmp / "moved/objects.json", moved_objects_json(run / "objects.json", t).dump());
+  Trajectory moved = io::read_trajectory(scene / "groundtruth.txt");
+  for (StampedPose& p : moved.poses) p.world_from_cam = t.apply(p.world_from_cam);
+  io::write_trajectory(tmp / "moved.txt", moved);
+
+  const auto eval = [&](const fs::path& map, const std::vector<std::string>& extra) {
+    std::vector<std::string> args{"eval",         "objects",
+                                  "--map",        map.string(),
+                                  "--gt-objects", (scene / "objects_gt.json").string(),
+                                  "--json",       (tmp / "e.json").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_objmap(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const auto json = nlohmann::json::parse(read_text(tmp / "e.json"));
+    const auto problems =
+        objmap::test::validate_json(json, objmap::test::load_schema("eval_objects.schema.json"));
+    EXPECT_TRUE(problems.empty()) << problems.front();
+    return std::make_pair(json, r.out);
+  };
+  const auto [plain, plain_text] = eval(run / "objects.json", {});
+  EXPECT_EQ(plain.at("alignment").at("method"), "none");
+  EXPECT_TRUE(has(plain_text, "alignment: none")) << plain_text;
+  const int matched = plain.at("centroid_error").back().at("matched").get<int>();
+  ASSERT_GE(matched, 10);
+  // Without --align, the moved map matches nothing.
+  const auto [lost, lost_text] = eval(tmp / "moved/objects.json", {});
+  EXPECT_EQ(lost.at("centroid_error").back().at("matched"), 0) << lost_text;
+
+  // --align trajectory: eval ate's SE(3) undoes the move exactly.
+  const auto [by_trajectory, text] =
+      eval(tmp / "moved/objects.json",
+           {"--align", "trajectory", "--gt-trajectory", (scene / "groundtruth.txt").string(),
+            "--trajectory", (tmp / "moved.txt").string()});
+  expect_same_eval_json(plain, by_trajectory);
+  const auto& a = by_trajectory.at("alignment");
+  EXPECT_EQ(a.at("method"), "trajectory");
+  EXPECT_EQ(a.at("pairs"), 20);
+  EXPECT_LT(a.at("rmse_m").get<double>(), 1e-9);
+  EXPECT_TRUE(has(text, "alignment: SE(3) from the trajectories")) << text;
+
+  // --align objects: the same map in either frame gives the same evaluation, with all pairs kept,
+  // and the fitted transform cannot leave the matched pairs' RMS error worse than none.
+  const auto [objects_moved, objects_text] =
+      eval(tmp / "moved/objects.json", {"--align", "objects"});
+  const nlohmann::json objects_plain = eval(run / "objects.json", {"--align", "objects"}).first;
+  expect_same_eval_json(objects_plain, objects_moved);
+  EXPECT_EQ(objects_moved.at("alignment").at("method"), "objects");
+  EXPECT_EQ(objects_moved.at("alignment").at("pairs").get<int>(), matched);
+  EXPECT_EQ(objects_moved.at("centroid_error").back().at("matched").get<int>(), matched);
+  EXPECT_LE(objects_moved.at("centroid_error").back().at("distance_m").at("rmse").get<double>(),
+            plain.at("centroid_error").back().at("distance_m").at("rmse").get<double>() + 1e-9);
+  EXPECT_TRUE(has(objects_text, "alignment: SE(3) from the objects")) << objects_text;
+}
+
+TEST(EvalObjectsCli, AlignFlagsAreChecked) {
+  TempDir tmp;
+  write_text(tmp / "objects.json", objects_json({}));
+  const std::string map = (tmp / "objects.json").string();
+  const auto one_line = [](const std::string& err) {
+    return std::count(err.begin(), err.end(), '\n') == 1;
+  };
+  auto r =
+      run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "trajectory"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "--align trajectory") && has(r.err, "--gt-trajectory"))
+      << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--trajectory", map});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "only with --align trajectory")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "icp"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "--align")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "objects"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "--align objects: only 0 objects")) << r.err;
+  r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "trajectory",
+                  "--gt-trajectory", (tmp / "none.txt").string(), "--trajectory",
+                  (tmp / "none.txt").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(one_line(r.err) && has(r.err, "none.txt")) << r.err;
 }
 
 }  // namespace

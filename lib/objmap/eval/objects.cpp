@@ -21,6 +21,7 @@
 #include "objmap/eval/format.h"
 #include "objmap/eval/json.h"
 #include "objmap/io/text_lines.h"
+#include "objmap/segmentation/coco_classes.h"
 
 namespace objmap::eval {
 
@@ -355,6 +356,17 @@ struct ClassMembers {
   std::vector<std::size_t> map, reference;  // indices into the inputs
 };
 
+// The objects' indices on both sides per canonical class, sorted by class name.
+std::map<std::string, ClassMembers> members_by_class(
+    const std::vector<io::MappedObject>& map, const std::vector<ReferenceObject>& reference) {
+  std::map<std::string, ClassMembers> classes;
+  for (std::size_t i = 0; i < map.size(); ++i)
+    classes[segmentation::canonical_class(map[i].class_name)].map.push_back(i);
+  for (std::size_t j = 0; j < reference.size(); ++j)
+    classes[segmentation::canonical_class(reference[j].class_name)].reference.push_back(j);
+  return classes;
+}
+
 // Pairs (map index, reference index) of the one-to-one assignment within `gate_m`.
 std::vector<std::pair<std::size_t, std::size_t>> assign_class(
     const ClassMembers& members, const std::vector<io::MappedObject>& map,
@@ -373,13 +385,97 @@ std::vector<std::pair<std::size_t, std::size_t>> assign_class(
   return pairs;
 }
 
+ObjectMatch make_match(const io::MappedObject& m, const ReferenceObject& r,
+                       const std::string& class_name) {
+  ObjectMatch match;
+  match.map_id = m.id;
+  match.reference_id = r.id;
+  match.class_name = class_name;
+  match.error_xyz_m = m.centroid - r.centroid;
+  match.distance_m = match.error_xyz_m.norm();
+  match.iou = obb_iou(m.obb, r.obb);
+  return match;
+}
+
+bool by_reference_id(const ObjectMatch& a, const ObjectMatch& b) {
+  return std::tie(a.reference_id, a.map_id) < std::tie(b.reference_id, b.map_id);
+}
+
+// Table 3: a row per class, then "overall".
+std::vector<CountRow> count_rows(const std::map<std::string, ClassMembers>& classes,
+                                 std::size_t mapped, std::size_t reference) {
+  const auto count_row = [](const std::string& name, std::size_t map_count, std::size_t ref) {
+    CountRow row{name, map_count, ref, std::nullopt};
+    if (ref > 0)
+      row.error = std::abs(static_cast<double>(map_count) - static_cast<double>(ref)) /
+                  static_cast<double>(ref);
+    return row;
+  };
+  std::vector<CountRow> rows;
+  for (const auto& [name, members] : classes)
+    rows.push_back(count_row(name, members.map.size(), members.reference.size()));
+  rows.push_back(count_row("overall", mapped, reference));
+  return rows;
+}
+
+// The pairs within the gate, then the left-over objects paired without a gate (beyond_gate), the
+// unmatched and missed ids and every reference object's outcome.
+void pair_objects(const std::map<std::string, ClassMembers>& classes,
+                  const std::vector<io::MappedObject>& map,
+                  const std::vector<ReferenceObject>& reference, double gate_m,
+                  ObjectEvalResult& result) {
+  std::vector<char> map_matched(map.size(), 0), ref_matched(reference.size(), 0);
+  std::vector<ReferenceOutcome> outcomes;  // per reference index
+  for (const ReferenceObject& r : reference)
+    outcomes.push_back({r.id, segmentation::canonical_class(r.class_name), "missed", std::nullopt});
+  for (const auto& [name, members] : classes) {
+    for (const auto& [i, j] : assign_class(members, map, reference, gate_m)) {
+      result.matches.push_back(make_match(map[i], reference[j], name));
+      outcomes[j].status = "matched";
+      outcomes[j].match = result.matches.back();
+      map_matched[i] = ref_matched[j] = 1;
+    }
+    ClassMembers left;
+    for (const std::size_t i : members.map)
+      if (!map_matched[i]) left.map.push_back(i);
+    for (const std::size_t j : members.reference)
+      if (!ref_matched[j]) left.reference.push_back(j);
+    for (const auto& [i, j] : assign_class(left, map, reference, kInf)) {
+      result.beyond_gate.push_back(make_match(map[i], reference[j], name));
+      outcomes[j].status = "beyond_gate";
+      outcomes[j].match = result.beyond_gate.back();
+    }
+  }
+  std::sort(result.matches.begin(), result.matches.end(), by_reference_id);
+  std::sort(result.beyond_gate.begin(), result.beyond_gate.end(), by_reference_id);
+  for (std::size_t i = 0; i < map.size(); ++i)
+    if (!map_matched[i]) result.unmatched_map_ids.push_back(map[i].id);
+  for (std::size_t j = 0; j < reference.size(); ++j) {
+    if (!ref_matched[j]) result.unmatched_reference_ids.push_back(reference[j].id);
+    if (!outcomes[j].match) result.missed_reference_ids.push_back(reference[j].id);
+  }
+  std::sort(result.unmatched_map_ids.begin(), result.unmatched_map_ids.end());
+  std::sort(result.unmatched_reference_ids.begin(), result.unmatched_reference_ids.end());
+  std::sort(result.missed_reference_ids.begin(), result.missed_reference_ids.end());
+  std::stable_sort(outcomes.begin(), outcomes.end(),
+                   [](const ReferenceOutcome& a, const ReferenceOutcome& b) {
+                     return a.reference_id < b.reference_id;
+                   });
+  result.reference_objects = std::move(outcomes);
+}
+
+// Tables 4–5, one row: the pairs within the gate, the pairs beyond it, the missed objects.
 ErrorRow error_row(const std::string& name, std::size_t mapped, std::size_t reference,
-                   const std::vector<const ObjectMatch*>& matches) {
+                   const std::vector<const ObjectMatch*>& matches,
+                   const std::vector<const ObjectMatch*>& beyond, double gate_m) {
   ErrorRow row;
   row.class_name = name;
   row.mapped = mapped;
   row.reference = reference;
   row.matched = matches.size();
+  row.beyond_gate = beyond.size();
+  row.missed = reference - matches.size() - beyond.size();
+  row.false_positives = mapped - matches.size();
   std::vector<double> distances, ious;
   for (const ObjectMatch* m : matches) {
     distances.push_back(m->distance_m);
@@ -389,69 +485,55 @@ ErrorRow error_row(const std::string& name, std::size_t mapped, std::size_t refe
   if (!matches.empty()) row.mean_abs_xyz_m /= static_cast<double>(matches.size());
   row.distance_m = compute_stats(distances);
   row.iou = compute_stats(ious);
+  for (const ObjectMatch* m : beyond) {
+    distances.push_back(m->distance_m);
+    ious.push_back(m->iou);
+  }
+  distances.insert(distances.end(), row.missed, gate_m);
+  ious.insert(ious.end(), row.missed, 0.0);
+  row.distance_all_m = compute_stats(distances);
+  row.iou_all = compute_stats(ious);
   return row;
 }
 
+// The pairs of class `name`; all of them without a name (the "overall" row).
+std::vector<const ObjectMatch*> of_class(const std::vector<ObjectMatch>& matches,
+                                         const std::optional<std::string>& name) {
+  std::vector<const ObjectMatch*> out;
+  for (const ObjectMatch& m : matches)
+    if (!name || m.class_name == *name) out.push_back(&m);
+  return out;
+}
+
 }  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> match_by_class(
+    const std::vector<io::MappedObject>& map, const std::vector<ReferenceObject>& reference,
+    double gate_m) {
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (const auto& [name, members] : members_by_class(map, reference))
+    for (const auto& pair : assign_class(members, map, reference, gate_m)) pairs.push_back(pair);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
 
 ObjectEvalResult evaluate_objects(const std::vector<io::MappedObject>& map,
                                   const std::vector<ReferenceObject>& reference,
                                   const ObjectEvalOptions& options) {
   options.check();
-  std::map<std::string, ClassMembers> classes;  // sorted by name
-  for (std::size_t i = 0; i < map.size(); ++i) classes[map[i].class_name].map.push_back(i);
-  for (std::size_t j = 0; j < reference.size(); ++j)
-    classes[reference[j].class_name].reference.push_back(j);
-
+  const std::map<std::string, ClassMembers> classes = members_by_class(map, reference);
   ObjectEvalResult result;
-  // Table 3.
-  const auto count_row = [](const std::string& name, std::size_t mapped, std::size_t ref) {
-    CountRow row{name, mapped, ref, std::nullopt};
-    if (ref > 0)
-      row.error = std::abs(static_cast<double>(mapped) - static_cast<double>(ref)) /
-                  static_cast<double>(ref);
-    return row;
-  };
-  for (const auto& [name, members] : classes)
-    result.counts.push_back(count_row(name, members.map.size(), members.reference.size()));
-  result.counts.push_back(count_row("overall", map.size(), reference.size()));
-
-  // Matches within the gate.
-  std::vector<char> map_matched(map.size(), 0), ref_matched(reference.size(), 0);
-  for (const auto& [name, members] : classes)
-    for (const auto& [i, j] : assign_class(members, map, reference, options.gate_m)) {
-      ObjectMatch m;
-      m.map_id = map[i].id;
-      m.reference_id = reference[j].id;
-      m.class_name = name;
-      m.error_xyz_m = map[i].centroid - reference[j].centroid;
-      m.distance_m = m.error_xyz_m.norm();
-      m.iou = obb_iou(map[i].obb, reference[j].obb);
-      result.matches.push_back(m);
-      map_matched[i] = ref_matched[j] = 1;
-    }
-  std::sort(result.matches.begin(), result.matches.end(),
-            [](const ObjectMatch& a, const ObjectMatch& b) {
-              return std::tie(a.reference_id, a.map_id) < std::tie(b.reference_id, b.map_id);
-            });
-  for (std::size_t i = 0; i < map.size(); ++i)
-    if (!map_matched[i]) result.unmatched_map_ids.push_back(map[i].id);
-  for (std::size_t j = 0; j < reference.size(); ++j)
-    if (!ref_matched[j]) result.unmatched_reference_ids.push_back(reference[j].id);
-  std::sort(result.unmatched_map_ids.begin(), result.unmatched_map_ids.end());
-  std::sort(result.unmatched_reference_ids.begin(), result.unmatched_reference_ids.end());
+  result.counts = count_rows(classes, map.size(), reference.size());
+  pair_objects(classes, map, reference, options.gate_m, result);
 
   // Tables 4–5.
-  std::vector<const ObjectMatch*> all;
-  for (const auto& [name, members] : classes) {
-    std::vector<const ObjectMatch*> of_class;
-    for (const ObjectMatch& m : result.matches)
-      if (m.class_name == name) of_class.push_back(&m);
-    result.errors.push_back(
-        error_row(name, members.map.size(), members.reference.size(), of_class));
-  }
-  for (const ObjectMatch& m : result.matches) all.push_back(&m);
-  result.errors.push_back(error_row("overall", map.size(), reference.size(), all));
+  for (const auto& [name, members] : classes)
+    result.errors.push_back(error_row(name, members.map.size(), members.reference.size(),
+                                      of_class(result.matches, name),
+                                      of_class(result.beyond_gate, name), options.gate_m));
+  result.errors.push_back(error_row("overall", map.size(), reference.size(),
+                                    of_class(result.matches, std::nullopt),
+                                    of_class(result.beyond_gate, std::nullopt), options.gate_m));
 
   // Precision / recall, each threshold with its own assignment.
   for (const double threshold : options.thresholds_m) {
@@ -471,6 +553,10 @@ ObjectEvalResult evaluate_objects(const std::vector<io::MappedObject>& map,
 
 double PointCounts::reduction() const {
   return dense_map > 0 ? 1.0 - objects_map / dense_map : 0.0;
+}
+
+double PointCounts::reduction_eq18() const {
+  return objects_voxel_filtered > 0 ? 1.0 - objects_outlier_filtered / objects_voxel_filtered : 0.0;
 }
 
 PointCounts read_point_counts(const std::filesystem::path& run_json) {
@@ -514,6 +600,119 @@ using nlohmann::ordered_json;
 
 ordered_json vec3_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
 
+ordered_json alignment_json(const ObjectAlignment& a) {
+  ordered_json out;
+  out["method"] = a.method;
+  if (a.method == "none") return out;
+  if (a.method == "trajectory") {
+    out["gt_trajectory"] = a.gt_trajectory;
+    out["trajectory"] = a.trajectory;
+  }
+  out["pairs"] = a.pairs;
+  out["rmse_m"] = a.rmse_m;
+  const Eigen::Matrix3d& r = a.reference_from_map.rotation;
+  ordered_json rotation = ordered_json::array();
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) rotation.push_back(r(row, col));
+  out["rotation"] = rotation;
+  out["translation_m"] = vec3_json(a.reference_from_map.translation);
+  return out;
+}
+
+ordered_json counts_json(const std::vector<CountRow>& rows) {
+  ordered_json counts = ordered_json::array();
+  for (const CountRow& row : rows) {
+    ordered_json c;
+    c["class"] = row.class_name;
+    c["reference"] = row.reference;
+    c["mapped"] = row.mapped;
+    c["error"] = row.error ? ordered_json(*row.error) : ordered_json(nullptr);
+    counts.push_back(c);
+  }
+  return counts;
+}
+
+ordered_json errors_json(const std::vector<ErrorRow>& rows) {
+  ordered_json errors = ordered_json::array();
+  for (const ErrorRow& row : rows) {
+    ordered_json e;
+    e["class"] = row.class_name;
+    e["reference"] = row.reference;
+    e["mapped"] = row.mapped;
+    e["matched"] = row.matched;
+    e["beyond_gate"] = row.beyond_gate;
+    e["missed"] = row.missed;
+    e["false_positives"] = row.false_positives;
+    e["distance_m"] = stats_json(row.distance_m);
+    e["mean_abs_xyz_m"] = vec3_json(row.mean_abs_xyz_m);
+    e["iou"] = stats_json(row.iou);
+    e["distance_all_m"] = stats_json(row.distance_all_m);
+    e["iou_all"] = stats_json(row.iou_all);
+    errors.push_back(e);
+  }
+  return errors;
+}
+
+ordered_json precision_recall_json(const std::vector<PrecisionRecall>& rows) {
+  ordered_json pr = ordered_json::array();
+  for (const PrecisionRecall& p : rows) {
+    ordered_json e;
+    e["threshold_m"] = p.threshold_m;
+    e["matched"] = p.matched;
+    e["precision"] = p.precision;
+    e["recall"] = p.recall;
+    pr.push_back(e);
+  }
+  return pr;
+}
+
+ordered_json match_json(const ObjectMatch& m) {
+  ordered_json e;
+  e["map_id"] = m.map_id;
+  e["reference_id"] = m.reference_id;
+  e["class"] = m.class_name;
+  e["distance_m"] = m.distance_m;
+  e["error_xyz_m"] = vec3_json(m.error_xyz_m);
+  e["iou"] = m.iou;
+  return e;
+}
+
+ordered_json matches_json(const std::vector<ObjectMatch>& matches) {
+  ordered_json out = ordered_json::array();
+  for (const ObjectMatch& m : matches) out.push_back(match_json(m));
+  return out;
+}
+
+ordered_json reference_objects_json(const std::vector<ReferenceOutcome>& outcomes) {
+  ordered_json out = ordered_json::array();
+  for (const ReferenceOutcome& o : outcomes) {
+    ordered_json e;
+    e["reference_id"] = o.reference_id;
+    e["class"] = o.class_name;
+    e["status"] = o.status;
+    e["map_id"] = o.match ? ordered_json(o.match->map_id) : ordered_json(nullptr);
+    e["distance_m"] = o.match ? ordered_json(o.match->distance_m) : ordered_json(nullptr);
+    e["iou"] = o.match ? ordered_json(o.match->iou) : ordered_json(nullptr);
+    out.push_back(e);
+  }
+  return out;
+}
+
+ordered_json points_json(const PointCounts& p) {
+  ordered_json points;
+  points["run"] = p.source;
+  points["dense_back_projected"] = p.dense_back_projected;
+  points["dense_map"] = p.dense_map;
+  points["objects_raw"] = p.objects_raw;
+  points["objects_voxel_filtered"] = p.objects_voxel_filtered;
+  points["objects_outlier_filtered"] = p.objects_outlier_filtered;
+  points["semantic_map"] = p.semantic_map;
+  points["objects_map"] = p.objects_map;
+  points["reduction"] = p.reduction();
+  points["reduction_eq18"] = p.reduction_eq18();
+  return points;
+}
+
 }  // namespace
 
 std::string objects_eval_json(const ObjectEvalReport& report) {
@@ -524,72 +723,17 @@ std::string objects_eval_json(const ObjectEvalReport& report) {
   out["reference"] = report.reference_source;
   out["gate_m"] = report.options.gate_m;
   out["unit"] = "m";
-
-  ordered_json counts = ordered_json::array();
-  for (const CountRow& row : r.counts) {
-    ordered_json c;
-    c["class"] = row.class_name;
-    c["reference"] = row.reference;
-    c["mapped"] = row.mapped;
-    c["error"] = row.error ? ordered_json(*row.error) : ordered_json(nullptr);
-    counts.push_back(c);
-  }
-  out["counts"] = counts;
-
-  ordered_json errors = ordered_json::array();
-  for (const ErrorRow& row : r.errors) {
-    ordered_json e;
-    e["class"] = row.class_name;
-    e["reference"] = row.reference;
-    e["mapped"] = row.mapped;
-    e["matched"] = row.matched;
-    e["distance_m"] = stats_json(row.distance_m);
-    e["mean_abs_xyz_m"] = vec3_json(row.mean_abs_xyz_m);
-    e["iou"] = stats_json(row.iou);
-    errors.push_back(e);
-  }
-  out["centroid_error"] = errors;
-
-  ordered_json pr = ordered_json::array();
-  for (const PrecisionRecall& p : r.precision_recall) {
-    ordered_json e;
-    e["threshold_m"] = p.threshold_m;
-    e["matched"] = p.matched;
-    e["precision"] = p.precision;
-    e["recall"] = p.recall;
-    pr.push_back(e);
-  }
-  out["precision_recall"] = pr;
-
-  ordered_json matches = ordered_json::array();
-  for (const ObjectMatch& m : r.matches) {
-    ordered_json e;
-    e["map_id"] = m.map_id;
-    e["reference_id"] = m.reference_id;
-    e["class"] = m.class_name;
-    e["distance_m"] = m.distance_m;
-    e["error_xyz_m"] = vec3_json(m.error_xyz_m);
-    e["iou"] = m.iou;
-    matches.push_back(e);
-  }
-  out["matches"] = matches;
+  out["alignment"] = alignment_json(report.alignment);
+  out["counts"] = counts_json(r.counts);
+  out["centroid_error"] = errors_json(r.errors);
+  out["precision_recall"] = precision_recall_json(r.precision_recall);
+  out["matches"] = matches_json(r.matches);
+  out["beyond_gate"] = matches_json(r.beyond_gate);
   out["unmatched_map_ids"] = r.unmatched_map_ids;
   out["unmatched_reference_ids"] = r.unmatched_reference_ids;
-
-  if (report.points) {
-    const PointCounts& p = *report.points;
-    ordered_json points;
-    points["run"] = p.source;
-    points["dense_back_projected"] = p.dense_back_projected;
-    points["dense_map"] = p.dense_map;
-    points["objects_raw"] = p.objects_raw;
-    points["objects_voxel_filtered"] = p.objects_voxel_filtered;
-    points["objects_outlier_filtered"] = p.objects_outlier_filtered;
-    points["semantic_map"] = p.semantic_map;
-    points["objects_map"] = p.objects_map;
-    points["reduction"] = p.reduction();
-    out["points"] = points;
-  }
+  out["missed_reference_ids"] = r.missed_reference_ids;
+  out["reference_objects"] = reference_objects_json(r.reference_objects);
+  if (report.points) out["points"] = points_json(*report.points);
   return out.dump(2) + "\n";
 }
 
@@ -607,6 +751,106 @@ std::string line(const char* format, ...) {
 
 std::string percent(double ratio) { return fixed_text(100.0 * ratio, 1) + "%"; }
 
+std::string ids_text(const std::vector<int>& ids) {
+  std::string s;
+  for (const int id : ids) s += (s.empty() ? "" : " ") + std::to_string(id);
+  return s.empty() ? std::string("none") : s;
+}
+
+std::string alignment_text(const ObjectAlignment& a) {
+  if (a.method == "none") return "  alignment: none (the map is taken in the reference's frame)\n";
+  const double angle_deg =
+      Eigen::AngleAxisd(a.reference_from_map.rotation).angle() * 180.0 / 3.14159265358979323846;
+  const Vec3& t = a.reference_from_map.translation;
+  const std::string what = a.method == "trajectory"
+                               ? "from the trajectories (" + a.trajectory + " onto " +
+                                     a.gt_trajectory + "; Umeyama on " + std::to_string(a.pairs) +
+                                     " associated camera positions"
+                               : "from the objects (Umeyama on " + std::to_string(a.pairs) +
+                                     " objects matched by class within the gate";
+  return "  alignment: SE(3) " + what + ", RMSE " + fixed_text(a.rmse_m, 4) +
+         " m): the map turned by " + fixed_text(angle_deg, 3) + " deg and moved by (" +
+         fixed_text(t.x(), 4) + ", " + fixed_text(t.y(), 4) + ", " + fixed_text(t.z(), 4) + ") m\n";
+}
+
+std::string counts_text(const ObjectEvalResult& r, const char* ref_label) {
+  std::string out = "Table 3: number of objects\n";
+  out += line("  %-16s %12s %8s %8s", "class", ref_label, "mapped", "error");
+  for (const CountRow& row : r.counts) {
+    if (row.class_name == "overall") out += "  " + std::string(46, '-') + "\n";
+    out += line("  %-16s %12zu %8zu %8s", row.class_name.c_str(), row.reference, row.mapped,
+                row.error ? percent(*row.error).c_str() : "-");
+  }
+  return out;
+}
+
+std::string errors_text(const ObjectEvalResult& r, double gate_m) {
+  std::string out =
+      "Tables 4-5: centroid error [m] of the objects matched within the gate, oriented-box IoU;\n"
+      "  beyond = paired beyond the gate, FP = map objects not matched within it; all = mean over\n"
+      "  every reference object (beyond the gate at its distance, a miss at the gate, " +
+      number_text(gate_m) + " m)\n";
+  out +=
+      line("  %-16s %7s %6s %6s %4s %8s %8s %8s %7s %7s %7s %6s %8s", "class", "matched", "beyond",
+           "missed", "FP", "mean", "median", "max", "|dx|", "|dy|", "|dz|", "IoU", "all");
+  for (const ErrorRow& row : r.errors) {
+    if (row.class_name == "overall") out += "  " + std::string(114, '-') + "\n";
+    const std::string matched = std::to_string(row.matched) + "/" + std::to_string(row.reference);
+    const std::string all = row.reference ? fixed_text(row.distance_all_m.mean, 4) : "-";
+    if (row.matched == 0) {
+      out += line("  %-16s %7s %6zu %6zu %4zu %8s %8s %8s %7s %7s %7s %6s %8s",
+                  row.class_name.c_str(), matched.c_str(), row.beyond_gate, row.missed,
+                  row.false_positives, "-", "-", "-", "-", "-", "-", "-", all.c_str());
+      continue;
+    }
+    out += line("  %-16s %7s %6zu %6zu %4zu %8.4f %8.4f %8.4f %7.4f %7.4f %7.4f %6.3f %8s",
+                row.class_name.c_str(), matched.c_str(), row.beyond_gate, row.missed,
+                row.false_positives, row.distance_m.mean, row.distance_m.median, row.distance_m.max,
+                row.mean_abs_xyz_m.x(), row.mean_abs_xyz_m.y(), row.mean_abs_xyz_m.z(),
+                row.iou.mean, all.c_str());
+  }
+  return out;
+}
+
+std::string outcomes_text(const ObjectEvalResult& r, const char* ref_label) {
+  std::string out = std::string("Every ") + ref_label +
+                    " object: matched within the gate, beyond it (with its distance), or missed\n";
+  out +=
+      line("  %6s  %-16s %-12s %7s %12s %6s", "id", "class", "status", "map id", "distance", "IoU");
+  for (const ReferenceOutcome& o : r.reference_objects) {
+    if (!o.match) {
+      out += line("  %6d  %-16s %-12s %7s %12s %6s", o.reference_id, o.class_name.c_str(),
+                  o.status.c_str(), "-", "-", "-");
+      continue;
+    }
+    out += line("  %6d  %-16s %-12s %7d %12.4f %6.3f", o.reference_id, o.class_name.c_str(),
+                o.status.c_str(), o.match->map_id, o.match->distance_m, o.match->iou);
+  }
+  out += "False positives (map objects not matched within the gate): " +
+         ids_text(r.unmatched_map_ids) + "\n";
+  return out;
+}
+
+std::string points_text(const PointCounts& p) {
+  std::string out = "Table 6: points (" + p.source + ")\n";
+  const char* row = "  %-46s %12.0f";
+  const char* text_row = "  %-46s %12s";
+  if (p.dense_map > 0)
+    out += line(row, "dense map", p.dense_map);
+  else
+    out += line(text_row, "dense map", "none");
+  out += line(row, "objects-only map", p.objects_map);
+  out += line(text_row, "reduction, objects-only vs dense map (Table 6)",
+              p.dense_map > 0 ? percent(p.reduction()).c_str() : "n/a");
+  out += line(row, "dense points back-projected", p.dense_back_projected);
+  out += line(row, "object points raw", p.objects_raw);
+  out += line(row, "object points voxel-filtered", p.objects_voxel_filtered);
+  out += line(row, "object points outlier-filtered (eq 18)", p.objects_outlier_filtered);
+  out += line(text_row, "eq 18 reduction (voxel- to outlier-filtered)",
+              p.objects_voxel_filtered > 0 ? percent(p.reduction_eq18()).c_str() : "n/a");
+  return out;
+}
+
 }  // namespace
 
 std::string objects_eval_text(const ObjectEvalReport& report) {
@@ -617,64 +861,18 @@ std::string objects_eval_text(const ObjectEvalReport& report) {
   out += "Objects  " + report.map_source + "\n";
   out += std::string("  vs     ") + report.reference_source +
          (gt ? " (ground-truth objects)\n" : " (reference map, ground-truth trajectory)\n");
-  out += "  one-to-one by class (Hungarian on centroid distance), gate " +
-         number_text(report.options.gate_m) + " m\n\n";
-
-  out += "Table 3: number of objects\n";
-  out += line("  %-16s %12s %8s %8s", "class", ref_label, "mapped", "error");
-  for (const CountRow& row : r.counts) {
-    if (row.class_name == "overall") out += "  " + std::string(46, '-') + "\n";
-    out += line("  %-16s %12zu %8zu %8s", row.class_name.c_str(), row.reference, row.mapped,
-                row.error ? percent(*row.error).c_str() : "-");
-  }
-
-  out += "\nTables 4-5: centroid error of the matched objects [m], oriented-box IoU\n";
-  out += line("  %-16s %7s %9s %9s %9s %8s %8s %8s %6s", "class", "matched", "mean", "median",
-              "max", "|dx|", "|dy|", "|dz|", "IoU");
-  for (const ErrorRow& row : r.errors) {
-    if (row.class_name == "overall") out += "  " + std::string(94, '-') + "\n";
-    const std::string matched = std::to_string(row.matched) + "/" + std::to_string(row.reference);
-    if (row.matched == 0) {
-      out += line("  %-16s %7s %9s %9s %9s %8s %8s %8s %6s", row.class_name.c_str(),
-                  matched.c_str(), "-", "-", "-", "-", "-", "-", "-");
-      continue;
-    }
-    out +=
-        line("  %-16s %7s %9.4f %9.4f %9.4f %8.4f %8.4f %8.4f %6.3f", row.class_name.c_str(),
-             matched.c_str(), row.distance_m.mean, row.distance_m.median, row.distance_m.max,
-             row.mean_abs_xyz_m.x(), row.mean_abs_xyz_m.y(), row.mean_abs_xyz_m.z(), row.iou.mean);
-  }
-
-  out += "\nPrecision / recall (one-to-one by class within the distance)\n";
+  out += "  one-to-one by canonical class (Hungarian on centroid distance), gate " +
+         number_text(report.options.gate_m) + " m\n";
+  out += alignment_text(report.alignment) + "\n";
+  out += counts_text(r, ref_label) + "\n";
+  out += errors_text(r, report.options.gate_m) + "\n";
+  out += "Precision / recall (one-to-one by class within the distance)\n";
   out += line("  %-10s %8s %10s %8s", "within", "matched", "precision", "recall");
   for (const PrecisionRecall& p : r.precision_recall)
     out += line("  %-10s %8zu %10.3f %8.3f", (fixed_text(p.threshold_m, 2) + " m").c_str(),
                 p.matched, p.precision, p.recall);
-
-  const auto ids = [](const std::vector<int>& v) {
-    std::string s;
-    for (const int id : v) s += (s.empty() ? "" : " ") + std::to_string(id);
-    return s.empty() ? std::string("none") : s;
-  };
-  out += "\nUnmatched (gate " + number_text(report.options.gate_m) + " m): map ids " +
-         ids(r.unmatched_map_ids) + "; " + ref_label + " ids " + ids(r.unmatched_reference_ids) +
-         "\n";
-
-  if (report.points) {
-    const PointCounts& p = *report.points;
-    out += "\nTable 6: points (" + p.source + ")\n";
-    if (p.dense_map > 0)
-      out += line("  %-34s %12.0f", "dense map", p.dense_map);
-    else
-      out += line("  %-34s %12s", "dense map", "none");
-    out += line("  %-34s %12.0f", "objects-only map", p.objects_map);
-    out +=
-        line("  %-34s %12s", "reduction", p.dense_map > 0 ? percent(p.reduction()).c_str() : "n/a");
-    out += line("  %-34s %12.0f", "dense points back-projected", p.dense_back_projected);
-    out += line("  %-34s %12.0f", "object points raw", p.objects_raw);
-    out += line("  %-34s %12.0f", "object points voxel-filtered", p.objects_voxel_filtered);
-    out += line("  %-34s %12.0f", "object points outlier-filtered", p.objects_outlier_filtered);
-  }
+  out += "\n" + outcomes_text(r, gt ? "ground-truth" : "reference");
+  if (report.points) out += "\n" + points_text(*report.points);
   return out;
 }
 
