@@ -105,13 +105,19 @@ void setup_fuse(CLI::App& app) {
   cmd->add_flag("--correct-poses", *correct,
                 "fuse, correct the keyframe poses with the objects (objmap correct), fuse again: "
                 "OUT also gets trajectory_corrected.txt and correction.json");
-  cmd->add_option("--correct-method", *correct_method, "with --correct-poses: graph or paper")
-      ->check(CLI::IsMember({"graph", "paper"}))
-      ->capture_default_str();
+  auto* correct_method_opt =
+      cmd->add_option("--correct-method", *correct_method,
+                      "with --correct-poses: graph or paper (default with --method paper: paper)")
+          ->check(CLI::IsMember({"graph", "paper"}))
+          ->capture_default_str();
   auto flags = std::make_shared<ConfigFlags>(
       cmd, [](pipeline::FuseOptions& o) { return pipeline::fuse_config_fields(o); }, *options);
-  cmd->callback([options, config, flags, correct, correct_method] {
+  cmd->callback([options, config, flags, correct, correct_method, correct_method_opt] {
     flags->apply_config(*config, *options);
+    // --method paper: the paper's value of every option not given (as a flag or in --config).
+    check_naming_flags([&] { flags->apply_preset(*options, pipeline::set_method_preset); },
+                       {{"method", "method (--method)"}});
+    if (options->method == "paper" && correct_method_opt->count() == 0) *correct_method = "paper";
     flags->check(*options);
     std::unique_ptr<ProgressBar> bar;
     std::size_t last = 0;
