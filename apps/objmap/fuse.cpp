@@ -74,7 +74,8 @@ void setup_fuse(CLI::App& app) {
       "Build the object-oriented semantic map (paper 3.2-3.3): back-project the keyframes "
       "(given masks cleaned of spill and of depth off the object's band), associate each "
       "instance with an object by track ID, centroid distance and voxel overlap (eq 22), "
-      "confirm objects seen from >= 3 viewpoints, filter outliers (eq 18). Writes "
+      "confirm objects seen from >= 3 viewpoints, filter outliers (eq 18); --method paper: the "
+      "paper's rules as it states them (docs/fusion.md). Writes "
       "OUT/objects.json, "
       "OUT/objects/<id>_<class>.ply, OUT/map_dense.ply, OUT/map_semantic.ply, OUT/map_objects.ply, "
       "OUT/run.json (the two dense maps not with --dense-map false).");

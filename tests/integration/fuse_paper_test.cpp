@@ -11,6 +11,7 @@
 #include "objmap/geometry/voxel_key.h"
 #include "objmap/io/ply.h"
 #include "objmap/pipeline/fuse.h"
+#include "support/schema_check.h"
 
 namespace objmap::test {
 namespace {
@@ -75,6 +76,8 @@ TEST(FusePaper, RunJsonRecordsTheMethodAndThePapersOptions) {
   EXPECT_EQ(o.at("objects").at("voxel_nearest_centre"), true);
   EXPECT_EQ(o.at("depth").at("min_m"), 0.01);
   // Masks as given: none refined or gated (objmap refines 169 of the 336 on this scene).
+  const auto errors = validate_json(o, load_schema("fuse_config.schema.json"));
+  EXPECT_TRUE(errors.empty()) << errors.front();
   const auto& counts = run.at("counts");
   EXPECT_EQ(counts.at("instances_mask_refined"), 0);
   EXPECT_EQ(counts.at("instances_depth_gated"), 0);
