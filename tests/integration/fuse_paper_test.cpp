@@ -82,6 +82,11 @@ TEST(FusePaper, RunJsonRecordsTheMethodAndThePapersOptions) {
   EXPECT_EQ(counts.at("instances_mask_refined"), 0);
   EXPECT_EQ(counts.at("instances_depth_gated"), 0);
   EXPECT_EQ(counts.at("merges"), 0);
+  // Suspected duplicates (measured: 1 pair) say that no pass could join them.
+  const auto& pairs = run.at("duplicates").at("pairs");
+  EXPECT_GE(pairs.size(), 1u);
+  for (const auto& p : pairs)
+    EXPECT_EQ(p.at("merge_reason"), "no merge pass (objects.final_merge false)");
 }
 
 TEST(FusePaper, EveryMatchIsTheSameIdOrACentroidWithinTenCentimetresOrAnIouAboveEightTenths) {
