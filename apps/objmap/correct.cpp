@@ -13,8 +13,12 @@ void add_correction_flags(CLI::App* cmd, pipeline::CorrectOptions& o) {
   auto& c = o.correction;
   cmd->add_option("--method", c.method,
                   "graph: one pose graph over keyframes (odometry from the trajectory) and object "
-                  "landmarks; paper: eq 20 per keyframe (Horn/Umeyama + robust refinement)")
+                  "landmarks; paper: eq 20 alone per keyframe (Horn/Umeyama + robust refinement)")
       ->check(CLI::IsMember({"graph", "paper"}))
+      ->capture_default_str();
+  cmd->add_option("--paper-prior", c.paper_prior,
+                  "paper: add a prior on each input pose with the drift the run may have "
+                  "accumulated as its std (beyond the paper); false: eq 20 alone (the paper)")
       ->capture_default_str();
   cmd->add_option("--view-model", o.view_model,
                   "icp: align each observation's points to the object's first view "

@@ -10,6 +10,7 @@
 
 #include "command.h"
 #include "objmap/eval/ate.h"
+#include "objmap/eval/objects.h"
 #include "objmap/eval/scene.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/objects_json.h"

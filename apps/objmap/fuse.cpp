@@ -74,7 +74,8 @@ void setup_fuse(CLI::App& app) {
       "Build the object-oriented semantic map (paper 3.2-3.3): back-project the keyframes "
       "(given masks cleaned of spill and of depth off the object's band), associate each "
       "instance with an object by track ID, centroid distance and voxel overlap (eq 22), "
-      "confirm objects seen from >= 3 viewpoints, filter outliers (eq 18). Writes "
+      "confirm objects seen from >= 3 viewpoints, filter outliers (eq 18); --method paper: the "
+      "paper's rules as it states them (docs/fusion.md). Writes "
       "OUT/objects.json, "
       "OUT/objects/<id>_<class>.ply, OUT/map_dense.ply, OUT/map_semantic.ply, OUT/map_objects.ply, "
       "OUT/run.json (the two dense maps not with --dense-map false).");
@@ -105,13 +106,19 @@ void setup_fuse(CLI::App& app) {
   cmd->add_flag("--correct-poses", *correct,
                 "fuse, correct the keyframe poses with the objects (objmap correct), fuse again: "
                 "OUT also gets trajectory_corrected.txt and correction.json");
-  cmd->add_option("--correct-method", *correct_method, "with --correct-poses: graph or paper")
-      ->check(CLI::IsMember({"graph", "paper"}))
-      ->capture_default_str();
+  auto* correct_method_opt =
+      cmd->add_option("--correct-method", *correct_method,
+                      "with --correct-poses: graph or paper (default with --method paper: paper)")
+          ->check(CLI::IsMember({"graph", "paper"}))
+          ->capture_default_str();
   auto flags = std::make_shared<ConfigFlags>(
       cmd, [](pipeline::FuseOptions& o) { return pipeline::fuse_config_fields(o); }, *options);
-  cmd->callback([options, config, flags, correct, correct_method] {
+  cmd->callback([options, config, flags, correct, correct_method, correct_method_opt] {
     flags->apply_config(*config, *options);
+    // --method paper: the paper's value of every option not given (as a flag or in --config).
+    check_naming_flags([&] { flags->apply_preset(*options, pipeline::set_method_preset); },
+                       {{"method", "method (--method)"}});
+    if (options->method == "paper" && correct_method_opt->count() == 0) *correct_method = "paper";
     flags->check(*options);
     std::unique_ptr<ProgressBar> bar;
     std::size_t last = 0;

@@ -142,6 +142,8 @@ TEST(CorrectSynthetic, PaperCutsTheDriftByAtLeastFivePercent) {
   EXPECT_LT(after, 0.95 * before) << before << " -> " << after;
   EXPECT_LT(centroid_error_m(s.paper, s.scene / "objects_gt.json"),
             centroid_error_m(s.fused, s.scene / "objects_gt.json"));
+  // Eq 20 alone, as the paper states it: no prior on the input poses.
+  EXPECT_FALSE(read_json(s.paper / "correction.json")["options"]["paper_prior"].get<bool>());
 }
 
 TEST(CorrectSynthetic, WithoutDriftTheTrajectoryIsNotMadeWorse) {

@@ -18,6 +18,7 @@ std::vector<io::MappedObject> transform_objects(const std::vector<io::MappedObje
     o.centroid = transform * o.centroid;
     o.obb.center = transform * o.obb.center;
     o.obb.rotation = transform.rotation * o.obb.rotation;
+    o.obb.half_extent *= transform.scale;
     Aabb box{Vec3::Constant(std::numeric_limits<double>::infinity()),
              Vec3::Constant(-std::numeric_limits<double>::infinity())};
     for (int corner = 0; corner < 8; ++corner) {

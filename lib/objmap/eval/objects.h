@@ -190,7 +190,7 @@ struct ObjectAlignment {
 };
 
 // The objects with centroid, oriented box and axis-aligned box (the box around the moved AABB)
-// moved by `transform` (scale 1).
+// moved by `transform` (its scale applies to the box extents).
 std::vector<io::MappedObject> transform_objects(const std::vector<io::MappedObject>& objects,
                                                 const Similarity& transform);
 

@@ -11,6 +11,7 @@
 #include "objmap/core/polygon.h"
 #include "objmap/eval/format.h"
 #include "objmap/eval/json.h"
+#include "objmap/eval/objects.h"
 
 namespace objmap::eval {
 
@@ -163,36 +164,6 @@ SceneDescription transform_scene(const SceneDescription& scene, const Similarity
     for (Vec3& corner : s.outline) corner = t * corner;
     s.height_m = t.scale * s.height_m + out.up.dot(t.translation);
     s.area_m2 *= t.scale * t.scale;
-  }
-  return out;
-}
-
-namespace {
-
-// The axis-aligned box of the moved corners of `a`.
-Aabb transform_aabb(const Aabb& a, const Similarity& t) {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  Aabb box{Vec3::Constant(kInf), Vec3::Constant(-kInf)};
-  for (int k = 0; k < 8; ++k) {
-    const Vec3 corner((k & 1) ? a.max.x() : a.min.x(), (k & 2) ? a.max.y() : a.min.y(),
-                      (k & 4) ? a.max.z() : a.min.z());
-    box.min = box.min.cwiseMin(t * corner);
-    box.max = box.max.cwiseMax(t * corner);
-  }
-  return box;
-}
-
-}  // namespace
-
-std::vector<io::MappedObject> transform_objects(const std::vector<io::MappedObject>& objects,
-                                                const Similarity& t) {
-  std::vector<io::MappedObject> out = objects;
-  for (io::MappedObject& o : out) {
-    o.centroid = t * o.centroid;
-    o.obb.center = t * o.obb.center;
-    o.obb.rotation = t.rotation * o.obb.rotation;
-    o.obb.half_extent *= t.scale;
-    o.aabb = transform_aabb(o.aabb, t);
   }
   return out;
 }

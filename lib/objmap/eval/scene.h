@@ -49,12 +49,10 @@ SceneDescription read_map_scene(const std::filesystem::path& objects_json);
 // objects_gt.json of `objmap synth`: up_in_world, surfaces[] and objects[].on.
 SceneDescription read_gt_scene(const std::filesystem::path& objects_gt_json);
 
-// Maps a map's scene and objects from their frame into another by `target_from_source`: points,
-// directions, surface heights (h' = s·h + up'·t) and boxes.
+// Maps a map's scene from its frame into another by `target_from_source`: points, directions,
+// surface heights (h' = s·h + up'·t) and outlines (objects: eval::transform_objects, objects.h).
 SceneDescription transform_scene(const SceneDescription& scene,
                                  const Similarity& target_from_source);
-std::vector<io::MappedObject> transform_objects(const std::vector<io::MappedObject>& objects,
-                                                const Similarity& target_from_source);
 
 // A true surface and the map surface matched to it: the map surface whose centre lies inside the
 // true outline (projected along the true up), with the true label if one such has it, else any;

@@ -157,6 +157,8 @@ DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const 
 }
 
 std::string describe_refusal(const MergeVerdict& v, const ObjectMapOptions& options) {
+  if (!options.final_merge) return "no merge pass (objects.final_merge false)";
+  const std::string m = to_string(options.overlap_measure);  // M of the pass
   switch (v.refused) {
     case MergeRefusal::kNone:
       return "would merge";
@@ -169,9 +171,9 @@ std::string describe_refusal(const MergeVerdict& v, const ObjectMapOptions& opti
     case MergeRefusal::kScore:
       return "score P " + fixed(v.score_p, 2) + " <= " + fixed(options.merge_threshold, 2) +
              " (same track " + (v.p_id > 0 ? "yes" : "no") + ", centroids " +
-             fixed(v.distance_m, 2) + " m apart, containment " + fixed(v.overlap, 2) + ")";
+             fixed(v.distance_m, 2) + " m apart, " + m + " " + fixed(v.overlap, 2) + ")";
     case MergeRefusal::kOverlap:
-      return "containment M " + fixed(v.overlap, 2) + " < " + fixed(options.merge_min_overlap, 2);
+      return m + " M " + fixed(v.overlap, 2) + " < " + fixed(options.merge_min_overlap, 2);
   }
   return "";
 }

@@ -51,7 +51,8 @@ DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const 
                                 const DuplicateOptions& options = {});
 
 // One line on why the merge pass kept the pair apart, with the figures and the rule's threshold,
-// e.g. "seen together in 9 of 12 keyframes (> 30%)"; "would merge" for MergeRefusal::kNone.
+// e.g. "seen together in 9 of 12 keyframes (> 30%)"; "would merge" for MergeRefusal::kNone; "no
+// merge pass ..." when options.final_merge is false (the paper's method: nothing joins them).
 std::string describe_refusal(const MergeVerdict& verdict, const ObjectMapOptions& options);
 
 // Share of the volume of box `small` inside box `large`, sampled on n×n×n cell centres of `small`.

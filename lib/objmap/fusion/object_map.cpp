@@ -77,6 +77,24 @@ void ObjectMapOptions::check() const {
           "must be in [0, 180], got " + std::to_string(view_min_rotation_deg));
 }
 
+void set_paper_rules(ObjectMapOptions& o) {
+  o.distance_gate_m = 0.1;
+  o.gate_radius_factor = 0.0;
+  o.distance_score = DistanceScore::kGate;
+  o.overlap_measure = OverlapMeasure::kIou;
+  o.overlap_tolerance_voxels = 0;
+  o.weight_id = o.weight_distance = o.weight_overlap = 0.5;
+  o.match_threshold = 0.4;
+  o.require_same_class = false;
+  o.one_observation_per_frame = false;
+  o.best_first = false;
+  o.final_merge = false;
+  o.merge_class_confusions = false;
+  o.confirmation = Confirmation::kIdKeyframes;
+  o.min_observations = 3;
+  o.keep_points = true;
+}
+
 int count_views(const std::vector<ObservationLink>& provenance, const ObjectMapOptions& options) {
   const double min_rotation_rad = options.view_min_rotation_deg * M_PI / 180.0;
   int views = 0;
@@ -106,6 +124,63 @@ OverlapMeasure parse_overlap_measure(const std::string& text, const std::string&
   if (text == "iou") return OverlapMeasure::kIou;
   if (text == "containment") return OverlapMeasure::kContainment;
   throw InputError(where, "unknown overlap measure '" + text + "'; expected iou or containment");
+}
+
+const char* to_string(DistanceScore score) {
+  return score == DistanceScore::kGate ? "gate" : "linear";
+}
+
+DistanceScore parse_distance_score(const std::string& text, const std::string& where) {
+  if (text == "linear") return DistanceScore::kLinear;
+  if (text == "gate") return DistanceScore::kGate;
+  throw InputError(where, "unknown distance score '" + text + "'; expected linear or gate");
+}
+
+const char* to_string(Confirmation confirmation) {
+  return confirmation == Confirmation::kIdKeyframes ? "id_keyframes" : "views";
+}
+
+Confirmation parse_confirmation(const std::string& text, const std::string& where) {
+  if (text == "views") return Confirmation::kViews;
+  if (text == "id_keyframes") return Confirmation::kIdKeyframes;
+  throw InputError(where, "unknown confirmation '" + text + "'; expected views or id_keyframes");
+}
+
+int count_id_keyframes(const std::vector<ObservationLink>& provenance) {
+  std::map<std::optional<int>, std::set<double>> keyframes;  // track id (none: nullopt) -> stamps
+  for (const ObservationLink& link : provenance) keyframes[link.track_id].insert(link.timestamp);
+  std::size_t most = 0;
+  for (const auto& entry : keyframes) most = std::max(most, entry.second.size());
+  return static_cast<int>(most);
+}
+
+PointCloud voxel_nearest_centre(const PointCloud& cloud, double voxel_m,
+                                const std::function<bool(VoxelKey)>& keep) {
+  const float inv_voxel_m = static_cast<float>(1.0 / voxel_m);  // as VoxelMap::key_of
+  struct Best {
+    std::size_t index;
+    float distance_sq;  // to the voxel's centre, in voxel units
+  };
+  std::map<VoxelKey, Best> best;  // sorted by key
+  Eigen::Vector3i ijk;
+  Eigen::Vector3f offset;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!geometry::voxel_coords(cloud.points[i], inv_voxel_m, ijk, offset)) continue;
+    const VoxelKey key = geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z());
+    const float d = (offset - Eigen::Vector3f::Constant(0.5f)).squaredNorm();
+    const auto [it, added] = best.try_emplace(key, Best{i, d});
+    if (!added && d < it->second.distance_sq) it->second = Best{i, d};
+  }
+  PointCloud out;
+  const bool colours = cloud.colors.size() == cloud.points.size();
+  for (const auto& [key, b] : best) {
+    if (keep && !keep(key)) continue;
+    if (colours)
+      out.push_back(cloud.points[b.index], cloud.colors[b.index]);
+    else
+      out.points.push_back(cloud.points[b.index]);
+  }
+  return out;
 }
 
 namespace {
@@ -154,6 +229,7 @@ struct ObjectMap::Object {
   double first_seen = 0.0, last_seen = 0.0;
   std::vector<ObservationLink> provenance;
   std::vector<MergeLink> merges;
+  PointCloud points;  // its observations' points (ObjectMapOptions::keep_points)
 
   explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
   // Marks the neighbourhoods of `keys` (voxels new to this object) in `near`.
@@ -221,7 +297,9 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
   s.distance_m = (centroid_a - b.centroid).norm();
   const double gate =
       std::max(o.distance_gate_m, o.gate_radius_factor * std::max(radius_a, b.radius));
-  const double f = std::max(0.0, 1.0 - s.distance_m / (2.0 * gate));
+  const double f = o.distance_score == DistanceScore::kGate
+                       ? (s.distance_m < gate ? 1.0 : 0.0)
+                       : std::max(0.0, 1.0 - s.distance_m / (2.0 * gate));
   const double partial = o.weight_id * s.p_id + o.weight_distance * f;
   // Eq 21 only when it can change the decision: M <= 1 (IoU <= min(|A|,|B|)/max(|A|,|B|)), and 0
   // for voxel bounds further apart than the tolerance.
@@ -290,7 +368,29 @@ bool ObjectMap::candidate(const Observation& obs, const Prepared& prep, const Ob
   return s.score_p > threshold;
 }
 
+std::vector<AddResult> ObjectMap::add_frame_in_turn(const std::vector<Observation>& observations) {
+  std::vector<AddResult> results(observations.size());
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    Prepared prep(options_.voxel_m);
+    if (!prepare(observations[i], prep)) continue;
+    // The highest P > K among the objects; ties: the lower id.
+    Object* best = nullptr;
+    Scores best_scores;
+    for (auto& object : objects_) {
+      Scores s;
+      if (candidate(observations[i], prep, *object, options_.match_threshold, s) &&
+          (!best || s.score_p > best_scores.score_p)) {
+        best = object.get();
+        best_scores = s;
+      }
+    }
+    results[i] = fuse(observations[i], prep, best, best ? best_scores : Scores{});
+  }
+  return results;
+}
+
 std::vector<AddResult> ObjectMap::add_frame(const std::vector<Observation>& observations) {
+  if (!options_.best_first) return add_frame_in_turn(observations);
   const std::size_t n = observations.size();
   std::vector<AddResult> results(n);
   std::vector<std::unique_ptr<Prepared>> prep(n);
@@ -382,6 +482,14 @@ AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* 
   o.voxels.merge(obs_voxels);
   o.dilate(new_keys);
   o.add_frame(obs.timestamp);
+  if (options_.keep_points) {
+    const PointCloud& p = obs.points_in_world;
+    o.points.points.insert(o.points.points.end(), p.points.begin(), p.points.end());
+    if (p.colors.size() == p.points.size())
+      o.points.colors.insert(o.points.colors.end(), p.colors.begin(), p.colors.end());
+    else
+      o.points.colors.resize(o.points.points.size(), Rgb{});
+  }
   o.refresh();
   ClassVote& vote = o.histogram[obs.class_name];
   vote.score_sum += obs.score;
@@ -445,6 +553,10 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
     h = static_cast<std::uint8_t>(std::min(255, h + hits));
   });
   for (double t : absorbed->frames) into->add_frame(t);
+  into->points.points.insert(into->points.points.end(), absorbed->points.points.begin(),
+                             absorbed->points.points.end());
+  into->points.colors.insert(into->points.colors.end(), absorbed->points.colors.begin(),
+                             absorbed->points.colors.end());
   into->refresh();
   for (const auto& [name, vote] : absorbed->histogram) {
     into->histogram[name].score_sum += vote.score_sum;
@@ -469,6 +581,7 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   absorbed->frames.clear();
   absorbed->provenance.clear();
   absorbed->merges.clear();
+  absorbed->points = PointCloud();
 }
 
 const char* to_string(MergeRefusal refusal) {
@@ -562,7 +675,7 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     return v.refused == MergeRefusal::kNone;
   };
   std::vector<Pair> pairs;  // only pairs above the threshold, in (i, j) order
-  for (std::size_t i = 0; i < objects_.size(); ++i) {
+  for (std::size_t i = 0; i < objects_.size() && options_.final_merge; ++i) {
     if (!objects_[i]->alive) continue;
     for (std::size_t j = i + 1; j < objects_.size(); ++j) {
       if (!objects_[j]->alive) continue;
@@ -689,10 +802,16 @@ std::size_t ObjectMap::size() const {
   return n;
 }
 
+int ObjectMap::confirmation_count(const Object& object) const {
+  return options_.confirmation == Confirmation::kIdKeyframes
+             ? count_id_keyframes(object.provenance)
+             : count_views(object.provenance, options_);
+}
+
 std::size_t ObjectMap::confirmed_count() const {
   std::size_t n = 0;
   for (const auto& o : objects_)
-    n += o->alive && count_views(o->provenance, options_) >= options_.min_observations;
+    n += o->alive && confirmation_count(*o) >= options_.min_observations;
   return n;
 }
 
@@ -708,13 +827,66 @@ Vec3 ObjectMap::centroid(int object_id) const {
   return objects_[id]->centroid;
 }
 
+void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
+                              ObjectRecord& r) const {
+  // Voxel support: only voxels seen in enough of the object's observations (see RecordOptions).
+  const bool support = options.min_voxel_support > 0.0;
+  const double need = std::min(255.0, std::max(1.0, options.min_voxel_support * o.observations));
+  const auto supported = [&](VoxelKey key) {
+    const std::uint8_t* hits = o.near.find(key);
+    return hits && *hits >= need;
+  };
+  const auto outliers = [&](PointCloud& cloud) {  // eq 18
+    filters::OutlierResult filtered = filters::remove_outliers(cloud, options.outlier);
+    cloud = std::move(filtered.kept);
+    r.outlier_threshold = filtered.threshold;
+  };
+  if (options.outlier_on_points || options.voxel_nearest_centre) {
+    // The paper's order (§3.3): eq 18 on the back-projected points, then the voxel filter.
+    require(options_.keep_points, "RecordOptions",
+            "outlier_on_points and voxel_nearest_centre need ObjectMapOptions.keep_points");
+    PointCloud points = o.points;
+    if (options.outlier_filter && options.outlier_on_points) outliers(points);
+    std::function<bool(VoxelKey)> keep;
+    if (support) keep = supported;
+    if (options.voxel_nearest_centre) {
+      r.cloud = voxel_nearest_centre(points, options_.voxel_m, keep);
+    } else {
+      VoxelMap voxels(VoxelMapOptions{options_.voxel_m, 1});
+      voxels.insert(points);
+      for (const auto& [key, v] : voxels.sorted_voxels())
+        if (!keep || keep(key))
+          r.cloud.push_back(voxels.mean_position(key, *v).cast<float>(), v->mean_color());
+    }
+    r.points_voxel = r.cloud.size();
+    if (options.outlier_filter && !options.outlier_on_points) outliers(r.cloud);
+    r.points_filtered = r.cloud.size();
+    return;
+  }
+  // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
+  PointCloud voxel_cloud;
+  if (support) {
+    const auto voxels = o.voxels.sorted_voxels();
+    voxel_cloud.reserve(voxels.size());
+    for (const auto& [key, v] : voxels)
+      if (supported(key))
+        voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
+  } else {
+    voxel_cloud = o.voxels.to_cloud();
+  }
+  r.points_voxel = voxel_cloud.size();
+  if (options.outlier_filter) outliers(voxel_cloud);  // eq 18 on the voxel cloud
+  r.cloud = std::move(voxel_cloud);
+  r.points_filtered = r.cloud.size();
+}
+
 std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const {
   std::vector<ObjectRecord> out;
   for (const auto& op : objects_) {
     const Object& o = *op;
     if (!o.alive) continue;
     const int views = count_views(o.provenance, options_);
-    const bool confirmed = views >= options_.min_observations;
+    const bool confirmed = confirmation_count(o) >= options_.min_observations;
     if (options.confirmed_only && !confirmed) continue;
     ObjectRecord r;
     r.id = o.id;
@@ -730,33 +902,8 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     r.provenance = o.provenance;
     r.merges = o.merges;
     r.points_raw = o.voxels.points_inserted();
-    // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
-    PointCloud voxel_cloud;
-    if (options.min_voxel_support > 0.0) {
-      // Only voxels seen in enough of the object's observations (see RecordOptions).
-      const double need =
-          std::min(255.0, std::max(1.0, options.min_voxel_support * o.observations));
-      const auto voxels = o.voxels.sorted_voxels();
-      voxel_cloud.reserve(voxels.size());
-      for (const auto& [key, v] : voxels) {
-        const std::uint8_t* hits = o.near.find(key);
-        if (hits && *hits >= need)
-          voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
-      }
-    } else {
-      voxel_cloud = o.voxels.to_cloud();
-    }
-    r.points_voxel = voxel_cloud.size();
-    if (options.outlier_filter) {
-      // Eq 18 on the voxel cloud.
-      filters::OutlierResult filtered = filters::remove_outliers(voxel_cloud, options.outlier);
-      r.cloud = std::move(filtered.kept);
-      r.outlier_threshold = filtered.threshold;
-    } else {
-      r.cloud = std::move(voxel_cloud);
-    }
-    r.points_filtered = r.cloud.size();
-    r.centroid = geometry::centroid(r.cloud);
+    filter_record(o, options, r);
+    r.centroid = geometry::centroid(r.cloud);  // eq 16: the mean of the points
     r.position = geometry::percentile_box_centre(r.cloud, options.position_percentile);
     r.aabb = geometry::compute_aabb(r.cloud);
     r.obb = geometry::compute_obb(r.cloud);

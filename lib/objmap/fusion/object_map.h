@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -45,6 +46,30 @@ enum class OverlapMeasure {
 const char* to_string(OverlapMeasure measure);
 // "iou" or "containment"; throws InputError(where, ...) otherwise.
 OverlapMeasure parse_overlap_measure(const std::string& text, const std::string& where);
+
+// How the centroid distance D enters P (eq 22).
+enum class DistanceScore {
+  // f(D) = max(0, 1 − D / (2·G)): 1 at D = 0, 1/2 at the gate G, 0 at twice the gate (default).
+  kLinear,
+  // The paper's gate (eq 17): f(D) = 1 when D < G, else 0, so that "the centroid within 0.1 m"
+  // is one criterion of its own, as the track ID is.
+  kGate,
+};
+const char* to_string(DistanceScore score);
+// "linear" or "gate"; throws InputError(where, ...) otherwise.
+DistanceScore parse_distance_score(const std::string& text, const std::string& where);
+
+// What confirms an object (min_observations of them).
+enum class Confirmation {
+  kViews,  // observations from distinct viewpoints (count_views; the default)
+  // The paper (§3.2): the keyframes in which the object's track ID was seen: the most of any of its
+  // track IDs (distinct keyframes of the object's observations with that ID); observations without
+  // an ID count together as one more "ID".
+  kIdKeyframes,
+};
+const char* to_string(Confirmation confirmation);
+// "views" or "id_keyframes"; throws InputError(where, ...) otherwise.
+Confirmation parse_confirmation(const std::string& text, const std::string& where);
 
 // Association score (eq 22): P = w_id·P_ID + w_d·f(D) + w_m·M, a match when P > K.
 //   P_ID ∈ {0, 1}: the observation's track id is one of the object's track ids.
@@ -115,8 +140,27 @@ struct ObjectMapOptions {
   double view_min_rotation_deg = 5.0;
   int min_points = 10;  // observations with fewer points (after depth checks) are ignored
   bool require_same_class = false;  // only match observations to objects of the voted class
-  void check() const;               // throws InputError naming the bad field
+  // The paper's method (`objmap fuse --method paper`, docs/fusion.md "The paper's method") needs
+  // these; the defaults are objmap's.
+  DistanceScore distance_score = DistanceScore::kLinear;  // f(D) of eq 22 (above)
+  Confirmation confirmation = Confirmation::kViews;       // what min_observations counts
+  // add_frame(): true: the best (observation, object) pair of the keyframe first (above); false:
+  // each observation in turn, in the order given, takes its best object (the paper).
+  bool best_first = true;
+  bool final_merge = true;   // merge_pass() joins objects of one class (false: the paper, none)
+  bool keep_points = false;  // each object keeps its observations' points (RecordOptions below)
+  void check() const;        // throws InputError naming the bad field
 };
+
+// Sets the paper's association and confirmation rules (§3.2; `objmap fuse --method paper`) and
+// leaves the other fields: eq 17 as a criterion of its own (DistanceScore::kGate, the fixed 0.1 m
+// gate), eq 21 the IoU of the exact voxel sets, eq 22 with w = (0.5, 0.5, 0.5) and K = 0.4 — the
+// same track ID alone (0.5 > K) or a centroid within 0.1 m alone (0.5 > K) joins, the overlap
+// alone only above the paper's 0.8 (0.5 · 0.8 = K); each instance in turn, any number per
+// keyframe, no final merge or class-confusion pass; confirmed once the object's ID was seen in 3
+// keyframes; keep_points for the paper's filters (RecordOptions::outlier_on_points,
+// voxel_nearest_centre).
+void set_paper_rules(ObjectMapOptions& options);
 
 // Why an observation joined its object (or started it): one entry of an object's provenance.
 struct ObservationLink {
@@ -190,12 +234,13 @@ struct ObjectRecord {
   Aabb aabb;                        // of the filtered points
   Obb obb;                          // PCA box of the filtered points
   std::size_t points_raw = 0;       // points of all its observations (before filtering)
-  std::size_t points_voxel = 0;     // after the voxel filter and min_voxel_support (voxels kept)
-  std::size_t points_filtered = 0;  // after the outlier filter (eq 18)
+  std::size_t points_voxel = 0;     // after the voxel filter and min_voxel_support (voxels kept;
+                                    // after eq 18 too with outlier_on_points)
+  std::size_t points_filtered = 0;  // after the outlier filter (eq 18): the cloud
   double outlier_threshold = 0.0;   // t of eq 18 for this object
   int observations = 0;
-  int views = 0;                             // observations from distinct viewpoints (above)
-  bool confirmed = false;                    // views >= min_observations
+  int views = 0;           // observations from distinct viewpoints (above)
+  bool confirmed = false;  // min_observations views (or ID keyframes, ObjectMapOptions)
   double first_seen = 0.0, last_seen = 0.0;  // timestamps
   std::vector<int> track_ids;                // ascending
   std::vector<ObservationLink> provenance;   // by timestamp, then insertion order
@@ -214,12 +259,28 @@ struct RecordOptions {
   // 0: keep every voxel (the paper).
   double min_voxel_support = 0.1;
   filters::OutlierOptions outlier;  // K, k, threads
+  // The paper's filters (§3.3), both need ObjectMapOptions::keep_points. outlier_on_points: eq 18
+  // on the object's back-projected points, then the voxel filter (false: the voxel filter, then
+  // eq 18 on one point per voxel). voxel_nearest_centre: the voxel filter keeps, per voxel, the
+  // point nearest the voxel's centre, with its colour (false: the mean of the voxel's points).
+  bool outlier_on_points = false;
+  bool voxel_nearest_centre = false;
 };
 
 // How many of an object's observations (its provenance, in time order) are views by the rule of
 // options.view_min_translation_m / view_min_rotation_deg: the first, and each one whose camera
 // moved or turned that much from the last view; an observation without a pose is a view.
 int count_views(const std::vector<ObservationLink>& provenance, const ObjectMapOptions& options);
+
+// The keyframes (distinct timestamps) in which the most-seen track ID of `provenance` was observed;
+// the observations without an ID count as one more ID (Confirmation::kIdKeyframes).
+int count_id_keyframes(const std::vector<ObservationLink>& provenance);
+
+// The voxel filter of the paper (§3.3) on `cloud`: per voxel of `voxel_m` (keys as
+// VoxelMap::key_of) the point nearest the voxel's centre (ties: the earlier point), with its
+// colour, sorted by voxel key. `keep(key)`, when given, says which voxels are kept.
+PointCloud voxel_nearest_centre(const PointCloud& cloud, double voxel_m,
+                                const std::function<bool(VoxelKey)>& keep = {});
 
 // What add_frame() did with an observation.
 struct AddResult {
@@ -292,6 +353,12 @@ class ObjectMap {
   // `threshold` or the object is not a candidate.
   bool candidate(const Observation& obs, const Prepared& prep, const Object& object,
                  double threshold, Scores& s) const;
+  // add_frame() with best_first false: each observation in turn takes its best object.
+  std::vector<AddResult> add_frame_in_turn(const std::vector<Observation>& observations);
+  // What confirms `object`: its views or its ID's keyframes (ObjectMapOptions::confirmation).
+  int confirmation_count(const Object& object) const;
+  // records(): the object's filtered cloud in `r` (points_voxel, points_filtered, cloud, t).
+  void filter_record(const Object& object, const RecordOptions& options, ObjectRecord& r) const;
   // add_frame(): fuses the observation into `target` (nullptr: a new object).
   AddResult fuse(const Observation& obs, const Prepared& prep, Object* target, const Scores& s);
   // Joins `absorbed` into `into` (voxels, votes, provenance, merges); `absorbed` dies.

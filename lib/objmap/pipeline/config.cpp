@@ -35,7 +35,8 @@ void leaves(const nlohmann::json& j, const std::string& prefix, std::vector<std:
 
 }  // namespace
 
-void apply_config_file(const fs::path& file, const std::vector<ConfigField>& fields) {
+std::vector<std::string> apply_config_file(const fs::path& file,
+                                           const std::vector<ConfigField>& fields) {
   std::ifstream in(file);
   if (!in)
     throw InputError(file.string(), "cannot open the config file; expected a readable JSON file");
@@ -68,6 +69,7 @@ void apply_config_file(const fs::path& file, const std::vector<ConfigField>& fie
                                                      : "unknown option; expected one of " + list);
   }
 
+  std::vector<std::string> set;
   for (const auto& f : fields) {
     const nlohmann::json* node = &j;
     for (const auto& part : split_key(f.key)) {
@@ -100,7 +102,9 @@ void apply_config_file(const fs::path& file, const std::vector<ConfigField>& fie
           }
         },
         f.target);
+    set.push_back(f.key);
   }
+  return set;
 }
 
 std::string config_to_json(const std::vector<ConfigField>& fields, int indent) {

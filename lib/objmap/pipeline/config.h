@@ -20,8 +20,9 @@ struct ConfigField {
 
 // Reads a JSON object from `file` and sets every field it names (nested objects follow the dots of
 // the keys). Throws InputError "<file>: <key>: ..." for malformed JSON, an unknown key (with the
-// known keys of that level) or a value of the wrong type.
-void apply_config_file(const std::filesystem::path& file, const std::vector<ConfigField>& fields);
+// known keys of that level) or a value of the wrong type. Returns the keys the file set.
+std::vector<std::string> apply_config_file(const std::filesystem::path& file,
+                                           const std::vector<ConfigField>& fields);
 
 // The fields' current values as a nested JSON object text (pretty, keys in table order).
 std::string config_to_json(const std::vector<ConfigField>& fields, int indent = 2);

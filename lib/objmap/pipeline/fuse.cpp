@@ -88,6 +88,14 @@ std::vector<ConfigField> segmentation_fields(FuseOptions& o) {
 std::vector<ConfigField> association_fields(FuseOptions& o) {
   auto& m = o.objects;
   return {
+      {"objects.distance_score", "--distance-score",
+       "D in eq 22: linear (f = 1 - D / 2G: 1/2 at the gate) or gate (the paper, eq 17: 1 within "
+       "the gate, else 0)",
+       &o.distance_score},
+      {"objects.best_first", "--best-first",
+       "a keyframe's best (instance, object) pair is fused first; false: each instance in turn "
+       "(the paper)",
+       &m.best_first},
       {"objects.voxel_m", "--object-voxel", "object voxel sets and overlap M (eq 21), m",
        &m.voxel_m},
       {"objects.distance_gate_m", "--distance-gate", "centroid gate D (eq 17), m",
@@ -110,6 +118,10 @@ std::vector<ConfigField> association_fields(FuseOptions& o) {
 std::vector<ConfigField> merging_fields(FuseOptions& o) {
   auto& m = o.objects;
   return {
+      {"objects.final_merge", "--final-merge",
+       "after the keyframes, join objects of one class that eq 22 says are one (ID-switch "
+       "repair); false: no such pass (the paper)",
+       &m.final_merge},
       {"objects.merge_min_overlap", "--merge-min-overlap",
        "merge pass: containment of the smaller object in the larger at least this",
        &m.merge_min_overlap},
@@ -150,6 +162,10 @@ std::vector<ConfigField> scoring_fields(FuseOptions& o) {
        &m.merge_threshold},
       {"objects.min_observations", "--min-observations",
        "views to confirm an object (observations from distinct viewpoints)", &m.min_observations},
+      {"objects.confirmation", "--confirmation",
+       "what --min-observations counts: views, or id_keyframes (the paper: the keyframes in which "
+       "the object's track ID was seen)",
+       &o.confirmation},
       {"objects.view_min_translation_m", "--view-translation",
        "an observation is a new view of its object after this much camera motion, m (or the "
        "rotation below; 0 and 0: every observation is a view)",
@@ -171,6 +187,14 @@ std::vector<ConfigField> filters_and_masks_fields(FuseOptions& o) {
        &o.outlier_filter},
       {"outlier.neighbours", "--outlier-k", "K nearest neighbours of eq 18", &o.outlier.neighbours},
       {"outlier.std_ratio", "--outlier-std", "k of t = m + k·s (eq 18)", &o.outlier.std_ratio},
+      {"outlier.on_points", "--outlier-on-points",
+       "eq 18 on each object's back-projected points, then the voxel filter (the paper); false: "
+       "on the voxel filter's points",
+       &o.outlier_on_points},
+      {"objects.voxel_nearest_centre", "--voxel-nearest-centre",
+       "the voxel filter keeps each voxel's point nearest its centre (the paper); false: the mean "
+       "of its points",
+       &o.voxel_nearest_centre},
       {"box_mask.bin_m", "--box-bin", "box masks: depth histogram bin, m", &b.bin_m},
       {"box_mask.near_mode_min_share", "--box-near-share",
        "box masks: share of the largest peak for the nearest peak to win", &b.near_mode_min_share},
@@ -220,14 +244,43 @@ std::vector<ConfigField> scene_fields(FuseOptions& o) {
 }  // namespace
 
 std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
-  // In the order of the data flow (the order of --help and of run.json's options).
-  std::vector<ConfigField> fields;
+  // In the order of the data flow (the order of --help and of run.json's options), after the
+  // method.
+  std::vector<ConfigField> fields{
+      {"method", "--method",
+       "objmap (default) or paper: every rule as the paper states it (docs/fusion.md); an option "
+       "given as well overrides the paper's value",
+       &o.method}};
   for (auto part : {inputs_fields, segmentation_fields, association_fields, merging_fields,
                     scoring_fields, filters_and_masks_fields, scene_fields}) {
     std::vector<ConfigField> more = part(o);
     fields.insert(fields.end(), more.begin(), more.end());
   }
   return fields;
+}
+
+void set_method_preset(FuseOptions& o) {
+  require(o.method == "objmap" || o.method == "paper", "method",
+          "'" + o.method + "' is not a method; expected objmap or paper");
+  if (o.method != "paper") return;
+  // Masks as given (§3.1): no refinement, no depth gate, no duplicate rule; depth >= 0.01 m.
+  o.mask_refine.enabled = false;
+  o.depth_gate.enabled = false;
+  o.duplicate_overlap = 1.0;
+  o.depth.min_depth_m = 0.01;
+  // Association and confirmation (§3.2, eqs 17, 21, 22; fusion::set_paper_rules), the voxel
+  // sets at the map's resolution (the paper's octree).
+  fusion::set_paper_rules(o.objects);
+  o.objects.voxel_m = o.map_voxel_m;
+  o.distance_score = fusion::to_string(o.objects.distance_score);
+  o.overlap_measure = fusion::to_string(o.objects.overlap_measure);
+  o.confirmation = fusion::to_string(o.objects.confirmation);
+  // Filters (§3.3): eq 18 on the raw points, then the voxel filter (nearest to the centre); all
+  // voxels kept.
+  o.min_voxel_support = 0.0;
+  o.outlier_filter = true;
+  o.outlier_on_points = true;
+  o.voxel_nearest_centre = true;
 }
 
 void FuseOptions::check() const {
@@ -252,6 +305,10 @@ void FuseOptions::check() const {
   check_part([&] { depth_gate.check(); }, "DepthGateOptions", "depth_gate");
   check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
   fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
+  fusion::parse_distance_score(distance_score, "objects.distance_score");
+  fusion::parse_confirmation(confirmation, "objects.confirmation");
+  require(method == "objmap" || method == "paper", "method",
+          "'" + method + "' is not a method; expected objmap or paper");
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
           "objects.min_voxel_support", "must be in [0, 1]");
   check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
@@ -889,6 +946,11 @@ fusion::ObjectMapOptions object_map_options(const FuseOptions& options, bool sti
   fusion::ObjectMapOptions object_options = options.objects;
   object_options.overlap_measure =
       fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
+  object_options.distance_score =
+      fusion::parse_distance_score(options.distance_score, "objects.distance_score");
+  object_options.confirmation =
+      fusion::parse_confirmation(options.confirmation, "objects.confirmation");
+  object_options.keep_points = options.outlier_on_points || options.voxel_nearest_centre;
   if (still_camera) {
     // A camera that hardly moves has one viewpoint: its frames are the views.
     object_options.view_min_translation_m = 0.0;
@@ -978,6 +1040,8 @@ void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& obj
   record_options.outlier = options.outlier;
   record_options.outlier.threads = result.threads;
   record_options.min_voxel_support = options.min_voxel_support;
+  record_options.outlier_on_points = options.outlier_on_points;
+  record_options.voxel_nearest_centre = options.voxel_nearest_centre;
   result.objects = objects.records(record_options);
   for (const auto& r : result.objects) {
     result.object_points_raw += r.points_raw;

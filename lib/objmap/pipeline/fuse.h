@@ -25,6 +25,10 @@
 namespace objmap::pipeline {
 
 struct FuseOptions {
+  // "objmap" (default): the options as set. "paper": the paper's rules; set_method_preset() sets
+  // them (the command line does so for every option not given, docs/cli.md). run_fuse() only
+  // records the method.
+  std::string method = "objmap";
   // Inputs and output.
   std::filesystem::path dataset;         // TUM folder
   std::filesystem::path trajectory;      // TUM trajectory, world_from_cam
@@ -46,10 +50,14 @@ struct FuseOptions {
   segmentation::MaskRefineOptions mask_refine;  // given masks: parts across depth edges removed
   segmentation::DepthGateOptions depth_gate;    // given masks: depths off the object's band removed
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
+  std::string distance_score = "linear";  // f(D) of eq 22: linear (default) or gate (paper, eq 17)
+  std::string confirmation = "views";     // views (default) or id_keyframes (paper)
   double min_voxel_support = 0.1;       // an object keeps voxels seen in >= 10% of its observations
   fusion::ObjectMapOptions objects;     // association (eq 22), confirmation, merge pass
   bool outlier_filter = true;           // eq 18 on each object's cloud
   filters::OutlierOptions outlier;      // K = 20, k = 1.0
+  bool outlier_on_points = false;       // eq 18 before the voxel filter, on the points (paper)
+  bool voxel_nearest_centre = false;    // the voxel filter keeps the point nearest the centre
   fusion::DuplicateOptions duplicates;  // suspected duplicates in run.json: touching = 2 cm
   scene::SceneOptions scene;            // up direction, support surfaces, relations
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
@@ -97,6 +105,20 @@ struct FuseResult {
 
 // Every tunable field of FuseOptions (not the input/output paths) with its JSON key, flag and help.
 std::vector<ConfigField> fuse_config_fields(FuseOptions& options);
+
+// Sets the options of `options.method`: nothing for "objmap"; for "paper" every rule as the paper
+// states it (docs/fusion.md, "The paper's method"), each with its equation or section:
+//  - association (§3.2, eqs 17, 21, 22): P = w_id·P_ID + w_d·[D < 0.1 m] + w_m·IoU with
+//    w = (0.5, 0.5, 0.5), K = 0.4: the same track ID alone (0.5 > K) or a centroid within the fixed
+//    0.1 m gate alone (0.5 > K) joins, the overlap alone only above the paper's 0.8 (0.5·0.8 = K);
+//    IoU of the exact voxel sets at the map's resolution; each instance in turn, no final merge;
+//  - confirmation: the object's track ID seen in >= 3 keyframes;
+//  - filters (§3.3): eq 18 on the object's back-projected points, then the voxel filter keeping
+//    the point nearest each voxel's centre; every voxel kept; centroid = mean of the points (eq
+//    16);
+//  - masks as given (no refinement, no depth gate, no duplicate rule), depth >= 0.01 m (eq 11).
+// Throws InputError("method", ...) for an unknown method.
+void set_method_preset(FuseOptions& options);
 
 // done/total keyframes, for a progress bar.
 using FuseProgress = std::function<void(std::size_t done, std::size_t total)>;

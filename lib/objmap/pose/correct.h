@@ -89,9 +89,10 @@ struct CorrectionOptions {
   double min_translation_m = 0.001;
   double min_rotation_deg = 0.1;
   int max_iterations = 100;  // Ceres iterations
-  // paper: eq 20 plus a prior on the input pose whose std is the drift the run may have
-  // accumulated (odometry sigmas × path length so far); false: eq 20 alone (the paper's).
-  bool paper_prior = true;
+  // paper: false (default): eq 20 alone, as the paper states it; true: eq 20 plus a prior on the
+  // input pose whose std is the drift the run may have accumulated (odometry sigmas × path length
+  // so far; beyond the paper, docs/pose.md).
+  bool paper_prior = false;
   double paper_prior_fraction = 0.005;  // prior std: odometry_sigma_m + this × path so far
   int reweight_rounds = 1;              // re-estimate each object's noise and solve again
   // Held-out check: the observations split in two folds (by object, or by keyframe with fewer
