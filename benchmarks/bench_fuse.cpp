@@ -4,7 +4,8 @@
 // groundtruth.txt and detections_yolofastest:
 //   build-*/bin/bench_fuse [--threads 2] [--repeat 3] [--dataset DIR]
 // Prints: ms per keyframe of the whole fuse (inputs to written run folder), ms per rgb+depth pair
-// to decode the same keyframes' PNGs on 1 and on `threads` threads, the ratios, peak RSS. Each
+// to decode the same keyframes' PNGs on 1 and on `threads` threads, the ratios, what the scene
+// step (up, surfaces, relations) adds to the fuse (target ≤ 10%), peak RSS. Each
 // figure is the best of `repeat` rounds. The fuse runs first, so the peak RSS is the fuse's.
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -41,7 +42,8 @@ using objmap::bench::data_dir;
 // runs or of this process). Returns false when the child failed.
 struct FuseRun {
   double seconds = 0.0;
-  double cpu_seconds = 0.0;  // user + system, all threads
+  double scene[3] = {0.0, 0.0, 0.0};  // the scene step: up, surfaces, relations (wall seconds)
+  double cpu_seconds = 0.0;           // user + system, all threads
   double peak_rss_mb = 0.0;
 };
 bool fuse_in_child(const pipeline::FuseOptions& options, FuseRun& run) {
@@ -53,8 +55,10 @@ bool fuse_in_child(const pipeline::FuseOptions& options, FuseRun& run) {
     close(fd[0]);
     int code = 0;
     try {
-      const double s = pipeline::run_fuse(options).seconds_total;
-      code = write(fd[1], &s, sizeof s) == static_cast<ssize_t>(sizeof s) ? 0 : 1;
+      const pipeline::FuseResult r = pipeline::run_fuse(options);
+      const double s[4] = {r.seconds_total, r.scene.seconds_up, r.scene.seconds_surfaces,
+                           r.scene.seconds_relations};
+      code = write(fd[1], s, sizeof s) == static_cast<ssize_t>(sizeof s) ? 0 : 1;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "bench_fuse: %s\n", e.what());
       code = 1;
@@ -62,15 +66,16 @@ bool fuse_in_child(const pipeline::FuseOptions& options, FuseRun& run) {
     _exit(code);
   }
   close(fd[1]);
-  double s = 0.0;
-  const bool got = read(fd[0], &s, sizeof s) == static_cast<ssize_t>(sizeof s);
+  double s[4] = {0.0, 0.0, 0.0, 0.0};
+  const bool got = read(fd[0], s, sizeof s) == static_cast<ssize_t>(sizeof s);
   close(fd[0]);
   int status = 0;
   rusage usage{};
   if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
       !got)
     return false;
-  run.seconds = s;
+  run.seconds = s[0];
+  for (int k = 0; k < 3; ++k) run.scene[k] = s[k + 1];
   run.peak_rss_mb = usage.ru_maxrss / 1024.0;
   run.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
                     1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
@@ -149,16 +154,25 @@ int main(int argc, char** argv) {
     options.segmentation = dataset / "detections_yolofastest";
     options.out = out;
     options.threads = threads;
-    double fuse_s = 1e30, cpu_s = 1e30, rss_mb = 0.0;
+    // The same without the scene step (up given as +z: no plane search; no surfaces), rounds
+    // interleaved so that both see the same load.
+    pipeline::FuseOptions no_scene = options;
+    no_scene.scene.up.mode = "z";
+    no_scene.scene.surfaces.enabled = false;
+    double fuse_s = 1e30, cpu_s = 1e30, rss_mb = 0.0, bare_s = 1e30, bare_cpu_s = 1e30;
+    FuseRun fastest;  // the round of the best wall time: its scene step's figures
     for (int r = 0; r < repeat; ++r) {
-      FuseRun run;
-      if (!fuse_in_child(options, run)) {
+      FuseRun run, bare;
+      if (!fuse_in_child(options, run) || !fuse_in_child(no_scene, bare)) {
         std::fprintf(stderr, "bench_fuse: the fuse failed\n");
         return 1;
       }
+      if (run.seconds < fuse_s) fastest = run;
       fuse_s = std::min(fuse_s, run.seconds);
       cpu_s = std::min(cpu_s, run.cpu_seconds);
       rss_mb = std::max(rss_mb, run.peak_rss_mb);
+      bare_s = std::min(bare_s, bare.seconds);
+      bare_cpu_s = std::min(bare_cpu_s, bare.cpu_seconds);
     }
     // The keyframes of the runs (once more, in this process, for the list of PNGs).
     const pipeline::FuseResult result = pipeline::run_fuse(options);
@@ -208,6 +222,19 @@ int main(int argc, char** argv) {
         "fuse CPU / decode CPU %7.2f   (the wall ratio is about this / threads when %d "
         "cores are free)\n",
         cpu_s / dec1_cpu_s, threads);
+    // The scene step (up direction, surfaces, relations; docs/scene.md): up and surfaces run
+    // beside the objects' filtering, so its cost is the fuse with it against the fuse without.
+    std::printf(
+        "scene step           %+8.2f ms/keyframe  (fuse with it - without: %.2f vs %.2f; CPU "
+        "%+.2f)\n",
+        1000.0 * (fuse_s - bare_s) / n, 1000.0 * fuse_s / n, 1000.0 * bare_s / n,
+        1000.0 * (cpu_s - bare_cpu_s) / n);
+    std::printf("scene / fuse without %8.1f %%  (target <= 10)\n",
+                100.0 * (fuse_s - bare_s) / bare_s);
+    std::printf(
+        "scene parts          up %.0f ms, surfaces %.0f ms (beside the objects), upright boxes "
+        "and relations %.0f ms\n",
+        1000.0 * fastest.scene[0], 1000.0 * fastest.scene[1], 1000.0 * fastest.scene[2]);
     std::printf("peak RSS             %8.1f MB (target <= 500)\n", rss_mb);
     std::printf("vs Open3D 214 ms/fr  %8.1fx faster (target >= 20)\n", kOpen3dMsPerFrame / fuse_ms);
   } catch (const std::exception& e) {

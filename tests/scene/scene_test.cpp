@@ -248,6 +248,92 @@ TEST(Surfaces, WithTheFloorUnseenTheTableIsWhatSmallObjectsStandOn) {
   EXPECT_EQ(floors, 0);
 }
 
+TEST(Surfaces, WallsInACornerAreNoSurface) {
+  // Two walls meeting in a corner: a slice of them at any height is an L of points as wide as the
+  // room, which a height histogram alone takes for a patch at every level.
+  std::vector<Vec3f> pts = room();
+  for (double x = 0.0; x <= 3.0; x += 0.01)
+    for (double z = 0.0; z <= 2.0; z += 0.01) pts.emplace_back(x, 3.0, z);
+  const std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), SurfaceOptions{});
+  ASSERT_EQ(surfaces.size(), 2u);
+  EXPECT_NEAR(surfaces[0].height_m, 0.0, 0.01);  // the floor, largest first
+  EXPECT_NEAR(surfaces[1].height_m, 0.75, 0.01);
+}
+
+TEST(Surfaces, ATiltedFloorCutInTwoIsOneSurface) {
+  // The estimated up is 3 deg off the floor (as on TUM fr1): the floor's height runs 0.21 m across
+  // its 4 m, and a rug-wide gap cuts it in two pieces whose median heights differ by 0.1 m.
+  std::vector<Vec3f> pts;
+  const double slope = std::tan(3.0 * M_PI / 180.0);
+  for (double x = 0.0; x <= 4.0; x += 0.01)
+    for (double y = 0.0; y <= 3.0; y += 0.01)
+      if (x < 1.9 || x > 2.1) pts.emplace_back(x, y, slope * x);
+  const std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), SurfaceOptions{});
+  ASSERT_EQ(surfaces.size(), 1u);
+  EXPECT_NEAR(surfaces[0].area_m2, 3.8 * 3.0, 0.5);
+}
+
+TEST(Surfaces, AFloorLargerThanATableIsTheFloorWithOnlySmallObjectsOnIt) {
+  std::vector<Vec3f> pts;
+  add_rect(pts, 0.0, 3.0, 0.0, 3.0, 0.0);
+  const PointCloud bag = box_object(Vec3(1.5, 1.5, 0.0), 0.1, 0.2);
+  pts.insert(pts.end(), bag.points.begin(), bag.points.end());
+  const std::vector<SceneObject> objects = {{1, "backpack", Vec3(1.5, 1.5, 0.1), &bag}};
+  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  const auto relations =
+      relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  ASSERT_EQ(surfaces.size(), 1u);
+  EXPECT_EQ(surfaces[0].label, "floor");
+  ASSERT_TRUE(relations[0].on);
+  EXPECT_EQ(relations[0].on->label, "floor");
+}
+
+TEST(Relations, ABookOnABookOfItsSizeIsOnThatBook) {
+  // The upper book is seen whole, the lower one only by its sides: from above the lower one looks
+  // no larger than the upper. The upper's bottom is 3 cm above the table and at the lower's top.
+  std::vector<Vec3f> pts = room();
+  const PointCloud lower = box_object(Vec3(1.5, 1.3, 0.75), 0.1, 0.03);
+  const PointCloud upper = box_object(Vec3(1.5, 1.3, 0.78), 0.1, 0.03);
+  for (const PointCloud* c : {&lower, &upper})
+    pts.insert(pts.end(), c->points.begin(), c->points.end());
+  const std::vector<SceneObject> objects = {{1, "book", Vec3(1.5, 1.3, 0.765), &lower},
+                                            {2, "book", Vec3(1.5, 1.3, 0.795), &upper}};
+  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  const auto relations =
+      relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  ASSERT_TRUE(relations[0].on);
+  EXPECT_EQ(relations[0].on->label, "table");
+  ASSERT_TRUE(relations[1].on);
+  EXPECT_EQ(relations[1].on->kind, "object");
+  EXPECT_EQ(relations[1].on->id, 1);
+}
+
+TEST(Relations, AChairOnThinLegsStandsOnTheFloor) {
+  // A seat at 0.45 m and a back up to 0.9 m hold most of the chair's points, its four legs 5% (one
+  // point per 1 cm voxel, as a fused object's cloud): its 2nd height percentile is 0.2 m up a leg.
+  PointCloud chair;
+  const Vec3 c(0.6, 2.3, 0.0);
+  for (double x = -0.2; x <= 0.2; x += 0.01)
+    for (double y = -0.2; y <= 0.2; y += 0.01)
+      chair.push_back(Vec3f(c.x() + x, c.y() + y, 0.45), Rgb{});
+  for (double x = -0.2; x <= 0.2; x += 0.01)
+    for (double z = 0.45; z <= 0.9; z += 0.01)
+      chair.push_back(Vec3f(c.x() + x, c.y() + 0.2, z), Rgb{});
+  for (double lx : {-0.18, 0.18})
+    for (double ly : {-0.18, 0.18})
+      for (double z = 0.0; z < 0.45; z += 0.01)
+        chair.push_back(Vec3f(c.x() + lx, c.y() + ly, z), Rgb{});
+  std::vector<Vec3f> pts = room();
+  pts.insert(pts.end(), chair.points.begin(), chair.points.end());
+  const std::vector<SceneObject> objects = {{1, "chair", Vec3(c.x(), c.y(), 0.45), &chair}};
+  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  const auto relations =
+      relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  ASSERT_TRUE(relations[0].on);
+  EXPECT_EQ(relations[0].on->label, "floor");
+  EXPECT_LE(relations[0].on->gap_m, 0.05);  // the 0.5th percentile: 0.04 m up a leg
+}
+
 TEST(Surfaces, OptionsAreChecked) {
   SurfaceOptions o;
   o.min_area_m2 = 0.0;

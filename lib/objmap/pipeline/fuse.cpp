@@ -1237,21 +1237,23 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
 
   // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
-  //      map's cloud is made on a second thread meanwhile the objects are merged and filtered
-  //      (they do not depend on each other).
+  //      map's cloud, the up direction and the support surfaces (docs/scene.md) are made on a
+  //      second thread meanwhile the objects are merged and filtered (they do not depend on each
+  //      other).
   io::StagingDir staging(options.out, io::kRunFolder);
   const fs::path dir = staging.path();
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();
   auto t_dense = Clock::now();
   double dense_seconds = 0.0;
-  std::future<DenseCloud> dense_future;
-  if (options.dense_map)
-    dense_future = std::async(std::launch::async, [&] {
-      DenseCloud cloud = take_dense_cloud(dense, dense_options);
-      dense_seconds = seconds_since(t_dense);
-      return cloud;
-    });
+  std::vector<Pose> cameras;
+  for (const Keyframe& k : result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
+  std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
+    DenseCloud cloud = options.dense_map ? take_dense_cloud(dense, dense_options) : DenseCloud{};
+    dense_seconds = seconds_since(t_dense);
+    find_up_and_surfaces(cameras, cloud.cloud.points, options.scene, result.scene);
+    return cloud;
+  });
 
   // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
   t0 = Clock::now();
@@ -1265,23 +1267,16 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
   result.times.push_back({"duplicate check", seconds_since(t0)});
 
-  DenseCloud dense_cloud = options.dense_map ? dense_future.get() : DenseCloud{};
+  DenseCloud dense_cloud = dense_future.get();
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
-
-  // 4c. The up direction (the cameras and the map's horizontal planes); the objects' boxes stand
-  //     on it.
-  t0 = Clock::now();
-  result.scene.up = orient_to_gravity(result.keyframes.keyframes, dense_cloud.cloud.points,
-                                      options.scene.up, result.objects);
-  result.scene.seconds_up = seconds_since(t0);
+  result.times.push_back({"up and surfaces (parallel to the objects)",
+                          result.scene.seconds_up + result.scene.seconds_surfaces});
   for (const auto& w : result.scene.up.warnings) result.warnings.push_back("up direction: " + w);
 
-  // 4d. Support surfaces and the objects' relations (on, near, above, under).
-  find_surfaces_and_relations(dense_cloud.cloud.points, result.objects, options.scene,
-                              result.scene);
-  result.times.push_back(
-      {"scene (up, surfaces, relations)",
-       result.scene.seconds_up + result.scene.seconds_surfaces + result.scene.seconds_relations});
+  // 4c. The objects' boxes stand on up; the surfaces that are objects' tops; the relations (on,
+  //     near, above, under).
+  relate_to_scene(result.objects, options.scene, result.scene);
+  result.times.push_back({"boxes upright and relations", result.scene.seconds_relations});
 
   // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.
   t0 = Clock::now();

@@ -66,31 +66,27 @@ ordered_json surface_json(const scene::Surface& s) {
 
 }  // namespace
 
-scene::UpEstimate orient_to_gravity(const std::vector<Keyframe>& keyframes,
-                                    const std::vector<Vec3f>& map_points,
-                                    const scene::UpOptions& options,
-                                    std::vector<fusion::ObjectRecord>& records) {
-  std::vector<Pose> cameras;
-  cameras.reserve(keyframes.size());
-  for (const Keyframe& k : keyframes) cameras.push_back(k.world_from_cam);
-  scene::UpEstimate up = scene::estimate_up(cameras, map_points, options);
+void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+                          const scene::SceneOptions& options, scene::SceneGraph& graph) {
+  auto t0 = Clock::now();
+  graph.up = scene::estimate_up(cameras, map_points, options.up);
+  graph.seconds_up = seconds_since(t0);
+  t0 = Clock::now();
+  graph.surfaces = scene::find_surfaces(map_points, graph.up.up, options.surfaces);
+  graph.seconds_surfaces = seconds_since(t0);
+}
+
+void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
+                     scene::SceneGraph& graph) {
+  const auto t0 = Clock::now();
   const fusion::RecordOptions defaults;
   for (auto& r : records) {
     r.position = geometry::percentile_box_centre(r.cloud, defaults.position_percentile,
-                                                 up.gravity_from_world);
-    r.obb = geometry::compute_upright_obb(r.cloud, up.up);
+                                                 graph.up.gravity_from_world);
+    r.obb = geometry::compute_upright_obb(r.cloud, graph.up.up);
   }
-  return up;
-}
-
-void find_surfaces_and_relations(const std::vector<Vec3f>& map_points,
-                                 const std::vector<fusion::ObjectRecord>& records,
-                                 const scene::SceneOptions& options, scene::SceneGraph& graph) {
   const std::vector<scene::SceneObject> objects = scene_objects(records);
-  auto t0 = Clock::now();
-  graph.surfaces = scene::find_surfaces(map_points, graph.up.up, objects, options.surfaces);
-  graph.seconds_surfaces = seconds_since(t0);
-  t0 = Clock::now();
+  scene::mark_object_tops(graph.surfaces, graph.up.up, objects);
   graph.relations = scene::relate_objects(objects, graph.surfaces, graph.up.up, options.surfaces,
                                           options.relations);
   graph.seconds_relations = seconds_since(t0);

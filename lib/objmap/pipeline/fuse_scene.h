@@ -4,7 +4,6 @@
 
 #include "objmap/core/types.h"
 #include "objmap/fusion/object_map.h"
-#include "objmap/pipeline/keyframes.h"
 #include "objmap/scene/scene.h"
 
 // fuse's scene step (docs/scene.md): the up direction from the keyframes' cameras and the dense
@@ -12,18 +11,17 @@
 // relations; and their JSON for objects.json and run.json.
 namespace objmap::pipeline {
 
-// Step 1: the up direction; every record's position (percentile box) and oriented box are then
-// taken in the gravity frame (the box turns about up only). With up = +z the positions are those
-// of fusion::ObjectMap::records, bit for bit.
-scene::UpEstimate orient_to_gravity(const std::vector<Keyframe>& keyframes,
-                                    const std::vector<Vec3f>& map_points,
-                                    const scene::UpOptions& options,
-                                    std::vector<fusion::ObjectRecord>& records);
+// Step 1, on the dense map alone (it runs beside the objects' filtering): the up direction from
+// the cameras and the map's planes, then the support surfaces. Fills graph.up, graph.surfaces and
+// their seconds.
+void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+                          const scene::SceneOptions& options, scene::SceneGraph& graph);
 
-// Step 2: surfaces and relations of the (oriented) records.
-void find_surfaces_and_relations(const std::vector<Vec3f>& map_points,
-                                 const std::vector<fusion::ObjectRecord>& records,
-                                 const scene::SceneOptions& options, scene::SceneGraph& graph);
+// Step 2, with the objects: every record's position (percentile box) and oriented box taken in
+// the gravity frame (the box turns about up only; with up = +z the positions are those of
+// fusion::ObjectMap::records, bit for bit), the surfaces that are an object's top, the relations.
+void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
+                     scene::SceneGraph& graph);
 
 // objects.json: "up_in_world", "gravity_from_world", "surfaces" (top level) and each object's
 // "relations" (in the order of the records).

@@ -30,7 +30,7 @@ Footprint footprint(const std::vector<Vec3f>& points, const Eigen::Matrix3d& gra
     std::nth_element(z.begin(), z.begin() + k, z.end());
     return static_cast<double>(z[k]);
   };
-  f.bottom = quantile(0.02);
+  f.bottom = quantile(0.005);
   f.top = quantile(0.98);
   return f;
 }

@@ -12,7 +12,9 @@ namespace objmap::scene::detail {
 struct Footprint {
   std::vector<cv::Point2f> hull;
   cv::Point2f centre;
-  double bottom = 0.0, top = 0.0;  // 2nd and 98th percentiles of the heights (an object)
+  // 0.5th and 98th percentiles of the heights (an object): few points of a chair or a table are
+  // on its legs, so a higher bottom percentile would stand it in the air.
+  double bottom = 0.0, top = 0.0;
   double mean_height = 0.0;
 };
 

@@ -3,10 +3,12 @@
 #include <pcl/ModelCoefficients.h>
 #include <pcl/PointIndices.h>
 #include <pcl/console/print.h>
+#include <pcl/features/normal_3d.h>
 #include <pcl/filters/extract_indices.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
+#include <pcl/search/kdtree.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <cmath>
@@ -74,6 +76,23 @@ Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, do
   plane.offset = -coefficients.values[3] / norm;
   plane.inliers = std::move(inliers.indices);
   return plane;
+}
+
+std::vector<float> normal_z(const Cloud::Ptr& cloud, int k, const Eigen::Vector3f& axis) {
+  std::vector<float> out(cloud->size(), 0.0f);
+  if (cloud->size() < 3) return out;
+  pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> estimate;
+  estimate.setInputCloud(cloud);
+  estimate.setSearchMethod(
+      pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
+  estimate.setKSearch(k);
+  pcl::PointCloud<pcl::Normal> normals;
+  estimate.compute(normals);
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const float z = std::fabs(normals[i].getNormalVector3fMap().dot(axis));
+    out[i] = std::isfinite(z) ? z : 0.0f;
+  }
+  return out;
 }
 
 Cloud::Ptr without(const Cloud::Ptr& cloud, const std::vector<int>& indices) {

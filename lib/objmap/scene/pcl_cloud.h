@@ -30,6 +30,10 @@ struct Plane {
 };
 Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, double eps_deg);
 
+// |n · axis| of each point's surface normal (PCL's NormalEstimation: the plane of its k nearest
+// neighbours); 0 where no normal could be fitted.
+std::vector<float> normal_z(const Cloud::Ptr& cloud, int k, const Eigen::Vector3f& axis);
+
 // `cloud` without the points at `indices` (sorted ascending).
 Cloud::Ptr without(const Cloud::Ptr& cloud, const std::vector<int>& indices);
 

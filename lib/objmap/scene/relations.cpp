@@ -35,9 +35,11 @@ cv::Point2f xy_in_gravity(const Eigen::Matrix3d& gravity, const Vec3& p) {
   return {static_cast<float>(g.x()), static_cast<float>(g.y())};
 }
 
-// `on`: the highest support (a surface that is no object's top, or another object) whose
-// top lies within [bottom − on_above, bottom + on_below] and whose outline holds the object's
-// centre (seen from above, with outline_margin).
+// `on`: the support (a surface that is no object's top, or another object) whose top lies
+// within [bottom − on_below, bottom + on_above] of the object's bottom, nearest to it (ties: the
+// higher), and whose outline holds the object's centre (seen from above, with outline_margin). The
+// nearest, not the highest: a mouse beside a keyboard whose box it bleeds into sits at the table's
+// height, 3 cm below the keyboard's top; a book on a book sits at the lower book's top.
 std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>& objects,
                                   const std::vector<detail::Footprint>& feet,
                                   const std::vector<Surface>& surfaces,
@@ -50,7 +52,9 @@ std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>&
     const double gap = f.bottom - top;
     if (gap < -o.on_below_m || gap > o.on_above_m) return;
     if (detail::inside_distance(hull, f.centre) < -o.outline_margin_m) return;
-    if (top <= best_top) return;
+    if (best && (std::fabs(gap) > std::fabs(best->gap_m) ||
+                 (std::fabs(gap) == std::fabs(best->gap_m) && top <= best_top)))
+      return;
     best_top = top;
     best = Support{kind, id, label, gap};
   };
@@ -60,20 +64,23 @@ std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>&
     for (const Vec3& q : s.outline) hull.push_back(xy_in_gravity(gravity, q));
     consider("surface", s.id, s.label, s.height_m, hull);
   }
+  const double own_area = f.hull.size() >= 3 ? cv::contourArea(f.hull) : 0.0;
   for (std::size_t j = 0; j < objects.size(); ++j) {
     if (j == i || feet[j].hull.size() < 3) continue;
-    // The support is the larger one seen from above (two objects side by side are not stacked).
-    if (cv::contourArea(feet[j].hull) <= cv::contourArea(f.hull)) continue;
+    // A support is not much smaller than what it carries, seen from above (a cup on a book, a
+    // book on a book of its size; not a keyboard on a mouse).
+    if (cv::contourArea(feet[j].hull) < o.support_min_area_ratio * own_area) continue;
     consider("object", objects[j].id, objects[j].class_name, feet[j].top, feet[j].hull);
   }
   return best;
 }
 
 // The surfaces' labels (SurfaceOptions): the floor is the lowest patch of floor_min_area that is
-// not an object's top, unless only small objects stand on it (then the floor is unseen and it is a
-// table); a table is a patch table_min_height..table_max_height above the floor, or, with the
-// floor unseen, the patch under most small objects; an object's top is a seat (chairs, couches,
-// beds) or a surface; the rest are surfaces.
+// not an object's top, unless only small objects stand on it and it is no larger than a table can
+// be (then the floor is unseen and it is a table); a table is a patch
+// table_min_height..table_max_height above the floor, or, with the floor unseen, the patch under
+// most small objects; an object's top is a seat (chairs, couches, beds) or a surface; the rest are
+// surfaces.
 void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObject>& objects,
                     const std::vector<Relations>& relations, const SurfaceOptions& o) {
   std::map<int, int> small_on, standing_on;  // surface id -> objects on it
@@ -97,7 +104,9 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
     }
     if (s.area_m2 >= o.floor_min_area_m2 && (!floor || s.height_m < floor->height_m)) floor = &s;
   }
-  if (floor && small_on[floor->id] > 0 && standing_on[floor->id] == 0) floor = nullptr;
+  if (floor && small_on[floor->id] > 0 && standing_on[floor->id] == 0 &&
+      floor->area_m2 <= o.table_max_area_m2)
+    floor = nullptr;
   if (floor) {
     floor->label = "floor";
     floor->label_rule =
@@ -114,7 +123,8 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
   }
   Surface* table = nullptr;
   for (Surface& s : surfaces)
-    if (!s.object && small_on[s.id] > 0 && (!table || small_on[s.id] > small_on[table->id]))
+    if (!s.object && small_on[s.id] > 0 && s.area_m2 <= o.table_max_area_m2 &&
+        (!table || small_on[s.id] > small_on[table->id]))
       table = &s;
   if (table) {
     table->label = "table";
@@ -150,6 +160,7 @@ void RelationOptions::check() const {
   require(outline_margin_m >= 0.0, "RelationOptions.outline_margin_m", "must be >= 0");
   require(near_radius_m > 0.0, "RelationOptions.near_radius_m", "must be > 0");
   require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
+  require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");
 }
 
 void SceneOptions::check() const {

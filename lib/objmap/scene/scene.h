@@ -19,6 +19,7 @@ struct UpOptions {
   // axis; "x,y,z": a given vector (normalised).
   std::string mode = "auto";
   double sample_voxel_m = 0.04;        // the dense map is sampled on this grid for the plane search
+  int max_sample_points = 10000;       // ... and thinned evenly to at most this many points
   double plane_distance_m = 0.02;      // RANSAC inlier distance
   int max_planes = 8;                  // planes taken out of the sample one after another
   double min_plane_share = 0.02;       // a plane holds at least this share of the sample
@@ -69,19 +70,20 @@ UpEstimate estimate_up(const std::vector<Pose>& cameras, const std::vector<Vec3f
 
 struct SurfaceOptions {
   bool enabled = true;
-  double sample_voxel_m = 0.02;     // the dense map is sampled on this grid
-  double bin_m = 0.01;              // height histogram bin: a peak is a horizontal level
-  double plane_distance_m = 0.015;  // a level's points lie this close to its height
-  int max_levels = 24;              // levels taken, most points first
-  double cluster_gap_m = 0.05;      // Euclidean clustering of a level's points into patches
+  double sample_voxel_m = 0.04;     // the dense map is sampled on this grid
+  int normal_neighbours = 12;       // a sample point's normal: the plane of this many nearest
+  double max_tilt_deg = 25.0;       // a point is horizontal when its normal is this close to up
+  double cluster_gap_m = 0.06;      // Euclidean clustering of the horizontal points into patches
   double min_area_m2 = 0.03;        // smaller patches are not surfaces
   double min_width_m = 0.03;        // a patch's narrower spread (std): not the slice of a wall
   double merge_height_m = 0.12;     // layers of one surface (depth noise) within this height merge
   double merge_gap_m = 0.3;         // pieces at one level this close merge (cut by objects on it)
+  double piece_height_m = 0.06;     // ... "one level": medians this close (a tilted floor)
   double floor_min_area_m2 = 0.3;   // the floor: the lowest patch of at least this area
   double table_min_height_m = 0.4;  // a table top: this far above the floor ...
   double table_max_height_m = 1.2;  // ... and at most this far
   double table_min_area_m2 = 0.1;
+  double table_max_area_m2 = 6.0;  // larger patches are no table (a floor seen without chairs)
   void check() const;
 };
 
@@ -113,6 +115,7 @@ struct RelationOptions {
   double outline_margin_m = 0.03;   // footprint centre inside the support's outline, this margin
   double near_radius_m = 0.5;       // `near`: box centres within this distance
   double stack_tolerance_m = 0.03;  // `above`: bottom at least top − this
+  double support_min_area_ratio = 0.5;  // an object support's footprint ≥ this × the object's
   void check() const;
 };
 
@@ -154,7 +157,14 @@ struct SceneGraph {
 SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
                        const std::vector<SceneObject>& objects, const SceneOptions& options);
 
-// Surfaces of the map given the up direction; `objects` tell which patch is an object's top.
+// Surfaces of the map given the up direction (ids 1.. by area, labelled "surface"): the map alone,
+// so that it can run beside the objects' filtering.
+std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
+                                   const SurfaceOptions& options);
+// Which surface is an object's top (a chair's seat, a shelf's board): Surface::object.
+void mark_object_tops(std::vector<Surface>& surfaces, const Vec3& up,
+                      const std::vector<SceneObject>& objects);
+// Both of the above.
 std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
                                    const std::vector<SceneObject>& objects,
                                    const SurfaceOptions& options);

@@ -24,7 +24,11 @@ using Cell = std::pair<long, long>;
 struct Patch {
   std::vector<Vec3f> points;  // gravity frame
   std::set<Cell> cells;
-  double level = 0.0;  // the histogram level it came from
+  double level = 0.0;  // the median height of its points
+  // Its plane: height = level + slope · (xy − centre), least squares (zero for a narrow patch):
+  // the estimated up leaves a real floor tilted by a few degrees, 10 cm across a room.
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero(), slope = Eigen::Vector2d::Zero();
+  double height_at(const Eigen::Vector2d& xy) const { return level + slope.dot(xy - centre); }
   Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max());
   Eigen::Vector2f hi = Eigen::Vector2f::Constant(std::numeric_limits<float>::lowest());
   void add(const Vec3f& q, double cell_m) {
@@ -36,56 +40,65 @@ struct Patch {
   }
 };
 
-// Step 1: the horizontal levels: peaks of the histogram of the sample's heights (a bin at least
-// as full as the two bins on either side, with at least `min_points`), fullest first.
-std::vector<double> levels(const std::vector<Vec3f>& g, const SurfaceOptions& o,
-                           std::size_t min_points) {
-  float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
-  for (const Vec3f& p : g) lo = std::min(lo, p.z()), hi = std::max(hi, p.z());
-  const std::size_t bins = static_cast<std::size_t>((hi - lo) / o.bin_m) + 1;
-  std::vector<std::size_t> count(bins, 0);
-  for (const Vec3f& p : g) ++count[static_cast<std::size_t>((p.z() - lo) / o.bin_m)];
-  std::vector<std::pair<std::size_t, double>> peaks;
-  for (std::size_t b = 0; b < bins; ++b) {
-    bool peak = count[b] >= min_points;
-    for (std::size_t k = b >= 2 ? b - 2 : 0; peak && k <= std::min(bins - 1, b + 2); ++k)
-      peak = k == b || count[k] < count[b] || (count[k] == count[b] && k > b);
-    if (peak) peaks.emplace_back(count[b], lo + (static_cast<double>(b) + 0.5) * o.bin_m);
+// The patch's plane (Patch::slope) by least squares, when it spans at least 0.3 m both ways; its
+// tilt is kept within max_tilt_deg.
+void fit_plane(Patch& p, double max_tilt_deg) {
+  const double n = static_cast<double>(p.points.size());
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  double z_mean = 0.0;
+  for (const Vec3f& q : p.points) {
+    mean += q.head<2>().cast<double>();
+    z_mean += q.z();
   }
-  std::stable_sort(peaks.begin(), peaks.end(),
-                   [](const auto& a, const auto& b) { return a.first > b.first; });
-  std::vector<double> out;
-  for (std::size_t i = 0; i < peaks.size() && static_cast<int>(i) < o.max_levels; ++i)
-    out.push_back(peaks[i].second);
-  return out;
+  mean /= n;
+  z_mean /= n;
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d cross = Eigen::Vector2d::Zero();
+  for (const Vec3f& q : p.points) {
+    const Eigen::Vector2d d = q.head<2>().cast<double>() - mean;
+    cov.noalias() += d * d.transpose();
+    cross += d * (q.z() - z_mean);
+  }
+  p.centre = mean;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov / n);
+  constexpr double kMinSpan = 0.3;  // a uniform spread of this width has variance span² / 12
+  if (eig.eigenvalues()[0] < kMinSpan * kMinSpan / 12.0) return;
+  p.slope = cov.ldlt().solve(cross);
+  const double max_slope = std::tan(max_tilt_deg * M_PI / 180.0);
+  if (p.slope.norm() > max_slope) p.slope *= max_slope / p.slope.norm();
 }
 
-// Step 2: a level's points (not taken by a fuller level) split into patches by Euclidean
-// clustering (PCL) at most cluster_gap_m apart.
-std::vector<Patch> patches_at(double level, const std::vector<Vec3f>& g, std::vector<bool>& used,
-                              const SurfaceOptions& o, std::size_t min_points) {
-  detail::Cloud::Ptr slab(new detail::Cloud);
-  for (std::size_t i = 0; i < g.size(); ++i)
-    if (!used[i] && std::fabs(g[i].z() - level) <= o.plane_distance_m) {
-      used[i] = true;
-      slab->push_back(pcl::PointXYZ(g[i].x(), g[i].y(), g[i].z()));
-    }
+// Step 2: the horizontal points split into patches by Euclidean clustering (PCL) at most
+// cluster_gap_m apart. A patch follows its surface wherever it goes: a table top that the
+// estimated up sees tilted by a few degrees stays one patch (its level is its median height).
+std::vector<Patch> horizontal_patches(const std::vector<Vec3f>& g, const SurfaceOptions& o,
+                                      std::size_t min_points) {
   std::vector<Patch> out;
-  if (slab->size() < min_points) return out;
+  if (g.size() < min_points) return out;
+  detail::Cloud::Ptr cloud(new detail::Cloud);
+  cloud->reserve(g.size());
+  for (const Vec3f& p : g) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
   pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
-  tree->setInputCloud(slab);
+  tree->setInputCloud(cloud);
   pcl::EuclideanClusterExtraction<pcl::PointXYZ> extract;
   extract.setClusterTolerance(o.cluster_gap_m);
   extract.setMinClusterSize(static_cast<int>(min_points));
   extract.setMaxClusterSize(std::numeric_limits<int>::max());
   extract.setSearchMethod(tree);
-  extract.setInputCloud(slab);
+  extract.setInputCloud(cloud);
   std::vector<pcl::PointIndices> clusters;
   extract.extract(clusters);
   for (const auto& c : clusters) {
     Patch p;
-    p.level = level;
-    for (int k : c.indices) p.add((*slab)[k].getVector3fMap(), o.sample_voxel_m);
+    std::vector<float> z;
+    z.reserve(c.indices.size());
+    for (int k : c.indices) {
+      p.add(g[static_cast<std::size_t>(k)], o.sample_voxel_m);
+      z.push_back(g[static_cast<std::size_t>(k)].z());
+    }
+    std::nth_element(z.begin(), z.begin() + static_cast<long>(z.size() / 2), z.end());
+    p.level = z[z.size() / 2];
+    fit_plane(p, o.max_tilt_deg);
     out.push_back(std::move(p));
   }
   return out;
@@ -109,10 +122,11 @@ double narrow_spread(const Patch& p) {
 // Whether two patches are one surface: layers of it (the depth noise of far views leaves a floor
 // or a table top as parallel layers a few cm apart: within merge_height_m, sharing cells), or
 // pieces of it at the same level that the objects on it cut apart (levels within
-// 2 × plane_distance_m, boxes less than merge_gap_m apart).
+// piece_height_m, boxes less than merge_gap_m apart). Levels are compared on the plane of the
+// larger patch `m` at the centre of `p`.
 bool one_surface(const Patch& m, const Patch& p, const SurfaceOptions& o) {
-  const double dh = std::fabs(m.level - p.level);
-  if (dh <= 2 * o.plane_distance_m) {
+  const double dh = std::fabs(m.height_at(p.centre) - p.level);  // m's plane at p's centre
+  if (dh <= o.piece_height_m) {
     const Eigen::Vector2f gap =
         (m.lo - p.hi).cwiseMax(p.lo - m.hi).cwiseMax(Eigen::Vector2f::Zero());
     if (gap.norm() <= o.merge_gap_m) return true;
@@ -183,24 +197,40 @@ std::optional<int> object_under(const Surface& s, const Eigen::Matrix3d& gravity
   return std::nullopt;
 }
 
+// Step 1: the horizontal points of the sample (gravity frame): those whose surface normal (PCL's
+// normal of the k nearest sample points) is within max_tilt_deg of up. A wall has points at
+// every height: its slices would be patches at every level.
+std::vector<Vec3f> horizontal_points(const detail::Cloud::Ptr& sample, const Eigen::Matrix3f& r,
+                                     const SurfaceOptions& o) {
+  const std::vector<float> nz = detail::normal_z(sample, o.normal_neighbours, r.row(2));
+  const float min_nz = static_cast<float>(std::cos(o.max_tilt_deg * M_PI / 180.0));
+  std::vector<Vec3f> out;
+  out.reserve(sample->size());
+  for (std::size_t i = 0; i < sample->size(); ++i)
+    if (nz[i] >= min_nz) out.push_back(r * (*sample)[i].getVector3fMap());
+  return out;
+}
+
 }  // namespace
 
 void SurfaceOptions::check() const {
   require(sample_voxel_m > 0.0, "SurfaceOptions.sample_voxel_m", "must be > 0");
-  require(bin_m > 0.0, "SurfaceOptions.bin_m", "must be > 0");
-  require(plane_distance_m > 0.0, "SurfaceOptions.plane_distance_m", "must be > 0");
-  require(max_levels >= 1, "SurfaceOptions.max_levels", "must be >= 1");
+  require(normal_neighbours >= 3, "SurfaceOptions.normal_neighbours", "must be >= 3");
+  require(max_tilt_deg >= 0.0 && max_tilt_deg <= 90.0, "SurfaceOptions.max_tilt_deg",
+          "must be in [0, 90]");
+  require(piece_height_m >= 0.0, "SurfaceOptions.piece_height_m", "must be >= 0");
   require(cluster_gap_m > 0.0, "SurfaceOptions.cluster_gap_m", "must be > 0");
   require(min_area_m2 > 0.0, "SurfaceOptions.min_area_m2", "must be > 0");
   require(min_width_m >= 0.0, "SurfaceOptions.min_width_m", "must be >= 0");
   require(merge_height_m >= 0.0, "SurfaceOptions.merge_height_m", "must be >= 0");
   require(merge_gap_m >= 0.0, "SurfaceOptions.merge_gap_m", "must be >= 0");
+  require(table_min_area_m2 < table_max_area_m2, "SurfaceOptions.table_min_area_m2",
+          "must be < table_max_area_m2");
   require(table_min_height_m < table_max_height_m, "SurfaceOptions.table_min_height_m",
           "must be < table_max_height_m");
 }
 
 std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
-                                   const std::vector<SceneObject>& objects,
                                    const SurfaceOptions& o) {
   std::vector<Surface> surfaces;
   if (!o.enabled || map_points.empty()) return surfaces;
@@ -209,23 +239,13 @@ std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const V
   const std::size_t min_points =
       std::max<std::size_t>(10, static_cast<std::size_t>(o.min_area_m2 / (cell * cell)));
   const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, cell, 600000);
-  std::vector<Vec3f> g(sample->size());
-  const Eigen::Matrix3f r = gravity.cast<float>();
-  for (std::size_t i = 0; i < g.size(); ++i) g[i] = r * (*sample)[i].getVector3fMap();
-  std::vector<bool> used(g.size(), false);
+  const std::vector<Vec3f> g = horizontal_points(sample, gravity.cast<float>(), o);
   std::vector<Patch> patches;
-  for (double level : levels(g, o, min_points))
-    for (Patch& p : patches_at(level, g, used, o, min_points))
-      if (narrow_spread(p) >= o.min_width_m) patches.push_back(std::move(p));
-  std::vector<detail::Footprint> footprints;
-  for (const auto& obj : objects)
-    footprints.push_back(detail::footprint(obj.cloud ? obj.cloud->points : std::vector<Vec3f>{},
-                                           gravity, obj.position));
+  for (Patch& p : horizontal_patches(g, o, min_points))
+    if (narrow_spread(p) >= o.min_width_m) patches.push_back(std::move(p));
   for (const Patch& p : merge_layers(std::move(patches), o)) {
     Surface s = make_surface(p, gravity, cell);
-    if (s.area_m2 < o.min_area_m2) continue;
-    s.object = object_under(s, gravity, objects, footprints);
-    surfaces.push_back(std::move(s));
+    if (s.area_m2 >= o.min_area_m2) surfaces.push_back(std::move(s));
   }
   std::stable_sort(surfaces.begin(), surfaces.end(),
                    [](const Surface& a, const Surface& b) { return a.area_m2 > b.area_m2; });
@@ -233,6 +253,24 @@ std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const V
     surfaces[i].id = static_cast<int>(i) + 1;
     surfaces[i].label = "surface";
   }
+  return surfaces;
+}
+
+void mark_object_tops(std::vector<Surface>& surfaces, const Vec3& up,
+                      const std::vector<SceneObject>& objects) {
+  const Eigen::Matrix3d gravity = gravity_from_world(up);
+  std::vector<detail::Footprint> footprints;
+  for (const auto& obj : objects)
+    footprints.push_back(detail::footprint(obj.cloud ? obj.cloud->points : std::vector<Vec3f>{},
+                                           gravity, obj.position));
+  for (Surface& s : surfaces) s.object = object_under(s, gravity, objects, footprints);
+}
+
+std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
+                                   const std::vector<SceneObject>& objects,
+                                   const SurfaceOptions& o) {
+  std::vector<Surface> surfaces = find_surfaces(map_points, up, o);
+  mark_object_tops(surfaces, up, objects);
   return surfaces;
 }
 

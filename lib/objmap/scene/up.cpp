@@ -46,7 +46,8 @@ void camera_prior(const std::vector<Pose>& cameras, UpEstimate& e) {
 std::vector<PlaneEvidence> dominant_planes(const std::vector<Vec3f>& map_points, const UpOptions& o,
                                            UpEstimate& e) {
   std::vector<PlaneEvidence> planes;
-  detail::Cloud::Ptr rest = detail::sample_on_grid(map_points, o.sample_voxel_m, 600000, 30000);
+  detail::Cloud::Ptr rest = detail::sample_on_grid(map_points, o.sample_voxel_m, 600000,
+                                                   static_cast<std::size_t>(o.max_sample_points));
   e.sample_points = rest->size();
   const std::size_t min_inliers = std::max<std::size_t>(
       50, static_cast<std::size_t>(o.min_plane_share * static_cast<double>(rest->size())));
@@ -112,6 +113,8 @@ void UpOptions::check() const {
   parse_up(mode, "UpOptions.mode");
   require(sample_voxel_m > 0.0, "UpOptions.sample_voxel_m",
           "must be > 0, got " + std::to_string(sample_voxel_m));
+  require(max_sample_points >= 100, "UpOptions.max_sample_points",
+          "must be >= 100, got " + std::to_string(max_sample_points));
   require(plane_distance_m > 0.0, "UpOptions.plane_distance_m",
           "must be > 0, got " + std::to_string(plane_distance_m));
   require(max_planes >= 1, "UpOptions.max_planes", "must be >= 1");
