@@ -182,7 +182,8 @@ Surface make_surface(const Patch& p, const Eigen::Matrix3d& gravity, double cell
 
 // The object whose top the surface is (a chair's seat, a shelf's board): the surface's centre
 // inside the object's footprint, its height above the object's bottom (1 cm) and at most 3 cm over
-// its top.
+// its top, and its area at most 1.5 times the footprint's (a person or a chair whose mask bled
+// over a desk has the desk's centre in its footprint; the desk is no top of theirs).
 std::optional<int> object_under(const Surface& s, const Eigen::Matrix3d& gravity_from_world,
                                 const std::vector<SceneObject>& objects,
                                 const std::vector<detail::Footprint>& footprints) {
@@ -191,7 +192,8 @@ std::optional<int> object_under(const Surface& s, const Eigen::Matrix3d& gravity
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const auto& f = footprints[i];
     if (s.height_m >= f.bottom + 0.01 && s.height_m <= f.top + 0.03 &&
-        detail::inside_distance(f.hull, c) >= 0.0)
+        detail::inside_distance(f.hull, c) >= 0.0 &&
+        s.area_m2 <= 1.5 * (f.hull.size() >= 3 ? cv::contourArea(f.hull) : 0.0))
       return objects[i].id;
   }
   return std::nullopt;

