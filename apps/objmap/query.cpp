@@ -5,6 +5,7 @@
 #include <string>
 
 #include "command.h"
+#include "objmap/io/scene_json.h"
 #include "objmap/scene/query.h"
 
 namespace objmap::app {
@@ -36,7 +37,7 @@ void print_matches(const std::vector<scene::QueryMatch>& matches) {
 }
 
 void run_query_command(const QueryOptions& o) {
-  const scene::MapScene map = scene::read_map_scene(std::filesystem::path(o.run) / "objects.json");
+  const scene::MapScene map = io::read_map_scene(std::filesystem::path(o.run) / "objects.json");
   const scene::Query q = scene::parse_query(o.text, map);
   const scene::QueryResult r = scene::run_query(q, map);
   if (o.json) {

@@ -54,7 +54,7 @@ struct QueryTest : ::testing::Test {
   MapScene scene;
   void SetUp() override {
     write_text(dir.path() / "objects.json", kObjects);
-    scene = read_map_scene(dir.path() / "objects.json");
+    scene = io::read_map_scene(dir.path() / "objects.json");
   }
   std::vector<int> ids(const std::string& text) {
     std::vector<int> out;
@@ -123,10 +123,11 @@ TEST(QueryRead, ARunWithoutTheSceneIsNamed) {
   write_text(dir.path() / "objects.json",
              R"({"schema_version": 1, "frame": "world", "units": "metres", "objects": []})");
   try {
-    read_map_scene(dir.path() / "objects.json");
+    io::read_map_scene(dir.path() / "objects.json");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("objects.json: up_in_world: missing"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("objects.json: missing field 'up_in_world'"),
+              std::string::npos)
         << e.what();
   }
 }

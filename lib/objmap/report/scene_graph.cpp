@@ -19,17 +19,17 @@ struct Node {
 
 // Depth of an object above its surface: 0 on a surface, 1 + its support's depth on an object
 // (cycles and chains longer than 8 stop there).
-int depth_of(const scene::MapObject& o, const scene::MapScene& s, int hops = 0) {
-  if (!o.on || o.on->kind != "object" || hops > 8) return 0;
-  const scene::MapObject* below = s.object(o.on->id);
+int depth_of(const io::SceneObject& o, const io::SceneDescription& s, int hops = 0) {
+  if (!o.on || o.on->kind != io::SceneRelation::Kind::kObject || hops > 8) return 0;
+  const io::SceneObject* below = s.object(o.on->id);
   return below ? 1 + depth_of(*below, s, hops + 1) : 0;
 }
 
 // The surface an object's chain of supports ends on; -1 when none.
-int base_surface(const scene::MapObject& o, const scene::MapScene& s, int hops = 0) {
+int base_surface(const io::SceneObject& o, const io::SceneDescription& s, int hops = 0) {
   if (!o.on || hops > 8) return -1;
-  if (o.on->kind == "surface") return o.on->id;
-  const scene::MapObject* below = s.object(o.on->id);
+  if (o.on->kind == io::SceneRelation::Kind::kSurface) return o.on->id;
+  const io::SceneObject* below = s.object(o.on->id);
   return below ? base_surface(*below, s, hops + 1) : -1;
 }
 
@@ -52,10 +52,10 @@ std::string colour(const std::string& class_name) {
 
 }  // namespace
 
-std::string scene_graph_svg(const scene::MapScene& s) {
+std::string scene_graph_svg(const io::SceneDescription& s) {
   if (s.objects.empty()) return "";
   // Columns: one per surface (floor first, then by height), then one for unsupported objects.
-  std::vector<const scene::MapSurface*> surfaces;
+  std::vector<const io::SceneSurface*> surfaces;
   for (const auto& f : s.surfaces) surfaces.push_back(&f);
   std::stable_sort(surfaces.begin(), surfaces.end(), [](const auto* a, const auto* b) {
     return (a->label == "floor") != (b->label == "floor") ? a->label == "floor"
@@ -66,7 +66,7 @@ std::string scene_graph_svg(const scene::MapScene& s) {
     column_of_surface[surfaces[i]->id] = static_cast<int>(i);
   const int free_column = static_cast<int>(surfaces.size());
   // Objects per (column, depth), in id order.
-  std::map<std::pair<int, int>, std::vector<const scene::MapObject*>> cells;
+  std::map<std::pair<int, int>, std::vector<const io::SceneObject*>> cells;
   int max_depth = 0;
   for (const auto& o : s.objects) {
     const int base = base_surface(o, s);
@@ -94,7 +94,7 @@ std::string scene_graph_svg(const scene::MapScene& s) {
   std::string body;
   for (const auto& o : s.objects) {  // edges first, under the boxes
     if (!o.on) continue;
-    const auto& to = o.on->kind == "surface" ? surface_node : object_node;
+    const auto& to = o.on->kind == io::SceneRelation::Kind::kSurface ? surface_node : object_node;
     if (!to.count(o.on->id)) continue;
     const Node a = object_node[o.id], b = to.at(o.on->id);
     char buf[256];

@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
@@ -14,47 +12,12 @@
 namespace objmap::scene {
 namespace {
 
-using nlohmann::json;
+using Kind = io::SceneRelation::Kind;
 
 const char* kGrammar =
     "expected CLASS [on|near|above|under CLASS|floor|table|seat|surface], e.g. \"cup on table\"";
 const std::set<std::string> kSurfaceLabels = {"floor", "table", "seat", "surface"};
 constexpr double kNearSurfaceM = 0.5;  // `near` a surface: within this of its outline
-
-Vec3 vec3(const json& j, const std::string& where) {
-  require(j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() && j[2].is_number(),
-          where, "expected 3 numbers");
-  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-}
-
-const json& field(const json& j, const std::string& key, const std::string& where) {
-  require(j.is_object() && j.contains(key), where + key,
-          "missing; expected an objects.json written by objmap fuse with the scene (up_in_world, "
-          "surfaces, relations)");
-  return j.at(key);
-}
-
-std::vector<std::pair<int, double>> neighbours(const json& list, const char* key) {
-  std::vector<std::pair<int, double>> out;
-  for (const auto& n : list) out.emplace_back(n.at("id").get<int>(), n.at(key).get<double>());
-  return out;
-}
-
-MapObject read_object(const json& o, const std::string& where) {
-  MapObject m;
-  m.id = field(o, "id", where).get<int>();
-  m.class_name = segmentation::canonical_class(field(o, "class", where).get<std::string>());
-  m.position = vec3(field(o, "position", where), where + "position");
-  const json& r = field(o, "relations", where);
-  const json& on = field(r, "on", where + "relations.");
-  if (!on.is_null())
-    m.on = MapRelation{on.at("kind").get<std::string>(), on.at("id").get<int>(),
-                       on.at("label").get<std::string>(), on.at("gap_m").get<double>()};
-  m.near = neighbours(field(r, "near", where + "relations."), "distance_m");
-  m.above = neighbours(field(r, "above", where + "relations."), "gap_m");
-  m.under = neighbours(field(r, "under", where + "relations."), "gap_m");
-  return m;
-}
 
 // Singular forms to try for a (possibly plural) phrase: the last word changed.
 std::vector<std::string> singulars(const std::string& phrase) {
@@ -80,7 +43,7 @@ std::string describe_support(const MapObject& o, const MapScene& scene) {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(3);
-  if (o.on->kind == "surface")
+  if (o.on->kind == Kind::kSurface)
     s << "on surface " << o.on->id << " (" << o.on->label << ")";
   else
     s << "on object " << o.on->id << " (" << o.on->label << ")";
@@ -94,7 +57,7 @@ std::vector<const MapSurface*> supporting_surfaces(const MapObject& o, const Map
   std::vector<const MapSurface*> out;
   const MapObject* cur = &o;
   for (int hop = 0; hop < 8 && cur && cur->on; ++hop) {
-    if (cur->on->kind == "surface") {
+    if (cur->on->kind == Kind::kSurface) {
       if (const MapSurface* s = scene.surface(cur->on->id)) out.push_back(s);
       break;
     }
@@ -152,14 +115,14 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
 std::optional<QueryMatch> match_object(const MapObject& o, const Query& q, const MapScene& scene) {
   const auto is_target = [&](int id) {
     const MapObject* t = scene.object(id);
-    return t && t->class_name == q.target;
+    return t && segmentation::canonical_class(t->class_name) == q.target;
   };
   std::ostringstream why;
   why.setf(std::ios::fixed);
   why.precision(3);
   if (q.relation == "on" && o.on) {
-    const MapSurface* s = o.on->kind == "surface" ? scene.surface(o.on->id) : nullptr;
-    if ((o.on->kind == "object" && is_target(o.on->id)) ||
+    const MapSurface* s = o.on->kind == Kind::kSurface ? scene.surface(o.on->id) : nullptr;
+    if ((o.on->kind == Kind::kObject && is_target(o.on->id)) ||
         (s && s->object && is_target(*s->object)))
       return QueryMatch{&o, describe_support(o, scene), o.on->gap_m, std::nullopt};
   }
@@ -187,55 +150,6 @@ std::optional<QueryMatch> match(const MapObject& o, const Query& q, const MapSce
 
 }  // namespace
 
-const MapObject* MapScene::object(int id) const {
-  for (const auto& o : objects)
-    if (o.id == id) return &o;
-  return nullptr;
-}
-
-const MapSurface* MapScene::surface(int id) const {
-  for (const auto& s : surfaces)
-    if (s.id == id) return &s;
-  return nullptr;
-}
-
-MapScene read_map_scene(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  require(static_cast<bool>(in), file.string(), "cannot be read; expected RUN/objects.json");
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("not valid JSON (") + e.what() + ")");
-  }
-  const std::string where = file.string() + ": ";
-  MapScene scene;
-  try {
-    scene.up = vec3(field(doc, "up_in_world", where), where + "up_in_world").normalized();
-    const json& g = field(doc, "gravity_from_world", where);
-    require(g.is_array() && g.size() == 9, where + "gravity_from_world", "expected 9 numbers");
-    for (int i = 0; i < 9; ++i) scene.gravity_from_world(i / 3, i % 3) = g[i].get<double>();
-    for (const auto& s : field(doc, "surfaces", where)) {
-      MapSurface m;
-      m.id = s.at("id").get<int>();
-      m.label = s.at("label").get<std::string>();
-      m.height_m = s.at("height_m").get<double>();
-      m.center = vec3(s.at("center"), where + "surfaces.center");
-      for (const auto& p : s.at("outline"))
-        m.outline.push_back(vec3(p, where + "surfaces.outline"));
-      if (s.contains("object")) m.object = s.at("object").get<int>();
-      scene.surfaces.push_back(std::move(m));
-    }
-    for (const auto& o : field(doc, "objects", where))
-      scene.objects.push_back(
-          read_object(o, where + "objects[" + std::to_string(scene.objects.size()) + "]."));
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("unexpected content (") + e.what() +
-                                        "); expected objects.json of objmap fuse");
-  }
-  return scene;
-}
-
 Query parse_query(const std::string& text, const MapScene& scene) {
   Query q;
   q.text = text;
@@ -246,7 +160,7 @@ Query parse_query(const std::string& text, const MapScene& scene) {
   require(!words.empty(), "query", std::string("empty; ") + kGrammar);
   std::set<std::string> known(segmentation::coco80_names().begin(),
                               segmentation::coco80_names().end());
-  for (const auto& o : scene.objects) known.insert(o.class_name);
+  for (const auto& o : scene.objects) known.insert(segmentation::canonical_class(o.class_name));
   const auto resolve = [&](const std::vector<std::string>& phrase, bool surface_ok) {
     std::string joined;
     for (const auto& w : phrase) joined += (joined.empty() ? "" : " ") + w;
@@ -276,15 +190,18 @@ Query parse_query(const std::string& text, const MapScene& scene) {
 
 QueryResult run_query(const Query& q, const MapScene& scene) {
   QueryResult result;
+  const auto of_subject = [&](const MapObject& o) {
+    return segmentation::canonical_class(o.class_name) == q.subject;
+  };
   for (const auto& o : scene.objects)
-    if (o.class_name == q.subject)
+    if (of_subject(o))
       if (auto m = match(o, q, scene)) result.matches.push_back(*m);
   std::stable_sort(
       result.matches.begin(), result.matches.end(),
       [](const QueryMatch& a, const QueryMatch& b) { return a.distance_m < b.distance_m; });
   if (!result.matches.empty()) return result;
   for (const auto& o : scene.objects)
-    if (o.class_name == q.subject) result.candidates.push_back(*match(o, Query{}, scene));
+    if (of_subject(o)) result.candidates.push_back(*match(o, Query{}, scene));
   if (result.candidates.empty() && !q.relation.empty())
     for (const auto& o : scene.objects)
       if (auto m = match(o, q, scene)) result.candidates.push_back(*m);
