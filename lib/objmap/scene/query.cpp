@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -36,6 +37,48 @@ std::vector<std::string> singulars(const std::string& phrase) {
   if (ends("es")) out.push_back(head + w.substr(0, w.size() - 2));
   if (ends("s")) out.push_back(head + w.substr(0, w.size() - 1));
   return out;
+}
+
+std::string join(std::vector<std::string>::const_iterator begin,
+                 std::vector<std::string>::const_iterator end) {
+  std::string out;
+  for (auto w = begin; w != end; ++w) out += (out.empty() ? "" : " ") + *w;
+  return out;
+}
+
+// The canonical class or surface label (second: true) that `phrase` names, if any.
+std::optional<std::pair<std::string, bool>> lookup(const std::string& phrase, bool surface_ok,
+                                                   const std::set<std::string>& known) {
+  for (const std::string& s : singulars(phrase)) {
+    if (surface_ok && kSurfaceLabels.count(s)) return std::make_pair(s, true);
+    if (known.count(segmentation::canonical_class(s)))
+      return std::make_pair(segmentation::canonical_class(s), false);
+  }
+  return std::nullopt;
+}
+
+// The subject (`surface_ok` false) or the target of a query. Throws naming the word not understood:
+// the one after the longest beginning of `phrase` that names something ("cup beside table":
+// 'beside'; "cup on table please": 'please'), else the phrase.
+std::pair<std::string, bool> resolve_phrase(const std::vector<std::string>& phrase, bool surface_ok,
+                                            const std::set<std::string>& known,
+                                            const std::string& text) {
+  require(!phrase.empty(), "query",
+          "'" + text + "' has no " + (surface_ok ? "target" : "class") + "; " + kGrammar);
+  if (auto found = lookup(join(phrase.begin(), phrase.end()), surface_ok, known)) return *found;
+  for (auto end = phrase.end() - 1; end != phrase.begin(); --end) {
+    const std::string head = join(phrase.begin(), end);
+    if (!lookup(head, surface_ok, known)) continue;
+    if (!surface_ok)
+      throw InputError("query", "'" + *end + "' is not a relation (on|near|above|under) after '" +
+                                    head + "'; " + kGrammar);
+    throw InputError("query", "'" + *end + "' after '" + head +
+                                  "' is not understood (one relation per query); " + kGrammar);
+  }
+  throw InputError("query", "'" + join(phrase.begin(), phrase.end()) +
+                                "' is not a class of COCO-80 or of this map" +
+                                std::string(surface_ok ? " nor floor|table|seat|surface" : "") +
+                                "; " + kGrammar);
 }
 
 std::string describe_support(const MapObject& o, const MapScene& scene) {
@@ -91,7 +134,7 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
   for (const MapSurface* s : under_it)
     if (label_matches(*s, q.target) &&
         (q.relation == "on" || q.relation == "above" || q.relation == "near"))
-      return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, s->id};
+      return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, std::nullopt};
   for (const MapSurface& s : scene.surfaces) {
     if (!label_matches(s, q.target)) continue;
     const auto [outside, height] = relative_to(s, o.position, scene);
@@ -100,13 +143,13 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
     why.precision(3);
     if (q.relation == "near" && outside <= kNearSurfaceM) {
       why << outside << " m beside surface " << s.id << " (" << s.label << ")";
-      return QueryMatch{&o, why.str(), outside, s.id};
+      return QueryMatch{&o, why.str(), outside, std::nullopt};
     }
     if ((q.relation == "under" && outside == 0.0 && height < 0.0) ||
         (q.relation == "above" && outside == 0.0 && height > 0.0)) {
       why << std::fabs(height) << " m " << q.relation << " surface " << s.id << " (" << s.label
           << ")";
-      return QueryMatch{&o, why.str(), std::fabs(height), s.id};
+      return QueryMatch{&o, why.str(), std::fabs(height), std::nullopt};
     }
   }
   return std::nullopt;
@@ -140,12 +183,16 @@ std::optional<QueryMatch> match_object(const MapObject& o, const Query& q, const
 }
 
 std::optional<QueryMatch> match(const MapObject& o, const Query& q, const MapScene& scene) {
-  if (q.relation.empty()) {
+  std::optional<QueryMatch> m;
+  if (q.relation.empty())
+    m = QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, std::nullopt};
+  else
+    m = q.target_is_surface ? match_surface(o, q, scene) : match_object(o, q, scene);
+  if (m) {  // whatever the relation: the surface it stands on
     const auto surfaces = supporting_surfaces(o, scene);
-    return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0,
-                      surfaces.empty() ? std::nullopt : std::optional<int>(surfaces[0]->id)};
+    m->surface = surfaces.empty() ? std::nullopt : std::optional<int>(surfaces[0]->id);
   }
-  return q.target_is_surface ? match_surface(o, q, scene) : match_object(o, q, scene);
+  return m;
 }
 
 }  // namespace
@@ -162,18 +209,7 @@ Query parse_query(const std::string& text, const MapScene& scene) {
                               segmentation::coco80_names().end());
   for (const auto& o : scene.objects) known.insert(segmentation::canonical_class(o.class_name));
   const auto resolve = [&](const std::vector<std::string>& phrase, bool surface_ok) {
-    std::string joined;
-    for (const auto& w : phrase) joined += (joined.empty() ? "" : " ") + w;
-    require(!joined.empty(), "query",
-            "'" + text + "' has no " + (surface_ok ? "target" : "class") + "; " + kGrammar);
-    for (const std::string& s : singulars(joined)) {
-      if (surface_ok && kSurfaceLabels.count(s)) return std::make_pair(s, true);
-      if (known.count(segmentation::canonical_class(s)))
-        return std::make_pair(segmentation::canonical_class(s), false);
-    }
-    throw InputError("query", "'" + joined + "' is not a class of COCO-80 or of this map" +
-                                  std::string(surface_ok ? " nor floor|table|seat|surface" : "") +
-                                  "; " + kGrammar);
+    return resolve_phrase(phrase, surface_ok, known, text);
   };
   const auto rel = std::find_if(words.begin(), words.end(), [](const std::string& w) {
     return w == "on" || w == "near" || w == "above" || w == "under";
@@ -196,9 +232,12 @@ QueryResult run_query(const Query& q, const MapScene& scene) {
   for (const auto& o : scene.objects)
     if (of_subject(o))
       if (auto m = match(o, q, scene)) result.matches.push_back(*m);
-  std::stable_sort(
-      result.matches.begin(), result.matches.end(),
-      [](const QueryMatch& a, const QueryMatch& b) { return a.distance_m < b.distance_m; });
+  // Closest first: a gap of -8 mm (the bottom hidden below the support's top) is no closer than
+  // one of +5 mm.
+  std::stable_sort(result.matches.begin(), result.matches.end(),
+                   [](const QueryMatch& a, const QueryMatch& b) {
+                     return std::fabs(a.distance_m) < std::fabs(b.distance_m);
+                   });
   if (!result.matches.empty()) return result;
   for (const auto& o : scene.objects)
     if (of_subject(o)) result.candidates.push_back(*match(o, Query{}, scene));

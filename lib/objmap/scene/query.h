@@ -33,13 +33,15 @@ Query parse_query(const std::string& text, const MapScene& scene);
 
 struct QueryMatch {
   const MapObject* object = nullptr;
-  std::string why;             // "on surface 2 (table), gap 0.004 m", "near 5 (keyboard), 0.21 m"
-  double distance_m = 0.0;     // the relation's figure (gap or distance)
-  std::optional<int> surface;  // the surface it stands on, if any
+  std::string why;          // "on surface 2 (table), gap 0.004 m", "near 5 (keyboard), 0.21 m"
+  double distance_m = 0.0;  // the relation's figure (gap or distance)
+  // The surface it stands on, following `on` through objects (a cup on a book on the table: the
+  // table), whatever the relation asked; none when it stands on nothing found.
+  std::optional<int> surface;
 };
 
 struct QueryResult {
-  std::vector<QueryMatch> matches;
+  std::vector<QueryMatch> matches;  // smallest |distance_m| first
   // When nothing matches: the objects of the subject's class (with what they relate to), or, when
   // there is none, the objects that satisfy the relation whatever their class.
   std::vector<QueryMatch> candidates;
