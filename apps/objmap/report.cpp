@@ -546,9 +546,10 @@ fs::path write_report(const ReportOptions& options, const report::PageContent& p
 void print_report_summary(const report::PageContent& page, const fs::path& out) {
   std::printf("%s\n", report::summary_line(page).c_str());
   for (const std::string& note : page.notes) std::printf("note: %s\n", note.c_str());
-  std::printf("written     %s/{report.md, topview.png%s%s, thumbnails/ (%zu)}\n", out.c_str(),
+  std::printf("written     %s/{report.md, topview.png%s%s%s, thumbnails/ (%zu)}\n", out.c_str(),
               page.trajectory_plot.bytes.empty() ? "" : ", trajectory.svg",
-              page.ate_plot.bytes.empty() ? "" : ", ate.svg", page.objects.size());
+              page.ate_plot.bytes.empty() ? "" : ", ate.svg",
+              page.scene_graph.bytes.empty() ? "" : ", scene_graph.svg", page.objects.size());
   std::printf("report      %s\n", (out / "report.html").c_str());
 }
 

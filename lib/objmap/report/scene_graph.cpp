@@ -33,13 +33,16 @@ int base_surface(const io::SceneObject& o, const io::SceneDescription& s, int ho
   return below ? base_surface(*below, s, hops + 1) : -1;
 }
 
-std::string rect(const Node& n, const std::string& fill, const std::string& label) {
+// A node's box and label; `node` ("object 3", "surface 1") names it for programs (data-node).
+std::string rect(const Node& n, const std::string& node, const std::string& fill,
+                 const std::string& label) {
   char buf[512];
   std::snprintf(buf, sizeof buf,
-                "<rect x=\"%.1f\" y=\"%.1f\" width=\"%d\" height=\"%d\" rx=\"5\" fill=\"%s\" "
-                "stroke=\"#333\"/><text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" "
+                "<rect data-node=\"%s\" x=\"%.1f\" y=\"%.1f\" width=\"%d\" height=\"%d\" rx=\"5\" "
+                "fill=\"%s\" stroke=\"#333\"/><text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" "
                 "text-anchor=\"middle\" font-family=\"sans-serif\">",
-                n.x - kNodeW / 2.0, n.y - kNodeH / 2.0, kNodeW, kNodeH, fill.c_str(), n.x, n.y + 4);
+                node.c_str(), n.x - kNodeW / 2.0, n.y - kNodeH / 2.0, kNodeW, kNodeH, fill.c_str(),
+                n.x, n.y + 4);
   return buf + xml_escape(label) + "</text>\n";
 }
 
@@ -97,21 +100,22 @@ std::string scene_graph_svg(const io::SceneDescription& s) {
     const auto& to = o.on->kind == io::SceneRelation::Kind::kSurface ? surface_node : object_node;
     if (!to.count(o.on->id)) continue;
     const Node a = object_node[o.id], b = to.at(o.on->id);
-    char buf[256];
+    char buf[320];
     std::snprintf(buf, sizeof buf,
-                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#777\" "
-                  "stroke-width=\"1.5\"/>\n",
-                  a.x, a.y + kNodeH / 2.0, b.x, b.y - kNodeH / 2.0);
+                  "<line data-edge=\"on object %d %s %d\" x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" "
+                  "y2=\"%.1f\" stroke=\"#777\" stroke-width=\"1.5\"/>\n",
+                  o.id, o.on->kind == io::SceneRelation::Kind::kSurface ? "surface" : "object",
+                  o.on->id, a.x, a.y + kNodeH / 2.0, b.x, b.y - kNodeH / 2.0);
     body += buf;
   }
   for (const auto* f : surfaces) {
     char label[128];
     std::snprintf(label, sizeof label, "S%d %s %.2f m", f->id, f->label.c_str(), f->height_m);
-    body += rect(surface_node[f->id], "#e8e2d0", label);
+    body += rect(surface_node[f->id], "surface " + std::to_string(f->id), "#e8e2d0", label);
   }
   for (const auto& o : s.objects)
-    body +=
-        rect(object_node[o.id], colour(o.class_name), std::to_string(o.id) + " " + o.class_name);
+    body += rect(object_node[o.id], "object " + std::to_string(o.id), colour(o.class_name),
+                 std::to_string(o.id) + " " + o.class_name);
   char head[256];
   std::snprintf(head, sizeof head,
                 "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
