@@ -45,15 +45,18 @@ def main():
     objects = []
     for o in gt["objects"]:
         c = to_slam(o["centroid"])
+        on = None if o["on"] is None else dict(o["on"], gap_m=0.0)
         objects.append({"id": o["id"], "class": o["class"], "score": 1.0, "centroid": c,
-                        "aabb": {"min": c, "max": c},
+                        "position": c, "aabb": {"min": c, "max": c},
                         "obb": {"center": to_slam(o["obb"]["center"]),
                                 "rotation": rotate(o["obb"]["rotation"]),
                                 "half_extent": o["obb"]["half_extent"]},
                         "points": {"outlier_filtered": 0}, "observation_count": 0, "ply": "",
-                        "relations": {"on": o["on"]}})
+                        "relations": {"on": on, "near": [], "above": [], "under": []}})
+    gravity = [r0[r][c] for r in range(3) for c in range(3)]  # R_0: takes that up to +z
     with open(out, "w") as f:
-        json.dump({"up_in_world": up, "surfaces": surfaces, "objects": objects}, f, indent=1)
+        json.dump({"up_in_world": up, "gravity_from_world": gravity, "surfaces": surfaces,
+                   "objects": objects}, f, indent=1)
 
 
 if __name__ == "__main__":

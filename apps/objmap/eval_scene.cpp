@@ -14,6 +14,7 @@
 #include "objmap/eval/scene.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/objects_json.h"
+#include "objmap/io/scene_json.h"
 #include "objmap/io/trajectory.h"
 
 namespace objmap::app {
@@ -55,9 +56,9 @@ void run_eval_scene(const EvalSceneArgs& args) {
   report.gt_source = args.gt_file;
   report.options = args.options;
   // The scene fields first: a run fused without them is named by its missing field.
-  eval::SceneDescription map_scene = eval::read_map_scene(objects_file);
+  eval::SceneDescription map_scene = io::read_map_scene(objects_file);
   std::vector<io::MappedObject> map_objects = io::read_objects_json(objects_file);
-  const eval::SceneDescription gt_scene = eval::read_gt_scene(args.gt_file);
+  const eval::SceneDescription gt_scene = io::read_gt_scene(args.gt_file);
   const std::vector<eval::ReferenceObject> gt_objects = eval::read_objects_gt(args.gt_file);
   if (!args.trajectory.empty()) {
     report.alignment = align_run(args);

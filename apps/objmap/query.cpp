@@ -5,6 +5,7 @@
 #include <string>
 
 #include "command.h"
+#include "objmap/io/scene_json.h"
 #include "objmap/scene/query.h"
 
 namespace objmap::app {
@@ -16,27 +17,35 @@ struct QueryOptions {
   bool json = false;
 };
 
-nlohmann::ordered_json match_json(const scene::QueryMatch& m) {
+nlohmann::ordered_json match_json(const scene::QueryMatch& m, const scene::MapScene& map) {
   const Vec3& p = m.object->position;
-  nlohmann::ordered_json j = {{"id", m.object->id},
-                              {"class", m.object->class_name},
-                              {"position", {p.x(), p.y(), p.z()}},
-                              {"why", m.why},
-                              {"distance_m", m.distance_m}};
-  j["surface"] = m.surface ? nlohmann::ordered_json(*m.surface) : nlohmann::ordered_json(nullptr);
+  nlohmann::ordered_json j = {
+      {"id", m.object->id}, {"class", m.object->class_name}, {"position", {p.x(), p.y(), p.z()}},
+      {"why", m.why},       {"distance_m", m.distance_m},    {"surface", nullptr}};
+  if (const scene::MapSurface* s = m.surface ? map.surface(*m.surface) : nullptr)
+    j["surface"] = {{"id", s->id}, {"label", s->label}, {"height_m", s->height_m}};
   return j;
 }
 
-void print_matches(const std::vector<scene::QueryMatch>& matches) {
+// "1 table" or "-": the surface a match stands on.
+std::string surface_text(const scene::QueryMatch& m, const scene::MapScene& map) {
+  const scene::MapSurface* s = m.surface ? map.surface(*m.surface) : nullptr;
+  return s ? std::to_string(s->id) + " " + s->label : "-";
+}
+
+void print_matches(const std::vector<scene::QueryMatch>& matches, const scene::MapScene& map) {
+  std::printf("  %-4s %-16s %-27s %-12s %s\n", "id", "class", "position (m)", "surface",
+              "relation");
   for (const auto& m : matches) {
     const Vec3& p = m.object->position;
-    std::printf("  %-4d %-16s at (%7.3f, %7.3f, %7.3f)  %s\n", m.object->id,
-                m.object->class_name.c_str(), p.x(), p.y(), p.z(), m.why.c_str());
+    std::printf("  %-4d %-16s (%7.3f, %7.3f, %7.3f)  %-12s %s\n", m.object->id,
+                m.object->class_name.c_str(), p.x(), p.y(), p.z(), surface_text(m, map).c_str(),
+                m.why.c_str());
   }
 }
 
 void run_query_command(const QueryOptions& o) {
-  const scene::MapScene map = scene::read_map_scene(std::filesystem::path(o.run) / "objects.json");
+  const scene::MapScene map = io::read_map_scene(std::filesystem::path(o.run) / "objects.json");
   const scene::Query q = scene::parse_query(o.text, map);
   const scene::QueryResult r = scene::run_query(q, map);
   if (o.json) {
@@ -46,21 +55,21 @@ void run_query_command(const QueryOptions& o) {
                                   {"target", q.target},
                                   {"matches", nlohmann::ordered_json::array()},
                                   {"candidates", nlohmann::ordered_json::array()}};
-    for (const auto& m : r.matches) out["matches"].push_back(match_json(m));
-    for (const auto& m : r.candidates) out["candidates"].push_back(match_json(m));
+    for (const auto& m : r.matches) out["matches"].push_back(match_json(m, map));
+    for (const auto& m : r.candidates) out["candidates"].push_back(match_json(m, map));
     std::printf("%s\n", out.dump(2).c_str());
     return;
   }
   if (!r.matches.empty()) {
     std::printf("%zu match%s for \"%s\":\n", r.matches.size(), r.matches.size() == 1 ? "" : "es",
                 o.text.c_str());
-    print_matches(r.matches);
+    print_matches(r.matches, map);
     return;
   }
   std::printf("no match for \"%s\"\n", o.text.c_str());
   if (!r.candidates.empty()) {
     std::printf("nearest candidates:\n");
-    print_matches(r.candidates);
+    print_matches(r.candidates, map);
   }
 }
 

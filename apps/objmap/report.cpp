@@ -19,13 +19,13 @@
 #include "objmap/io/objects_json.h"
 #include "objmap/io/ply.h"
 #include "objmap/io/png_encode.h"
+#include "objmap/io/scene_json.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/report/page.h"
 #include "objmap/report/plots.h"
 #include "objmap/report/scene_graph.h"
 #include "objmap/report/thumbnail.h"
 #include "objmap/report/topview.h"
-#include "objmap/scene/query.h"
 
 namespace objmap::app {
 namespace {
@@ -347,9 +347,9 @@ std::string up_text(const ReportOptions& options, const std::optional<Eigen::Mat
 
 // Step 5b: the scene graph (surfaces, objects, `on` edges), for a run with a scene.
 void add_scene_graph(const ReportOptions& options, report::PageContent& page) {
-  scene::MapScene map;
+  io::SceneDescription map;
   try {
-    map = scene::read_map_scene(options.run / "objects.json");
+    map = io::read_map_scene(options.run / "objects.json");
   } catch (const InputError&) {
     page.notes.push_back(
         "no scene graph: objects.json has no surfaces and relations (a run of an "
@@ -546,9 +546,10 @@ fs::path write_report(const ReportOptions& options, const report::PageContent& p
 void print_report_summary(const report::PageContent& page, const fs::path& out) {
   std::printf("%s\n", report::summary_line(page).c_str());
   for (const std::string& note : page.notes) std::printf("note: %s\n", note.c_str());
-  std::printf("written     %s/{report.md, topview.png%s%s, thumbnails/ (%zu)}\n", out.c_str(),
+  std::printf("written     %s/{report.md, topview.png%s%s%s, thumbnails/ (%zu)}\n", out.c_str(),
               page.trajectory_plot.bytes.empty() ? "" : ", trajectory.svg",
-              page.ate_plot.bytes.empty() ? "" : ", ate.svg", page.objects.size());
+              page.ate_plot.bytes.empty() ? "" : ", ate.svg",
+              page.scene_graph.bytes.empty() ? "" : ", scene_graph.svg", page.objects.size());
   std::printf("report      %s\n", (out / "report.html").c_str());
 }
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "eval_test_util.h"
+#include "objmap/io/scene_json.h"
 #include "objmap/io/trajectory.h"
 #include "support/schema_check.h"
 #include "support/test_support.h"
@@ -111,23 +112,32 @@ json map_json(const Scene& s, const Pose& t = Pose::Identity()) {
   json objects = json::array();
   for (const Object& o : s.objects) {
     const Vec3 c = t * o.centroid;
+    json on = o.on;
+    if (!on.is_null()) on["gap_m"] = 0.0;  // fuse writes the gap to the support
     objects.push_back(
         {{"id", o.id},
          {"class", o.cls},
          {"score", 0.9},
          {"centroid", vec(c)},
+         {"position", vec(c)},
          {"aabb", {{"min", vec(c - Vec3::Constant(0.05))}, {"max", vec(c + Vec3::Constant(0.05))}}},
          {"obb", obb(o.centroid, t)},
          {"points", {{"outlier_filtered", 100}}},
          {"observation_count", 10},
          {"ply", "objects/x.ply"},
          {"relations",
-          {{"on", o.on},
+          {{"on", on},
            {"near", json::array()},
            {"above", json::array()},
            {"under", json::array()}}}});
   }
-  return {{"up_in_world", vec(up)}, {"surfaces", surfaces}, {"objects", objects}};
+  json gravity = json::array();  // takes up to +z when the truth's up is z
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) gravity.push_back(t.linear()(c, r));
+  return {{"up_in_world", vec(up)},
+          {"gravity_from_world", gravity},
+          {"surfaces", surfaces},
+          {"objects", objects}};
 }
 
 // objects_gt.json as objmap synth writes it.
@@ -162,8 +172,8 @@ struct Files {
 
 SceneEvalResult evaluate(const json& map_doc, const json& gt_doc = gt_json(truth())) {
   Files f(map_doc, gt_doc);
-  return evaluate_scene(io::read_objects_json(f.map), read_map_scene(f.map), read_objects_gt(f.gt),
-                        read_gt_scene(f.gt), ObjectEvalOptions{});
+  return evaluate_scene(io::read_objects_json(f.map), io::read_map_scene(f.map),
+                        read_objects_gt(f.gt), io::read_gt_scene(f.gt), ObjectEvalOptions{});
 }
 
 TEST(EvalScene, PerfectMapScoresOneAndGivesTheHeightErrors) {
@@ -271,7 +281,7 @@ TEST(EvalScene, ARunWithoutTheSceneFieldsIsNamed) {
     json doc = map_json(perfect_map());
     remove(doc);
     write_text(file, doc.dump());
-    return error_of([&] { read_map_scene(file); });
+    return error_of([&] { io::read_map_scene(file); });
   };
   const std::string where = file.string() + ": ";
   EXPECT_EQ(message_without([](json& d) {
@@ -378,7 +388,12 @@ json perfect_map_in_slam_frame(const json& gt, const Pose& t0) {
     return vec(slam_from_world * Vec3(p[0].get<double>(), p[1].get<double>(), p[2].get<double>()));
   };
   const Vec3 up = t0.linear().transpose() * Vec3::UnitZ();  // R_0^T up (docs/formats.md)
-  json doc = {{"up_in_world", vec(up)}, {"surfaces", json::array()}, {"objects", json::array()}};
+  json gravity = json::array();                             // takes that up to +z: R_0
+  for (int k = 0; k < 9; ++k) gravity.push_back(t0.linear()(k / 3, k % 3));
+  json doc = {{"up_in_world", vec(up)},
+              {"gravity_from_world", gravity},
+              {"surfaces", json::array()},
+              {"objects", json::array()}};
   for (const json& f : gt.at("surfaces")) {
     json s = {{"id", f.at("id")}, {"label", f.at("label")}, {"center", moved(f.at("center"))}};
     s["height_m"] =
@@ -389,6 +404,8 @@ json perfect_map_in_slam_frame(const json& gt, const Pose& t0) {
   }
   for (const json& o : gt.at("objects")) {
     const json c = moved(o.at("centroid"));
+    json on = o.at("on");
+    if (!on.is_null()) on["gap_m"] = 0.0;  // fuse writes the gap to the support
     json rotation = json::array();
     Eigen::Matrix3d r;
     for (int k = 0; k < 9; ++k) r(k / 3, k % 3) = o["obb"]["rotation"][k].get<double>();
@@ -406,7 +423,12 @@ json perfect_map_in_slam_frame(const json& gt, const Pose& t0) {
                               {"points", {{"outlier_filtered", 100}}},
                               {"observation_count", 10},
                               {"ply", ""},
-                              {"relations", {{"on", o.at("on")}}}});
+                              {"position", c},
+                              {"relations",
+                               {{"on", on},
+                                {"near", json::array()},
+                                {"above", json::array()},
+                                {"under", json::array()}}}});
   }
   return doc;
 }

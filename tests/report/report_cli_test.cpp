@@ -1,9 +1,12 @@
 // objmap report on a fuse run of a synthetic scene (the cached seed-3 run of tests/integration).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
+#include <vector>
 
 #include "objmap/core/error.h"
 #include "objmap/eval/ate.h"
@@ -274,6 +277,78 @@ TEST(ReportCli, TrajectoriesAgainstTheGroundTruthThenTheCorrectedOne) {
   std::snprintf(rmse, sizeof rmse, "ATE RMSE estimated %.4f m, corrected 0.004",
                 expected.stats.rmse);
   EXPECT_NE(r.out.find(rmse), std::string::npos) << r.out << "\nexpected: " << rmse;
+}
+
+// The values of `attribute` in `doc`, in order ("object 3" for data-node="object 3").
+std::vector<std::string> attribute_values(const std::string& doc, const std::string& attribute) {
+  std::vector<std::string> out;
+  const std::string key = attribute + "=\"";
+  for (std::size_t at = doc.find(key); at != std::string::npos; at = doc.find(key, at + 1)) {
+    const std::size_t start = at + key.size();
+    out.push_back(doc.substr(start, doc.find('"', start) - start));
+  }
+  return out;
+}
+
+TEST(ReportCli, SceneGraphHoldsTheObjectsSurfacesAndOnEdgesOfObjectsJson) {
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  const fs::path out = dir / "rep";
+  const RunResult r = run_objmap({"report", "--run", c.run.string(), "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(out / "scene_graph.svg"));
+  const std::string svg = read_text(out / "scene_graph.svg");
+  EXPECT_EQ(xml_problem(svg), "");
+
+  // Expected from objects.json itself: a node per object and per surface, an edge per `on`.
+  const auto doc = nlohmann::json::parse(read_text(c.run / "objects.json"));
+  std::multiset<std::string> nodes, edges;
+  for (const auto& s : doc.at("surfaces"))
+    nodes.insert("surface " + std::to_string(s.at("id").get<int>()));
+  for (const auto& o : doc.at("objects")) {
+    nodes.insert("object " + std::to_string(o.at("id").get<int>()));
+    const auto& on = o.at("relations").at("on");
+    if (!on.is_null())
+      edges.insert("on object " + std::to_string(o.at("id").get<int>()) + " " +
+                   on.at("kind").get<std::string>() + " " + std::to_string(on.at("id").get<int>()));
+  }
+  ASSERT_FALSE(doc.at("surfaces").empty());
+  ASSERT_FALSE(edges.empty());
+  // The seed-3 scene's stacked books: at least one object stands on another.
+  EXPECT_TRUE(std::any_of(edges.begin(), edges.end(), [](const std::string& e) {
+    return e.find(" object ", 3) != std::string::npos;
+  }));
+  const auto svg_nodes = attribute_values(svg, "data-node");
+  const auto svg_edges = attribute_values(svg, "data-edge");
+  EXPECT_EQ(std::multiset<std::string>(svg_nodes.begin(), svg_nodes.end()), nodes);
+  EXPECT_EQ(std::multiset<std::string>(svg_edges.begin(), svg_edges.end()), edges);
+  EXPECT_EQ(count_of(svg, "<rect"), nodes.size());
+  EXPECT_EQ(count_of(svg, "<line"), edges.size());
+
+  // On the page (inline) and in report.md (the file), and named in the summary.
+  const std::string html = read_text(out / "report.html");
+  EXPECT_EQ(count_of(html, "data-edge=\""), edges.size());
+  EXPECT_NE(read_text(out / "report.md").find("](scene_graph.svg)"), std::string::npos);
+  EXPECT_NE(r.out.find("scene_graph.svg"), std::string::npos) << r.out;
+}
+
+TEST(ReportCli, ARunWithoutTheSceneHasNoSceneGraphAndSaysSo) {
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  const fs::path run = run_with_estimate(c.run, c.scene / "groundtruth.txt", dir.path());
+  auto doc = nlohmann::json::parse(read_text(c.run / "objects.json"));
+  doc.erase("up_in_world");
+  doc.erase("surfaces");
+  fs::remove(run / "objects.json");
+  write_text(run / "objects.json", doc.dump(1));
+  const RunResult r =
+      run_objmap({"report", "--run", run.string(), "--out", (dir / "rep").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "rep" / "scene_graph.svg"));
+  EXPECT_NE(r.out.find("note: no scene graph"), std::string::npos) << r.out;
+  EXPECT_EQ(read_text(dir / "rep" / "report.html").find("data-edge="), std::string::npos);
 }
 
 TEST(ReportCli, RunWithoutObjectsJsonIsExit2NamingTheFile) {

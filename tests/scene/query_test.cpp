@@ -54,7 +54,7 @@ struct QueryTest : ::testing::Test {
   MapScene scene;
   void SetUp() override {
     write_text(dir.path() / "objects.json", kObjects);
-    scene = read_map_scene(dir.path() / "objects.json");
+    scene = io::read_map_scene(dir.path() / "objects.json");
   }
   std::vector<int> ids(const std::string& text) {
     std::vector<int> out;
@@ -116,6 +116,32 @@ TEST_F(QueryTest, BadQueriesNameTheWord) {
   EXPECT_NE(error("cup on").find("has no target"), std::string::npos);
   EXPECT_NE(error("").find("query: empty"), std::string::npos);
   EXPECT_NE(error("on table").find("has no class"), std::string::npos);
+  // A word after a known beginning is the one named.
+  EXPECT_EQ(error("cup beside table")
+                .rfind("query: 'beside' is not a relation (on|near|above|under) "
+                       "after 'cup'; expected CLASS",
+                       0),
+            0u);
+  EXPECT_EQ(error("tv monitors beside table").rfind("query: 'beside' is not a relation", 0), 0u);
+  EXPECT_EQ(
+      error("cup on table please")
+          .rfind("query: 'please' after 'table' is not understood (one relation per query)", 0),
+      0u);
+  EXPECT_EQ(error("cup on dining table now").rfind("query: 'now' after 'dining table'", 0), 0u);
+  EXPECT_EQ(error("cup near book on table").rfind("query: 'on' after 'book'", 0), 0u);
+}
+
+TEST_F(QueryTest, EveryMatchNamesTheSurfaceItStandsOn) {
+  const auto surface_of = [&](const std::string& text) {
+    std::vector<std::optional<int>> out;
+    for (const auto& m : run_query(parse_query(text, scene), scene).matches)
+      out.push_back(m.surface);
+    return out;
+  };
+  EXPECT_EQ(surface_of("mouse near keyboard"), (std::vector<std::optional<int>>{1}));
+  EXPECT_EQ(surface_of("cup above book"), (std::vector<std::optional<int>>{1}));  // via the book
+  EXPECT_EQ(surface_of("book on chair"), (std::vector<std::optional<int>>{3}));   // the seat
+  EXPECT_EQ(surface_of("chair"), (std::vector<std::optional<int>>{2}));
 }
 
 TEST(QueryRead, ARunWithoutTheSceneIsNamed) {
@@ -123,10 +149,11 @@ TEST(QueryRead, ARunWithoutTheSceneIsNamed) {
   write_text(dir.path() / "objects.json",
              R"({"schema_version": 1, "frame": "world", "units": "metres", "objects": []})");
   try {
-    read_map_scene(dir.path() / "objects.json");
+    io::read_map_scene(dir.path() / "objects.json");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("objects.json: up_in_world: missing"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("objects.json: missing field 'up_in_world'"),
+              std::string::npos)
         << e.what();
   }
 }

@@ -28,6 +28,17 @@ fs::path scene() {
   return dir;
 }
 
+// The scene fused with its groundtruth.txt (the cached run of tests/integration); `r`: how fuse
+// failed when it is absent.
+fs::path fused_run(RunResult* r) {
+  const fs::path s = scene();
+  return cached_output(
+      "seed3-orbit60-fuse",
+      {"fuse", "--dataset", s.string(), "--trajectory", (s / "groundtruth.txt").string(),
+       "--segmentation", (s / "segmentation").string(), "--out", "{OUT}"},
+      r);
+}
+
 TEST(Schemas, TheValidatorRejectsWhatItShould) {
   const auto schema = load_schema("camera.schema.json");
   EXPECT_FALSE(validate_json(nlohmann::json::parse(R"({"fx":1})"), schema).empty());
@@ -49,13 +60,8 @@ TEST(Schemas, SynthOutputs) {
 }
 
 TEST(Schemas, FuseOutputsAndConfig) {
-  const fs::path s = scene();
   RunResult r;
-  const fs::path run = cached_output(
-      "seed3-orbit60-fuse",
-      {"fuse", "--dataset", s.string(), "--trajectory", (s / "groundtruth.txt").string(),
-       "--segmentation", (s / "segmentation").string(), "--out", "{OUT}"},
-      &r);
+  const fs::path run = fused_run(&r);
   ASSERT_TRUE(fs::exists(run)) << r.err;
   expect_valid(run / "objects.json", "objects.schema.json");
   expect_valid(run / "run.json", "run.schema.json");
@@ -64,6 +70,34 @@ TEST(Schemas, FuseOutputsAndConfig) {
   EXPECT_TRUE(errors.empty()) << errors.front();
   expect_valid(fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "examples" / "fuse_config.json",
                "fuse_config.schema.json");
+}
+
+TEST(Schemas, QueryOutput) {
+  RunResult r;
+  const fs::path run = fused_run(&r);
+  ASSERT_TRUE(fs::exists(run)) << r.err;
+  const auto schema = load_schema("query.schema.json");
+  // Matches (with a surface), no match (candidates), a relation to an object, a bare class.
+  std::size_t matches = 0, candidates = 0, surfaces = 0;
+  for (const char* text : {"book on table", "books on floor", "book near book", "book"}) {
+    r = run_objmap({"query", "--run", run.string(), text, "--json"});
+    ASSERT_EQ(r.exit_code, 0) << text << ": " << r.err;
+    const auto doc = nlohmann::json::parse(r.out);
+    const auto errors = validate_json(doc, schema);
+    EXPECT_TRUE(errors.empty()) << text << ": " << errors.front();
+    matches += doc["matches"].size();
+    candidates += doc["candidates"].size();
+    for (const auto& m : doc["matches"]) surfaces += m["surface"].is_object();
+  }
+  EXPECT_GT(matches, 0u);
+  EXPECT_GT(candidates, 0u);
+  EXPECT_GT(surfaces, 0u);
+  // The schema rejects what the output must not be.
+  EXPECT_FALSE(validate_json(nlohmann::json::parse(
+                                 R"({"query":"x","subject":"x","relation":"beside","target":"",)"
+                                 R"("matches":[],"candidates":[]})"),
+                             schema)
+                   .empty());
 }
 
 TEST(Schemas, EvalOutputs) {

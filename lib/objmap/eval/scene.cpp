@@ -15,155 +15,25 @@
 
 namespace objmap::eval {
 
-// ---- reading
-// ------------------------------------------------------------------------------------
-
-namespace {
-
-using nlohmann::json;
-
-// Which file is read: the messages say what was expected.
-struct SceneFile {
-  std::string path;
-  std::string expected;  // "objects.json of an objmap fuse that estimates the scene ..."
-};
-
-const json& need(const json& j, const std::string& key, const std::string& where,
-                 const SceneFile& file) {
-  if (!j.is_object() || !j.contains(key))
-    throw InputError(where, "missing field '" + key + "'; expected " + file.expected);
-  return j[key];
-}
-
-Vec3 read_vec3(const json& v, const std::string& where) {
-  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
-    throw InputError(where, "expected [x, y, z], got " + v.dump());
-  return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-}
-
-double read_number(const json& v, const std::string& where) {
-  if (!v.is_number()) throw InputError(where, "expected a number, got " + v.dump());
-  return v.get<double>();
-}
-
-int read_id(const json& v, const std::string& where) {
-  if (!v.is_number_integer()) throw InputError(where, "expected an integer id, got " + v.dump());
-  return v.get<int>();
-}
-
-std::string read_label(const json& j, const std::string& where) {
-  if (!j.contains("label")) return "";
-  if (!j["label"].is_string())
-    throw InputError(where + ".label", "expected a string, got " + j["label"].dump());
-  return j["label"].get<std::string>();
-}
-
-Vec3 read_up(const json& doc, const SceneFile& file) {
-  const Vec3 up = read_vec3(need(doc, "up_in_world", file.path, file), file.path + ": up_in_world");
-  if (!(up.norm() > 1e-9) || !up.allFinite())
-    throw InputError(file.path + ": up_in_world", "is a zero vector; expected a unit vector");
-  return up.normalized();
-}
-
-SceneSurface read_surface(const json& s, const std::string& where, const SceneFile& file) {
-  SceneSurface out;
-  out.id = read_id(need(s, "id", where, file), where + ".id");
-  out.label = read_label(s, where);
-  out.height_m = read_number(need(s, "height_m", where, file), where + ".height_m");
-  out.center = read_vec3(need(s, "center", where, file), where + ".center");
-  if (s.contains("outline")) {
-    const json& outline = s["outline"];
-    if (!outline.is_array()) throw InputError(where + ".outline", "expected an array of [x, y, z]");
-    for (std::size_t k = 0; k < outline.size(); ++k)
-      out.outline.push_back(read_vec3(outline[k], where + ".outline[" + std::to_string(k) + "]"));
-  }
-  if (s.contains("area_m2")) out.area_m2 = read_number(s["area_m2"], where + ".area_m2");
-  if (s.contains("object")) out.object_id = read_id(s["object"], where + ".object");
-  return out;
-}
-
-std::optional<OnRelation> read_on(const json& on, const std::string& where, const SceneFile& file) {
-  if (on.is_null()) return std::nullopt;
-  const json& kind = need(on, "kind", where, file);
-  OnRelation r;
-  if (kind == "surface")
-    r.kind = OnRelation::Kind::kSurface;
-  else if (kind == "object")
-    r.kind = OnRelation::Kind::kObject;
-  else
-    throw InputError(where + ".kind", "is " + kind.dump() + "; expected \"surface\" or \"object\"");
-  r.id = read_id(need(on, "id", where, file), where + ".id");
-  r.label = read_label(on, where);
-  return r;
-}
-
-json parse_file(const SceneFile& file) {
-  std::ifstream in(file.path);
-  if (!in) throw InputError(file.path, "cannot open; expected " + file.expected);
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.path, std::string("malformed JSON: ") + e.what());
-  }
-}
-
-// `on_path`: where each object keeps its relation ({"relations", "on"} or {"on"}).
-SceneDescription read_scene(const SceneFile& file, const std::vector<std::string>& on_path) {
-  const json doc = parse_file(file);
-  SceneDescription scene;
-  scene.source = file.path;
-  scene.up = read_up(doc, file);
-  const json& surfaces = need(doc, "surfaces", file.path, file);
-  if (!surfaces.is_array()) throw InputError(file.path + ": surfaces", "expected an array");
-  std::set<int> ids;
-  for (std::size_t i = 0; i < surfaces.size(); ++i) {
-    const std::string where = file.path + ": surfaces[" + std::to_string(i) + "]";
-    scene.surfaces.push_back(read_surface(surfaces[i], where, file));
-    if (!ids.insert(scene.surfaces.back().id).second)
-      throw InputError(where + ".id", "appears twice; expected unique surface ids");
-  }
-  const json& objects = need(doc, "objects", file.path, file);
-  if (!objects.is_array()) throw InputError(file.path + ": objects", "expected an array");
-  for (std::size_t i = 0; i < objects.size(); ++i) {
-    std::string where = file.path + ": objects[" + std::to_string(i) + "]";
-    const int id = read_id(need(objects[i], "id", where, file), where + ".id");
-    const json* at = &objects[i];
-    for (const std::string& key : on_path) {
-      at = &need(*at, key, where, file);
-      where += "." + key;
-    }
-    scene.on[id] = read_on(*at, where, file);
-  }
-  return scene;
-}
-
-}  // namespace
-
-SceneDescription read_map_scene(const std::filesystem::path& objects_json) {
-  return read_scene({objects_json.string(),
-                     "objects.json of an objmap fuse that estimates the scene (up_in_world, "
-                     "surfaces, objects[].relations; schemas/objects.schema.json)"},
-                    {"relations", "on"});
-}
-
-SceneDescription read_gt_scene(const std::filesystem::path& objects_gt_json) {
-  return read_scene({objects_gt_json.string(),
-                     "objects_gt.json of objmap synth with up_in_world, surfaces and objects[].on "
-                     "(schemas/objects_gt.schema.json)"},
-                    {"on"});
-}
-
 // ---- frames
 // -------------------------------------------------------------------------------------
 
 SceneDescription transform_scene(const SceneDescription& scene, const Similarity& t) {
   SceneDescription out = scene;
   out.up = (t.rotation * scene.up).normalized();
+  // A rotation that still takes the new up to +z.
+  out.gravity_from_world = scene.gravity_from_world * t.rotation.transpose();
   for (SceneSurface& s : out.surfaces) {
     s.center = t * s.center;
     for (Vec3& corner : s.outline) corner = t * corner;
     s.height_m = t.scale * s.height_m + out.up.dot(t.translation);
     s.area_m2 *= t.scale * t.scale;
+  }
+  for (io::SceneObject& o : out.objects) {
+    o.position = t * o.position;
+    if (o.on) o.on->gap_m *= t.scale;
+    for (auto* list : {&o.near, &o.above, &o.under})
+      for (auto& [id, figure] : *list) figure *= t.scale;
   }
   return out;
 }
@@ -252,8 +122,8 @@ bool relation_correct(const OnRelation& map_on, const OnRelation& gt_on, const R
   const auto gt_it = c.gt_surfaces.find(gt_on.id);
   const SceneSurface* gt_surface = gt_it == c.gt_surfaces.end() ? nullptr : gt_it->second;
   if (map_on.kind == OnRelation::Kind::kObject)  // a seat: the chair it belongs to
-    return gt_surface && gt_surface->object_id > 0 &&
-           lookup(c.map_object_of_gt, gt_surface->object_id) == map_on.id;
+    return gt_surface && gt_surface->object && *gt_surface->object > 0 &&
+           lookup(c.map_object_of_gt, *gt_surface->object) == map_on.id;
   if (lookup(c.map_surface_of_gt, gt_on.id) == map_on.id) return true;
   const std::string gt_label = gt_surface ? gt_surface->label : gt_on.label;
   const auto map_it = c.map_surfaces.find(map_on.id);
@@ -263,8 +133,8 @@ bool relation_correct(const OnRelation& map_on, const OnRelation& gt_on, const R
 }
 
 std::optional<OnRelation> on_of(const SceneDescription& scene, int object_id) {
-  const auto it = scene.on.find(object_id);
-  return it == scene.on.end() ? std::nullopt : it->second;
+  const io::SceneObject* o = scene.object(object_id);
+  return o ? o->on : std::nullopt;
 }
 
 RelationScores score_relations(const std::vector<RelationCheck>& checks,

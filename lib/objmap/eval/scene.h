@@ -10,6 +10,7 @@
 #include "objmap/eval/objects.h"
 #include "objmap/eval/stats.h"
 #include "objmap/io/objects_json.h"
+#include "objmap/io/scene_json.h"
 
 // Evaluation of the scene structure of an object map against the ground truth of `objmap synth`
 // (issue #19): the up direction of the world, the horizontal support surfaces (floor, table tops,
@@ -17,40 +18,15 @@
 // `eval objects` matches them (evaluate_objects).
 namespace objmap::eval {
 
-// What an object rests on: a surface (id of a surface of the same file) or an object (its id).
-struct OnRelation {
-  enum class Kind { kSurface, kObject };
-  Kind kind = Kind::kSurface;
-  int id = 0;
-  std::string label;  // the surface's label or the object's class ("" when the file gives none)
-};
-
-struct SceneSurface {
-  int id = 0;
-  std::string label;  // "floor", "table", "seat" or "surface"
-  double height_m = 0.0;
-  Vec3 center = Vec3::Zero();
-  std::vector<Vec3> outline;  // corners in cyclic order (may be empty in a map)
-  double area_m2 = 0.0;
-  int object_id = 0;  // ground truth: the object a seat belongs to (0: none)
-};
-
-// The scene fields of objects.json (a map) or objects_gt.json (the ground truth).
-struct SceneDescription {
-  std::string source;  // the file, for messages and reports
-  Vec3 up = Vec3::UnitZ();
-  std::vector<SceneSurface> surfaces;
-  std::map<int, std::optional<OnRelation>> on;  // by object id; nullopt: rests on nothing known
-};
-
-// RUN/objects.json of `objmap fuse`: up_in_world, surfaces[] and objects[].relations.on. Throws
-// InputError naming the file and the missing or malformed field.
-SceneDescription read_map_scene(const std::filesystem::path& objects_json);
-// objects_gt.json of `objmap synth`: up_in_world, surfaces[] and objects[].on.
-SceneDescription read_gt_scene(const std::filesystem::path& objects_gt_json);
+// The scene of a map (objects.json) or of the ground truth (objects_gt.json): io/scene_json.h
+// reads both (io::read_map_scene, io::read_gt_scene).
+using SceneDescription = io::SceneDescription;
+using SceneSurface = io::SceneSurface;
+using OnRelation = io::SceneRelation;
 
 // Maps a map's scene from its frame into another by `target_from_source`: points, directions,
-// surface heights (h' = s·h + up'·t) and outlines (objects: eval::transform_objects, objects.h).
+// surface heights (h' = s·h + up'·t), outlines, the objects' positions and the relations' figures
+// (objects' boxes: eval::transform_objects, objects.h).
 SceneDescription transform_scene(const SceneDescription& scene,
                                  const Similarity& target_from_source);
 

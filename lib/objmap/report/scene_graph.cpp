@@ -19,27 +19,30 @@ struct Node {
 
 // Depth of an object above its surface: 0 on a surface, 1 + its support's depth on an object
 // (cycles and chains longer than 8 stop there).
-int depth_of(const scene::MapObject& o, const scene::MapScene& s, int hops = 0) {
-  if (!o.on || o.on->kind != "object" || hops > 8) return 0;
-  const scene::MapObject* below = s.object(o.on->id);
+int depth_of(const io::SceneObject& o, const io::SceneDescription& s, int hops = 0) {
+  if (!o.on || o.on->kind != io::SceneRelation::Kind::kObject || hops > 8) return 0;
+  const io::SceneObject* below = s.object(o.on->id);
   return below ? 1 + depth_of(*below, s, hops + 1) : 0;
 }
 
 // The surface an object's chain of supports ends on; -1 when none.
-int base_surface(const scene::MapObject& o, const scene::MapScene& s, int hops = 0) {
+int base_surface(const io::SceneObject& o, const io::SceneDescription& s, int hops = 0) {
   if (!o.on || hops > 8) return -1;
-  if (o.on->kind == "surface") return o.on->id;
-  const scene::MapObject* below = s.object(o.on->id);
+  if (o.on->kind == io::SceneRelation::Kind::kSurface) return o.on->id;
+  const io::SceneObject* below = s.object(o.on->id);
   return below ? base_surface(*below, s, hops + 1) : -1;
 }
 
-std::string rect(const Node& n, const std::string& fill, const std::string& label) {
+// A node's box and label; `node` ("object 3", "surface 1") names it for programs (data-node).
+std::string rect(const Node& n, const std::string& node, const std::string& fill,
+                 const std::string& label) {
   char buf[512];
   std::snprintf(buf, sizeof buf,
-                "<rect x=\"%.1f\" y=\"%.1f\" width=\"%d\" height=\"%d\" rx=\"5\" fill=\"%s\" "
-                "stroke=\"#333\"/><text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" "
+                "<rect data-node=\"%s\" x=\"%.1f\" y=\"%.1f\" width=\"%d\" height=\"%d\" rx=\"5\" "
+                "fill=\"%s\" stroke=\"#333\"/><text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" "
                 "text-anchor=\"middle\" font-family=\"sans-serif\">",
-                n.x - kNodeW / 2.0, n.y - kNodeH / 2.0, kNodeW, kNodeH, fill.c_str(), n.x, n.y + 4);
+                node.c_str(), n.x - kNodeW / 2.0, n.y - kNodeH / 2.0, kNodeW, kNodeH, fill.c_str(),
+                n.x, n.y + 4);
   return buf + xml_escape(label) + "</text>\n";
 }
 
@@ -52,10 +55,10 @@ std::string colour(const std::string& class_name) {
 
 }  // namespace
 
-std::string scene_graph_svg(const scene::MapScene& s) {
+std::string scene_graph_svg(const io::SceneDescription& s) {
   if (s.objects.empty()) return "";
   // Columns: one per surface (floor first, then by height), then one for unsupported objects.
-  std::vector<const scene::MapSurface*> surfaces;
+  std::vector<const io::SceneSurface*> surfaces;
   for (const auto& f : s.surfaces) surfaces.push_back(&f);
   std::stable_sort(surfaces.begin(), surfaces.end(), [](const auto* a, const auto* b) {
     return (a->label == "floor") != (b->label == "floor") ? a->label == "floor"
@@ -66,7 +69,7 @@ std::string scene_graph_svg(const scene::MapScene& s) {
     column_of_surface[surfaces[i]->id] = static_cast<int>(i);
   const int free_column = static_cast<int>(surfaces.size());
   // Objects per (column, depth), in id order.
-  std::map<std::pair<int, int>, std::vector<const scene::MapObject*>> cells;
+  std::map<std::pair<int, int>, std::vector<const io::SceneObject*>> cells;
   int max_depth = 0;
   for (const auto& o : s.objects) {
     const int base = base_surface(o, s);
@@ -94,24 +97,25 @@ std::string scene_graph_svg(const scene::MapScene& s) {
   std::string body;
   for (const auto& o : s.objects) {  // edges first, under the boxes
     if (!o.on) continue;
-    const auto& to = o.on->kind == "surface" ? surface_node : object_node;
+    const auto& to = o.on->kind == io::SceneRelation::Kind::kSurface ? surface_node : object_node;
     if (!to.count(o.on->id)) continue;
     const Node a = object_node[o.id], b = to.at(o.on->id);
-    char buf[256];
+    char buf[320];
     std::snprintf(buf, sizeof buf,
-                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#777\" "
-                  "stroke-width=\"1.5\"/>\n",
-                  a.x, a.y + kNodeH / 2.0, b.x, b.y - kNodeH / 2.0);
+                  "<line data-edge=\"on object %d %s %d\" x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" "
+                  "y2=\"%.1f\" stroke=\"#777\" stroke-width=\"1.5\"/>\n",
+                  o.id, o.on->kind == io::SceneRelation::Kind::kSurface ? "surface" : "object",
+                  o.on->id, a.x, a.y + kNodeH / 2.0, b.x, b.y - kNodeH / 2.0);
     body += buf;
   }
   for (const auto* f : surfaces) {
     char label[128];
     std::snprintf(label, sizeof label, "S%d %s %.2f m", f->id, f->label.c_str(), f->height_m);
-    body += rect(surface_node[f->id], "#e8e2d0", label);
+    body += rect(surface_node[f->id], "surface " + std::to_string(f->id), "#e8e2d0", label);
   }
   for (const auto& o : s.objects)
-    body +=
-        rect(object_node[o.id], colour(o.class_name), std::to_string(o.id) + " " + o.class_name);
+    body += rect(object_node[o.id], "object " + std::to_string(o.id), colour(o.class_name),
+                 std::to_string(o.id) + " " + o.class_name);
   char head[256];
   std::snprintf(head, sizeof head,
                 "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "

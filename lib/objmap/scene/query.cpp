@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -14,47 +13,12 @@
 namespace objmap::scene {
 namespace {
 
-using nlohmann::json;
+using Kind = io::SceneRelation::Kind;
 
 const char* kGrammar =
     "expected CLASS [on|near|above|under CLASS|floor|table|seat|surface], e.g. \"cup on table\"";
 const std::set<std::string> kSurfaceLabels = {"floor", "table", "seat", "surface"};
 constexpr double kNearSurfaceM = 0.5;  // `near` a surface: within this of its outline
-
-Vec3 vec3(const json& j, const std::string& where) {
-  require(j.is_array() && j.size() == 3 && j[0].is_number() && j[1].is_number() && j[2].is_number(),
-          where, "expected 3 numbers");
-  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-}
-
-const json& field(const json& j, const std::string& key, const std::string& where) {
-  require(j.is_object() && j.contains(key), where + key,
-          "missing; expected an objects.json written by objmap fuse with the scene (up_in_world, "
-          "surfaces, relations)");
-  return j.at(key);
-}
-
-std::vector<std::pair<int, double>> neighbours(const json& list, const char* key) {
-  std::vector<std::pair<int, double>> out;
-  for (const auto& n : list) out.emplace_back(n.at("id").get<int>(), n.at(key).get<double>());
-  return out;
-}
-
-MapObject read_object(const json& o, const std::string& where) {
-  MapObject m;
-  m.id = field(o, "id", where).get<int>();
-  m.class_name = segmentation::canonical_class(field(o, "class", where).get<std::string>());
-  m.position = vec3(field(o, "position", where), where + "position");
-  const json& r = field(o, "relations", where);
-  const json& on = field(r, "on", where + "relations.");
-  if (!on.is_null())
-    m.on = MapRelation{on.at("kind").get<std::string>(), on.at("id").get<int>(),
-                       on.at("label").get<std::string>(), on.at("gap_m").get<double>()};
-  m.near = neighbours(field(r, "near", where + "relations."), "distance_m");
-  m.above = neighbours(field(r, "above", where + "relations."), "gap_m");
-  m.under = neighbours(field(r, "under", where + "relations."), "gap_m");
-  return m;
-}
 
 // Singular forms to try for a (possibly plural) phrase: the last word changed.
 std::vector<std::string> singulars(const std::string& phrase) {
@@ -75,12 +39,54 @@ std::vector<std::string> singulars(const std::string& phrase) {
   return out;
 }
 
+std::string join(std::vector<std::string>::const_iterator begin,
+                 std::vector<std::string>::const_iterator end) {
+  std::string out;
+  for (auto w = begin; w != end; ++w) out += (out.empty() ? "" : " ") + *w;
+  return out;
+}
+
+// The canonical class or surface label (second: true) that `phrase` names, if any.
+std::optional<std::pair<std::string, bool>> lookup(const std::string& phrase, bool surface_ok,
+                                                   const std::set<std::string>& known) {
+  for (const std::string& s : singulars(phrase)) {
+    if (surface_ok && kSurfaceLabels.count(s)) return std::make_pair(s, true);
+    if (known.count(segmentation::canonical_class(s)))
+      return std::make_pair(segmentation::canonical_class(s), false);
+  }
+  return std::nullopt;
+}
+
+// The subject (`surface_ok` false) or the target of a query. Throws naming the word not understood:
+// the one after the longest beginning of `phrase` that names something ("cup beside table":
+// 'beside'; "cup on table please": 'please'), else the phrase.
+std::pair<std::string, bool> resolve_phrase(const std::vector<std::string>& phrase, bool surface_ok,
+                                            const std::set<std::string>& known,
+                                            const std::string& text) {
+  require(!phrase.empty(), "query",
+          "'" + text + "' has no " + (surface_ok ? "target" : "class") + "; " + kGrammar);
+  if (auto found = lookup(join(phrase.begin(), phrase.end()), surface_ok, known)) return *found;
+  for (auto end = phrase.end() - 1; end != phrase.begin(); --end) {
+    const std::string head = join(phrase.begin(), end);
+    if (!lookup(head, surface_ok, known)) continue;
+    if (!surface_ok)
+      throw InputError("query", "'" + *end + "' is not a relation (on|near|above|under) after '" +
+                                    head + "'; " + kGrammar);
+    throw InputError("query", "'" + *end + "' after '" + head +
+                                  "' is not understood (one relation per query); " + kGrammar);
+  }
+  throw InputError("query", "'" + join(phrase.begin(), phrase.end()) +
+                                "' is not a class of COCO-80 or of this map" +
+                                std::string(surface_ok ? " nor floor|table|seat|surface" : "") +
+                                "; " + kGrammar);
+}
+
 std::string describe_support(const MapObject& o, const MapScene& scene) {
   if (!o.on) return "on nothing found";
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(3);
-  if (o.on->kind == "surface")
+  if (o.on->kind == Kind::kSurface)
     s << "on surface " << o.on->id << " (" << o.on->label << ")";
   else
     s << "on object " << o.on->id << " (" << o.on->label << ")";
@@ -94,7 +100,7 @@ std::vector<const MapSurface*> supporting_surfaces(const MapObject& o, const Map
   std::vector<const MapSurface*> out;
   const MapObject* cur = &o;
   for (int hop = 0; hop < 8 && cur && cur->on; ++hop) {
-    if (cur->on->kind == "surface") {
+    if (cur->on->kind == Kind::kSurface) {
       if (const MapSurface* s = scene.surface(cur->on->id)) out.push_back(s);
       break;
     }
@@ -128,7 +134,7 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
   for (const MapSurface* s : under_it)
     if (label_matches(*s, q.target) &&
         (q.relation == "on" || q.relation == "above" || q.relation == "near"))
-      return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, s->id};
+      return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, std::nullopt};
   for (const MapSurface& s : scene.surfaces) {
     if (!label_matches(s, q.target)) continue;
     const auto [outside, height] = relative_to(s, o.position, scene);
@@ -137,13 +143,13 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
     why.precision(3);
     if (q.relation == "near" && outside <= kNearSurfaceM) {
       why << outside << " m beside surface " << s.id << " (" << s.label << ")";
-      return QueryMatch{&o, why.str(), outside, s.id};
+      return QueryMatch{&o, why.str(), outside, std::nullopt};
     }
     if ((q.relation == "under" && outside == 0.0 && height < 0.0) ||
         (q.relation == "above" && outside == 0.0 && height > 0.0)) {
       why << std::fabs(height) << " m " << q.relation << " surface " << s.id << " (" << s.label
           << ")";
-      return QueryMatch{&o, why.str(), std::fabs(height), s.id};
+      return QueryMatch{&o, why.str(), std::fabs(height), std::nullopt};
     }
   }
   return std::nullopt;
@@ -152,14 +158,14 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
 std::optional<QueryMatch> match_object(const MapObject& o, const Query& q, const MapScene& scene) {
   const auto is_target = [&](int id) {
     const MapObject* t = scene.object(id);
-    return t && t->class_name == q.target;
+    return t && segmentation::canonical_class(t->class_name) == q.target;
   };
   std::ostringstream why;
   why.setf(std::ios::fixed);
   why.precision(3);
   if (q.relation == "on" && o.on) {
-    const MapSurface* s = o.on->kind == "surface" ? scene.surface(o.on->id) : nullptr;
-    if ((o.on->kind == "object" && is_target(o.on->id)) ||
+    const MapSurface* s = o.on->kind == Kind::kSurface ? scene.surface(o.on->id) : nullptr;
+    if ((o.on->kind == Kind::kObject && is_target(o.on->id)) ||
         (s && s->object && is_target(*s->object)))
       return QueryMatch{&o, describe_support(o, scene), o.on->gap_m, std::nullopt};
   }
@@ -177,64 +183,19 @@ std::optional<QueryMatch> match_object(const MapObject& o, const Query& q, const
 }
 
 std::optional<QueryMatch> match(const MapObject& o, const Query& q, const MapScene& scene) {
-  if (q.relation.empty()) {
+  std::optional<QueryMatch> m;
+  if (q.relation.empty())
+    m = QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, std::nullopt};
+  else
+    m = q.target_is_surface ? match_surface(o, q, scene) : match_object(o, q, scene);
+  if (m) {  // whatever the relation: the surface it stands on
     const auto surfaces = supporting_surfaces(o, scene);
-    return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0,
-                      surfaces.empty() ? std::nullopt : std::optional<int>(surfaces[0]->id)};
+    m->surface = surfaces.empty() ? std::nullopt : std::optional<int>(surfaces[0]->id);
   }
-  return q.target_is_surface ? match_surface(o, q, scene) : match_object(o, q, scene);
+  return m;
 }
 
 }  // namespace
-
-const MapObject* MapScene::object(int id) const {
-  for (const auto& o : objects)
-    if (o.id == id) return &o;
-  return nullptr;
-}
-
-const MapSurface* MapScene::surface(int id) const {
-  for (const auto& s : surfaces)
-    if (s.id == id) return &s;
-  return nullptr;
-}
-
-MapScene read_map_scene(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  require(static_cast<bool>(in), file.string(), "cannot be read; expected RUN/objects.json");
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("not valid JSON (") + e.what() + ")");
-  }
-  const std::string where = file.string() + ": ";
-  MapScene scene;
-  try {
-    scene.up = vec3(field(doc, "up_in_world", where), where + "up_in_world").normalized();
-    const json& g = field(doc, "gravity_from_world", where);
-    require(g.is_array() && g.size() == 9, where + "gravity_from_world", "expected 9 numbers");
-    for (int i = 0; i < 9; ++i) scene.gravity_from_world(i / 3, i % 3) = g[i].get<double>();
-    for (const auto& s : field(doc, "surfaces", where)) {
-      MapSurface m;
-      m.id = s.at("id").get<int>();
-      m.label = s.at("label").get<std::string>();
-      m.height_m = s.at("height_m").get<double>();
-      m.center = vec3(s.at("center"), where + "surfaces.center");
-      for (const auto& p : s.at("outline"))
-        m.outline.push_back(vec3(p, where + "surfaces.outline"));
-      if (s.contains("object")) m.object = s.at("object").get<int>();
-      scene.surfaces.push_back(std::move(m));
-    }
-    for (const auto& o : field(doc, "objects", where))
-      scene.objects.push_back(
-          read_object(o, where + "objects[" + std::to_string(scene.objects.size()) + "]."));
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("unexpected content (") + e.what() +
-                                        "); expected objects.json of objmap fuse");
-  }
-  return scene;
-}
 
 Query parse_query(const std::string& text, const MapScene& scene) {
   Query q;
@@ -246,20 +207,9 @@ Query parse_query(const std::string& text, const MapScene& scene) {
   require(!words.empty(), "query", std::string("empty; ") + kGrammar);
   std::set<std::string> known(segmentation::coco80_names().begin(),
                               segmentation::coco80_names().end());
-  for (const auto& o : scene.objects) known.insert(o.class_name);
+  for (const auto& o : scene.objects) known.insert(segmentation::canonical_class(o.class_name));
   const auto resolve = [&](const std::vector<std::string>& phrase, bool surface_ok) {
-    std::string joined;
-    for (const auto& w : phrase) joined += (joined.empty() ? "" : " ") + w;
-    require(!joined.empty(), "query",
-            "'" + text + "' has no " + (surface_ok ? "target" : "class") + "; " + kGrammar);
-    for (const std::string& s : singulars(joined)) {
-      if (surface_ok && kSurfaceLabels.count(s)) return std::make_pair(s, true);
-      if (known.count(segmentation::canonical_class(s)))
-        return std::make_pair(segmentation::canonical_class(s), false);
-    }
-    throw InputError("query", "'" + joined + "' is not a class of COCO-80 or of this map" +
-                                  std::string(surface_ok ? " nor floor|table|seat|surface" : "") +
-                                  "; " + kGrammar);
+    return resolve_phrase(phrase, surface_ok, known, text);
   };
   const auto rel = std::find_if(words.begin(), words.end(), [](const std::string& w) {
     return w == "on" || w == "near" || w == "above" || w == "under";
@@ -276,15 +226,21 @@ Query parse_query(const std::string& text, const MapScene& scene) {
 
 QueryResult run_query(const Query& q, const MapScene& scene) {
   QueryResult result;
+  const auto of_subject = [&](const MapObject& o) {
+    return segmentation::canonical_class(o.class_name) == q.subject;
+  };
   for (const auto& o : scene.objects)
-    if (o.class_name == q.subject)
+    if (of_subject(o))
       if (auto m = match(o, q, scene)) result.matches.push_back(*m);
-  std::stable_sort(
-      result.matches.begin(), result.matches.end(),
-      [](const QueryMatch& a, const QueryMatch& b) { return a.distance_m < b.distance_m; });
+  // Closest first: a gap of -8 mm (the bottom hidden below the support's top) is no closer than
+  // one of +5 mm.
+  std::stable_sort(result.matches.begin(), result.matches.end(),
+                   [](const QueryMatch& a, const QueryMatch& b) {
+                     return std::fabs(a.distance_m) < std::fabs(b.distance_m);
+                   });
   if (!result.matches.empty()) return result;
   for (const auto& o : scene.objects)
-    if (o.class_name == q.subject) result.candidates.push_back(*match(o, Query{}, scene));
+    if (of_subject(o)) result.candidates.push_back(*match(o, Query{}, scene));
   if (result.candidates.empty() && !q.relation.empty())
     for (const auto& o : scene.objects)
       if (auto m = match(o, q, scene)) result.candidates.push_back(*m);
