@@ -26,6 +26,9 @@ echo
 echo "== objmap eval objects --map $run/objects.json --gt-objects $scene/objects_gt.json"
 "$objmap" eval objects --map "$run/objects.json" --gt-objects "$scene/objects_gt.json"
 echo
+echo "== objmap query --run $run \"cup on table\"  (the scene: up, surfaces, what stands on what)"
+"$objmap" query --run "$run" "cup on table"
+echo
 echo "== objmap fuse --trajectory $scene/estimated.txt --correct-poses --out $corrected  (the drifting estimate)"
 "$objmap" fuse --dataset "$scene" --trajectory "$scene/estimated.txt" \
   --segmentation "$scene/segmentation" --out "$corrected" --correct-poses 2>/dev/null |
