@@ -16,6 +16,7 @@
 #include "objmap/eval/objects.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/io/atomic.h"
+#include "objmap/io/json_file.h"
 #include "objmap/io/objects_json.h"
 #include "objmap/io/ply.h"
 #include "objmap/io/png_encode.h"
@@ -51,15 +52,7 @@ const Rgb kGtColor{70, 70, 70};
 const Rgb kEstColor{20, 20, 20};
 const Rgb kCorrectedColor{150, 50, 175};
 
-json read_json(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot open");
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
-  }
-}
+json read_json(const fs::path& file) { return io::read_json_file(file, "cannot open"); }
 
 // The pictures are CV_8UC3; objmap's PNG encoder (also that of `objmap synth`) writes them.
 std::string png_bytes(const cv::Mat& image) {

@@ -1,6 +1,7 @@
 // Pose correction on small constructed problems whose answer is known.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -107,6 +108,43 @@ TEST(AlignRigid, RecoversAKnownTransformExactly) {
   const Pose three =
       align_rigid({source.begin(), source.begin() + 3}, {target.begin(), target.begin() + 3});
   EXPECT_LT((three.matrix() - truth.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// align_rigid is Umeyama's method with weights: without weights it gives Eigen::umeyama's answer,
+// and with whole weights that of Eigen::umeyama on each pair repeated as often as its weight.
+TEST(AlignRigid, IsEigenUmeyamaWithWeights) {
+  const Pose truth = make_pose(-1.1, 0.4, Vec3(2.0, 0.3, -0.7));
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Vec3> source, target;
+  for (int i = 0; i < 12; ++i) {
+    source.emplace_back(0.3 * i - 1.0, std::sin(1.3 * i), 0.1 * i * i - 2.0);
+    target.push_back(truth * source.back() + Vec3(noise(rng), noise(rng), noise(rng)));
+  }
+  const auto umeyama = [](const std::vector<Vec3>& s, const std::vector<Vec3>& t) {
+    Eigen::Matrix3Xd sm(3, s.size()), tm(3, t.size());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      sm.col(static_cast<Eigen::Index>(i)) = s[i];
+      tm.col(static_cast<Eigen::Index>(i)) = t[i];
+    }
+    return Eigen::Matrix4d(Eigen::umeyama(sm, tm, /*with_scaling=*/false));
+  };
+  EXPECT_LT((align_rigid(source, target).matrix() - umeyama(source, target)).cwiseAbs().maxCoeff(),
+            1e-12);
+  std::vector<double> weights;
+  std::vector<Vec3> source_repeated, target_repeated;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    weights.push_back(static_cast<double>(1 + i % 3));
+    for (std::size_t r = 0; r < 1 + i % 3; ++r) {
+      source_repeated.push_back(source[i]);
+      target_repeated.push_back(target[i]);
+    }
+  }
+  EXPECT_LT(
+      (align_rigid(source, target, weights).matrix() - umeyama(source_repeated, target_repeated))
+          .cwiseAbs()
+          .maxCoeff(),
+      1e-12);
 }
 
 TEST(AlignRigid, BadInputSaysWhatIsWrong) {

@@ -20,6 +20,7 @@
 #include "objmap/core/error.h"
 #include "objmap/eval/format.h"
 #include "objmap/eval/json.h"
+#include "objmap/io/json_file.h"
 #include "objmap/io/text_lines.h"
 #include "objmap/segmentation/coco_classes.h"
 
@@ -205,6 +206,10 @@ namespace {
 
 using nlohmann::json;
 
+const char* const kCannotOpenGt =
+    "cannot open; expected objects_gt.json (objmap synth) or a cuboid list "
+    "\"x y z yaw half_x half_y half_z\"";
+
 const json& gt_field(const json& j, const std::string& key, const std::string& where) {
   if (!j.is_object() || !j.contains(key))
     throw InputError(where, "missing field '" + key +
@@ -226,13 +231,7 @@ std::vector<double> gt_numbers(const json& j, const std::string& key, std::size_
 }
 
 std::vector<ReferenceObject> read_objects_gt_json(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
-  }
+  const json doc = io::read_json_file(file, kCannotOpenGt);
   const json& objects = gt_field(doc, "objects", file.string());
   if (!objects.is_array()) throw InputError(file.string() + ": objects", "expected an array");
   std::vector<ReferenceObject> out;
@@ -319,10 +318,7 @@ std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path
 std::vector<ReferenceObject> read_objects_gt(const std::filesystem::path& file,
                                              const std::string& default_class) {
   std::ifstream in(file);
-  if (!in)
-    throw InputError(file.string(),
-                     "cannot open; expected objects_gt.json (objmap synth) or a cuboid list "
-                     "\"x y z yaw half_x half_y half_z\"");
+  if (!in) throw InputError(file.string(), kCannotOpenGt);
   require(!default_class.empty(), "--gt-class", "must not be empty");
   // Detect by content: JSON starts with '{' (after blanks); anything else is the cuboid text.
   char first = 0;
@@ -560,14 +556,8 @@ double PointCounts::reduction_eq18() const {
 }
 
 PointCounts read_point_counts(const std::filesystem::path& run_json) {
-  std::ifstream in(run_json);
-  if (!in) throw InputError(run_json.string(), "cannot open; expected RUN/run.json of objmap fuse");
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(run_json.string(), std::string("malformed JSON: ") + e.what());
-  }
+  const json doc =
+      io::read_json_file(run_json, "cannot open; expected RUN/run.json of objmap fuse");
   if (!doc.is_object() || !doc.contains("points") || !doc["points"].is_object())
     throw InputError(run_json.string(),
                      "missing object 'points'; expected run.json of objmap fuse "

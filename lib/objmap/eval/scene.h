@@ -13,8 +13,8 @@
 #include "objmap/io/scene_json.h"
 
 // Evaluation of the scene structure of an object map against the ground truth of `objmap synth`
-// (issue #19): the up direction of the world, the horizontal support surfaces (floor, table tops,
-// seats) and each object's `on` relation. The map's objects are matched to the true ones as
+// (docs/scene.md): the up direction of the world, the horizontal support surfaces (floor, table
+// tops, seats) and each object's `on` relation. The map's objects are matched to the true ones as
 // `eval objects` matches them (evaluate_objects).
 namespace objmap::eval {
 

@@ -11,24 +11,16 @@
 #include <nlohmann/json.hpp>
 
 #include "objmap/core/error.h"
-#include "objmap/track/assignment.h"  // header-only Hungarian method (no link dependency)
+#include "objmap/track/assignment.h"  // the Hungarian method
+#include "objmap/track/tracker.h"     // box_iou
 
 namespace objmap::eval {
 
 namespace {
 
-using segmentation::Box;
 using segmentation::Instance;
 using segmentation::Mask;
-
-double box_iou(const Box& a, const Box& b) {
-  const double iw = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
-  const double ih = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
-  if (iw <= 0 || ih <= 0) return 0.0;
-  const double inter = iw * ih;
-  const double uni = a.w * a.h + b.w * b.h - inter;
-  return uni > 0 ? inter / uni : 0.0;
-}
+using track::box_iou;
 
 // A mask with its pixel count and tight pixel bounds [u0, u1) x [v0, v1), for fast IoU.
 struct MaskInfo {

@@ -8,6 +8,27 @@
 
 namespace objmap::geometry {
 
+namespace {
+
+// The box whose axes are the columns of `axes` (a rotation) around the cloud: the points' extent
+// along each axis, measured from `mean`.
+Obb box_along(const Eigen::Matrix3d& axes, const Vec3& mean, const PointCloud& cloud) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
+  Vec3 hi = Vec3::Constant(std::numeric_limits<double>::lowest());
+  for (const Vec3f& p : cloud.points) {
+    const Vec3 local = axes.transpose() * (p.cast<double>() - mean);
+    lo = lo.cwiseMin(local);
+    hi = hi.cwiseMax(local);
+  }
+  Obb box;
+  box.rotation = axes;
+  box.center = mean + axes * ((lo + hi) / 2.0);
+  box.half_extent = (hi - lo) / 2.0;
+  return box;
+}
+
+}  // namespace
+
 Vec3 centroid(const PointCloud& cloud) {
   if (cloud.empty()) return Vec3::Zero();
   Vec3 sum = Vec3::Zero();
@@ -29,8 +50,7 @@ Aabb compute_aabb(const PointCloud& cloud) {
 }
 
 Obb compute_obb(const PointCloud& cloud) {
-  Obb box;
-  if (cloud.empty()) return box;
+  if (cloud.empty()) return Obb();
   const Vec3 mean = centroid(cloud);
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (const Vec3f& p : cloud.points) {
@@ -48,22 +68,11 @@ Obb compute_obb(const PointCloud& cloud) {
     if (axes(k, i) < 0) axes.col(i) = -axes.col(i);
   }
   axes.col(2) = axes.col(0).cross(axes.col(1));  // right-handed
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
-  Vec3 hi = Vec3::Constant(std::numeric_limits<double>::lowest());
-  for (const Vec3f& p : cloud.points) {
-    const Vec3 local = axes.transpose() * (p.cast<double>() - mean);
-    lo = lo.cwiseMin(local);
-    hi = hi.cwiseMax(local);
-  }
-  box.rotation = axes;
-  box.center = mean + axes * ((lo + hi) / 2.0);
-  box.half_extent = (hi - lo) / 2.0;
-  return box;
+  return box_along(axes, mean, cloud);
 }
 
 Obb compute_upright_obb(const PointCloud& cloud, const Vec3& up) {
-  Obb box;
-  if (cloud.empty()) return box;
+  if (cloud.empty()) return Obb();
   const Vec3 mean = centroid(cloud);
   // Any horizontal basis (h0, h1), then the 2x2 covariance of the points in it.
   const Vec3 h0 = up.unitOrthogonal();
@@ -84,17 +93,7 @@ Obb compute_upright_obb(const PointCloud& cloud, const Vec3& up) {
   axes.col(0) = a;
   axes.col(1) = up.cross(a);
   axes.col(2) = up;
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
-  Vec3 hi = Vec3::Constant(std::numeric_limits<double>::lowest());
-  for (const Vec3f& p : cloud.points) {
-    const Vec3 local = axes.transpose() * (p.cast<double>() - mean);
-    lo = lo.cwiseMin(local);
-    hi = hi.cwiseMax(local);
-  }
-  box.rotation = axes;
-  box.center = mean + axes * ((lo + hi) / 2.0);
-  box.half_extent = (hi - lo) / 2.0;
-  return box;
+  return box_along(axes, mean, cloud);
 }
 
 Vec3 percentile_box_centre(const PointCloud& cloud, double q,

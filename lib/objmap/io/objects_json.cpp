@@ -1,8 +1,9 @@
 #include "objmap/io/objects_json.h"
 
+#include "objmap/io/json_file.h"
+
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -59,14 +60,7 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
     throw InputError(file.string(), "is a folder; expected RUN/objects.json of objmap fuse");
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot open; expected RUN/objects.json of objmap fuse");
-  json doc;
-  try {
-    doc = json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
-  }
+  const json doc = read_json_file(file, "cannot open; expected RUN/objects.json of objmap fuse");
   const json& objects = field(doc, "objects", file.string());
   if (!objects.is_array()) throw InputError(file.string() + ": objects", "expected an array");
   std::vector<MappedObject> out;

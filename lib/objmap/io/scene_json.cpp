@@ -1,11 +1,11 @@
 #include "objmap/io/scene_json.h"
 
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <system_error>
 
 #include "objmap/core/error.h"
+#include "objmap/io/json_file.h"
 
 namespace objmap::io {
 
@@ -148,13 +148,7 @@ json parse_file(const SceneFile& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file.path, ec))
     throw InputError(file.path, "is a folder; expected " + file.expected);
-  std::ifstream in(file.path);
-  if (!in) throw InputError(file.path, "cannot open; expected " + file.expected);
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.path, std::string("malformed JSON: ") + e.what());
-  }
+  return read_json_file(file.path, "cannot open; expected " + file.expected);
 }
 
 SceneDescription read_scene(const SceneFile& file) {

@@ -108,12 +108,6 @@ void LineReader::expect_fields(std::size_t count, const std::string& layout) con
                                   std::to_string(count) + ": " + layout);
 }
 
-void LineReader::expect_min_fields(std::size_t count, const std::string& layout) const {
-  if (fields_.size() < count)
-    throw InputError(where(), std::to_string(fields_.size()) + " fields; expected at least " +
-                                  std::to_string(count) + ": " + layout);
-}
-
 double LineReader::number(std::size_t i, const std::string& what) const {
   return parse_double(field(i), where(), what);
 }

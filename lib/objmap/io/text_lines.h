@@ -50,8 +50,6 @@ class LineReader {
   // Throws InputError(where(), "<n> fields; expected <count>: <layout>") unless the line has
   // exactly `count` fields.
   void expect_fields(std::size_t count, const std::string& layout) const;
-  // Same for "at least `count`".
-  void expect_min_fields(std::size_t count, const std::string& layout) const;
   // Field i parsed with parse_double / parse_int, `what` names it in the message ("timestamp").
   double number(std::size_t i, const std::string& what) const;
   std::int64_t integer(std::size_t i, const std::string& what) const;

@@ -1,11 +1,11 @@
 #include "objmap/pipeline/config.h"
 
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
 #include "objmap/core/error.h"
+#include "objmap/io/json_file.h"
 
 namespace objmap::pipeline {
 
@@ -37,15 +37,8 @@ void leaves(const nlohmann::json& j, const std::string& prefix, std::vector<std:
 
 std::vector<std::string> apply_config_file(const fs::path& file,
                                            const std::vector<ConfigField>& fields) {
-  std::ifstream in(file);
-  if (!in)
-    throw InputError(file.string(), "cannot open the config file; expected a readable JSON file");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
-  }
+  const nlohmann::json j =
+      io::read_json_file(file, "cannot open the config file; expected a readable JSON file");
   if (!j.is_object()) throw InputError(file.string(), "expected a JSON object at the top level");
 
   std::set<std::string> known;

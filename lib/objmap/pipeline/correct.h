@@ -13,9 +13,10 @@
 // RUN/objects.json (objects and their per-keyframe observations) and RUN/objects/*.ply (the object
 // models), corrects the keyframe poses of the run's trajectory, spreads the corrections to every
 // pose of it, fuses the map again with the corrected trajectory and writes OUT as a complete run
-// folder plus OUT/trajectory_corrected.txt and OUT/correction.json (schemas/correction.json).
-// The input trajectory is never written. A refused correction still writes OUT: the input poses
-// as trajectory_corrected.txt, the input run's map, and the reason in correction.json.
+// folder plus OUT/trajectory_corrected.txt and OUT/correction.json
+// (schemas/correction.schema.json). The input trajectory is never written. A refused correction
+// still writes OUT: the input poses as trajectory_corrected.txt, the input run's map, and the
+// reason in correction.json.
 namespace objmap::pipeline {
 
 struct CorrectOptions {

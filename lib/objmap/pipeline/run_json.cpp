@@ -1,20 +1,15 @@
 #include "objmap/pipeline/run_json.h"
 
 #include <array>
-#include <fstream>
+
+#include "objmap/io/json_file.h"
 
 namespace objmap::pipeline::run_json {
 
 namespace fs = std::filesystem;
 
 json read_file(const fs::path& file) {
-  std::ifstream in(file);
-  require(static_cast<bool>(in), file.string(), "cannot be read; expected a file of a fuse run");
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw InputError(file.string(), std::string("malformed JSON: ") + e.what());
-  }
+  return io::read_json_file(file, "cannot be read; expected a file of a fuse run");
 }
 
 Vec3 vec3(const json& a, const fs::path& file, const std::string& where) {

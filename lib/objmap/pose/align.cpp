@@ -10,6 +10,12 @@
 
 namespace objmap::pose {
 
+// Why not Eigen::umeyama (Eigen/Geometry, which eval/ate.cpp uses): it takes no weights, and pose
+// correction weighs every pair by its observation's weight over the landmark's variance (eq 20,
+// pose/correct.cpp), so the weighted means and the weighted cross-covariance are written here.
+// Otherwise this is Umeyama's method step for step (the SVD of the cross-covariance, the sign fix
+// S, t = mean_target - R mean_source); the tests check that it gives Eigen::umeyama's answer
+// without weights, and with whole weights that of each pair repeated as often as its weight.
 Pose align_rigid(const std::vector<Vec3>& source, const std::vector<Vec3>& target,
                  const std::vector<double>& weights) {
   require(source.size() == target.size(), "align_rigid",

@@ -35,7 +35,6 @@ class Rng {
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
   // Uniform integer in [0, n).
   int uniform_int(int n) { return static_cast<int>(uniform() * n); }
-  bool bernoulli(double p) { return uniform() < p; }
   // Standard normal (Box-Muller, both values used).
   double normal() {
     if (has_spare_) {

@@ -80,20 +80,27 @@ Trajectory in_first_camera_frame(const Trajectory& trajectory) {
   return out;
 }
 
-segmentation::Segmentation SynthSequence::segmentation() const {
+namespace {
+
+// One of the frames' segmentations (`which`) as one Segmentation.
+segmentation::Segmentation collect(const std::vector<SynthFrame>& frames,
+                                   segmentation::FrameSegmentation SynthFrame::*which,
+                                   const std::string& source) {
   segmentation::Segmentation s;
   s.format = "json";
-  s.source = "synthetic";
-  for (const auto& f : frames) s.frames.push_back(f.segmentation);
+  s.source = source;
+  for (const auto& f : frames) s.frames.push_back(f.*which);
   return s;
 }
 
+}  // namespace
+
+segmentation::Segmentation SynthSequence::segmentation() const {
+  return collect(frames, &SynthFrame::segmentation, "synthetic");
+}
+
 segmentation::Segmentation SynthSequence::segmentation_gt() const {
-  segmentation::Segmentation s;
-  s.format = "json";
-  s.source = "synthetic (exact)";
-  for (const auto& f : frames) s.frames.push_back(f.segmentation_gt);
-  return s;
+  return collect(frames, &SynthFrame::segmentation_gt, "synthetic (exact)");
 }
 
 SynthSequence prepare_sequence(const SynthOptions& options) {
