@@ -192,7 +192,7 @@ class VoxelHashTable {
   }
 
   // Removes `key`'s entry (false: there was none). The capacity stays; no tombstone is left
-  // (backward-shift deletion), so lookups cost what they did. O(the key's cluster).
+  // (backward-shift deletion), so lookups do not probe through erased slots. O(its cluster).
   bool erase(VoxelKey key);
 
   // All keys, ascending.
