@@ -7,7 +7,7 @@ OBJMAP := $(BUILD)/bin/objmap
 
 FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build test demo bench fuzz sanitize format clean
+.PHONY: all deps configure build test demo bench bench-memory fuzz sanitize format clean
 
 all: build
 
@@ -37,6 +37,12 @@ bench: deps build
 	@bash scripts/install-deps.sh --bench
 	@BENCH_COMMAND="make bench$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
 	  bash scripts/bench.sh $(OBJMAP) $(DATA)
+
+# make bench-memory: peak memory and dense-map voxels of objmap fuse on a synthetic scene circled
+# for 300 and 1200 frames, with and without the dense map's pruning (scripts/bench_memory.sh; about
+# 8 minutes on 2 cores the first time, the scenes are kept in out/bench_memory/).
+bench-memory: build
+	@bash scripts/bench_memory.sh $(OBJMAP) out/bench_memory
 
 # make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of fuzz/ (every reader of
 # outside data) for FUZZ_SECONDS under libFuzzer + ASan + UBSan, built with clang in build-fuzz/

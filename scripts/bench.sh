@@ -25,7 +25,8 @@
 # Outputs: out/bench/<sequence>/ (runs, every eval JSON, logs). Environment: BENCH_OUT, BENCH_SEEDS,
 # BENCH_REPEAT (timing rounds, default 3), BENCH_PERF=0 (skip part 2), BENCH_NETWORK=0 (skip the
 # network chain, scripts/network_chain.sh), BENCH_DOC (the Markdown file),
-# BENCH_PROGRAMS=1 (also run every build/bin/bench_* program and print its output).
+# BENCH_PROGRAMS=1 (also run every build/bin/bench_* program and print its output), BENCH_MEMORY=0
+# (skip the memory runs, scripts/bench_memory.sh).
 set -uo pipefail
 objmap=${1:-build/bin/objmap}
 data=${2:-../shared/data}
@@ -297,6 +298,15 @@ if [ "${BENCH_NETWORK:-1}" != 0 ] && [ -f "$data/../models/yolov5n-seg_coco/yolo
   bash "$(dirname "$0")/network_chain.sh" "$objmap" "$data" "$out/network_chain" \
     >"$out/network_chain.md" 2>"$out/network_chain.log" ||
     { tail -n 3 "$out/network_chain.log" >&2; rm -f "$out/network_chain.md"; }
+fi
+
+# 2c. Memory on long runs (scripts/bench_memory.sh): peak RSS and dense voxels of a synthetic scene
+#     circled for 300 and 1200 frames; printed and kept in $out/memory.txt (docs/benchmarks.md,
+#     "Memory on long runs", is written by hand from it). BENCH_MEMORY=0 skips it (~8 minutes).
+if [ "${BENCH_MEMORY:-1}" != 0 ]; then
+  step "memory: objmap fuse at 300 and 1200 frames of a synthetic orbit (scripts/bench_memory.sh)"
+  bash "$(dirname "$0")/bench_memory.sh" "$objmap" "$out/memory" >"$out/memory.txt" \
+    2>"$out/memory.log" && cat "$out/memory.txt" >&2 || tail -n 3 "$out/memory.log" >&2
 fi
 
 if [ "${BENCH_PROGRAMS:-0}" = 1 ]; then

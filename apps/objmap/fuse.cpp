@@ -52,8 +52,11 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
     return before > 0 ? 100.0 * (1.0 - after / before) : 0.0;
   };
   if (options.dense_map)
-    std::printf("\npoints      dense: %llu back-projected -> %zu in the map (1 voxel = 1 point)\n",
-                static_cast<unsigned long long>(r.dense_points_raw), r.dense_points_map);
+    std::printf(
+        "\npoints      dense: %llu back-projected -> %zu in the map (1 voxel = 1 point; %llu noise "
+        "voxels pruned)\n",
+        static_cast<unsigned long long>(r.dense_points_raw), r.dense_points_map,
+        static_cast<unsigned long long>(r.dense_voxels_pruned));
   else
     std::printf("\npoints      dense: none (--dense-map false)\n");
   std::printf("            objects: %zu -> %zu voxel-filtered -> %zu outlier-filtered (-%.1f%%)\n",

@@ -30,5 +30,39 @@ TEST(VoxelHashTable, GrowsAndFindsEveryKey) {
   EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end()));
 }
 
+TEST(VoxelHashTable, EraseKeepsEveryOtherKeyFindable) {
+  // A table at its fullest (5/8), so with long clusters: every third key erased, the rest still
+  // found with their values, the erased ones not; inserting again reuses the slots.
+  VoxelHashTable<int> table;
+  const int n = 640;  // 640 of 1024 slots
+  for (int i = 0; i < n; ++i) table[pack_voxel(i, -i, 3)] = i;
+  ASSERT_EQ(table.capacity(), 1024u);
+  std::size_t erased = 0;
+  for (int i = 0; i < n; i += 3) erased += table.erase(pack_voxel(i, -i, 3));
+  EXPECT_EQ(erased, 214u);
+  EXPECT_FALSE(table.erase(pack_voxel(0, 0, 3)));  // erased already
+  EXPECT_EQ(table.size(), static_cast<std::size_t>(n) - 214u);
+  EXPECT_EQ(table.capacity(), 1024u);
+  for (int i = 0; i < n; ++i) {
+    const int* v = table.find(pack_voxel(i, -i, 3));
+    if (i % 3 == 0) {
+      EXPECT_EQ(v, nullptr) << i;
+    } else {
+      ASSERT_NE(v, nullptr) << i;
+      EXPECT_EQ(*v, i);
+    }
+  }
+  std::size_t visited = 0;
+  table.for_each([&](VoxelKey, int v) { visited += v % 3 != 0; });
+  EXPECT_EQ(visited, table.size());
+  for (int i = 0; i < n; i += 3) table[pack_voxel(i, -i, 3)] = -i;
+  EXPECT_EQ(table.size(), static_cast<std::size_t>(n));
+  EXPECT_EQ(table.capacity(), 1024u);
+  EXPECT_EQ(*table.find(pack_voxel(3, -3, 3)), -3);
+  for (int i = 0; i < n; ++i) EXPECT_TRUE(table.erase(pack_voxel(i, -i, 3)));
+  EXPECT_TRUE(table.empty());
+  EXPECT_EQ(table.find(pack_voxel(1, -1, 3)), nullptr);
+}
+
 }  // namespace
 }  // namespace objmap::geometry

@@ -298,6 +298,41 @@ TEST(FuseSynthetic, IdenticalOutputsForAnyThreadCount) {
   }
 }
 
+TEST(FuseSynthetic, DensePruningDropsNoiseVoxelsTheSameForAnyThreadCount) {
+  // --dense-prune-every 4: the dense map loses voxels (run.json counts them), is identical for 1
+  // and 3 threads (the prunes fall between the same keyframes), and the objects keep their points.
+  const SceneRun& r = default_run();
+  ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
+  TempDir dir;
+  std::string dense;
+  for (const char* threads : {"1", "3"}) {
+    const fs::path out = dir.path() / threads;
+    const auto f = run_objmap(
+        fuse_args(r.scene, out.string(), {"--dense-prune-every", "4", "--threads", threads}));
+    ASSERT_EQ(f.exit_code, 0) << f.err;
+    const auto run = read_json(out / "run.json");
+    EXPECT_TRUE(validate_json(run, load_schema("run.schema.json")).empty());
+    const auto before = read_json(r.out / "run.json");
+    const std::size_t pruned = run["points"]["dense_pruned"].get<std::size_t>();
+    EXPECT_GT(pruned, 0u);
+    EXPECT_LT(run["points"]["dense_map"].get<std::size_t>(),
+              before["points"]["dense_map"].get<std::size_t>());
+    EXPECT_EQ(run["points"]["dense_back_projected"], before["points"]["dense_back_projected"]);
+    EXPECT_EQ(run["points"]["objects_raw"], before["points"]["objects_raw"]);
+    EXPECT_EQ(run["options"]["map"]["prune_every"].get<int>(), 4);
+    const auto a = read_json(r.out / "objects.json"), b = read_json(out / "objects.json");
+    ASSERT_EQ(a["objects"].size(), b["objects"].size());
+    for (std::size_t i = 0; i < a["objects"].size(); ++i)
+      for (const char* key : {"id", "class", "centroid", "points", "observations"})
+        EXPECT_EQ(a["objects"][i][key], b["objects"][i][key]) << key;
+    const std::string ply = read_text(out / "map_dense.ply");
+    if (dense.empty())
+      dense = ply;
+    else
+      EXPECT_TRUE(ply == dense) << "map_dense.ply differs between 1 and 3 threads";
+  }
+}
+
 TEST(FuseSynthetic, WithoutTheDenseMapTheObjectsAreTheSame) {
   // --dense-map false: no map_dense.ply / map_semantic.ply, every object cloud byte-identical; in
   // objects.json the same objects with the same points (the up direction, so the boxes, come from

@@ -183,27 +183,6 @@ PointCloud voxel_nearest_centre(const PointCloud& cloud, double voxel_m,
   return out;
 }
 
-namespace {
-
-// Packed-key offsets of the 27 voxels of a 3×3×3 neighbourhood (the packed fields never wrap inside
-// the key range, so adding the offset moves each coordinate by -1, 0 or +1).
-const std::array<VoxelKey, 27>& neighbourhood_offsets() {
-  static const std::array<VoxelKey, 27> offsets = [] {
-    std::array<VoxelKey, 27> o{};
-    int n = 0;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz)
-          o[n++] = static_cast<VoxelKey>(static_cast<std::int64_t>(dx) * (std::int64_t{1} << 42) +
-                                         static_cast<std::int64_t>(dy) * (std::int64_t{1} << 21) +
-                                         static_cast<std::int64_t>(dz));
-    return o;
-  }();
-  return offsets;
-}
-
-}  // namespace
-
 struct ObjectMap::Object {
   int id = -1;
   bool alive = true;
@@ -234,7 +213,7 @@ struct ObjectMap::Object {
   explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
   // Marks the neighbourhoods of `keys` (voxels new to this object) in `near`.
   void dilate(const std::vector<VoxelKey>& keys) {
-    const auto& offsets = neighbourhood_offsets();
+    const auto& offsets = geometry::neighbourhood_offsets();
     near.reserve(near.size() + keys.size() * 4);
     // The 27 slots of a key two keys ahead are prefetched, so that the cache misses of a large
     // table overlap (the slots, not the values, depend on the order: the table ends the same).
@@ -728,7 +707,7 @@ double ObjectMap::supported_share(const Object& a, const Object& b) const {
   // what its masks bled onto in a few views (a mouse beside a keyboard's box).
   const double need =
       std::min(255.0, std::max(1.0, options_.confusion_min_support * b.observations));
-  const auto& offsets = neighbourhood_offsets();
+  const auto& offsets = geometry::neighbourhood_offsets();
   const int reach = options_.overlap_tolerance_voxels;
   std::size_t shared = 0;
   a.voxels.for_each([&](VoxelKey key, const VoxelData&) {

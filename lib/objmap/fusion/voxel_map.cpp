@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "objmap/core/error.h"
+#include "objmap/core/parallel.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/geometry/voxel_key_sse.h"
 
@@ -289,6 +290,46 @@ void VoxelMap::reset() {
   for (Table& t : shards_) t.reset();
   points_inserted_ = 0;
   points_dropped_ = 0;
+  for (auto& keys : young_) keys.clear();
+  for (auto& keys : aging_) keys.clear();
+  voxels_pruned_ = 0;
+}
+
+void VoxelMap::remember_new_voxels() {
+  young_.resize(shards_.size());
+  aging_.resize(shards_.size());
+}
+
+std::size_t VoxelMap::prune_remembered(const Judge& judge) {
+  require(young_.size() == shards_.size(), "VoxelMap::prune_remembered",
+          "the map does not remember its new voxels; call remember_new_voxels() first");
+  // 1. The decisions, every shard's voxels on any thread (nothing changes yet).
+  const std::size_t n = shards_.size();
+  std::vector<std::vector<VoxelKey>> drop(n);
+  parallel_for(n, static_cast<int>(threads_), [&](std::size_t s) {
+    const std::vector<VoxelKey>& keys = aging_[s];
+    const Table& table = shards_[s];
+    std::vector<const VoxelData*> voxels(keys.size());
+    constexpr std::size_t kAhead = 8;  // the slots of later keys prefetched (cache misses overlap)
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (i + kAhead < keys.size()) table.prefetch(keys[i + kAhead]);
+      voxels[i] = table.find(keys[i]);  // remembered voxels are dropped only here
+    }
+    std::vector<std::uint8_t> noise(keys.size(), 0);
+    judge(keys, voxels, noise);
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (noise[i]) drop[s].push_back(keys[i]);
+  });
+  // 2. The drops, shard by shard; the voxels opened since the last call are judged by the next.
+  std::size_t dropped = 0;
+  for (std::size_t s = 0; s < n; ++s) dropped += drop[s].size();
+  parallel_for(n, static_cast<int>(threads_), [&](std::size_t s) {
+    for (VoxelKey key : drop[s]) shards_[s].erase(key);
+    aging_[s].swap(young_[s]);
+    young_[s].clear();
+  });
+  voxels_pruned_ += dropped;
+  return dropped;
 }
 
 void VoxelMap::reserve(std::size_t voxels) {
@@ -370,10 +411,15 @@ void VoxelMap::write_runs(const Run* runs, std::size_t m, std::size_t shard,
   } else {
     shards_[shard].reserve(shards_[shard].size() + m);
   }
-  auto table_of = [&](std::size_t r) -> Table& { return shards_[all ? run_shard[r] : shard]; };
+  auto shard_of_run = [&](std::size_t r) { return all ? run_shard[r] : shard; };
+  const bool remember = !young_.empty();  // the voxels opened, for prune_remembered()
   add_in_order(
-      m, [&](std::size_t r) { table_of(r).prefetch(runs[r].key); },
-      [&](std::size_t r) { add_voxel(table_of(r), runs[r].key, runs[r].sum); });
+      m, [&](std::size_t r) { shards_[shard_of_run(r)].prefetch(runs[r].key); },
+      [&](std::size_t r) {
+        const std::size_t s = shard_of_run(r);
+        if (add_voxel(shards_[s], runs[r].key, runs[r].sum) && remember)
+          young_[s].push_back(runs[r].key);
+      });
 }
 
 void VoxelMap::insert(const PointCloud& cloud) {
@@ -385,14 +431,16 @@ void VoxelMap::insert(const PointCloud& cloud) {
   points_dropped_ += dropped;
 }
 
-inline void VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
+inline bool VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
   VoxelData& v = table[key];
+  const bool opened = v.count == 0;  // an entry has points once added
   for (int a = 0; a < 3; ++a) {
     v.offset_sum[a] += src.offset_sum[a];
     v.color_sum[a] += src.color_sum[a];
   }
   v.count += src.count;
   v.color_count += src.color_count;
+  return opened;
 }
 
 void VoxelMap::merge(const VoxelMap& other) {
@@ -440,9 +488,19 @@ void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
   const std::size_t n = static_cast<std::size_t>(frame.shard_end(shard) - first);
   Table& dst = shards_[shard];
   dst.reserve(dst.size() + n);
+  if (young_.empty()) {
+    add_in_order(
+        n, [&](std::size_t r) { dst.prefetch(first[r].key); },
+        [&](std::size_t r) { add_voxel(dst, first[r].key, first[r].sum); });
+    return;
+  }
+  // The voxels this frame opens are remembered for prune_remembered().
+  std::vector<VoxelKey>& young = young_[shard];
   add_in_order(
       n, [&](std::size_t r) { dst.prefetch(first[r].key); },
-      [&](std::size_t r) { add_voxel(dst, first[r].key, first[r].sum); });
+      [&](std::size_t r) {
+        if (add_voxel(dst, first[r].key, first[r].sum)) young.push_back(first[r].key);
+      });
 }
 
 void VoxelMap::add(const FrameVoxels& frame) {

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -70,6 +71,21 @@ class VoxelMap {
 
   // Removes every voxel and zeroes the counters, keeping the tables' memory for reuse.
   void reset();
+
+  // Pruning (fusion/dense_prune.h). From now on insert() and add_shard() remember the voxels they
+  // open, so that prune_remembered() judges each of them once.
+  void remember_new_voxels();
+  // Judges the voxels opened before the previous call (none at the first) and drops the noise;
+  // keeps the voxels opened since for the next call. Returns how many were dropped. judge(keys,
+  // voxels, noise) gets a shard's voxels at a time and sets noise[i] (0 or 1) for each; it is
+  // called on `threads` threads at once and must only read. Every decision is taken before a voxel
+  // is dropped, so the result depends neither on the order nor on the thread count. Nothing may be
+  // added meanwhile.
+  using Judge = std::function<void(const std::vector<VoxelKey>& keys,
+                                   const std::vector<const VoxelData*>& voxels,
+                                   std::vector<std::uint8_t>& noise)>;
+  std::size_t prune_remembered(const Judge& judge);
+  std::uint64_t voxels_pruned() const { return voxels_pruned_; }  // by prune_remembered, in all
 
   // Room for this many voxels without rehashing (e.g. a per-frame map: ~1/4 of the pixels).
   void reserve(std::size_t voxels);
@@ -153,7 +169,8 @@ class VoxelMap {
   // (run_shard: scratch), prefetching ahead.
   void write_runs(const Run* runs, std::size_t m, std::size_t shard,
                   std::vector<std::uint32_t>& run_shard, std::vector<std::size_t>& per_shard);
-  void add_voxel(Table& table, VoxelKey key, const VoxelData& src);
+  // Adds src to key's voxel; true when the voxel was opened by it.
+  bool add_voxel(Table& table, VoxelKey key, const VoxelData& src);
 
   double voxel_m_;
   float inv_voxel_m_;
@@ -162,6 +179,10 @@ class VoxelMap {
   std::size_t shard_mask_ = kNoMask;  // shards_.size() - 1 when that is a power of two
   std::uint64_t points_inserted_ = 0;
   std::uint64_t points_dropped_ = 0;
+  // Per shard, the voxels opened since the last prune_remembered() and before it
+  // (remember_new_voxels; empty vectors: not remembered).
+  std::vector<std::vector<VoxelKey>> young_, aging_;
+  std::uint64_t voxels_pruned_ = 0;
 };
 
 // Number of voxels present in both maps (same voxel size), |A ∩ B| of eq 21.

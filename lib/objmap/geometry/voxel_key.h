@@ -1,5 +1,6 @@
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -65,6 +66,24 @@ inline VoxelKey voxel_key(const Vec3f& point, float inv_voxel_m) {
   return pack_voxel(fast_floor(sx), fast_floor(sy), fast_floor(sz));
 }
 
+// The key offsets of a voxel's 3×3×3 neighbourhood, itself included (offset 0, the 14th), in
+// (dx, dy, dz) order: key + offset is the neighbour's key (for voxels not at the end of the key
+// range).
+inline const std::array<VoxelKey, 27>& neighbourhood_offsets() {
+  static const std::array<VoxelKey, 27> offsets = [] {
+    std::array<VoxelKey, 27> o{};
+    int n = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz)
+          o[n++] = static_cast<VoxelKey>(static_cast<std::int64_t>(dx) * (std::int64_t{1} << 42) +
+                                         static_cast<std::int64_t>(dy) * (std::int64_t{1} << 21) +
+                                         static_cast<std::int64_t>(dz));
+    return o;
+  }();
+  return offsets;
+}
+
 // Lower corner of a voxel in metres.
 inline Vec3 voxel_corner(VoxelKey key, double voxel_m) {
   return unpack_voxel(key).cast<double>() * voxel_m;
@@ -82,8 +101,9 @@ inline std::uint64_t mix_voxel_key(VoxelKey key) {
 }
 
 // Open addressing with linear probing, power-of-two capacity, at most 5/8 full. Keys and values sit
-// in one slot array (one cache line for a probe and the update). No erase (maps only grow).
-// Iteration order depends on the insertion history; callers that export sort by key.
+// in one slot array (one cache line for a probe and the update). Entries leave only in bulk
+// (erase, the dense map's pruning). Iteration order depends on the insertion history; callers
+// that export sort by key.
 template <typename Value>
 class VoxelHashTable {
  public:
@@ -171,6 +191,10 @@ class VoxelHashTable {
       if (s.key != kNoVoxel) f(s.key, s.value);
   }
 
+  // Removes `key`'s entry (false: there was none). The capacity stays; no tombstone is left
+  // (backward-shift deletion), so lookups do not probe through erased slots. O(its cluster).
+  bool erase(VoxelKey key);
+
   // All keys, ascending.
   std::vector<VoxelKey> sorted_keys() const;
 
@@ -202,6 +226,34 @@ class VoxelHashTable {
 }  // namespace objmap::geometry
 
 #include <algorithm>
+
+template <typename Value>
+bool objmap::geometry::VoxelHashTable<Value>::erase(VoxelKey key) {
+  if (slots_.empty()) return false;
+  const std::size_t m = slots_.size() - 1;
+  std::size_t hole = index(key);
+  while (slots_[hole].key != key) {
+    if (slots_[hole].key == kNoVoxel) return false;
+    hole = (hole + 1) & m;
+  }
+  // Backward-shift deletion (Knuth's Algorithm R): the hole takes the next entry of its cluster
+  // whose home is not in (hole, j], and so on until the cluster ends.
+  for (std::size_t j = hole;;) {
+    slots_[hole] = Slot{};
+    while (true) {
+      j = (j + 1) & m;
+      if (slots_[j].key == kNoVoxel) {
+        --size_;
+        return true;
+      }
+      const std::size_t home = index(slots_[j].key);
+      const bool stays = hole <= j ? (hole < home && home <= j) : (hole < home || home <= j);
+      if (!stays) break;
+    }
+    slots_[hole] = std::move(slots_[j]);
+    hole = j;
+  }
+}
 
 template <typename Value>
 std::vector<objmap::geometry::VoxelKey> objmap::geometry::VoxelHashTable<Value>::sorted_keys()

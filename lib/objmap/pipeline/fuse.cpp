@@ -64,6 +64,15 @@ std::vector<ConfigField> inputs_fields(FuseOptions& o) {
        "write the dense and semantic maps; false: the objects only (about 1.7x faster, 40% of "
        "the memory; objects.json is the same)",
        &o.dense_map},
+      {"map.prune_every", "--dense-prune-every",
+       "dense map: after every n keyframes, drop the voxels opened earlier that the recent views "
+       "contradict (they measure the surface elsewhere along the ray); 0: keep every voxel (the "
+       "paper)",
+       &o.dense_prune.every_keyframes},
+      {"map.prune_tolerance", "--dense-prune-tolerance",
+       "dense map: a voxel is kept when the median of the recent views' signed distances to it "
+       "is within this many voxels",
+       &o.dense_prune.tolerance_voxels},
   };
 }
 
@@ -268,6 +277,8 @@ void set_method_preset(FuseOptions& o) {
   o.depth_gate.enabled = false;
   o.duplicate_overlap = 1.0;
   o.depth.min_depth_m = 0.01;
+  // The dense map keeps every voxel (§3.3: the voxel filter only).
+  o.dense_prune.every_keyframes = 0;
   // Association and confirmation (§3.2, eqs 17, 21, 22; fusion::set_paper_rules), the voxel
   // sets at the map's resolution (the paper's octree).
   fusion::set_paper_rules(o.objects);
@@ -296,6 +307,8 @@ void FuseOptions::check() const {
   require(std::isfinite(map_voxel_m) && map_voxel_m >= 0.001 && map_voxel_m <= 1.0, "map.voxel_m",
           "must be in [0.001, 1] m");
   require(dense_stride >= 1 && dense_stride <= 64, "map.dense_stride", "must be in [1, 64]");
+  check_part([&] { dense_prune.check(); }, "DensePruneOptions", "map.prune",
+             {{"every_keyframes", "map.prune_every"}, {"tolerance_voxels", "map.prune_tolerance"}});
   require(std::isfinite(min_instance_score) && min_instance_score >= 0 && min_instance_score <= 1,
           "segmentation.min_score", "must be in [0, 1]");
   require(std::isfinite(duplicate_overlap) && duplicate_overlap > 0 && duplicate_overlap <= 1,
@@ -409,7 +422,7 @@ class ShardedMergeOrder {
     std::unique_lock<std::mutex> lock(mutex_);
     while (left > 0) {
       std::size_t ready = n;
-      for (std::size_t k = 0; k < n && ready == n; ++k) {
+      for (std::size_t k = 0; k < n && ready == n && index < hold_; ++k) {
         const std::size_t s = (index * 5 + k) % n;  // neighbouring frames start on other shards
         if (!done[s] && next_[s] == index) ready = s;
       }
@@ -433,6 +446,13 @@ class ShardedMergeOrder {
     }
     return true;
   }
+  // Keyframes from `index` on wait (before their first shard) until hold(index') with a later
+  // index' — the map is pruned between two keyframes — or fail().
+  void hold(std::size_t index) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    hold_ = index;
+    cv_.notify_all();
+  }
   // Releases every waiting worker (a keyframe failed; the run is abandoned).
   void fail() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -444,6 +464,7 @@ class ShardedMergeOrder {
   std::mutex mutex_;
   std::condition_variable cv_;
   std::vector<std::size_t> next_;
+  std::size_t hold_ = ~std::size_t{0};
   bool failed_ = false;
 };
 
@@ -471,6 +492,7 @@ class FrameVoxelsPool {
 // What a worker hands back for one keyframe (its dense voxels are already in the dense map).
 struct FrameWork {
   std::vector<fusion::Observation> observations;
+  cv::Mat depth;  // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
   std::size_t duplicates = 0, depth_gated = 0;
@@ -642,6 +664,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   // 1. The images (checked: size, type).
   const cv::Mat bgr = io::read_rgb(frame.rgb_file, camera.width, camera.height);
   const cv::Mat depth = io::read_depth(frame.depth_file, camera.width, camera.height);
+  if (dense && options.dense_prune.every_keyframes > 0) work.depth = depth;
 
   // 2. Dense map: every valid pixel (eqs 11-15) with its colour.
   geometry::BackprojectOptions dense_options = options.depth;
@@ -976,6 +999,8 @@ void add_counts(const FrameWork& work, FuseResult& result) {
 // Step 3: back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead (one
 // keyframe more than threads in flight); this thread merges their results strictly in keyframe
 // order, so the maps do not depend on the thread count. Without `dense`, the observations only.
+// After every options.dense_prune.every_keyframes keyframes the dense map's noise is pruned, the
+// next keyframes held back from the map meanwhile: always between the same two keyframes.
 void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
                     const FuseInputs& inputs, fusion::VoxelMap* dense, fusion::ObjectMap& objects,
                     FuseResult& result) {
@@ -985,6 +1010,13 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
   ShardedMergeOrder merge_order(kDenseShards);
   FrameVoxelsPool frame_voxels;
   const std::size_t window = static_cast<std::size_t>(result.threads);
+  const std::size_t prune_every =
+      dense ? static_cast<std::size_t>(options.dense_prune.every_keyframes) : 0;
+  fusion::RecentViews views(camera, prune_every);
+  if (prune_every > 0) {
+    dense->remember_new_voxels();
+    merge_order.hold(prune_every);
+  }
   std::deque<std::future<FrameWork>> pending;
   std::size_t next = 0;
   auto launch = [&](std::size_t i) {
@@ -1013,6 +1045,21 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
         pending.push_back(launch(next++));
       FrameWork work = pending.front().get();
       pending.pop_front();
+      if (prune_every > 0) {
+        views.add(work.depth, keyframes[done].world_from_cam);
+        work.depth.release();
+        if ((done + 1) % prune_every == 0) {  // keyframes 0..done are in the map, done + 1 waits
+          dense->prune_remembered([&](const std::vector<fusion::VoxelKey>& keys,
+                                      const std::vector<const fusion::VoxelData*>& voxels,
+                                      std::vector<std::uint8_t>& noise) {
+            std::vector<Vec3> points(keys.size());
+            for (std::size_t i = 0; i < keys.size(); ++i)
+              points[i] = dense->mean_position(keys[i], *voxels[i]);
+            views.judge(points, dense->voxel_m(), options.dense_prune, noise);
+          });
+          merge_order.hold(done + 1 + prune_every);
+        }
+      }
       add_counts(work, result);
       // The keyframe's observations are associated together, best match first.
       for (const auto& added : objects.add_frame(work.observations)) {
@@ -1024,9 +1071,11 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
       if (progress) progress(done + 1, keyframes.size());
     }
   } catch (...) {
+    merge_order.fail();  // no worker may wait for a keyframe this thread will not release
     drain();
     throw;
   }
+  if (dense) result.dense_voxels_pruned = dense->voxels_pruned();
 }
 
 // Step 4: the final merge pass (ID-switch repair), then each confirmed object's filtered record.
@@ -1165,6 +1214,7 @@ ordered_json points_json(const FuseResult& result, const MapPoints& maps) {
   return {
       {"dense_back_projected", result.dense_points_raw},
       {"dense_map", result.dense_points_map},
+      {"dense_pruned", result.dense_voxels_pruned},
       {"objects_raw", result.object_points_raw},
       {"objects_voxel_filtered", result.object_points_voxel},
       {"objects_outlier_filtered", result.object_points_filtered},

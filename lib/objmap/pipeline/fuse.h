@@ -6,6 +6,7 @@
 
 #include "objmap/core/camera.h"
 #include "objmap/filters/outlier.h"
+#include "objmap/fusion/dense_prune.h"
 #include "objmap/fusion/duplicates.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/geometry/backproject.h"
@@ -44,8 +45,9 @@ struct FuseOptions {
   double map_voxel_m = 0.01;           // dense/semantic map voxel (1 cm)
   int dense_stride = 1;                // back-project every n-th pixel into the dense map
   bool dense_map = true;  // false: objects only, no map_dense.ply / map_semantic.ply (faster)
-  double min_instance_score = 0.0;  // instances below this detector score are ignored
-  double duplicate_overlap = 0.5;   // same class, box and mask this much inside another: one kept
+  fusion::DensePruneOptions dense_prune;  // the dense map's noise voxels (fusion/dense_prune.h)
+  double min_instance_score = 0.0;        // instances below this detector score are ignored
+  double duplicate_overlap = 0.5;  // same class, box and mask this much inside another: one kept
   segmentation::BoxMaskOptions box_mask;        // masks for instances that have only a box
   segmentation::MaskRefineOptions mask_refine;  // given masks: parts across depth edges removed
   segmentation::DepthGateOptions depth_gate;    // given masks: depths off the object's band removed
@@ -94,6 +96,7 @@ struct FuseResult {
   // Table 6: points.
   std::uint64_t dense_points_raw = 0;      // back-projected points of all keyframes
   std::size_t dense_points_map = 0;        // voxels of the dense map (= points of map_dense.ply)
+  std::uint64_t dense_voxels_pruned = 0;   // voxels dropped from it as noise (dense_prune)
   std::size_t object_points_raw = 0;       // points of the confirmed objects' observations
   std::size_t object_points_voxel = 0;     // after the voxel filter
   std::size_t object_points_filtered = 0;  // after the outlier filter (map_objects.ply)
