@@ -97,9 +97,10 @@ def truth_cell(s, run):
         if s["missed"] > 0:
             cell += " · %d missed" % s["missed"]
         return cell
-    objects = load_json(os.path.join(run, "objects.json")) if run else None
-    if objects:  # no true objects: the count alone
-        return "%d objects" % len(objects.get("objects", []))
+    counts = (load_json(os.path.join(run, "run.json")) or {}).get("counts") if run else None
+    if counts:  # no true objects: confirmed of all objects
+        return "%d of %d" % (counts.get("objects_confirmed", 0),
+                             counts.get("objects_before_confirmation", 0))
     return "failed"
 
 
@@ -215,7 +216,7 @@ def ablation_section(root, cols):
     return out
 
 
-def sweep_section(root, wm):
+def sweep_section(root, wm, synth_args):
     cells = {}
     for path in glob.glob(os.path.join(root, "sweep", "seed*", "*")):
         m = re.match(r"wid([\d.]+)_wd([\d.]+)_wm([\d.]+)_k([\d.]+)$", os.path.basename(path))
@@ -258,11 +259,12 @@ def sweep_section(root, wm):
             row.append(text)
         body.append(row)
     return [
-        "Sweep of eq 22 on `objmap synth --seed N` (default orbit) for N = %s, fused with "
+        "Sweep of eq 22 on `objmap synth --seed N%s` for N = %s, fused with "
         "groundtruth.txt; w_m = %s held (P > K is unchanged when the weights and K are scaled "
         "together). A cell sums the seeds: objects mapped / true, duplicates, missed, the mean "
         "centroid error of all matched objects, and the seeds mapped exactly (every true object "
-        "matched, no extra object)." % (", ".join(seeds), wm),
+        "matched, no extra object)." % ((" " + synth_args) if synth_args else "",
+                                        ", ".join(seeds), wm),
         "",
         md_table(["w_id, w_d"] + ["K = %s" % k for k in ks], body),
         "",
@@ -282,7 +284,8 @@ def render(args):
                   (" (git " + commit + ")") if commit else "", cpu,
                   features.get("load_start", "?")))
     abl = ablation_section(root, cols) if cols else []
-    sweep = sweep_section(root, features.get("sweep_wm", DEFAULTS["wm"]))
+    sweep = sweep_section(root, features.get("sweep_wm", DEFAULTS["wm"]),
+                          features.get("sweep_synth", ""))
     tables = []
     if abl:
         b, e = MARKERS["ablation"]
@@ -301,7 +304,8 @@ def render(args):
             "of a true object of its class that another map object matches), mean centroid error "
             "of the matched objects (`objmap eval objects --gt-objects`, one-to-one by class "
             "within 0.3 m); `· 1 missed`: a true object without a match. Sequences without true "
-            "objects give the count alone.", "",
+            "objects: `17 of 48` = objects confirmed of all objects the fusion made (run.json "
+            "`counts`).", "",
         ] + abl + [
             "The sum row: Σ |mapped − true| over the rows, Σ duplicates, Σ missed, and the "
             "mean centroid error of all matched objects.", "",
