@@ -7,7 +7,7 @@ OBJMAP := $(BUILD)/bin/objmap
 
 FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build test demo bench bench-memory fuzz sanitize format clean
+.PHONY: all deps configure build test demo bench bench-memory ablation fuzz sanitize format clean
 
 all: build
 
@@ -31,8 +31,10 @@ demo: deps configure
 	@bash scripts/demo.sh $(OBJMAP) $(DEMO)
 
 # make bench [DATA=DIR]: every table of docs/benchmarks.md on the sequences under DATA plus three
-# synthetic scenes (scripts/bench.sh; about 10 minutes on 2 cores); writes the generated section
-# of docs/benchmarks.md and out/bench/. Installs python3-open3d for the Open3D baseline if it can.
+# synthetic scenes (scripts/bench.sh; about 10 minutes on 2 cores), then the ablation (below,
+# about 30 minutes more; BENCH_ABLATION=0 leaves it out); writes the generated sections of
+# docs/benchmarks.md and docs/fusion.md and out/bench/. Installs python3-open3d for the Open3D
+# baseline if it can.
 bench: deps build
 	@bash scripts/install-deps.sh --bench
 	@BENCH_COMMAND="make bench$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
@@ -43,6 +45,14 @@ bench: deps build
 # 8 minutes on 2 cores the first time, the scenes are kept in out/bench_memory/).
 bench-memory: build
 	@bash scripts/bench_memory.sh $(OBJMAP) out/bench_memory
+
+# make ablation [DATA=DIR]: only the ablation part of make bench (scripts/ablation.sh): paper vs
+# objmap vs objmap with each change reverted on every sequence, and the eq 22 weight sweep;
+# writes their generated sections of docs/benchmarks.md and docs/fusion.md and out/ablation/.
+ablation: deps configure
+	cmake --build $(BUILD) -j$(JOBS) --target objmap_app
+	@ABLATION_COMMAND="make ablation$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
+	  bash scripts/ablation.sh $(OBJMAP) $(DATA)
 
 # make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of fuzz/ (every reader of
 # outside data) for FUZZ_SECONDS under libFuzzer + ASan + UBSan, built with clang in build-fuzz/

@@ -22,11 +22,14 @@
 #    (scripts/open3d_baseline.py; n/a when python3-open3d is missing).
 # 3. scripts/bench_tables.py writes the tables between <!-- bench:begin --> and <!-- bench:end -->
 #    of docs/benchmarks.md (the rest of the file is untouched) and out/bench/tables.md.
+# 4. scripts/ablation.sh: paper vs objmap vs objmap with each change reverted, and the eq 22 sweep
+#    (out/bench/ablation/; its own markers in docs/benchmarks.md and docs/fusion.md).
 # Outputs: out/bench/<sequence>/ (runs, every eval JSON, logs). Environment: BENCH_OUT, BENCH_SEEDS,
 # BENCH_REPEAT (timing rounds, default 3), BENCH_PERF=0 (skip part 2), BENCH_NETWORK=0 (skip the
 # network chain, scripts/network_chain.sh), BENCH_DOC (the Markdown file),
 # BENCH_PROGRAMS=1 (also run every build/bin/bench_* program and print its output), BENCH_MEMORY=0
-# (skip the memory runs, scripts/bench_memory.sh).
+# (skip the memory runs, scripts/bench_memory.sh), BENCH_ABLATION=0 (skip part 4:
+# scripts/ablation.sh, docs/benchmarks.md "How make bench works").
 set -uo pipefail
 objmap=${1:-build/bin/objmap}
 data=${2:-../shared/data}
@@ -38,25 +41,11 @@ here=$(cd "$(dirname "$0")" && pwd)
 tables="$here/bench_tables.py"
 py=python3
 
-if [ ! -x "$objmap" ]; then
-  echo "bench: no objmap binary at $objmap (make build first)" >&2
-  exit 2
-fi
-bindir=$(cd "$(dirname "$objmap")" && pwd)
-objmap="$bindir/$(basename "$objmap")"
-case "$out" in
-  "" | / | . | ..) echo "bench: refusing BENCH_OUT='$out'" >&2; exit 2 ;;
-esac
-# Only an earlier bench folder (it has features.txt) or an empty one is deleted: never a folder
-# that BENCH_OUT names by mistake.
-if [ -d "$out" ] && [ -n "$(ls -A "$out")" ] && [ ! -f "$out/features.txt" ]; then
-  echo "bench: $out: exists and is not an earlier bench folder (no features.txt); expected a new" \
-    "or empty folder (BENCH_OUT)" >&2
-  exit 2
-fi
-rm -rf "$out"
-mkdir -p "$out"
-out=$(cd "$out" && pwd)
+# step, run, frames_of, first_match, sequence_inputs, use_objmap, fresh_out
+# shellcheck source=bench_common.sh
+. "$here/bench_common.sh"
+use_objmap "$objmap" bench
+fresh_out "$out" bench BENCH_OUT
 started=$(date -u +%s)
 
 has_correct=0
@@ -70,29 +59,6 @@ if grep -q -- "--method" <<<"$correct_help"; then has_correct=1; fi
   echo "load_start=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null)"
   echo "date=$(date -u '+%Y-%m-%d %H:%M UTC')"
 } >"$out/features.txt"
-
-step() { echo "bench: $*" >&2; }
-
-# run LOG CMD...: runs CMD with its output in LOG; on failure says so (the bench goes on).
-run() {
-  local log=$1
-  shift
-  if "$@" >"$log" 2>&1; then return 0; fi
-  echo "  failed ($(tail -n 1 "$log")): $*" >&2
-  return 1
-}
-
-frames_of() { grep -vc '^\s*#' "$1/rgb.txt" 2>/dev/null || echo 0; }
-
-first_match() {  # first existing path among the arguments (globs expanded by the caller)
-  local p
-  for p in "$@"; do
-    if [ -e "$p" ]; then
-      echo "$p"
-      return
-    fi
-  done
-}
 
 # bench_sequence NAME KIND DATASET SEGMENTATION ESTIMATE GT_OBJECTS [extra fuse args...]
 bench_sequence() {
@@ -193,10 +159,7 @@ if [ -d "$data" ]; then
     [ -f "$dir/depth.txt" ] || continue
     name=$(basename "$dir")
     [ -e "$out/$name" ] && name=$(echo "${dir#"$data"/}" | tr '/' '_')
-    seg=$(first_match "$dir/segmentation" "$dir"/detections* "$dir"/boxes* "$dir/masks")
-    est=$(first_match "$dir/CameraTrajectory.txt" "$dir/KeyFrameTrajectory.txt" \
-      "$dir"/*estimate*.txt "$dir"/vo_*.txt)
-    gtobj=$(first_match "$dir/objects_gt.json" "$dir/objects_gt.txt")
+    sequence_inputs "$dir"  # sets seg, est, gtobj
     if [ -z "$est" ] && [ -n "$seg" ] && [ -f "$dir/groundtruth.txt" ]; then
       # No SLAM estimate: a seeded drifted copy of the ground truth (3% of the path, 2 deg/m yaw),
       # so that Table 7 has a row for the sequence.
@@ -321,3 +284,11 @@ fi
 step "writing the tables ($doc between <!-- bench:begin --> and <!-- bench:end -->)"
 $py "$tables" render --bench "$out" --doc "$doc" --data "$data" --objmap "$objmap" \
   --seconds $(($(date -u +%s) - started)) --command "${BENCH_COMMAND:-make bench DATA=$data}"
+
+# 4. The ablation (scripts/ablation.sh: its own tables in docs/benchmarks.md and docs/fusion.md).
+if [ "${BENCH_ABLATION:-1}" != 0 ]; then
+  step "ablation: scripts/ablation.sh (out in $out/ablation)"
+  ABLATION_OUT="$out/ablation" BENCH_DOC="$doc" \
+    ABLATION_COMMAND="${BENCH_COMMAND:-make bench DATA=$data} (scripts/ablation.sh)" \
+    bash "$here/ablation.sh" "$objmap" "$data"
+fi

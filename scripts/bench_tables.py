@@ -700,27 +700,36 @@ def render(args):
     return 0
 
 
-def write_section(doc, section):
+def write_section(doc, section, begin=BEGIN, end=END, after_intro=True):
+    """Replaces the part of `doc` from the line `begin` to the line `end` with `section`; without
+    the markers `section` goes after the intro (before the first "## " heading: after_intro) or at
+    the end."""
     try:
         with open(doc) as f:
             text = f.read()
     except OSError:
-        text = "# Benchmarks and measured results\n\n"
-    if BEGIN in text and END in text and text.index(BEGIN) < text.index(END):
-        before = text[:text.index(BEGIN)]
-        after = text[text.index(END) + len(END):]
+        text = "# Benchmarks and measured results\n\n" if after_intro else ""
+    m = re.search(r"^## ", text, re.M) if after_intro else None
+    if begin in text and end in text and text.index(begin) < text.index(end):
+        before = text[:text.index(begin)]
+        after = text[text.index(end) + len(end):]
         new = before + section + after
+    elif m:
+        new = text[:m.start()] + section + "\n\n" + text[m.start():]
     else:
-        # After the intro: before the second heading (the first "## "), else at the end.
-        m = re.search(r"^## ", text, re.M)
-        if m:
-            new = text[:m.start()] + section + "\n\n" + text[m.start():]
-        else:
-            new = text.rstrip("\n") + "\n\n" + section + "\n"
+        new = (text.rstrip("\n") + "\n\n" if text.strip() else "") + section + "\n"
     tmp = doc + ".tmp"
     with open(tmp, "w") as f:
         f.write(new)
     os.replace(tmp, doc)
+
+
+def add_render_arguments(parser, command):
+    """The options of a render step that says how and by what it was made (ablation_tables too)."""
+    parser.add_argument("--doc", default="")
+    parser.add_argument("--objmap", default="")
+    parser.add_argument("--command", default=command)
+    parser.add_argument("--seconds", type=float, default=0.0)
 
 
 def main():
@@ -734,11 +743,8 @@ def main():
         q.add_argument(k, required=True)
     r = sub.add_parser("render", help="write the Markdown tables")
     r.add_argument("--bench", default="out/bench")
-    r.add_argument("--doc", default="")
     r.add_argument("--data", default="")
-    r.add_argument("--objmap", default="")
-    r.add_argument("--command", default="make bench")
-    r.add_argument("--seconds", type=float, default=0.0)
+    add_render_arguments(r, "make bench")
     args = p.parse_args()
     return {"measure": measure, "prepare": prepare, "render": render}[args.what](args)
 

@@ -337,5 +337,77 @@ TEST(BenchTables, PrepareMovesASlamEstimateOntoTheGroundTruth) {
   EXPECT_EQ(poses, 3);
 }
 
+// scripts/ablation_tables.py (make ablation) on a fixture: one row, three columns, one sweep cell.
+TEST(AblationTables, RenderCellsIntoTheirMarkers) {
+  if (!has_python3()) GTEST_SKIP() << "no python3";
+  TempDir dir;
+  const fs::path root = dir / "ablation";
+  write_text(root / "features.txt", "load_start=1.0 1.0 1.0\ndate=2026-01-01 00:00 UTC\n");
+  write_text(root / "columns.txt",
+             "paper|paper (--method paper)|--method paper\nobjmap|objmap (defaults)|\n"
+             "iou|--overlap iou|--overlap iou\n");
+  // Two true objects (cups at x = 0 and x = 1); map objects: 0 and 1 matched 2 cm off, 2 a
+  // second cup 5 cm from the first (a duplicate), 3 a book far away (not a duplicate).
+  const auto objects = [](int n) {
+    const double x[] = {0.02, 1.02, 0.05, 5.0};
+    const char* cls[] = {"cup", "cup", "cup", "book"};
+    std::string s = R"({"objects": [)";
+    for (int i = 0; i < n; ++i)
+      s += std::string(i ? "," : "") + R"({"id": )" + std::to_string(i) + R"(, "class": ")" +
+           cls[i] + R"(", "centroid": [)" + std::to_string(x[i]) + ", 0, 0]}";
+    return s + "]}";
+  };
+  const auto eval = [](int mapped, std::vector<int> unmatched) {
+    std::string u;
+    for (int id : unmatched) u += (u.empty() ? "" : ",") + std::to_string(id);
+    return R"({"counts": [{"class": "overall", "reference": 2, "mapped": )" +
+           std::to_string(mapped) + R"(, "error": 0}], "matches": [
+             {"map_id": 0, "class": "cup", "distance_m": 0.02, "error_xyz_m": [0.02, 0, 0]},
+             {"map_id": 1, "class": "cup", "distance_m": 0.02, "error_xyz_m": [0.02, 0, 0]}],
+             "unmatched_map_ids": [)" +
+           u + "]}";
+  };
+  const std::string run_json = R"({"options": {"method": "objmap", "objects": {"overlap_measure":
+      "containment"}}, "points": {"objects_outlier_filtered": 35100}})";
+  for (const std::string col : {"paper", "objmap", "iou"}) {
+    const fs::path c = root / "ablation" / "synth_seed9" / col;
+    const bool extra = col != "objmap";
+    write_text(c / "run_gt" / "objects.json", objects(extra ? 4 : 2));
+    write_text(c / "vs_truth.json", extra ? eval(4, {2, 3}) : eval(2, {}));
+    std::string run = run_json;
+    if (extra) run.replace(run.find("\"containment\""), 13, "\"iou\"");
+    write_text(c / "run_gt" / "run.json", run);
+  }
+  write_text(root / "ablation" / "synth_seed9" / "objmap" / "est_vs_gtmap.json",
+             R"({"centroid_error": [{"class": "overall", "reference": 2, "matched": 2,
+                 "distance_m": {"mean": 0.047}}]})");
+  const fs::path cell = root / "sweep" / "seed11" / "wid0.3_wd0.2_wm0.5_k0.4";
+  write_text(cell / "run_gt" / "objects.json", objects(2));
+  write_text(cell / "vs_truth.json", eval(2, {}));
+
+  const std::string tail = "\n\nHand-written, kept.\n";
+  write_text(dir / "bench.md", "# B\n\n<!-- ablation:begin -->\nOLD\n<!-- ablation:end -->" + tail);
+  write_text(dir / "fusion.md", "# F\n\n<!-- sweep:begin -->\nOLD\n<!-- sweep:end -->" + tail);
+  const fs::path script = fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "scripts" / "ablation_tables.py";
+  const std::string cmd = "python3 " + script.string() + " render --ablation " + root.string() +
+                          " --doc " + (dir / "bench.md").string() + " --fusion-doc " +
+                          (dir / "fusion.md").string() + " >" + (dir / "log").string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_text(dir / "log");
+  const std::string bench = read_text(dir / "bench.md");
+  EXPECT_EQ(bench.find("OLD"), std::string::npos) << bench;
+  EXPECT_EQ(bench.substr(bench.size() - tail.size()), tail) << bench;
+  EXPECT_NE(bench.find("| synth_seed9 | 4/2 d1 · 2.0 cm | 2/2 d0 · 2.0 cm | 4/2 d1 · 2.0 cm |"),
+            std::string::npos)
+      << bench;
+  EXPECT_NE(bench.find("| 4.7 cm (2/2) · 35.1k |"), std::string::npos) << bench;
+  // The paper differs from objmap in overlap_measure only, and the iou column covers it.
+  EXPECT_NE(bench.find("`objects.overlap_measure`. Each is set"), std::string::npos) << bench;
+  const std::string fusion = read_text(dir / "fusion.md");
+  EXPECT_EQ(fusion.substr(fusion.size() - tail.size()), tail) << fusion;
+  EXPECT_NE(fusion.find("| 0.3, 0.2 | **2/2 d0 · 2.0 cm · 1/1 exact** (default) |"),
+            std::string::npos)
+      << fusion;
+}
+
 }  // namespace
 }  // namespace objmap::test
