@@ -24,13 +24,7 @@ fs::path with_suffix(const fs::path& path, const std::string& suffix) {
   return p.parent_path() / (p.filename().string() + suffix + std::to_string(::getpid()));
 }
 
-void make_parent(const fs::path& file) {
-  const fs::path parent = file.parent_path();
-  if (parent.empty()) return;
-  std::error_code ec;
-  fs::create_directories(parent, ec);
-  if (ec) throw InputError(parent.string(), "cannot create the folder: " + ec.message());
-}
+void make_parent(const fs::path& file);  // below the registry
 
 // The unfinished outputs of the process. Never destroyed: the signal thread may use it while the
 // process exits.
@@ -45,7 +39,21 @@ Registry& registry() {
   return *r;
 }
 
+void make_parent(const fs::path& file) {
+  const fs::path parent = file.parent_path();
+  if (!parent.empty()) create_output_folders(parent);
+}
+
 }  // namespace
+
+void create_output_folders(const fs::path& folder) {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.closed) throw InputError(folder.string(), "not created: the process is interrupted");
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) throw InputError(folder.string(), "cannot create the folder: " + ec.message());
+}
 
 UnfinishedOutput::UnfinishedOutput(fs::path path) : path_(std::move(path)) {
   Registry& r = registry();

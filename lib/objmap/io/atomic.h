@@ -32,6 +32,11 @@ class UnfinishedOutput {
 // waits for the commit to end). Afterwards nothing more is registered.
 std::vector<std::filesystem::path> remove_unfinished_outputs();
 
+// Creates `folder` and its parents, as std::filesystem::create_directories, unless the process is
+// being interrupted: after remove_unfinished_outputs() it throws InputError instead, so that no
+// thread makes again a folder inside an unfinished output that the interrupt has just removed.
+void create_output_folders(const std::filesystem::path& folder);
+
 // Writes `bytes` to "<file>.tmp-<pid>" and renames it to `file` (replacing an existing
 // file). Creates the parent folders if needed. Throws InputError(file, reason) when the file cannot
 // be written; the temporary file is removed then.

@@ -1136,7 +1136,7 @@ ordered_json write_maps(const FuseOptions& options, const fs::path& dir,
   points.objects = objects_only.size();
   io::write_ply(dir / "map_objects.ply", objects_only, ply);
   objects_only = PointCloud();
-  fs::create_directories(dir / "objects");
+  io::create_output_folders(dir / "objects");
   ordered_json objects_json = ordered_json::array();
   for (const auto& r : result.objects) {
     const std::string name =

@@ -50,11 +50,7 @@ void write_segmentation(const std::filesystem::path& dir, const Segmentation& se
                        "decimals");
     }
   }
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (!std::filesystem::is_directory(dir)) {
-    throw InputError(dir.string(), "cannot create the folder: " + error.message());
-  }
+  io::create_output_folders(dir);
   for (const FrameSegmentation& frame : segmentation.frames) {
     write_frame_json(dir / frame_file_name(frame.timestamp), frame);
   }

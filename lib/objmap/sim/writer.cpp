@@ -185,11 +185,8 @@ std::string synth_json(const SynthSequence& s) {
 namespace {
 
 void make_folders(const fs::path& dir) {
-  std::error_code ec;
-  for (const char* sub : {"rgb", "depth", "segmentation", "segmentation_gt"}) {
-    fs::create_directories(dir / sub, ec);
-    if (ec) throw InputError((dir / sub).string(), "cannot create the folder: " + ec.message());
-  }
+  for (const char* sub : {"rgb", "depth", "segmentation", "segmentation_gt"})
+    io::create_output_folders(dir / sub);
 }
 
 void write_images(const fs::path& dir, const SynthFrame& f) {
