@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # make fuzz: builds the fuzz targets of fuzz/ with clang, libFuzzer, ASan and UBSan in build-fuzz/
-# and runs each for FUZZ_SECONDS (default 60) seconds on a corpus seeded from fuzz/seeds/<target>/
-# and the real data (fuzz/seeds.txt). A finding (a crash, a sanitizer report, an exception other than
+# and runs each for FUZZ_SECONDS (default 60) seconds on a corpus seeded from the real data
+# (fuzz/seeds.txt) and fuzz/seeds/<target>/ where it exists. A finding (a crash, a sanitizer report, an exception other than
 # InputError, an InputError of several lines, an input taking > 10 s or > 2 GB) stops that target:
 # the input is saved in build-fuzz/findings/<target>/, and the script exits 1 after the others.
 #   scripts/fuzz.sh [DATA]   env: FUZZ_SECONDS, FUZZ_TARGETS="png ply" (default: all), JOBS
@@ -33,12 +33,14 @@ for t in "${targets[@]}"; do
   corpus=$build/corpus/$t findings=$build/findings/$t log=$build/logs/$t.log
   mkdir -p "$corpus" "$findings" "$(dirname "$log")"
   for f in $(awk -v t="$t" '$1 == t { for (i = 2; i <= NF; i++) print $i }' fuzz/seeds.txt); do
-    if [ -f "$data/$f" ]; then cp "$data/$f" "$corpus/data_$(basename "$f")"; else
+    if [ -f "$data/$f" ]; then cp "$data/$f" "$corpus/data_$(echo "$f" | tr / _)"; else
       echo "fuzz: $t: seed $data/$f missing (set OBJMAP_DATA)" >&2
     fi
   done
+  hand_made=()  # tiny text seeds of fuzz/seeds/<target>/, when the target has some
+  [ -d "fuzz/seeds/$t" ] && hand_made=("fuzz/seeds/$t")
   if "$build/bin/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
-      -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "fuzz/seeds/$t" >"$log" 2>&1; then
+      -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "${hand_made[@]}" >"$log" 2>&1; then
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
     cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
     echo "fuzz: $t: $runs runs, coverage $cov, corpus $(ls "$corpus" | wc -l) inputs, no finding"
