@@ -1301,7 +1301,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
     DenseCloud cloud = options.dense_map ? take_dense_cloud(dense, dense_options) : DenseCloud{};
     dense_seconds = seconds_since(t_dense);
-    find_up_and_surfaces(cameras, cloud.cloud.points, options.scene, result.scene);
+    scene::find_up_and_surfaces(cameras, cloud.cloud.points, options.scene, result.scene);
     return cloud;
   });
 

@@ -66,16 +66,6 @@ ordered_json surface_json(const scene::Surface& s) {
 
 }  // namespace
 
-void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
-                          const scene::SceneOptions& options, scene::SceneGraph& graph) {
-  auto t0 = Clock::now();
-  graph.up = scene::estimate_up(cameras, map_points, options.up);
-  graph.seconds_up = seconds_since(t0);
-  t0 = Clock::now();
-  graph.surfaces = scene::find_surfaces(map_points, graph.up.up, options.surfaces);
-  graph.seconds_surfaces = seconds_since(t0);
-}
-
 void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
                      scene::SceneGraph& graph) {
   const auto t0 = Clock::now();

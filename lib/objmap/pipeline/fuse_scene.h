@@ -11,14 +11,9 @@
 // relations; and their JSON for objects.json and run.json.
 namespace objmap::pipeline {
 
-// Step 1, on the dense map alone (it runs beside the objects' filtering): the up direction from
-// the cameras and the map's planes, then the support surfaces. Fills graph.up, graph.surfaces and
-// their seconds.
-void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
-                          const scene::SceneOptions& options, scene::SceneGraph& graph);
-
-// Step 2, with the objects: every record's position (percentile box) and oriented box taken in
-// the gravity frame (the box turns about up only; with up = +z the positions are those of
+// Step 1 is scene::find_up_and_surfaces, on the dense map alone (it runs beside the objects'
+// filtering). Step 2, with the objects: every record's position (percentile box) and oriented box
+// taken in the gravity frame (the box turns about up only; with up = +z the positions are those of
 // fusion::ObjectMap::records, bit for bit), the surfaces that are an object's top, the relations.
 void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
                      scene::SceneGraph& graph);

@@ -42,10 +42,14 @@ Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m, std:
   const float leaf = static_cast<float>(voxel_m);
   grid.setLeafSize(leaf, leaf, leaf);
   grid.filter(*sampled);
-  if (sampled->size() <= max_output) return sampled;
-  const std::size_t out_stride = (sampled->size() + max_output - 1) / max_output;
+  return thin(sampled, max_output);
+}
+
+Cloud::Ptr thin(const Cloud::Ptr& cloud, std::size_t max_output) {
+  if (cloud->size() <= max_output) return cloud;
+  const std::size_t stride = (cloud->size() + max_output - 1) / max_output;
   Cloud::Ptr thinned(new Cloud);
-  for (std::size_t i = 0; i < sampled->size(); i += out_stride) thinned->push_back((*sampled)[i]);
+  for (std::size_t i = 0; i < cloud->size(); i += stride) thinned->push_back((*cloud)[i]);
   return thinned;
 }
 
@@ -78,8 +82,8 @@ Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, do
   return plane;
 }
 
-std::vector<float> normal_z(const Cloud::Ptr& cloud, int k, const Eigen::Vector3f& axis) {
-  std::vector<float> out(cloud->size(), 0.0f);
+std::vector<Eigen::Vector3f> normals(const Cloud::Ptr& cloud, int k) {
+  std::vector<Eigen::Vector3f> out(cloud->size(), Eigen::Vector3f::Zero());
   if (cloud->size() < 3) return out;
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> estimate;
   estimate.setInputCloud(cloud);
@@ -87,10 +91,10 @@ std::vector<float> normal_z(const Cloud::Ptr& cloud, int k, const Eigen::Vector3
       pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
   estimate.setKSearch(k);
   pcl::PointCloud<pcl::Normal> normals;
-  estimate.compute(normals);
+  estimate.compute(normals);  // NaN where no plane could be fitted
   for (std::size_t i = 0; i < normals.size(); ++i) {
-    const float z = std::fabs(normals[i].getNormalVector3fMap().dot(axis));
-    out[i] = std::isfinite(z) ? z : 0.0f;
+    const Eigen::Vector3f n = normals[i].getNormalVector3fMap();
+    if (n.allFinite()) out[i] = n;
   }
   return out;
 }

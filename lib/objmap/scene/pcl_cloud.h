@@ -30,9 +30,13 @@ struct Plane {
 };
 Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, double eps_deg);
 
-// |n · axis| of each point's surface normal (PCL's NormalEstimation: the plane of its k nearest
-// neighbours); 0 where no normal could be fitted.
-std::vector<float> normal_z(const Cloud::Ptr& cloud, int k, const Eigen::Vector3f& axis);
+// `cloud` thinned evenly (every n-th point) to at most `max_output` points; `cloud` itself when it
+// has no more.
+Cloud::Ptr thin(const Cloud::Ptr& cloud, std::size_t max_output);
+
+// Each point's unit surface normal (PCL's NormalEstimation: the plane of its k nearest neighbours);
+// zero where no normal could be fitted.
+std::vector<Eigen::Vector3f> normals(const Cloud::Ptr& cloud, int k);
 
 // `cloud` without the points at `indices` (sorted ascending).
 Cloud::Ptr without(const Cloud::Ptr& cloud, const std::vector<int>& indices);

@@ -197,13 +197,9 @@ SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f
     return std::chrono::duration<double>(Clock::now() - t).count();
   };
   SceneGraph g;
-  auto t0 = Clock::now();
-  g.up = estimate_up(cameras, map_points, options.up);
-  g.seconds_up = since(t0);
-  t0 = Clock::now();
-  g.surfaces = find_surfaces(map_points, g.up.up, objects, options.surfaces);
-  g.seconds_surfaces = since(t0);
-  t0 = Clock::now();
+  find_up_and_surfaces(cameras, map_points, options, g);
+  const auto t0 = Clock::now();
+  mark_object_tops(g.surfaces, g.up.up, objects);
   g.relations = relate_objects(objects, g.surfaces, g.up.up, options.surfaces, options.relations);
   g.seconds_relations = since(t0);
   return g;

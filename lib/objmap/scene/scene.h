@@ -152,6 +152,13 @@ struct SceneGraph {
   double seconds_up = 0.0, seconds_surfaces = 0.0, seconds_relations = 0.0;
 };
 
+// The up direction, then the surfaces on it, as estimate_up and find_surfaces give them (the same
+// results) in less time: the map is sampled once when both use the same grid, and the sample's
+// normals are computed on a second thread while RANSAC looks for the up's planes. Fills graph.up,
+// graph.surfaces and their seconds (the sample counts to the up's).
+void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+                          const SceneOptions& options, SceneGraph& graph);
+
 // Up, surfaces and relations of a fused map: `map_points` is the dense map (may be empty: up then
 // comes from the cameras alone and there are no surfaces), `objects` the confirmed objects.
 SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,

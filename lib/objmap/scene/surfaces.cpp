@@ -12,8 +12,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/scene/footprint.h"
-#include "objmap/scene/pcl_cloud.h"
-#include "objmap/scene/scene.h"
+#include "objmap/scene/sampled.h"
 
 namespace objmap::scene {
 namespace {
@@ -202,14 +201,15 @@ std::optional<int> object_under(const Surface& s, const Eigen::Matrix3d& gravity
 // Step 1: the horizontal points of the sample (gravity frame): those whose surface normal (PCL's
 // normal of the k nearest sample points) is within max_tilt_deg of up. A wall has points at
 // every height: its slices would be patches at every level.
-std::vector<Vec3f> horizontal_points(const detail::Cloud::Ptr& sample, const Eigen::Matrix3f& r,
-                                     const SurfaceOptions& o) {
-  const std::vector<float> nz = detail::normal_z(sample, o.normal_neighbours, r.row(2));
+std::vector<Vec3f> horizontal_points(const detail::Cloud::Ptr& sample,
+                                     const std::vector<Eigen::Vector3f>& normals,
+                                     const Eigen::Matrix3f& r, const SurfaceOptions& o) {
+  const Eigen::Vector3f up = r.row(2).transpose();
   const float min_nz = static_cast<float>(std::cos(o.max_tilt_deg * M_PI / 180.0));
   std::vector<Vec3f> out;
   out.reserve(sample->size());
   for (std::size_t i = 0; i < sample->size(); ++i)
-    if (nz[i] >= min_nz) out.push_back(r * (*sample)[i].getVector3fMap());
+    if (std::fabs(normals[i].dot(up)) >= min_nz) out.push_back(r * (*sample)[i].getVector3fMap());
   return out;
 }
 
@@ -234,14 +234,21 @@ void SurfaceOptions::check() const {
 
 std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
                                    const SurfaceOptions& o) {
+  if (!o.enabled || map_points.empty()) return {};
+  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, o.sample_voxel_m, 600000);
+  return detail::find_surfaces(sample, detail::normals(sample, o.normal_neighbours), up, o);
+}
+
+std::vector<Surface> detail::find_surfaces(const Cloud::Ptr& sample,
+                                           const std::vector<Eigen::Vector3f>& normals,
+                                           const Vec3& up, const SurfaceOptions& o) {
   std::vector<Surface> surfaces;
-  if (!o.enabled || map_points.empty()) return surfaces;
+  if (!o.enabled || sample->empty()) return surfaces;
   const Eigen::Matrix3d gravity = gravity_from_world(up);
   const double cell = o.sample_voxel_m;
   const std::size_t min_points =
       std::max<std::size_t>(10, static_cast<std::size_t>(o.min_area_m2 / (cell * cell)));
-  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, cell, 600000);
-  const std::vector<Vec3f> g = horizontal_points(sample, gravity.cast<float>(), o);
+  const std::vector<Vec3f> g = horizontal_points(sample, normals, gravity.cast<float>(), o);
   std::vector<Patch> patches;
   for (Patch& p : horizontal_patches(g, o, min_points))
     if (narrow_spread(p) >= o.min_width_m) patches.push_back(std::move(p));

@@ -6,8 +6,7 @@
 #include <sstream>
 
 #include "objmap/core/error.h"
-#include "objmap/scene/pcl_cloud.h"
-#include "objmap/scene/scene.h"
+#include "objmap/scene/sampled.h"
 
 namespace objmap::scene {
 namespace {
@@ -43,11 +42,10 @@ void camera_prior(const std::vector<Pose>& cameras, UpEstimate& e) {
 
 // Step 2: the dominant planes of the sampled map, one after another (RANSAC, then the next in
 // what is left), while each holds at least min_plane_share of the sample.
-std::vector<PlaneEvidence> dominant_planes(const std::vector<Vec3f>& map_points, const UpOptions& o,
+std::vector<PlaneEvidence> dominant_planes(const detail::Cloud::Ptr& sample, const UpOptions& o,
                                            UpEstimate& e) {
   std::vector<PlaneEvidence> planes;
-  detail::Cloud::Ptr rest = detail::sample_on_grid(map_points, o.sample_voxel_m, 600000,
-                                                   static_cast<std::size_t>(o.max_sample_points));
+  detail::Cloud::Ptr rest = sample;
   e.sample_points = rest->size();
   const std::size_t min_inliers = std::max<std::size_t>(
       50, static_cast<std::size_t>(o.min_plane_share * static_cast<double>(rest->size())));
@@ -167,13 +165,23 @@ Eigen::Matrix3d gravity_from_world(const Vec3& up) {
 
 UpEstimate estimate_up(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
                        const UpOptions& options) {
+  const detail::Cloud::Ptr sample =
+      parse_up(options.mode, "--up")
+          ? detail::Cloud::Ptr(new detail::Cloud)
+          : detail::sample_on_grid(map_points, options.sample_voxel_m, 600000,
+                                   static_cast<std::size_t>(options.max_sample_points));
+  return detail::estimate_up(cameras, sample, options);
+}
+
+UpEstimate detail::estimate_up(const std::vector<Pose>& cameras, const Cloud::Ptr& sample,
+                               const UpOptions& options) {
   UpEstimate e;
   camera_prior(cameras, e);
   if (const auto given = parse_up(options.mode, "--up")) {
     e.source = "given";
     e.up = *given;
   } else {
-    e.planes = dominant_planes(map_points, options, e);
+    e.planes = dominant_planes(sample, options, e);
     const std::optional<Vec3> planes_up = horizontal_up(e.planes, options);
     e.source = planes_up ? "planes" : "cameras";
     e.up = planes_up ? *planes_up : e.camera_prior;

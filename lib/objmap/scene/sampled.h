@@ -1,0 +1,22 @@
+#pragma once
+// Private to lib/objmap/scene: the up direction and the surfaces on a sample of the dense map
+// already taken (pcl_cloud.h), so that find_up_and_surfaces samples the map once.
+#include <vector>
+
+#include "objmap/scene/pcl_cloud.h"
+#include "objmap/scene/scene.h"
+
+namespace objmap::scene::detail {
+
+// estimate_up with the dense map sampled on options.sample_voxel_m and thinned to
+// options.max_sample_points (sample_on_grid); the sample is not used when the mode gives up.
+UpEstimate estimate_up(const std::vector<Pose>& cameras, const Cloud::Ptr& sample,
+                       const UpOptions& options);
+
+// find_surfaces with the dense map sampled on options.sample_voxel_m (sample_on_grid, not thinned)
+// and the sample's normals (normals(sample, options.normal_neighbours)).
+std::vector<Surface> find_surfaces(const Cloud::Ptr& sample,
+                                   const std::vector<Eigen::Vector3f>& normals, const Vec3& up,
+                                   const SurfaceOptions& options);
+
+}  // namespace objmap::scene::detail
