@@ -26,7 +26,7 @@
 #include "objmap/io/image.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/fuse.h"
-#include "objmap/version.h"
+#include "objmap/core/version.h"
 
 namespace fs = std::filesystem;
 using namespace objmap;

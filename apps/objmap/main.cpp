@@ -20,7 +20,7 @@
 #include "command.h"
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
-#include "objmap/version.h"
+#include "objmap/core/version.h"
 
 namespace objmap::app {
 

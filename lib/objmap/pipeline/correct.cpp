@@ -22,7 +22,7 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/run_json.h"
-#include "objmap/version.h"
+#include "objmap/core/version.h"
 
 namespace objmap::pipeline {
 namespace {

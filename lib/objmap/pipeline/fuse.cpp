@@ -27,7 +27,7 @@
 #include "objmap/pipeline/fuse_scene.h"
 #include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/read.h"
-#include "objmap/version.h"
+#include "objmap/core/version.h"
 
 namespace objmap::pipeline {
 

@@ -3,12 +3,10 @@
 #include <pcl/ModelCoefficients.h>
 #include <pcl/PointIndices.h>
 #include <pcl/console/print.h>
-#include <pcl/features/normal_3d.h>
 #include <pcl/filters/extract_indices.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
-#include <pcl/search/kdtree.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <cmath>
@@ -80,23 +78,6 @@ Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, do
   plane.offset = -coefficients.values[3] / norm;
   plane.inliers = std::move(inliers.indices);
   return plane;
-}
-
-std::vector<Eigen::Vector3f> normals(const Cloud::Ptr& cloud, int k) {
-  std::vector<Eigen::Vector3f> out(cloud->size(), Eigen::Vector3f::Zero());
-  if (cloud->size() < 3) return out;
-  pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> estimate;
-  estimate.setInputCloud(cloud);
-  estimate.setSearchMethod(
-      pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
-  estimate.setKSearch(k);
-  pcl::PointCloud<pcl::Normal> normals;
-  estimate.compute(normals);  // NaN where no plane could be fitted
-  for (std::size_t i = 0; i < normals.size(); ++i) {
-    const Eigen::Vector3f n = normals[i].getNormalVector3fMap();
-    if (n.allFinite()) out[i] = n;
-  }
-  return out;
 }
 
 Cloud::Ptr without(const Cloud::Ptr& cloud, const std::vector<int>& indices) {

@@ -34,10 +34,6 @@ Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, do
 // has no more.
 Cloud::Ptr thin(const Cloud::Ptr& cloud, std::size_t max_output);
 
-// Each point's unit surface normal (PCL's NormalEstimation: the plane of its k nearest neighbours);
-// zero where no normal could be fitted.
-std::vector<Eigen::Vector3f> normals(const Cloud::Ptr& cloud, int k);
-
 // `cloud` without the points at `indices` (sorted ascending).
 Cloud::Ptr without(const Cloud::Ptr& cloud, const std::vector<int>& indices);
 

@@ -71,7 +71,6 @@ UpEstimate estimate_up(const std::vector<Pose>& cameras, const std::vector<Vec3f
 struct SurfaceOptions {
   bool enabled = true;
   double sample_voxel_m = 0.04;     // the dense map is sampled on this grid
-  int normal_neighbours = 12;       // a sample point's normal: the plane of this many nearest
   double max_tilt_deg = 25.0;       // a point is horizontal when its normal is this close to up
   double cluster_gap_m = 0.06;      // Euclidean clustering of the horizontal points into patches
   double min_area_m2 = 0.03;        // smaller patches are not surfaces

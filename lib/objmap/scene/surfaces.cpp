@@ -198,8 +198,9 @@ std::optional<int> object_under(const Surface& s, const Eigen::Matrix3d& gravity
   return std::nullopt;
 }
 
-// Step 1: the horizontal points of the sample (gravity frame): those whose surface normal (PCL's
-// normal of the k nearest sample points) is within max_tilt_deg of up. A wall has points at
+// Step 1: the horizontal points of the sample (gravity frame): those whose surface normal (the
+// plane of the sample points in the 3x3x3 cells around it, grid_normals) is within max_tilt_deg
+// of up. A wall has points at
 // every height: its slices would be patches at every level.
 std::vector<Vec3f> horizontal_points(const detail::Cloud::Ptr& sample,
                                      const std::vector<Eigen::Vector3f>& normals,
@@ -217,7 +218,6 @@ std::vector<Vec3f> horizontal_points(const detail::Cloud::Ptr& sample,
 
 void SurfaceOptions::check() const {
   require(sample_voxel_m > 0.0, "SurfaceOptions.sample_voxel_m", "must be > 0");
-  require(normal_neighbours >= 3, "SurfaceOptions.normal_neighbours", "must be >= 3");
   require(max_tilt_deg >= 0.0 && max_tilt_deg <= 90.0, "SurfaceOptions.max_tilt_deg",
           "must be in [0, 90]");
   require(piece_height_m >= 0.0, "SurfaceOptions.piece_height_m", "must be >= 0");
@@ -236,7 +236,7 @@ std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const V
                                    const SurfaceOptions& o) {
   if (!o.enabled || map_points.empty()) return {};
   const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, o.sample_voxel_m, 600000);
-  return detail::find_surfaces(sample, detail::normals(sample, o.normal_neighbours), up, o);
+  return detail::find_surfaces(sample, detail::grid_normals(sample, o.sample_voxel_m), up, o);
 }
 
 std::vector<Surface> detail::find_surfaces(const Cloud::Ptr& sample,

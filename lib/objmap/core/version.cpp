@@ -1,4 +1,4 @@
-#include "objmap/version.h"
+#include "objmap/core/version.h"
 
 namespace objmap {
 const char* version() { return "0.1.0"; }
