@@ -102,6 +102,36 @@ TEST(Ply, ReadsAsciiWithExtraPropertiesAndDoubles) {
   EXPECT_EQ(c.colors[0], (Rgb{10, 20, 30}));
 }
 
+TEST(Ply, ReadsEveryBinaryTypeWithItsSign) {
+  // x: short -2, y: int -70000, z: double 1.25, red: char -1 (clamped to 0), green: ushort 300
+  // (clamped to 255), blue: uint8 7.
+  TempDir dir;
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty short x\n"
+      "property int y\nproperty double z\nproperty char red\nproperty ushort green\n"
+      "property uint8 blue\nend_header\n";
+  const auto put = [&bytes](const void* v, std::size_t n) {
+    bytes.append(static_cast<const char*>(v), n);
+  };
+  const std::int16_t x = -2;
+  const std::int32_t y = -70000;
+  const double z = 1.25;
+  const std::int8_t r = -1;
+  const std::uint16_t g = 300;
+  const std::uint8_t b = 7;
+  put(&x, 2);
+  put(&y, 4);
+  put(&z, 8);
+  put(&r, 1);
+  put(&g, 2);
+  put(&b, 1);
+  write_text(dir / "types.ply", bytes);
+  const PointCloud c = read_ply(dir / "types.ply");
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.points[0], Vec3f(-2.f, -70000.f, 1.25f));
+  EXPECT_EQ(c.colors[0], (Rgb{0, 255, 7}));
+}
+
 TEST(Ply, MalformedFilesSayWhatIsWrong) {
   TempDir dir;
   write_text(dir / "be.ply",

@@ -76,11 +76,21 @@ void write_ply(const fs::path& path, const PointCloud& cloud, const std::vector<
 
 namespace {
 
+enum class Kind { kSigned, kUnsigned, kFloat, kDouble };
+
 struct Property {
   std::string type;  // normalised: char uchar short ushort int uint float double
   std::string name;
   int size = 0;
+  Kind kind = Kind::kUnsigned;  // how the `size` bytes of a binary value read
 };
+
+Kind kind_of(const std::string& t) {
+  if (t == "float") return Kind::kFloat;
+  if (t == "double") return Kind::kDouble;
+  if (t == "char" || t == "short" || t == "int") return Kind::kSigned;
+  return Kind::kUnsigned;
+}
 
 int type_size(const std::string& t) {
   if (t == "char" || t == "uchar") return 1;
@@ -102,26 +112,30 @@ std::string normalise_type(const std::string& t) {
   return t;
 }
 
-double read_binary(const char* p, const std::string& type) {
+// A little-endian binary value of property `p` (its kind and size parsed once from the header).
+double read_binary(const char* bytes, const Property& p) {
   std::uint64_t bits = 0;
-  const int n = type_size(type);
-  for (int b = 0; b < n; ++b)
-    bits |= static_cast<std::uint64_t>(static_cast<unsigned char>(p[b])) << (8 * b);
-  if (type == "float") {
-    const std::uint32_t b32 = static_cast<std::uint32_t>(bits);
-    float f;
-    std::memcpy(&f, &b32, 4);
-    return f;
+  for (int b = 0; b < p.size; ++b)
+    bits |= static_cast<std::uint64_t>(static_cast<unsigned char>(bytes[b])) << (8 * b);
+  switch (p.kind) {
+    case Kind::kFloat: {
+      const std::uint32_t b32 = static_cast<std::uint32_t>(bits);
+      float f;
+      std::memcpy(&f, &b32, 4);
+      return f;
+    }
+    case Kind::kDouble: {
+      double d;
+      std::memcpy(&d, &bits, 8);
+      return d;
+    }
+    case Kind::kSigned:  // sign-extend from p.size bytes
+      return static_cast<double>(static_cast<std::int64_t>(bits << (64 - 8 * p.size)) >>
+                                 (64 - 8 * p.size));
+    case Kind::kUnsigned:
+      break;
   }
-  if (type == "double") {
-    double d;
-    std::memcpy(&d, &bits, 8);
-    return d;
-  }
-  if (type == "char") return static_cast<std::int8_t>(bits);
-  if (type == "short") return static_cast<std::int16_t>(bits);
-  if (type == "int") return static_cast<std::int32_t>(bits);
-  return static_cast<double>(bits);  // unsigned
+  return static_cast<double>(bits);
 }
 
 }  // namespace
@@ -193,7 +207,7 @@ PlyHeader read_header(PlyReader& r) {
       type = normalise_type(type);
       const int size = type_size(type);
       if (size == 0 || name.empty()) throw InputError(at, "unknown property type '" + type + "'");
-      h.props.push_back({type, name, size});
+      h.props.push_back({type, name, size, kind_of(type)});
     } else {
       throw InputError(at, "unexpected header line '" + r.line + "'");
     }
@@ -253,7 +267,7 @@ void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
                                   " of " + std::to_string(h.vertices) + " vertices (truncated)");
   for (std::size_t i = 0; i < h.vertices; ++i) {
     const char* row = body.data() + i * h.stride;
-    auto value = [&](int k) { return read_binary(row + h.offset[k], h.props[k].type); };
+    auto value = [&](int k) { return read_binary(row + h.offset[k], h.props[k]); };
     cloud.points[i] = Vec3f(static_cast<float>(value(h.ix)), static_cast<float>(value(h.iy)),
                             static_cast<float>(value(h.iz)));
     if (h.colour())
