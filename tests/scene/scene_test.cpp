@@ -288,6 +288,43 @@ TEST(Surfaces, AFloorLargerThanATableIsTheFloorWithOnlySmallObjectsOnIt) {
   EXPECT_EQ(relations[0].on->label, "floor");
 }
 
+TEST(Surfaces, AFloorInPiecesAtOneLevelIsFloorEverywhere) {
+  // A 3 x 2 m floor at 5 cm and, 0.6 m beyond it, a 1 m2 piece at 0 (under a desk the camera saw
+  // from afar: a few cm lower through the estimated up's tilt). The lowest piece is not the
+  // floor alone; a table top at 0.8 m is a table above the larger piece.
+  std::vector<Vec3f> pts;
+  add_rect(pts, 0.0, 3.0, 0.0, 2.0, 0.05);
+  add_rect(pts, 0.0, 1.0, 2.6, 3.6, 0.0);
+  add_rect(pts, 1.0, 2.0, 0.5, 1.3, 0.8);
+  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), {}, SurfaceOptions{});
+  relate_objects({}, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  ASSERT_EQ(surfaces.size(), 3u);
+  EXPECT_EQ(surfaces[0].label, "floor");  // the 6 m2 piece, largest first
+  EXPECT_NE(surfaces[0].label_rule.find("largest"), std::string::npos) << surfaces[0].label_rule;
+  EXPECT_EQ(surfaces[1].label, "floor");  // the 1 m2 piece
+  EXPECT_NE(surfaces[1].label_rule.find("floor's level"), std::string::npos);
+  EXPECT_EQ(surfaces[2].label, "table");
+  EXPECT_EQ(surfaces[2].label_rule, "a patch 0.75 m above the floor");
+}
+
+TEST(Relations, AMonitorAtTheDesksBackEdgeStandsOnIt) {
+  // The desk's visible outline ends where the monitor hides it: the monitor's centre lies 5.5 cm
+  // beyond the outline's edge (y = 1.775, the last 4 cm cell's mean; more than the 3 cm margin)
+  // with 27% of its footprint over the desk. A box with 8% of its footprint over the desk stands
+  // on nothing seen.
+  std::vector<Vec3f> pts = room();
+  const PointCloud monitor = box_object(Vec3(1.5, 1.83, 0.75), 0.12, 0.4);
+  const PointCloud box = box_object(Vec3(2.0, 1.875, 0.75), 0.12, 0.1);
+  const std::vector<SceneObject> objects = {{1, "tv monitor", Vec3(1.5, 1.83, 0.95), &monitor},
+                                            {2, "box", Vec3(2.0, 1.875, 0.8), &box}};
+  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  const auto relations =
+      relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  ASSERT_TRUE(relations[0].on);
+  EXPECT_EQ(relations[0].on->label, "table");
+  EXPECT_FALSE(relations[1].on);
+}
+
 TEST(Relations, ABookOnABookOfItsSizeIsOnThatBook) {
   // The upper book is seen whole, the lower one only by its sides: from above the lower one looks
   // no larger than the upper. The upper's bottom is 3 cm above the table and at the lower's top.

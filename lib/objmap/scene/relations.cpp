@@ -7,6 +7,7 @@
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <set>
+#include <sstream>
 
 #include "objmap/core/error.h"
 #include "objmap/scene/footprint.h"
@@ -30,14 +31,33 @@ bool seat_class(const std::string& name) {
   return c == "chair" || c == "couch" || c == "sofa" || c == "bench" || c == "bed" || c == "toilet";
 }
 
+std::string fixed(double v, int digits) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(digits);
+  out << v;
+  return out.str();
+}
+
 cv::Point2f xy_in_gravity(const Eigen::Matrix3d& gravity, const Vec3& p) {
   const Vec3 g = gravity * p;
   return {static_cast<float>(g.x()), static_cast<float>(g.y())};
 }
 
+// The share of the footprint `own` (a convex hull) that lies over the convex outline `under`.
+double overlap_share(const std::vector<cv::Point2f>& own, const std::vector<cv::Point2f>& under) {
+  if (own.size() < 3 || under.size() < 3) return 0.0;
+  const double area = cv::contourArea(own);
+  if (!(area > 0.0)) return 0.0;
+  std::vector<cv::Point2f> common;
+  return cv::intersectConvexConvex(own, under, common, /*handleNested=*/true) / area;
+}
+
 // `on`: the support (a surface that is no object's top, or another object) whose top lies
 // within [bottom − on_below, bottom + on_above] of the object's bottom, nearest to it (ties: the
-// higher), and whose outline holds the object's centre (seen from above, with outline_margin). The
+// higher), and whose outline holds the object's centre (seen from above, with outline_margin) or
+// at least min_footprint_overlap of its footprint: the visible outline of a desk ends where the
+// monitor at its back edge hides it, so the monitor's centre may lie beyond it. The
 // nearest, not the highest: a mouse beside a keyboard whose box it bleeds into sits at the table's
 // height, 3 cm below the keyboard's top; a book on a book sits at the lower book's top.
 std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>& objects,
@@ -51,7 +71,9 @@ std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>&
                             const std::vector<cv::Point2f>& hull) {
     const double gap = f.bottom - top;
     if (gap < -o.on_below_m || gap > o.on_above_m) return;
-    if (detail::inside_distance(hull, f.centre) < -o.outline_margin_m) return;
+    if (detail::inside_distance(hull, f.centre) < -o.outline_margin_m &&
+        overlap_share(f.hull, hull) < o.min_footprint_overlap)
+      return;
     if (best && (std::fabs(gap) > std::fabs(best->gap_m) ||
                  (std::fabs(gap) == std::fabs(best->gap_m) && top <= best_top)))
       return;
@@ -104,19 +126,35 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
     }
     if (s.area_m2 >= o.floor_min_area_m2 && (!floor || s.height_m < floor->height_m)) floor = &s;
   }
+  // The floor: the largest of the large patches at the lowest one's level (a floor that the
+  // estimated up sees tilted, or that desks and chairs cut apart, leaves pieces a few cm apart).
+  const auto at_level = [&](const Surface& s, double level) {
+    return !s.object && s.area_m2 >= o.floor_min_area_m2 &&
+           std::fabs(s.height_m - level) <= o.merge_height_m;
+  };
+  if (floor) {
+    const double lowest = floor->height_m;
+    for (Surface& s : surfaces)
+      if (at_level(s, lowest) && s.area_m2 > floor->area_m2) floor = &s;
+  }
   if (floor && small_on[floor->id] > 0 && standing_on[floor->id] == 0 &&
       floor->area_m2 <= o.table_max_area_m2)
     floor = nullptr;
   if (floor) {
-    floor->label = "floor";
-    floor->label_rule =
-        "the lowest patch of at least " + std::to_string(o.floor_min_area_m2) + " m2";
+    const std::string large = fixed(o.floor_min_area_m2, 2) + " m2";
+    for (Surface& s : surfaces)
+      if (at_level(s, floor->height_m)) {
+        s.label = "floor";
+        s.label_rule = &s == floor
+                           ? "the largest patch of at least " + large + " at the lowest level"
+                           : "a patch of at least " + large + " at the floor's level";
+      }
     for (Surface& s : surfaces) {
       const double above = s.height_m - floor->height_m;
-      if (!s.object && &s != floor && s.area_m2 >= o.table_min_area_m2 &&
+      if (!s.object && s.label != "floor" && s.area_m2 >= o.table_min_area_m2 &&
           above >= o.table_min_height_m && above <= o.table_max_height_m) {
         s.label = "table";
-        s.label_rule = "a patch " + std::to_string(above).substr(0, 4) + " m above the floor";
+        s.label_rule = "a patch " + fixed(above, 2) + " m above the floor";
       }
     }
     return;
@@ -158,6 +196,8 @@ void RelationOptions::check() const {
   require(on_below_m >= 0.0, "RelationOptions.on_below_m", "must be >= 0");
   require(on_above_m >= 0.0, "RelationOptions.on_above_m", "must be >= 0");
   require(outline_margin_m >= 0.0, "RelationOptions.outline_margin_m", "must be >= 0");
+  require(min_footprint_overlap > 0.0 && min_footprint_overlap <= 1.0,
+          "RelationOptions.min_footprint_overlap", "must be in (0, 1]");
   require(near_radius_m > 0.0, "RelationOptions.near_radius_m", "must be > 0");
   require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
   require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");

@@ -111,9 +111,10 @@ struct SceneObject {
 struct RelationOptions {
   double on_below_m = 0.06;  // an object's bottom may lie this far below its support's top ...
   double on_above_m = 0.08;  // ... or this far above it (its lowest part hidden from the camera)
-  double outline_margin_m = 0.03;   // footprint centre inside the support's outline, this margin
-  double near_radius_m = 0.5;       // `near`: box centres within this distance
-  double stack_tolerance_m = 0.03;  // `above`: bottom at least top − this
+  double outline_margin_m = 0.03;  // footprint centre inside the support's outline, this margin
+  double min_footprint_overlap = 0.25;  // ... or this share of the footprint over the outline
+  double near_radius_m = 0.5;           // `near`: box centres within this distance
+  double stack_tolerance_m = 0.03;      // `above`: bottom at least top − this
   double support_min_area_ratio = 0.5;  // an object support's footprint ≥ this × the object's
   void check() const;
 };
