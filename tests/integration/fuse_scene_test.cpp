@@ -1,4 +1,4 @@
-// The scene step through `objmap fuse` (issue 19, docs/scene.md): the up direction, the support
+// The scene step through `objmap fuse` (docs/scene.md): the up direction, the support
 // surfaces and the objects' `on` relations against objmap synth's ground truth with the trajectory
 // in the SLAM frame (the first camera's, as ORB-SLAM2 writes it), and the up direction on real TUM
 // sequences whose trajectory is given in their first camera's frame.
@@ -61,8 +61,8 @@ FirstCameraRun fuse_in_first_camera_frame(const std::string& key, const fs::path
 TEST(FuseScene, SyntheticScenesInTheSlamFrameUpSurfacesAndOnRelations) {
   // Seeds 1-3 fused with estimated_slam_frame.txt (the drifting estimate in the first camera's
   // frame: y down, z forward); eval scene brings the map into the ground truth's frame by the
-  // trajectories. Issue 19: up within 2 deg, floor and table found within 2 cm, `on` precision and
-  // recall >= 0.9 over the seeds.
+  // trajectories. The bounds: up within 2 deg, floor and table found within 2 cm, `on` precision
+  // and recall >= 0.9 over the seeds.
   int predicted = 0, relevant = 0, correct = 0;
   for (const char* seed : {"1", "2", "3"}) {
     RunResult why;
@@ -140,7 +140,7 @@ TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   // fr1's depth planes themselves lie 2.6-6.9 deg from the ground truth's z (the map's floor and
   // desk planes; each frame's own: 3.0 deg median), and their mean moves with the RANSAC sample:
   // 2.98 deg with the trajectory written to 6 decimals, 4.04 deg with it written exactly
-  // (docs/scene.md). The issue's 3 deg is not reached on fr1.
+  // (docs/scene.md), so 3 deg is not reached on fr1.
   EXPECT_LT(angle_deg(up_of(r.run), r.truth), 4.5);
   const nlohmann::json doc = read_json(r.run / "objects.json");
   double table_height = -1e9, floor_height = 1e9;
