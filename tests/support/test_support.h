@@ -23,6 +23,10 @@ bool data_required();
 
 // The message of the objmap::InputError that `call` throws, or "(no error)" when it throws none.
 std::string error_of(const std::function<void()>& call);
+// The reason of that InputError, its where() into *where when given; when `call` throws none, a
+// test failure "no error for <what>" and "".
+std::string error_reason(const std::function<void()>& call, const std::string& what,
+                         std::string* where = nullptr);
 
 // A fresh empty folder under the system temp dir, removed with the object.
 class TempDir {
