@@ -190,7 +190,7 @@ else
   step "no data folder $data: synthetic scenes only"
 fi
 
-# 1c. Speed of objmap correct on a 200-keyframe run (issue: "seconds, not minutes").
+# 1c. Speed of objmap correct on a 200-keyframe run (the target: seconds, not minutes).
 speed="$out/correct_speed"
 if [ "${BENCH_PERF:-1}" != 0 ] && [ $has_correct -eq 1 ]; then
   mkdir -p "$speed"

@@ -5,7 +5,7 @@
 # default options and with the dense map's pruning (--dense-prune-every 16). Prints per run the
 # keyframes, the dense map's voxels, the voxels pruned, the peak resident memory of the process
 # (/usr/bin/time -v) and the time per keyframe, then per variant the ratios of the last frame count
-# to the first (the targets of issue #21: voxels <= 1.3x, peak memory <= 1.5x).
+# to the first (the targets: voxels <= 1.3x, peak memory <= 1.5x).
 #   bash scripts/bench_memory.sh [OBJMAP] [OUT]        (make bench-memory [BUILD=DIR])
 # Environment: MEM_FRAMES ("300 1200"), MEM_SEED (1), MEM_THREADS (synth and fuse --threads, 2),
 # MEM_VARIANTS (fuse options per variant, ';'-separated; default ";--dense-prune-every 16").

@@ -37,7 +37,7 @@ from tum import nearest, quat_to_matrix, read_list, read_trajectory
 BEGIN = "<!-- bench:begin -->"
 END = "<!-- bench:end -->"
 
-# The seed paper (Sensors 2022, 22, 7576), as quoted in the project's issue.
+# The seed paper (Sensors 2022, 22, 7576).
 PAPER_TABLE7 = {
     "sequences": ["fr3_office", "fr3_teddy", "fr2_desk", "fr1_room", "fr1_desk"],
     "ORB-SLAM2": [0.0121, 0.0225, 0.0095, 0.0474, 0.0163],
@@ -592,7 +592,7 @@ def performance(bench):
                            "OpenCV): %.2f× faster than cv::imread; against cv::imread the fuse "
                            "costs %.2f× the decoding." %
                            (bf["imread1_ms"] / bf["decode1_ms"], fuse_ms / bf["imread1_ms"]))
-    summary.append("Issue's reference for the Open3D job on this machine: ~214 ms/frame, 2.7 GB.")
+    summary.append("Reference for the Open3D job on this machine: ~214 ms/frame, 2.7 GB.")
     return table + "\n\n" + " ".join(summary), meta["dataset"]
 
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Object positions of objmap fuse runs on synthetic scenes against the issue's tolerance.
+"""Object positions of objmap fuse runs on synthetic scenes against the position tolerance.
 
 For each SCENE:RUN pair (a folder of `objmap synth` and an `objmap fuse` run of it with
 groundtruth.txt), every map object is matched to a ground-truth object of its class (nearest

@@ -1,4 +1,4 @@
-// No command writes over what it reads (issue 21): an output that is an input, or a folder that
+// No command writes over what it reads: an output that is an input, or a folder that
 // holds one, is exit 2 naming both flags, and the input is left as it was.
 #include <gtest/gtest.h>
 
@@ -97,8 +97,8 @@ TEST(InputsCli, NoCommandWritesOverWhatItReads) {
 }
 
 TEST(InputsCli, AnOutputThatCannotBeWrittenIsRefusedBeforeTheWork) {
-  // --out inside a regular file: refused before any work (it used to fail at the final rename,
-  // naming the temporary folder).
+  // --out inside a regular file: refused before any work, naming the output and the file in its
+  // way (not the temporary folder at the final rename).
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
   TempDir tmp;
   write_text(tmp / "a_file", "x");

@@ -109,7 +109,7 @@ TEST(DetectCli, WholeFolderValidatesAndRerunsIdentically) {
   EXPECT_EQ(files_of(tmp / "seg"), files_of(tmp / "seg2"));
 }
 
-// The pipeline from a bare TUM folder and a trajectory: detect -> track -> fuse. On
+// The whole pipeline from a bare TUM folder and a trajectory: detect -> track -> fuse. On
 // fr1_desk_9 the map has the monitor and the keyboard (measured: exactly these 2 objects).
 TEST(DetectCli, DetectTrackFuseEndToEnd) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");

@@ -19,6 +19,7 @@
 namespace objmap::eval {
 namespace {
 
+using objmap::test::assignment_cost;
 using objmap::test::read_text;
 using objmap::test::run_objmap;
 using objmap::test::TempDir;
@@ -30,13 +31,6 @@ constexpr double kPi = 3.14159265358979323846;
 
 bool has(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
-}
-
-double assignment_cost(const Eigen::MatrixXd& cost, const std::vector<int>& row_to_col) {
-  double total = 0;
-  for (std::size_t i = 0; i < row_to_col.size(); ++i)
-    if (row_to_col[i] >= 0) total += cost(i, row_to_col[i]);
-  return total;
 }
 
 // ---- Hungarian

@@ -7,7 +7,7 @@
 namespace objmap::fusion {
 namespace {
 
-// One observation as a keyframe of its own: what the removed ObjectMap::add(observation) did.
+// One observation as a keyframe of its own.
 AddResult add_one(ObjectMap& map, const Observation& observation) {
   return map.add_frame({observation}).front();
 }

@@ -168,7 +168,7 @@ TEST(FuseReal, YcbVideoClipWithDefaultsFindsItsThreeObjects) {
 }
 
 TEST(FuseReal, YcbVideoMaskBleedOntoTheFarBackgroundDoesNotMoveTheObjects) {
-  // Issue 17's failure, reproduced on the real clip: each label mask bled 8 px onto what lies
+  // Mask bleed on the real clip: each label mask bled 8 px onto what lies
   // >= 10 cm behind its object (the table 14-20 cm behind the gelatin box's top edge and the mug's
   // rim). On this clip a bleed of <= 4 px lands on the sensor's shadow (no depth) or is a rim that
   // refine_mask removes; 8 px is a part of its own that is not a rim, so only the depth gate can
@@ -219,10 +219,10 @@ TEST(FuseReal, YcbVideoObjectsAgreeWithTheirOwnLabelMasks) {
 }
 
 TEST(FuseReal, Fr1RpyEveryFrameGivesTheSameObjectsAsTheKeyframes) {
-  // Issue 17: fr1_rpy_every4 with its detector boxes; motion keeps 145 of the 174 frames. Fusing
-  // all 174 confirmed 21 objects where the keyframes gave 18 (a false positive lasting 3 frames,
-  // a keyboard also boxed as "book"); views, not frames, now confirm, and a class confusion joins
-  // its object: 18 and 17 (docs/benchmarks.md, objects per keyframe density).
+  // fr1_rpy_every4 with its detector boxes; motion keeps 145 of the 174 frames. Counted by frames,
+  // all 174 would confirm 21 objects where the keyframes give 18 (a false positive lasting 3
+  // frames, a keyboard also boxed as "book"); views, not frames, confirm, and a class confusion
+  // joins its object: 18 and 17 (docs/benchmarks.md, objects per keyframe density).
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
   TempDir dir;
   const auto keyframes = fuse_real(data, "detections_yolofastest", dir / "kf");

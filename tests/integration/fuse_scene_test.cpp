@@ -1,4 +1,4 @@
-// The scene step through `objmap fuse` (issue 19, docs/scene.md): the up direction, the support
+// The scene step through `objmap fuse` (docs/scene.md): the up direction, the support
 // surfaces and the objects' `on` relations against objmap synth's ground truth with the trajectory
 // in the SLAM frame (the first camera's, as ORB-SLAM2 writes it), and the up direction on real TUM
 // sequences whose trajectory is given in their first camera's frame.
@@ -42,11 +42,27 @@ Eigen::Vector3d first_camera_frame(const fs::path& groundtruth, const fs::path& 
   return first_from_world.linear() * Eigen::Vector3d::UnitZ();
 }
 
+// A real sequence fused with its ground truth moved into its first camera's frame (cached as
+// `key`): the run folder (absent when the fuse failed, `why` says why) and the true up in it.
+struct FirstCameraRun {
+  fs::path run;
+  RunResult why;
+  Eigen::Vector3d truth;
+};
+FirstCameraRun fuse_in_first_camera_frame(const std::string& key, const fs::path& data,
+                                          const std::string& segmentation) {
+  const fs::path trajectory = fs::path(::testing::TempDir()) / (key + ".txt");
+  FirstCameraRun r;
+  r.truth = first_camera_frame(data / "groundtruth.txt", trajectory);
+  r.run = fuse_cached(key, data, trajectory, data / segmentation, &r.why);
+  return r;
+}
+
 TEST(FuseScene, SyntheticScenesInTheSlamFrameUpSurfacesAndOnRelations) {
   // Seeds 1-3 fused with estimated_slam_frame.txt (the drifting estimate in the first camera's
   // frame: y down, z forward); eval scene brings the map into the ground truth's frame by the
-  // trajectories. Issue 19: up within 2 deg, floor and table found within 2 cm, `on` precision and
-  // recall >= 0.9 over the seeds.
+  // trajectories. The bounds: up within 2 deg, floor and table found within 2 cm, `on` precision
+  // and recall >= 0.9 over the seeds.
   int predicted = 0, relevant = 0, correct = 0;
   for (const char* seed : {"1", "2", "3"}) {
     RunResult why;
@@ -78,15 +94,12 @@ TEST(FuseScene, SyntheticScenesInTheSlamFrameUpSurfacesAndOnRelations) {
 
 TEST(FuseScene, Fr3CabinetInItsFirstCameraFrameFindsUp) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr3_cabinet_58kf");
-  const fs::path trajectory = fs::path(::testing::TempDir()) / "fr3_cabinet_first_camera.txt";
-  const Eigen::Vector3d truth = first_camera_frame(data / "groundtruth.txt", trajectory);
-  RunResult why;
-  const fs::path run =
-      fuse_cached("fr3-cabinet-first-camera", data, trajectory, data / "boxes_yolov2", &why);
-  ASSERT_TRUE(fs::exists(run)) << why.err;
-  EXPECT_LT(angle_deg(up_of(run), truth), 1.0);  // 0.47 deg measured
+  const FirstCameraRun r =
+      fuse_in_first_camera_frame("fr3-cabinet-first-camera", data, "boxes_yolov2");
+  ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
+  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 1.0);  // 0.47 deg measured
   // The hall's floor is the floor (26 m2, no table however few objects stand on it).
-  const nlohmann::json doc = read_json(run / "objects.json");
+  const nlohmann::json doc = read_json(r.run / "objects.json");
   ASSERT_FALSE(doc["surfaces"].empty());
   EXPECT_EQ(doc["surfaces"][0]["label"], "floor");
   EXPECT_GT(doc["surfaces"][0]["area_m2"].get<double>(), 10.0);
@@ -121,18 +134,15 @@ TEST(FuseScene, Fr1RpyWithTheVisualOdometryEstimateFindsUp) {
 
 TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
-  const fs::path trajectory = fs::path(::testing::TempDir()) / "fr1_rpy_first_camera.txt";
-  const Eigen::Vector3d truth = first_camera_frame(data / "groundtruth.txt", trajectory);
-  RunResult why;
-  const fs::path run =
-      fuse_cached("fr1-rpy-first-camera", data, trajectory, data / "detections_yolofastest", &why);
-  ASSERT_TRUE(fs::exists(run)) << why.err;
+  const FirstCameraRun r =
+      fuse_in_first_camera_frame("fr1-rpy-first-camera", data, "detections_yolofastest");
+  ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
   // fr1's depth planes themselves lie 2.6-6.9 deg from the ground truth's z (the map's floor and
   // desk planes; each frame's own: 3.0 deg median), and their mean moves with the RANSAC sample:
   // 2.98 deg with the trajectory written to 6 decimals, 4.04 deg with it written exactly
-  // (docs/scene.md). The issue's 3 deg is not reached on fr1.
-  EXPECT_LT(angle_deg(up_of(run), truth), 4.5);
-  const nlohmann::json doc = read_json(run / "objects.json");
+  // (docs/scene.md), so 3 deg is not reached on fr1.
+  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 4.5);
+  const nlohmann::json doc = read_json(r.run / "objects.json");
   double table_height = -1e9, floor_height = 1e9;
   for (const auto& s : doc["surfaces"]) {
     if (s["label"] == "floor") floor_height = std::min(floor_height, s["height_m"].get<double>());

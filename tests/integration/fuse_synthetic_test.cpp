@@ -59,7 +59,7 @@ const SceneRun& default_run() {
   return run;
 }
 
-// The issue's position criterion: within max(2 cm, 10% of the object's largest dimension) of the
+// The position criterion: within max(2 cm, 10% of the object's largest dimension) of the
 // ground truth. The reference is the ground-truth object's box centre (objects_gt.json obb.center),
 // what the real data's references are (fr3_cabinet's cuboid, the YCB-Video model origins) and
 // what a surface sensor can observe; the volume centroid (objects_gt.json centroid) is not: a
@@ -68,7 +68,7 @@ double position_tolerance(const GtObject& g) { return std::max(0.02, 0.1 * g.lar
 
 TEST(FuseSynthetic, DefaultSceneEveryObjectFoundOnceAtItsBoxCentre) {
   // `objmap synth` with its defaults (seed 1, orbit 20°/s: each object seen over 60°), default mask
-  // noise, ground-truth poses: the issue's criterion as it stands.
+  // noise, ground-truth poses: the criterion as it stands.
   const SceneRun r = make_run("default", {}, {});
   ASSERT_EQ(r.synth.exit_code, 0) << r.synth.err;
   ASSERT_EQ(r.fuse.exit_code, 0) << r.fuse.err;
@@ -120,7 +120,7 @@ std::vector<std::pair<const GtObject*, double>> position_errors(const SceneRun& 
 }
 
 TEST(FuseSynthetic, MaskBleedOntoTheTableBehindDoesNotMoveObjectsAtTheEdge) {
-  // Issue 17: the edge preset's objects stand 1-2.5 cm from the table's edges and the masks bleed
+  // The edge preset's objects stand 1-2.5 cm from the table's edges and the masks bleed
   // 3 px onto whatever lies behind (table top, floor, walls) on top of the usual mask noise.
   // Without the depth gate the near cup and the mouse are dragged across the table top behind
   // them (6.8-15 cm over seeds 1-3, docs/fusion.md); with it, every object is within tolerance.
@@ -142,7 +142,7 @@ TEST(FuseSynthetic, MaskBleedOntoTheTableBehindDoesNotMoveObjectsAtTheEdge) {
 }
 
 TEST(FuseSynthetic, EveryFrameGivesTheSameObjectsAsTheKeyframes) {
-  // Issue 17: more frames of the same scene must not make more objects. Seeds 1-3 with their
+  // More frames of the same scene must not make more objects. Seeds 1-3 with their
   // defaults (motion keeps 30 of the 90 frames) fused again with --keyframes all.
   for (const char* seed : {"1", "2", "3"}) {
     const SceneRun r = make_run(std::string("seed") + seed + "-motion", {"--seed", seed}, {});

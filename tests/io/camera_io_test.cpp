@@ -50,14 +50,7 @@ DepthMapFactor: 5000.0
 
 // The reason of the InputError of read_camera_file(file); where goes to *where.
 std::string camera_error(const fs::path& file, std::string* where = nullptr) {
-  try {
-    read_camera_file(file);
-  } catch (const InputError& e) {
-    if (where) *where = e.where();
-    return e.reason();
-  }
-  ADD_FAILURE() << "no error for " << file;
-  return "";
+  return test::error_reason([&] { read_camera_file(file); }, file.string(), where);
 }
 
 std::string replace(std::string text, const std::string& from, const std::string& to) {

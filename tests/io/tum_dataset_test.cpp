@@ -18,14 +18,7 @@ using test::write_text;
 
 // The reason of the InputError thrown by reading `dir` (fails the test when nothing is thrown).
 std::string read_error(const fs::path& dir, std::string* where = nullptr) {
-  try {
-    read_tum_dataset(dir);
-  } catch (const InputError& e) {
-    if (where) *where = e.where();
-    return e.reason();
-  }
-  ADD_FAILURE() << "no error for " << dir;
-  return "";
+  return test::error_reason([&] { read_tum_dataset(dir); }, dir.string(), where);
 }
 
 TEST(ReadTumDataset, Fr1Desk9) {

@@ -10,6 +10,15 @@
 namespace objmap::scene {
 namespace {
 
+// The surfaces and which of them are objects' tops, as fuse finds them (find_surfaces, then
+// mark_object_tops).
+std::vector<Surface> surfaces_and_tops(const std::vector<Vec3f>& map_points, const Vec3& up,
+                                       const std::vector<SceneObject>& objects) {
+  std::vector<Surface> surfaces = find_surfaces(map_points, up, SurfaceOptions{});
+  mark_object_tops(surfaces, up, objects);
+  return surfaces;
+}
+
 double angle_deg(const Vec3& a, const Vec3& b) {
   return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
 }
@@ -196,7 +205,7 @@ struct Fixture {
 TEST(Surfaces, FloorAndTableFoundAtTheirHeightsWithTheObjectsOnThem) {
   Fixture f;
   const auto objects = f.objects();
-  std::vector<Surface> surfaces = find_surfaces(f.map(), Vec3::UnitZ(), objects, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(f.map(), Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   const Surface* floor = nullptr;
@@ -234,7 +243,7 @@ TEST(Surfaces, WithTheFloorUnseenTheTableIsWhatSmallObjectsStandOn) {
   Fixture f;
   const auto objects = f.objects();
   std::vector<Surface> surfaces =
-      find_surfaces(f.map(/*with_floor=*/false), Vec3::UnitZ(), objects, SurfaceOptions{});
+      surfaces_and_tops(f.map(/*with_floor=*/false), Vec3::UnitZ(), objects);
   relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   int tables = 0, floors = 0;
   for (const auto& s : surfaces) {
@@ -279,7 +288,7 @@ TEST(Surfaces, AFloorLargerThanATableIsTheFloorWithOnlySmallObjectsOnIt) {
   const PointCloud bag = box_object(Vec3(1.5, 1.5, 0.0), 0.1, 0.2);
   pts.insert(pts.end(), bag.points.begin(), bag.points.end());
   const std::vector<SceneObject> objects = {{1, "backpack", Vec3(1.5, 1.5, 0.1), &bag}};
-  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_EQ(surfaces.size(), 1u);
@@ -296,7 +305,7 @@ TEST(Surfaces, AFloorInPiecesAtOneLevelIsFloorEverywhere) {
   add_rect(pts, 0.0, 3.0, 0.0, 2.0, 0.05);
   add_rect(pts, 0.0, 1.0, 2.6, 3.6, 0.0);
   add_rect(pts, 1.0, 2.0, 0.5, 1.3, 0.8);
-  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), {}, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), {}, SurfaceOptions{});
   relate_objects({}, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_EQ(surfaces.size(), 3u);
   EXPECT_EQ(surfaces[0].label, "floor");  // the 6 m2 piece, largest first
@@ -317,7 +326,7 @@ TEST(Relations, AMonitorAtTheDesksBackEdgeStandsOnIt) {
   const PointCloud box = box_object(Vec3(2.0, 1.875, 0.75), 0.12, 0.1);
   const std::vector<SceneObject> objects = {{1, "tv monitor", Vec3(1.5, 1.83, 0.95), &monitor},
                                             {2, "box", Vec3(2.0, 1.875, 0.8), &box}};
-  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_TRUE(relations[0].on);
@@ -335,7 +344,7 @@ TEST(Relations, ABookOnABookOfItsSizeIsOnThatBook) {
     pts.insert(pts.end(), c->points.begin(), c->points.end());
   const std::vector<SceneObject> objects = {{1, "book", Vec3(1.5, 1.3, 0.765), &lower},
                                             {2, "book", Vec3(1.5, 1.3, 0.795), &upper}};
-  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_TRUE(relations[0].on);
@@ -363,7 +372,7 @@ TEST(Relations, AChairOnThinLegsStandsOnTheFloor) {
   std::vector<Vec3f> pts = room();
   pts.insert(pts.end(), chair.points.begin(), chair.points.end());
   const std::vector<SceneObject> objects = {{1, "chair", Vec3(c.x(), c.y(), 0.45), &chair}};
-  std::vector<Surface> surfaces = find_surfaces(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_TRUE(relations[0].on);

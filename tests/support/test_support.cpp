@@ -39,6 +39,18 @@ std::string error_of(const std::function<void()>& call) {
   return "(no error)";
 }
 
+std::string error_reason(const std::function<void()>& call, const std::string& what,
+                         std::string* where) {
+  try {
+    call();
+  } catch (const InputError& e) {
+    if (where) *where = e.where();
+    return e.reason();
+  }
+  ADD_FAILURE() << "no error for " << what;
+  return "";
+}
+
 TempDir::TempDir() {
   static std::atomic<int> counter{0};
   std::random_device rd;

@@ -1,6 +1,8 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -21,6 +23,10 @@ bool data_required();
 
 // The message of the objmap::InputError that `call` throws, or "(no error)" when it throws none.
 std::string error_of(const std::function<void()>& call);
+// The reason of that InputError, its where() into *where when given; when `call` throws none, a
+// test failure "no error for <what>" and "".
+std::string error_reason(const std::function<void()>& call, const std::string& what,
+                         std::string* where = nullptr);
 
 // A fresh empty folder under the system temp dir, removed with the object.
 class TempDir {
@@ -58,6 +64,15 @@ RunResult run_objmap_interrupted(const std::vector<std::string>& args,
 // (when given) says why.
 fs::path cached_output(const std::string& key, const std::vector<std::string>& args,
                        RunResult* result = nullptr);
+
+// Total cost of an assignment (row -> column, -1 for none) of a cost matrix, to check an
+// assignment solver against brute force.
+inline double assignment_cost(const Eigen::MatrixXd& cost, const std::vector<int>& row_to_col) {
+  double total = 0.0;
+  for (int r = 0; r < static_cast<int>(row_to_col.size()); ++r)
+    if (row_to_col[r] >= 0) total += cost(r, row_to_col[r]);
+  return total;
+}
 
 std::string read_text(const fs::path& file);
 void write_text(const fs::path& file, const std::string& text);

@@ -7,9 +7,12 @@
 #include <random>
 
 #include "objmap/track/assignment.h"
+#include "support/test_support.h"
 
 namespace objmap::track {
 namespace {
+
+using objmap::test::assignment_cost;
 
 // Smallest total cost over all assignments of min(rows, cols) pairs, by enumeration.
 double brute_force(const Eigen::MatrixXd& cost) {

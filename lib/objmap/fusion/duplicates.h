@@ -5,7 +5,7 @@
 
 #include "objmap/fusion/object_map.h"
 
-// Suspected duplicates, without ground truth (issue 17): pairs of confirmed objects of one class
+// Suspected duplicates, without ground truth: pairs of confirmed objects of one class
 // (segmentation::canonical_class) whose oriented boxes overlap or whose surfaces touch, each with
 // the merge pass's verdict on the pair (ObjectMap::merge_verdict): which of its rules kept the two
 // apart. One physical object kept as two map objects shows up here; so do two objects of one class

@@ -230,14 +230,7 @@ struct ObjectMap::Object {
     double sq = 0.0;
     bool any = false;
     voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-      const Eigen::Vector3i ijk = geometry::unpack_voxel(key);
-      if (!any) {
-        lo = hi = ijk;
-        any = true;
-      } else {
-        lo = lo.cwiseMin(ijk);
-        hi = hi.cwiseMax(ijk);
-      }
+      geometry::extend_voxel_bounds(key, any, lo, hi);
       const Vec3 p = voxels.mean_position(key, v);
       sum += p;
       sq += p.squaredNorm();

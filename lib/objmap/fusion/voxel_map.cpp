@@ -517,16 +517,8 @@ void VoxelMap::merge_counts(const VoxelMap& other) {
 bool VoxelMap::key_bounds(Eigen::Vector3i& lo, Eigen::Vector3i& hi) const {
   bool any = false;
   for (const Table& t : shards_) {
-    t.for_each([&](VoxelKey key, const VoxelData&) {
-      const Eigen::Vector3i ijk = geometry::unpack_voxel(key);
-      if (!any) {
-        lo = hi = ijk;
-        any = true;
-      } else {
-        lo = lo.cwiseMin(ijk);
-        hi = hi.cwiseMax(ijk);
-      }
-    });
+    t.for_each(
+        [&](VoxelKey key, const VoxelData&) { geometry::extend_voxel_bounds(key, any, lo, hi); });
   }
   return any;
 }

@@ -8,9 +8,9 @@
 
 #include "objmap/core/types.h"
 
-// Voxel keys and a flat open-addressing hash table keyed by them. Shared by the voxel filter
-// (filters/), the dense voxel map and the per-object voxel sets (fusion/), so that every part of
-// objmap agrees on which voxel a point falls in.
+// Voxel keys and a flat open-addressing hash table keyed by them. Shared by the dense voxel map and
+// the per-object voxel sets (fusion/), so that every part of objmap agrees on which voxel a point
+// falls in.
 namespace objmap::geometry {
 
 // A voxel is (ix, iy, iz) = floor(point / voxel_m), packed as 3 × 21 bits with an offset of 2^20:
@@ -31,6 +31,19 @@ inline Eigen::Vector3i unpack_voxel(VoxelKey key) {
   return {static_cast<int>((key >> 42) & mask) - kVoxelCoordLimit,
           static_cast<int>((key >> 21) & mask) - kVoxelCoordLimit,
           static_cast<int>(key & mask) - kVoxelCoordLimit};
+}
+
+// Grows the box [lo, hi] of voxel coordinates to hold `key`'s voxel; `any` is false before the
+// first key (lo and hi are then set to it).
+inline void extend_voxel_bounds(VoxelKey key, bool& any, Eigen::Vector3i& lo, Eigen::Vector3i& hi) {
+  const Eigen::Vector3i ijk = unpack_voxel(key);
+  if (!any) {
+    lo = hi = ijk;
+    any = true;
+  } else {
+    lo = lo.cwiseMin(ijk);
+    hi = hi.cwiseMax(ijk);
+  }
 }
 
 // floor() for |x| < 2^31 without a libm call (x86-64's baseline SSE2 has no rounding instruction).
@@ -82,11 +95,6 @@ inline const std::array<VoxelKey, 27>& neighbourhood_offsets() {
     return o;
   }();
   return offsets;
-}
-
-// Lower corner of a voxel in metres.
-inline Vec3 voxel_corner(VoxelKey key, double voxel_m) {
-  return unpack_voxel(key).cast<double>() * voxel_m;
 }
 
 // MurmurHash3 finaliser: every key bit reaches the high bits used for the slot index and the low
@@ -183,11 +191,6 @@ class VoxelHashTable {
   template <typename F>
   void for_each(F&& f) const {
     for (const Slot& s : slots_)
-      if (s.key != kNoVoxel) f(s.key, s.value);
-  }
-  template <typename F>
-  void for_each_mutable(F&& f) {
-    for (Slot& s : slots_)
       if (s.key != kNoVoxel) f(s.key, s.value);
   }
 

@@ -1,7 +1,6 @@
 // Relations between objects and surfaces: on, near, above, under; the surfaces' labels
 // (docs/scene.md, "Relations" and "Labels").
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -228,21 +227,6 @@ std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
         if (s.id == r.on->id) r.on->label = s.label;
   near_above_under(objects, feet, options, relations);
   return relations;
-}
-
-SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
-                       const std::vector<SceneObject>& objects, const SceneOptions& options) {
-  using Clock = std::chrono::steady_clock;
-  const auto since = [](Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-  };
-  SceneGraph g;
-  find_up_and_surfaces(cameras, map_points, options, g);
-  const auto t0 = Clock::now();
-  mark_object_tops(g.surfaces, g.up.up, objects);
-  g.relations = relate_objects(objects, g.surfaces, g.up.up, options.surfaces, options.relations);
-  g.seconds_relations = since(t0);
-  return g;
 }
 
 }  // namespace objmap::scene

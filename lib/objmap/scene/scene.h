@@ -159,11 +159,6 @@ struct SceneGraph {
 void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
                           const SceneOptions& options, SceneGraph& graph);
 
-// Up, surfaces and relations of a fused map: `map_points` is the dense map (may be empty: up then
-// comes from the cameras alone and there are no surfaces), `objects` the confirmed objects.
-SceneGraph build_scene(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
-                       const std::vector<SceneObject>& objects, const SceneOptions& options);
-
 // Surfaces of the map given the up direction (ids 1.. by area, labelled "surface"): the map alone,
 // so that it can run beside the objects' filtering.
 std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
@@ -171,10 +166,6 @@ std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const V
 // Which surface is an object's top (a chair's seat, a shelf's board): Surface::object.
 void mark_object_tops(std::vector<Surface>& surfaces, const Vec3& up,
                       const std::vector<SceneObject>& objects);
-// Both of the above.
-std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
-                                   const std::vector<SceneObject>& objects,
-                                   const SurfaceOptions& options);
 
 // The relations of every object, then the surfaces' labels (the table is what small objects stand
 // on when the floor is not seen), which the `on` supports then carry.

@@ -275,12 +275,4 @@ void mark_object_tops(std::vector<Surface>& surfaces, const Vec3& up,
   for (Surface& s : surfaces) s.object = object_under(s, gravity, objects, footprints);
 }
 
-std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
-                                   const std::vector<SceneObject>& objects,
-                                   const SurfaceOptions& o) {
-  std::vector<Surface> surfaces = find_surfaces(map_points, up, o);
-  mark_object_tops(surfaces, up, objects);
-  return surfaces;
-}
-
 }  // namespace objmap::scene

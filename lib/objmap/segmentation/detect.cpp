@@ -738,11 +738,4 @@ DetectResult detect_frames(Detector& detector, const std::vector<DetectFrame>& f
   return result;
 }
 
-DetectResult detect_dataset(const fs::path& dataset, const DetectOptions& options,
-                            const std::function<void(std::size_t, std::size_t)>& progress) {
-  options.check();
-  const std::vector<DetectFrame> frames = list_rgb_frames(dataset);
-  return detect_frames(frames, options, dataset.string(), progress);
-}
-
 }  // namespace objmap::segmentation

@@ -154,8 +154,4 @@ DetectResult detect_frames(Detector& detector, const std::vector<DetectFrame>& f
                            const std::string& where,
                            const std::function<void(std::size_t, std::size_t)>& progress = {});
 
-// list_rgb_frames + detect_frames on a TUM folder.
-DetectResult detect_dataset(const std::filesystem::path& dataset, const DetectOptions& options,
-                            const std::function<void(std::size_t, std::size_t)>& progress = {});
-
 }  // namespace objmap::segmentation

@@ -73,12 +73,4 @@ inline std::vector<int> solve_assignment(const Eigen::MatrixXd& cost) {
   return row_to_col;
 }
 
-// Total cost of an assignment returned by solve_assignment.
-inline double assignment_cost(const Eigen::MatrixXd& cost, const std::vector<int>& row_to_col) {
-  double total = 0.0;
-  for (int r = 0; r < static_cast<int>(row_to_col.size()); ++r)
-    if (row_to_col[r] >= 0) total += cost(r, row_to_col[r]);
-  return total;
-}
-
 }  // namespace objmap::track
