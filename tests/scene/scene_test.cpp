@@ -305,7 +305,7 @@ TEST(Surfaces, AFloorInPiecesAtOneLevelIsFloorEverywhere) {
   add_rect(pts, 0.0, 3.0, 0.0, 2.0, 0.05);
   add_rect(pts, 0.0, 1.0, 2.6, 3.6, 0.0);
   add_rect(pts, 1.0, 2.0, 0.5, 1.3, 0.8);
-  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), {}, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), {});
   relate_objects({}, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_EQ(surfaces.size(), 3u);
   EXPECT_EQ(surfaces[0].label, "floor");  // the 6 m2 piece, largest first
@@ -326,7 +326,7 @@ TEST(Relations, AMonitorAtTheDesksBackEdgeStandsOnIt) {
   const PointCloud box = box_object(Vec3(2.0, 1.875, 0.75), 0.12, 0.1);
   const std::vector<SceneObject> objects = {{1, "tv monitor", Vec3(1.5, 1.83, 0.95), &monitor},
                                             {2, "box", Vec3(2.0, 1.875, 0.8), &box}};
-  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects, SurfaceOptions{});
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
   ASSERT_TRUE(relations[0].on);
