@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "objmap/core/error.h"
@@ -105,6 +106,129 @@ TEST(DensePrune, FewViewsGiveNoVerdictAndTheToleranceIsInVoxels) {
       [](const std::vector<VoxelKey>& keys, const std::vector<const VoxelData*>&,
          std::vector<std::uint8_t>& noise) { noise.assign(keys.size(), 1); };
   EXPECT_THROW(plain.prune_remembered(everything), InputError);
+}
+
+// judge_peaks() of the map's remembered voxels against `views`.
+VoxelMap::Judge peak_judge(const VoxelMap& map, const RecentViews& views,
+                           const DensePruneOptions& options) {
+  return [&map, &views, options](const std::vector<VoxelKey>& keys,
+                                 const std::vector<const VoxelData*>& voxels,
+                                 std::vector<std::uint8_t>& noise) {
+    std::vector<Vec3> points;
+    std::vector<std::uint32_t> counts;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      points.push_back(map.mean_position(keys[i], *voxels[i]));
+      counts.push_back(voxels[i]->count);
+    }
+    views.judge_peaks(points, counts, map, options, noise);
+  };
+}
+
+DensePruneOptions peak_options(double ratio, int rejudge) {
+  DensePruneOptions options;
+  options.peak_ratio = ratio;
+  options.rejudge = rejudge;
+  return options;
+}
+
+TEST(DensePrunePeak, DropsVoxelsBesideABusierVoxelAlongTheRayAndKeepsTheSurface) {
+  const Camera camera = wall_camera();
+  RecentViews views(camera, 4);
+  views.add(wall_depth(2.0, camera.depth_factor), Pose::Identity());
+  // σ(2 m) = 6 mm: the ray is searched within ±1.2 cm (2σ), i.e. the voxels next to the wall's.
+  const Vec3f behind(0.005f, 0.005f, 2.015f);      // one point 1.5 cm behind the wall (10 each)
+  const Vec3f in_front(0.025f, 0.015f, 1.988f);    // one point 1.2 cm in front
+  const Vec3f far_behind(0.055f, 0.055f, 2.045f);  // 4.5 cm behind: beyond 2σ, kept
+  VoxelMap map({0.01, 2, 4});
+  map.remember_new_voxels();
+  map.insert(wall_points({behind, in_front, far_behind}));
+  const VoxelMap::Judge judge = peak_judge(map, views, peak_options(0.75, 0));
+  EXPECT_EQ(map.prune_remembered(judge), 0u);  // the first call judges nothing yet
+  EXPECT_EQ(map.prune_remembered(judge), 2u);
+  EXPECT_FALSE(map.contains(map.key_of(behind)));
+  EXPECT_FALSE(map.contains(map.key_of(in_front)));
+  EXPECT_TRUE(map.contains(map.key_of(far_behind)));
+  for (int i = -20; i < 20; ++i)
+    for (int j = -20; j < 20; ++j)
+      ASSERT_TRUE(map.contains(geometry::pack_voxel(i, j, 200))) << i << " " << j;
+}
+
+TEST(DensePrunePeak, ASurvivorIsJudgedAgainOnceItsNeighbourHasGrown) {
+  const Camera camera = wall_camera();
+  RecentViews views(camera, 4);
+  views.add(wall_depth(2.0, camera.depth_factor), Pose::Identity());
+  const Vec3f surface(0.005f, 0.005f, 2.005f), beside(0.005f, 0.005f, 2.015f);
+  for (const int rejudge : {0, 1}) {
+    VoxelMap map({0.01, 1, 2});
+    map.remember_new_voxels(rejudge);
+    PointCloud first;  // two points each: equal, both survive their first judgement
+    for (const Vec3f& p : {surface, surface, beside, beside}) first.push_back(p);
+    map.insert(first);
+    const VoxelMap::Judge judge = peak_judge(map, views, peak_options(0.75, rejudge));
+    EXPECT_EQ(map.prune_remembered(judge), 0u);  // call 0: nothing to judge
+    EXPECT_EQ(map.prune_remembered(judge), 0u);  // call 1: both judged, both kept
+    PointCloud more;  // the surface gets ten more points (no voxel opened)
+    for (int k = 0; k < 10; ++k) more.push_back(surface);
+    map.insert(more);
+    EXPECT_EQ(map.prune_remembered(judge), 0u);  // call 2: nothing due
+    // Call 3 (two calls after the first judgement): the survivors are judged again.
+    EXPECT_EQ(map.prune_remembered(judge), rejudge == 1 ? 1u : 0u) << "rejudge " << rejudge;
+    EXPECT_EQ(map.contains(map.key_of(beside)), rejudge == 0);
+    EXPECT_TRUE(map.contains(map.key_of(surface)));
+    for (int call = 0; call < 8; ++call) EXPECT_EQ(map.prune_remembered(judge), 0u);
+  }
+}
+
+// A wall 2 m away with Gaussian depth noise (σ 8 mm), `frames` points per column: the surface
+// voxels stay, the slab thins, and the map does not depend on the thread count.
+TEST(DensePrunePeak, ANoisyWallThinsToItsSurfaceTheSameOnAnyThreadCount) {
+  const Camera camera = wall_camera();
+  RecentViews views(camera, 4);
+  views.add(wall_depth(2.0, camera.depth_factor), Pose::Identity());
+  std::vector<VoxelMap::VoxelPoints> results;
+  std::size_t before = 0;
+  for (const int threads : {1, 3}) {
+    VoxelMap map({0.01, threads, 4});
+    map.remember_new_voxels(2);
+    std::mt19937 rng(7);
+    std::normal_distribution<float> noise(0.f, 0.008f);
+    const VoxelMap::Judge judge = peak_judge(map, views, peak_options(0.75, 2));
+    for (int frame = 0; frame < 24; ++frame) {
+      PointCloud cloud;
+      for (int i = -20; i < 20; ++i)
+        for (int j = -20; j < 20; ++j)
+          for (int k = 0; k < 4; ++k)
+            cloud.push_back(Vec3f(0.01f * i + 0.005f, 0.01f * j + 0.005f, 2.005f + noise(rng)));
+      map.insert(cloud);
+      if (threads == 1 && frame == 7) before = map.size();  // what 8 frames open, unpruned
+      if (frame % 4 == 3) map.prune_remembered(judge);
+    }
+    // Every column keeps a voxel at the surface or next to it (a surface voxel that loses to its
+    // neighbour early, when both have few points, stays dropped: the neighbour holds the surface).
+    for (int i = -20; i < 20; ++i)
+      for (int j = -20; j < 20; ++j)
+        ASSERT_TRUE(map.contains(geometry::pack_voxel(i, j, 200)) ||
+                    map.contains(geometry::pack_voxel(i, j, 199)) ||
+                    map.contains(geometry::pack_voxel(i, j, 201)))
+            << i << " " << j;
+    EXPECT_LT(map.size(), before / 2);  // the slab: less than half of it after 24 frames
+    results.push_back(map.sorted_points());
+  }
+  ASSERT_EQ(results[0].size(), results[1].size());
+  for (std::size_t i = 0; i < results[0].size(); ++i)
+    ASSERT_EQ(results[0][i].key, results[1][i].key);
+}
+
+TEST(DensePrunePeak, BadOptionsNameTheField) {
+  EXPECT_THROW(peak_options(1.5, 0).check(), InputError);
+  EXPECT_THROW(peak_options(-0.1, 0).check(), InputError);
+  EXPECT_THROW(peak_options(0.75, -1).check(), InputError);
+  EXPECT_THROW(peak_options(0.75, 17).check(), InputError);
+  DensePruneOptions options = peak_options(0.75, 2);
+  options.peak_sigmas = 0.0;
+  EXPECT_THROW(options.check(), InputError);
+  VoxelMap map({0.01, 1, 2});
+  EXPECT_THROW(map.remember_new_voxels(-1), InputError);
 }
 
 }  // namespace

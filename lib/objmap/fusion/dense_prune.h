@@ -7,6 +7,7 @@
 
 #include "objmap/core/camera.h"
 #include "objmap/core/types.h"
+#include "objmap/fusion/voxel_map.h"
 
 // Noise voxels of the dense map. Depth noise scatters a surface's points along the viewing rays
 // over a slab a few σ(z) thick (σ grows with the square of the depth: ±1 cm at 1.5 m, several cm at
@@ -26,6 +27,15 @@
 // noise when |median s| > tolerance_voxels voxels: the views put the surface elsewhere along the
 // ray. A surface seen repeatedly has the median of its measurements at its voxels and is kept; a
 // voxel that fewer recent views see is kept.
+//
+// The peak rule (peak_ratio > 0) judges instead by the map itself, as non-maximum suppression along
+// the ray: the noise spreads a surface's points along the rays with a density that peaks at the
+// surface, so a voxel is noise when a voxel its ray crosses within ±peak_sigmas σ(z) (the ray from
+// the latest recent view that has it in its image, else from the latest view) holds more than
+// count / peak_ratio points. The kept slab is as thick as the band where the density is at least
+// peak_ratio of its peak (±0.76 σ at 0.75), whatever the number of frames. With rejudge > 0 a
+// survivor is judged again 2, 4, 8, ... prunes later (VoxelMap::remember_new_voxels): a voxel that
+// passed while its neighbours were young goes once their counts have grown.
 namespace objmap::fusion {
 
 struct DensePruneOptions {
@@ -34,7 +44,13 @@ struct DensePruneOptions {
   int max_views = 5;          // the latest views that see it are enough (the cost of a verdict)
   double truncation_m = 0.1;  // s beyond +this counts as +this; below -this: occluded
   double tolerance_voxels = 1.0;  // |median s| allowed, in voxels
-  void check() const;             // throws InputError naming the bad field
+  int rejudge = 0;  // a surviving voxel is judged again 2, 4, 8, ... prunes later, this many times
+  double peak_ratio = 0.0;   // peak rule: noise when count < ratio x the ray's peak; 0: median rule
+  double peak_sigmas = 2.0;  // the ray is searched within ± this many σ(z)
+  double sigma_base_m = 0.0012;     // σ(z) = base + quadratic (z − ref)² (Nguyen et al. 2012)
+  double sigma_quadratic = 0.0019;  // 1/m
+  double sigma_ref_z_m = 0.4;
+  void check() const;  // throws InputError naming the bad field
 };
 
 // The last keyframes' depth images and poses, to judge the dense map's new voxels against.
@@ -51,16 +67,27 @@ class RecentViews {
   // the cache). Thread-safe (reads only).
   void judge(const std::vector<Vec3>& points, double voxel_m, const DensePruneOptions& options,
              std::vector<std::uint8_t>& noise) const;
+  // The peak rule for voxels' mean points and point counts in `map`: noise[i] = 1 when a voxel
+  // within ±peak_sigmas σ(z) along the ray from the latest view that has the point in its image
+  // (else the latest view) holds more than counts[i] / peak_ratio points. Reads only.
+  void judge_peaks(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& counts,
+                   const VoxelMap& map, const DensePruneOptions& options,
+                   std::vector<std::uint8_t>& noise) const;
   // judge() of one point.
   bool contradicted(const Vec3& point_in_world, double voxel_m,
                     const DensePruneOptions& options) const;
 
  private:
-  static constexpr int kStep = 2;  // the depth is kept at every kStep-th pixel and row
+  static constexpr int kStep = 2;         // the depth is kept at every kStep-th pixel and row
+  static constexpr int kMaxSamples = 64;  // samples along a ray in the peak rule (±16 voxels)
+  struct PeakRay;                         // the peak rule's search for one voxel
+  PeakRay peak_ray(const Vec3& point, std::uint32_t count, double voxel_m,
+                   const DensePruneOptions& options) const;
   struct View {
     cv::Mat depth;  // every kStep-th pixel of every kStep-th row
     Eigen::Matrix3d cam_from_world_r;
     Vec3 cam_from_world_t;
+    Vec3 centre_in_world;
   };
   Camera camera_;
   bool distorted_ = false;

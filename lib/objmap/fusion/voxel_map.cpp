@@ -292,22 +292,47 @@ void VoxelMap::reset() {
   points_dropped_ = 0;
   for (auto& keys : young_) keys.clear();
   for (auto& keys : aging_) keys.clear();
+  survivors_.clear();
+  prunes_ = 0;
   voxels_pruned_ = 0;
 }
 
-void VoxelMap::remember_new_voxels() {
+void VoxelMap::remember_new_voxels(int rejudge) {
+  require(rejudge >= 0 && rejudge <= 16, "VoxelMap::remember_new_voxels",
+          "rejudge must be in [0, 16], got " + std::to_string(rejudge));
   young_.resize(shards_.size());
   aging_.resize(shards_.size());
+  rejudge_ = rejudge;
 }
 
 std::size_t VoxelMap::prune_remembered(const Judge& judge) {
   require(young_.size() == shards_.size(), "VoxelMap::prune_remembered",
           "the map does not remember its new voxels; call remember_new_voxels() first");
-  // 1. The decisions, every shard's voxels on any thread (nothing changes yet).
   const std::size_t n = shards_.size();
+  const std::size_t now = prunes_++;
+  // The survivors due now, and the lists the survivors of this call go to (made before the
+  // threads start: each thread then writes only its own shard's vectors).
+  std::vector<std::pair<int, std::vector<std::vector<VoxelKey>>>> due;
+  for (auto it = survivors_.begin(); it != survivors_.end() && it->first.first == now;) {
+    due.emplace_back(it->first.second, std::move(it->second));
+    it = survivors_.erase(it);
+  }
+  std::vector<std::vector<std::vector<VoxelKey>>*> next(static_cast<std::size_t>(rejudge_));
+  for (int round = 0; round < rejudge_; ++round) {
+    auto& list = survivors_[{now + (std::size_t{2} << round), round + 1}];
+    list.resize(n);
+    next[static_cast<std::size_t>(round)] = &list;
+  }
+  // 1. The decisions, every shard's voxels on any thread (nothing changes yet): the voxels opened
+  //    before the previous call (round 0), then the survivors due (round r: r judgements passed).
   std::vector<std::vector<VoxelKey>> drop(n);
   parallel_for(n, static_cast<int>(threads_), [&](std::size_t s) {
-    const std::vector<VoxelKey>& keys = aging_[s];
+    std::vector<VoxelKey> keys = aging_[s];
+    std::vector<int> rounds(keys.size(), 0);
+    for (const auto& [round, lists] : due) {
+      keys.insert(keys.end(), lists[s].begin(), lists[s].end());
+      rounds.resize(keys.size(), round);
+    }
     const Table& table = shards_[s];
     std::vector<const VoxelData*> voxels(keys.size());
     constexpr std::size_t kAhead = 8;  // the slots of later keys prefetched (cache misses overlap)
@@ -317,8 +342,12 @@ std::size_t VoxelMap::prune_remembered(const Judge& judge) {
     }
     std::vector<std::uint8_t> noise(keys.size(), 0);
     judge(keys, voxels, noise);
-    for (std::size_t i = 0; i < keys.size(); ++i)
-      if (noise[i]) drop[s].push_back(keys[i]);
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (noise[i])
+        drop[s].push_back(keys[i]);
+      else if (rounds[i] < rejudge_)
+        (*next[static_cast<std::size_t>(rounds[i])])[s].push_back(keys[i]);
+    }
   });
   // 2. The drops, shard by shard; the voxels opened since the last call are judged by the next.
   std::size_t dropped = 0;

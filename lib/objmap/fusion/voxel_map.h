@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -74,7 +75,10 @@ class VoxelMap {
 
   // Pruning (fusion/dense_prune.h). From now on insert() and add_shard() remember the voxels they
   // open, so that prune_remembered() judges each of them once.
-  void remember_new_voxels();
+  // `rejudge`: a voxel that survives its judgement is judged again, 2, 4, 8, ... calls later, up to
+  // this many more times (the cost stays amortised: each voxel is judged 1 + rejudge times at
+  // most).
+  void remember_new_voxels(int rejudge = 0);
   // Judges the voxels opened before the previous call (none at the first) and drops the noise;
   // keeps the voxels opened since for the next call. Returns how many were dropped. judge(keys,
   // voxels, noise) gets a shard's voxels at a time and sets noise[i] (0 or 1) for each; it is
@@ -97,6 +101,7 @@ class VoxelMap {
   std::size_t memory_bytes() const;  // hash tables
 
   const VoxelData* find(VoxelKey key) const;
+  void prefetch(VoxelKey key) const { shards_[shard_of(key)].prefetch(key); }  // a find() soon
   bool contains(VoxelKey key) const { return find(key) != nullptr; }
   VoxelKey key_of(const Vec3f& point_in_world) const {
     return geometry::voxel_key(point_in_world, inv_voxel_m_);
@@ -182,6 +187,11 @@ class VoxelMap {
   // Per shard, the voxels opened since the last prune_remembered() and before it
   // (remember_new_voxels; empty vectors: not remembered).
   std::vector<std::vector<VoxelKey>> young_, aging_;
+  // Survivors to judge again: by (call number at which they are due, how many judgements they
+  // passed), per shard.
+  int rejudge_ = 0;
+  std::size_t prunes_ = 0;  // calls of prune_remembered()
+  std::map<std::pair<std::size_t, int>, std::vector<std::vector<VoxelKey>>> survivors_;
   std::uint64_t voxels_pruned_ = 0;
 };
 

@@ -73,6 +73,14 @@ std::vector<ConfigField> inputs_fields(FuseOptions& o) {
        "dense map: a voxel is kept when the median of the recent views' signed distances to it "
        "is within this many voxels",
        &o.dense_prune.tolerance_voxels},
+      {"map.prune_peak_ratio", "--dense-prune-peak",
+       "dense map: judge by the peak rule instead, a voxel is noise when a voxel along its ray "
+       "within 2 sigma(z) holds more than 1/ratio times its points; 0: the median rule",
+       &o.dense_prune.peak_ratio},
+      {"map.prune_rejudge", "--dense-prune-rejudge",
+       "dense map: a voxel that survives is judged again 2, 4, 8, ... prunes later, this many "
+       "times",
+       &o.dense_prune.rejudge},
   };
 }
 
@@ -308,7 +316,10 @@ void FuseOptions::check() const {
           "must be in [0.001, 1] m");
   require(dense_stride >= 1 && dense_stride <= 64, "map.dense_stride", "must be in [1, 64]");
   check_part([&] { dense_prune.check(); }, "DensePruneOptions", "map.prune",
-             {{"every_keyframes", "map.prune_every"}, {"tolerance_voxels", "map.prune_tolerance"}});
+             {{"every_keyframes", "map.prune_every"},
+              {"tolerance_voxels", "map.prune_tolerance"},
+              {"peak_ratio", "map.prune_peak_ratio"},
+              {"rejudge", "map.prune_rejudge"}});
   require(std::isfinite(min_instance_score) && min_instance_score >= 0 && min_instance_score <= 1,
           "segmentation.min_score", "must be in [0, 1]");
   require(std::isfinite(duplicate_overlap) && duplicate_overlap > 0 && duplicate_overlap <= 1,
@@ -1014,7 +1025,7 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
       dense ? static_cast<std::size_t>(options.dense_prune.every_keyframes) : 0;
   fusion::RecentViews views(camera, prune_every);
   if (prune_every > 0) {
-    dense->remember_new_voxels();
+    dense->remember_new_voxels(options.dense_prune.rejudge);
     merge_order.hold(prune_every);
   }
   std::deque<std::future<FrameWork>> pending;
@@ -1053,9 +1064,15 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
                                       const std::vector<const fusion::VoxelData*>& voxels,
                                       std::vector<std::uint8_t>& noise) {
             std::vector<Vec3> points(keys.size());
-            for (std::size_t i = 0; i < keys.size(); ++i)
+            std::vector<std::uint32_t> counts(keys.size());
+            for (std::size_t i = 0; i < keys.size(); ++i) {
               points[i] = dense->mean_position(keys[i], *voxels[i]);
-            views.judge(points, dense->voxel_m(), options.dense_prune, noise);
+              counts[i] = voxels[i]->count;
+            }
+            if (options.dense_prune.peak_ratio > 0)
+              views.judge_peaks(points, counts, *dense, options.dense_prune, noise);
+            else
+              views.judge(points, dense->voxel_m(), options.dense_prune, noise);
           });
           merge_order.hold(done + 1 + prune_every);
         }
