@@ -1,4 +1,4 @@
-// bench_scene: the parts of fuse's scene step (docs/scene.md, docs/benchmarks.md "Scene step") on
+// bench_scene: the parts of fuse's scene step (docs/scene.md, docs/benchmarks.md "The scene step") on
 // the dense map of fr1_rpy_every4 (fused once with its ground truth at start-up): the 4 cm sample,
 // its normals by objmap's grid against PCL's NormalEstimation (12 nearest by a kd-tree, what the
 // grid replaced), the up's RANSAC and the surfaces on the sample.

@@ -1,5 +1,5 @@
 // The sample's surface normals from its grid (docs/scene.md, "Surfaces"; the benchmark against
-// PCL's NormalEstimation is in docs/benchmarks.md, "Scene step").
+// PCL's NormalEstimation is in docs/benchmarks.md, "The scene step").
 #include <Eigen/Eigenvalues>
 
 #include "objmap/geometry/voxel_key.h"

@@ -16,7 +16,7 @@ UpEstimate estimate_up(const std::vector<Pose>& cameras, const Cloud::Ptr& sampl
 // Each sample point's unit surface normal: the plane (PCA) of the sample points in its grid cell
 // and the 26 cells around it (`sample` one point per cell of `cell_m`, as sample_on_grid gives
 // it); zero where fewer than 3. PCL's NormalEstimation (k nearest by a kd-tree) gives the same
-// on planes at 4x the time (docs/benchmarks.md, "Scene step").
+// on planes at 3x the time (docs/benchmarks.md, "The scene step").
 std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_m);
 
 // find_surfaces with the dense map sampled on options.sample_voxel_m (sample_on_grid, not thinned)

@@ -1,5 +1,5 @@
-// The up direction and the support surfaces of one dense map in one pass (docs/scene.md,
-// "Speed"): the map sampled once, the sample's normals computed beside the RANSAC of the up.
+// The up direction and the support surfaces of one dense map in one pass (docs/benchmarks.md,
+// "The scene step"): the map sampled once, the sample's normals computed beside the up's RANSAC.
 #include <chrono>
 #include <future>
 
