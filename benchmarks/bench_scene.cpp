@@ -1,7 +1,7 @@
-// bench_scene: the parts of fuse's scene step (docs/scene.md, docs/benchmarks.md "The scene step") on
-// the dense map of fr1_rpy_every4 (fused once with its ground truth at start-up): the 4 cm sample,
-// its normals by objmap's grid against PCL's NormalEstimation (12 nearest by a kd-tree, what the
-// grid replaced), the up's RANSAC and the surfaces on the sample.
+// bench_scene: the parts of fuse's scene step (docs/scene.md, docs/benchmarks.md "The scene step")
+// on the dense map of fr1_rpy_every4 (fused once with its ground truth at start-up): the 4 cm
+// sample, its normals by objmap's grid against PCL's NormalEstimation (12 nearest by a kd-tree,
+// what the grid replaced), the up's RANSAC and the surfaces on the sample.
 //   OBJMAP_DATA=../shared/data build/bin/bench_scene
 #include <benchmark/benchmark.h>
 #include <pcl/features/normal_3d.h>
