@@ -23,10 +23,10 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "bench_data.h"
+#include "objmap/core/version.h"
 #include "objmap/io/image.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/fuse.h"
-#include "objmap/core/version.h"
 
 namespace fs = std::filesystem;
 using namespace objmap;

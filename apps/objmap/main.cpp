@@ -19,8 +19,8 @@
 
 #include "command.h"
 #include "objmap/core/error.h"
-#include "objmap/io/atomic.h"
 #include "objmap/core/version.h"
+#include "objmap/io/atomic.h"
 
 namespace objmap::app {
 

@@ -15,6 +15,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/core/parallel.h"
+#include "objmap/core/version.h"
 #include "objmap/geometry/bounds.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/camera_io.h"
@@ -22,7 +23,6 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/run_json.h"
-#include "objmap/core/version.h"
 
 namespace objmap::pipeline {
 namespace {

@@ -15,6 +15,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/core/parallel.h"
+#include "objmap/core/version.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/fusion/voxel_map.h"
@@ -27,7 +28,6 @@
 #include "objmap/pipeline/fuse_scene.h"
 #include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/read.h"
-#include "objmap/core/version.h"
 
 namespace objmap::pipeline {
 
