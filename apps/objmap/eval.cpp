@@ -11,8 +11,8 @@
 #include <string>
 
 #include "command.h"
+#include "objmap/core/format.h"
 #include "objmap/eval/ate.h"
-#include "objmap/eval/format.h"
 #include "objmap/eval/json.h"
 #include "objmap/eval/objects.h"
 #include "objmap/eval/rpe.h"
@@ -86,19 +86,18 @@ void run_eval_ate(const EvalAteArgs& args) {
     io::write_trajectory(args.save_aligned_file, result.aligned,
                          "objmap eval ate: " + args.est_file + " aligned onto " + args.gt_file +
                              "\n" + (args.options.with_scale ? "sim3" : "se3") +
-                             " alignment, scale " + eval::number_text(a.scale));
+                             " alignment, scale " + number_text(a.scale));
   if (!args.json_file.empty())
     io::write_file_atomic(args.json_file, eval::ate_json(result, args.options));
 
   std::cout << "ATE  " << args.est_file << "  vs  " << args.gt_file << "\n"
             << "  pairs   " << result.stats.count
-            << " (max_diff " + eval::number_text(args.options.max_diff_s) << " s, offset "
-            << eval::number_text(args.options.offset_s) << " s)\n"
+            << " (max_diff " + number_text(args.options.max_diff_s) << " s, offset "
+            << number_text(args.options.offset_s) << " s)\n"
             << "  align   " << (args.options.with_scale ? "sim3" : "se3") << ", scale "
-            << eval::fixed_text(a.scale, 6) << ", translation ["
-            << eval::fixed_text(a.translation.x(), 4) << ", "
-            << eval::fixed_text(a.translation.y(), 4) << ", "
-            << eval::fixed_text(a.translation.z(), 4) << "] m\n"
+            << fixed_text(a.scale, 6) << ", translation [" << fixed_text(a.translation.x(), 4)
+            << ", " << fixed_text(a.translation.y(), 4) << ", " << fixed_text(a.translation.z(), 4)
+            << "] m\n"
             << "  translational error [m]\n";
   print_stats_rows(std::cout, {&result.stats});
 }
@@ -154,11 +153,10 @@ void run_eval_rpe(EvalRpeArgs args) {
     io::write_file_atomic(args.json_file, eval::rpe_json(result, args.options));
 
   std::cout << "RPE  " << args.est_file << "  vs  " << args.gt_file << "\n"
-            << "  pairs   " << result.pairs.size() << " (delta "
-            << eval::number_text(args.options.delta) << " "
-            << eval::to_string(args.options.delta_unit) << ", max_diff "
-            << eval::fixed_text(result.max_diff_s, 4) << " s, offset "
-            << eval::number_text(args.options.offset_s) << " s)\n"
+            << "  pairs   " << result.pairs.size() << " (delta " << number_text(args.options.delta)
+            << " " << eval::to_string(args.options.delta_unit) << ", max_diff "
+            << fixed_text(result.max_diff_s, 4) << " s, offset "
+            << number_text(args.options.offset_s) << " s)\n"
             << "          translational [m]  rotational [deg]\n";
   print_stats_rows(std::cout, {&result.translational_m, &result.rotational_deg});
 }

@@ -6,7 +6,7 @@
 #include <tuple>
 
 #include "objmap/core/error.h"
-#include "objmap/eval/format.h"
+#include "objmap/core/format.h"
 
 namespace objmap::eval {
 

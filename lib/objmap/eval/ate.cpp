@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "objmap/core/error.h"
-#include "objmap/eval/format.h"
+#include "objmap/core/format.h"
 
 namespace objmap::eval {
 

@@ -18,7 +18,7 @@
 #include <tuple>
 
 #include "objmap/core/error.h"
-#include "objmap/eval/format.h"
+#include "objmap/core/format.h"
 #include "objmap/eval/json.h"
 #include "objmap/io/json_file.h"
 #include "objmap/io/text_lines.h"

@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "objmap/core/error.h"
+#include "objmap/core/format.h"
 #include "objmap/eval/associate.h"
-#include "objmap/eval/format.h"
 
 namespace objmap::eval {
 

@@ -8,8 +8,8 @@
 #include <set>
 
 #include "objmap/core/error.h"
+#include "objmap/core/format.h"
 #include "objmap/core/polygon.h"
-#include "objmap/eval/format.h"
 #include "objmap/eval/json.h"
 #include "objmap/eval/objects.h"
 

@@ -1,4 +1,5 @@
 #include "objmap/fusion/duplicates.h"
+#include "objmap/core/format.h"
 
 #include <flann/flann.hpp>
 
@@ -95,12 +96,6 @@ double aabb_gap(const Aabb& x, const Aabb& y) {
 
 double volume(const Obb& box) { return 8.0 * box.half_extent.prod(); }
 
-std::string fixed(double value, int decimals) {
-  char s[64];
-  std::snprintf(s, sizeof s, "%.*f", decimals, value);
-  return s;
-}
-
 }  // namespace
 
 DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const ObjectMap& map,
@@ -167,13 +162,15 @@ std::string describe_refusal(const MergeVerdict& v, const ObjectMapOptions& opti
     case MergeRefusal::kSharedFrames:
       return "seen together in " + std::to_string(v.shared_frames) + " of " +
              std::to_string(v.smaller_frames) + " keyframes (more than " +
-             fixed(100.0 * options.merge_max_shared_frames, 0) + "%)";
+             fixed_text(100.0 * options.merge_max_shared_frames, 0) + "%)";
     case MergeRefusal::kScore:
-      return "score P " + fixed(v.score_p, 2) + " <= " + fixed(options.merge_threshold, 2) +
-             " (same track " + (v.p_id > 0 ? "yes" : "no") + ", centroids " +
-             fixed(v.distance_m, 2) + " m apart, " + m + " " + fixed(v.overlap, 2) + ")";
+      return "score P " + fixed_text(v.score_p, 2) +
+             " <= " + fixed_text(options.merge_threshold, 2) + " (same track " +
+             (v.p_id > 0 ? "yes" : "no") + ", centroids " + fixed_text(v.distance_m, 2) +
+             " m apart, " + m + " " + fixed_text(v.overlap, 2) + ")";
     case MergeRefusal::kOverlap:
-      return m + " M " + fixed(v.overlap, 2) + " < " + fixed(options.merge_min_overlap, 2);
+      return m + " M " + fixed_text(v.overlap, 2) + " < " +
+             fixed_text(options.merge_min_overlap, 2);
   }
   return "";
 }

@@ -1,4 +1,5 @@
 #include "objmap/report/page.h"
+#include "objmap/core/format.h"
 
 #include <cstdio>
 #include <map>
@@ -11,14 +12,8 @@ namespace objmap::report {
 
 namespace {
 
-std::string fixed(double value, int decimals) {
-  char s[64];
-  std::snprintf(s, sizeof s, "%.*f", decimals, value);
-  return s;
-}
-
 std::string count_text(double value) {  // 1234567 -> "1 234 567" (thin groups read at a glance)
-  std::string digits = fixed(value, 0);
+  std::string digits = fixed_text(value, 0);
   std::string out;
   const std::size_t start = digits[0] == '-' ? 1 : 0;
   for (std::size_t i = 0; i < digits.size(); ++i) {
@@ -28,7 +23,7 @@ std::string count_text(double value) {  // 1234567 -> "1 234 567" (thin groups r
   return out;
 }
 
-std::string percent(double ratio) { return fixed(100.0 * ratio, 1) + "%"; }
+std::string percent(double ratio) { return fixed_text(100.0 * ratio, 1) + "%"; }
 
 std::map<std::string, int> per_class(const PageContent& c) {
   std::map<std::string, int> n;
@@ -49,9 +44,10 @@ Table ate_table(const PageContent& c) {
   t.header = {"trajectory", "pairs", "RMSE", "mean", "median", "std", "min", "max"};
   t.numeric = {false, true, true, true, true, true, true, true};
   for (const PageAte& a : c.ate)
-    t.rows.push_back({a.name, std::to_string(a.stats.count), fixed(a.stats.rmse, 4),
-                      fixed(a.stats.mean, 4), fixed(a.stats.median, 4), fixed(a.stats.stddev, 4),
-                      fixed(a.stats.min, 4), fixed(a.stats.max, 4)});
+    t.rows.push_back({a.name, std::to_string(a.stats.count), fixed_text(a.stats.rmse, 4),
+                      fixed_text(a.stats.mean, 4), fixed_text(a.stats.median, 4),
+                      fixed_text(a.stats.stddev, 4), fixed_text(a.stats.min, 4),
+                      fixed_text(a.stats.max, 4)});
   return t;
 }
 
@@ -72,17 +68,17 @@ Table objects_table(const PageContent& c) {
     std::vector<std::string> row = {
         std::to_string(o.id),
         o.class_name,
-        fixed(o.centroid.x(), 3),
-        fixed(o.centroid.y(), 3),
-        fixed(o.centroid.z(), 3),
+        fixed_text(o.centroid.x(), 3),
+        fixed_text(o.centroid.y(), 3),
+        fixed_text(o.centroid.z(), 3),
         p.points_raw ? count_text(static_cast<double>(*p.points_raw)) : "-",
         p.points_voxel ? count_text(static_cast<double>(*p.points_voxel)) : "-",
         count_text(static_cast<double>(o.points)),
         std::to_string(o.observations),
-        fixed(o.score, 2)};
+        fixed_text(o.score, 2)};
     if (c.object_eval) {
       const auto d = gt_distance(c, o.id);
-      row.push_back(d ? fixed(*d, 3) : "unmatched");
+      row.push_back(d ? fixed_text(*d, 3) : "unmatched");
     }
     t.rows.push_back(row);
     t.swatches.push_back(hex_color(fusion::class_color(o.class_name)));
@@ -119,7 +115,7 @@ Table class_table(const PageContent& c) {
 Table error_table(const eval::ObjectEvalReport& e) {
   Table t;
   t.caption = "Tables 4-5: centroid error of the matched objects [m] (one-to-one by class, gate " +
-              fixed(e.options.gate_m, 2) + " m) and oriented-box IoU";
+              fixed_text(e.options.gate_m, 2) + " m) and oriented-box IoU";
   t.header = {"class", "matched", "mean", "median", "max", "|dx|", "|dy|", "|dz|", "IoU"};
   t.numeric = {false, true, true, true, true, true, true, true, true};
   t.total_row = "overall";
@@ -128,10 +124,10 @@ Table error_table(const eval::ObjectEvalReport& e) {
     if (r.matched == 0) {
       t.rows.push_back({r.class_name, matched, "-", "-", "-", "-", "-", "-", "-"});
     } else {
-      t.rows.push_back({r.class_name, matched, fixed(r.distance_m.mean, 4),
-                        fixed(r.distance_m.median, 4), fixed(r.distance_m.max, 4),
-                        fixed(r.mean_abs_xyz_m.x(), 4), fixed(r.mean_abs_xyz_m.y(), 4),
-                        fixed(r.mean_abs_xyz_m.z(), 4), fixed(r.iou.mean, 3)});
+      t.rows.push_back({r.class_name, matched, fixed_text(r.distance_m.mean, 4),
+                        fixed_text(r.distance_m.median, 4), fixed_text(r.distance_m.max, 4),
+                        fixed_text(r.mean_abs_xyz_m.x(), 4), fixed_text(r.mean_abs_xyz_m.y(), 4),
+                        fixed_text(r.mean_abs_xyz_m.z(), 4), fixed_text(r.iou.mean, 3)});
     }
     t.swatches.push_back(r.class_name == "overall" ? ""
                                                    : hex_color(fusion::class_color(r.class_name)));
@@ -145,8 +141,8 @@ Table precision_table(const eval::ObjectEvalReport& e) {
   t.header = {"within", "matched", "precision", "recall"};
   t.numeric = {true, true, true, true};
   for (const eval::PrecisionRecall& p : e.result.precision_recall)
-    t.rows.push_back({fixed(p.threshold_m, 2) + " m", std::to_string(p.matched),
-                      fixed(p.precision, 3), fixed(p.recall, 3)});
+    t.rows.push_back({fixed_text(p.threshold_m, 2) + " m", std::to_string(p.matched),
+                      fixed_text(p.precision, 3), fixed_text(p.recall, 3)});
   return t;
 }
 
@@ -174,7 +170,7 @@ Table duplicates_table(const std::vector<PageDuplicate>& pairs) {
   t.numeric = {false, false, true, true, true, false};
   for (const PageDuplicate& d : pairs) {
     t.rows.push_back({std::to_string(d.a) + " + " + std::to_string(d.b), d.class_name,
-                      percent(d.obb_overlap), fixed(d.surface_distance_m, 3),
+                      percent(d.obb_overlap), fixed_text(d.surface_distance_m, 3),
                       percent(d.touching_share), d.merge_reason});
     t.swatches.push_back(hex_color(fusion::class_color(d.class_name)));
   }
@@ -245,16 +241,16 @@ std::string summary_line(const PageContent& c) {
     s += "; ATE not computed (no ground-truth trajectory)";
   } else {
     for (std::size_t i = 0; i < c.ate.size(); ++i)
-      s += (i == 0 ? "; ATE RMSE " : ", ") + c.ate[i].name + " " + fixed(c.ate[i].stats.rmse, 4) +
-           " m";
+      s += (i == 0 ? "; ATE RMSE " : ", ") + c.ate[i].name + " " +
+           fixed_text(c.ate[i].stats.rmse, 4) + " m";
     s += " (" + std::to_string(c.ate[0].stats.count) + " pose pairs)";
   }
   if (c.object_eval) {
     for (const eval::ErrorRow& r : c.object_eval->result.errors)
       if (r.class_name == "overall" && r.matched > 0)
         s += "; " + std::to_string(r.matched) + "/" + std::to_string(r.reference) +
-             " ground-truth objects matched, mean centroid error " + fixed(r.distance_m.mean, 3) +
-             " m";
+             " ground-truth objects matched, mean centroid error " +
+             fixed_text(r.distance_m.mean, 3) + " m";
   }
   return s + ".";
 }

@@ -6,9 +6,9 @@
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <set>
-#include <sstream>
 
 #include "objmap/core/error.h"
+#include "objmap/core/format.h"
 #include "objmap/scene/footprint.h"
 #include "objmap/scene/scene.h"
 #include "objmap/segmentation/coco_classes.h"
@@ -28,14 +28,6 @@ bool floor_standing(const std::string& name) {
 bool seat_class(const std::string& name) {
   const std::string c = segmentation::canonical_class(name);
   return c == "chair" || c == "couch" || c == "sofa" || c == "bench" || c == "bed" || c == "toilet";
-}
-
-std::string fixed(double v, int digits) {
-  std::ostringstream out;
-  out.setf(std::ios::fixed);
-  out.precision(digits);
-  out << v;
-  return out.str();
 }
 
 cv::Point2f xy_in_gravity(const Eigen::Matrix3d& gravity, const Vec3& p) {
@@ -140,7 +132,7 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
       floor->area_m2 <= o.table_max_area_m2)
     floor = nullptr;
   if (floor) {
-    const std::string large = fixed(o.floor_min_area_m2, 2) + " m2";
+    const std::string large = fixed_text(o.floor_min_area_m2, 2) + " m2";
     for (Surface& s : surfaces)
       if (at_level(s, floor->height_m)) {
         s.label = "floor";
@@ -153,7 +145,7 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
       if (!s.object && s.label != "floor" && s.area_m2 >= o.table_min_area_m2 &&
           above >= o.table_min_height_m && above <= o.table_max_height_m) {
         s.label = "table";
-        s.label_rule = "a patch " + fixed(above, 2) + " m above the floor";
+        s.label_rule = "a patch " + fixed_text(above, 2) + " m above the floor";
       }
     }
     return;

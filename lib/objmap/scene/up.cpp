@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "objmap/core/error.h"
+#include "objmap/core/format.h"
 #include "objmap/scene/sampled.h"
 
 namespace objmap::scene {
@@ -13,14 +14,6 @@ namespace {
 
 double angle_deg(const Vec3& a, const Vec3& b) {
   return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
-}
-
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
 }
 
 // Step 1: the cameras' prior. Cameras are held roughly upright: the camera's y axis points down,
@@ -187,18 +180,18 @@ UpEstimate detail::estimate_up(const std::vector<Pose>& cameras, const Cloud::Pt
     e.up = planes_up ? *planes_up : e.camera_prior;
     if (e.camera_agreement < 0.5)
       e.warnings.push_back("the cameras' up axes disagree (agreement " +
-                           fixed(e.camera_agreement, 2) +
+                           fixed_text(e.camera_agreement, 2) +
                            " < 0.5: a camera not held upright, e.g. on a ceiling?); the up "
                            "direction rests on the map's planes alone; give --up if it is known");
     if (!planes_up)
       e.warnings.push_back(
-          "no plane of the dense map lies within " + fixed(options.max_prior_angle_deg, 0) +
+          "no plane of the dense map lies within " + fixed_text(options.max_prior_angle_deg, 0) +
           " deg of the cameras' up (the mean of their -y axes) that they look down "
           "at; up is the cameras'; give --up if the world's up is known");
   }
   e.prior_to_up_deg = angle_deg(e.camera_prior, e.up);
   if (e.source == "planes" && e.prior_to_up_deg > options.disagree_warning_deg)
-    e.warnings.push_back("the map's horizontal planes are " + fixed(e.prior_to_up_deg, 1) +
+    e.warnings.push_back("the map's horizontal planes are " + fixed_text(e.prior_to_up_deg, 1) +
                          " deg from the cameras' up; check the up direction in the report, give "
                          "--up if it is wrong");
   e.gravity_from_world = gravity_from_world(e.up);

@@ -1,9 +1,9 @@
-#include "objmap/eval/format.h"
+#include "objmap/core/format.h"
 
 #include <charconv>
 #include <cstdio>
 
-namespace objmap::eval {
+namespace objmap {
 
 std::string number_text(double value) {
   char buffer[64];
@@ -17,4 +17,4 @@ std::string fixed_text(double value, int decimals) {
   return buffer;
 }
 
-}  // namespace objmap::eval
+}  // namespace objmap
