@@ -24,8 +24,7 @@ void quiet_pcl() {
 }
 }  // namespace
 
-Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m, std::size_t max_input,
-                          std::size_t max_output) {
+Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m, std::size_t max_input) {
   quiet_pcl();
   Cloud::Ptr all(new Cloud);
   const std::size_t in_stride =
@@ -40,7 +39,7 @@ Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m, std:
   const float leaf = static_cast<float>(voxel_m);
   grid.setLeafSize(leaf, leaf, leaf);
   grid.filter(*sampled);
-  return thin(sampled, max_output);
+  return sampled;
 }
 
 Cloud::Ptr thin(const Cloud::Ptr& cloud, std::size_t max_output) {

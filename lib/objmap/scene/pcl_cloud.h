@@ -3,7 +3,6 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
-#include <limits>
 #include <vector>
 
 #include "objmap/core/types.h"
@@ -14,10 +13,9 @@ using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 // The points on a grid of `voxel_m` (PCL's VoxelGrid: one point per occupied cell, the mean), from
 // at most `max_input` of them (an even stride through the input: the dense map's points are
-// sorted by voxel, so every n-th is an even thinning) and at most `max_output` after (the same).
+// sorted by voxel, so every n-th is an even thinning).
 Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m,
-                          std::size_t max_input = 600000,
-                          std::size_t max_output = std::numeric_limits<std::size_t>::max());
+                          std::size_t max_input = 600000);
 
 // The best plane of `cloud` by RANSAC (PCL's SACSegmentation, least-squares refined): its unit
 // normal n and offset d (n · p = d for its points) and the inliers. `axis`/`eps_deg` > 0: only

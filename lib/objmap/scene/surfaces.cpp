@@ -235,7 +235,7 @@ void SurfaceOptions::check() const {
 std::vector<Surface> find_surfaces(const std::vector<Vec3f>& map_points, const Vec3& up,
                                    const SurfaceOptions& o) {
   if (!o.enabled || map_points.empty()) return {};
-  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, o.sample_voxel_m, 600000);
+  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, o.sample_voxel_m);
   return detail::find_surfaces(sample, detail::grid_normals(sample, o.sample_voxel_m), up, o);
 }
 

@@ -161,8 +161,8 @@ UpEstimate estimate_up(const std::vector<Pose>& cameras, const std::vector<Vec3f
   const detail::Cloud::Ptr sample =
       parse_up(options.mode, "--up")
           ? detail::Cloud::Ptr(new detail::Cloud)
-          : detail::sample_on_grid(map_points, options.sample_voxel_m, 600000,
-                                   static_cast<std::size_t>(options.max_sample_points));
+          : detail::thin(detail::sample_on_grid(map_points, options.sample_voxel_m),
+                         static_cast<std::size_t>(options.max_sample_points));
   return detail::estimate_up(cameras, sample, options);
 }
 

@@ -32,7 +32,7 @@ void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Ve
     return;
   }
   // The same sample as estimate_up's before it is thinned, and find_surfaces' (sample_on_grid).
-  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, so.sample_voxel_m, 600000);
+  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, so.sample_voxel_m);
   std::future<std::vector<Eigen::Vector3f>> normals = std::async(
       std::launch::async, [&] { return detail::grid_normals(sample, so.sample_voxel_m); });
   const bool auto_up = !parse_up(uo.mode, "--up");
