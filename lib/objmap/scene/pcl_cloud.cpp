@@ -5,11 +5,12 @@
 #include <pcl/console/print.h>
 #include <pcl/filters/extract_indices.h>
 #include <pcl/filters/voxel_grid.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/segmentation/sac_segmentation.h>
+#include <pcl/sample_consensus/ransac.h>
+#include <pcl/sample_consensus/sac_model_plane.h>
 
 #include <cmath>
+#include <limits>
+#include <memory>
 
 namespace objmap::scene::detail {
 
@@ -50,32 +51,62 @@ Cloud::Ptr thin(const Cloud::Ptr& cloud, std::size_t max_output) {
   return thinned;
 }
 
-Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, double eps_deg) {
+std::size_t count_plane_inliers(const Cloud& cloud, const std::vector<int>& indices,
+                                const Eigen::Vector4f& plane, double threshold) {
+  const float a = plane[0], b = plane[1], c = plane[2], d = plane[3];
+  // |s| < threshold (double) for a float s is |s| < the float just above threshold's float
+  // rounding when that rounding is below threshold, else |s| < the rounding.
+  float limit = static_cast<float>(threshold);
+  if (static_cast<double>(limit) < threshold)
+    limit = std::nextafter(limit, std::numeric_limits<float>::infinity());
+  std::size_t count = 0;
+  for (const pcl::index_t i : indices) {
+    const pcl::PointXYZ& p = cloud[static_cast<std::size_t>(i)];
+    count += std::abs((a * p.x + c * p.z) + (b * p.y + d)) < limit ? 1 : 0;
+  }
+  return count;
+}
+
+namespace {
+
+// PCL's plane model with count_plane_inliers for its inlier count (RANSAC's inner loop).
+class CountingPlaneModel : public pcl::SampleConsensusModelPlane<pcl::PointXYZ> {
+ public:
+  using SampleConsensusModelPlane::SampleConsensusModelPlane;
+
+  std::size_t countWithinDistance(const Eigen::VectorXf& model,
+                                  const double threshold) const override {
+    if (!isModelValid(model)) return 0;
+    return count_plane_inliers(*input_, *indices_, model.head<4>(), threshold);
+  }
+};
+
+}  // namespace
+
+Plane fit_plane(const Cloud::Ptr& cloud, double distance_m) {
   Plane plane;
   if (cloud->size() < 3) return plane;
-  pcl::SACSegmentation<pcl::PointXYZ> seg;  // fixed seed: the same planes on every run
-  seg.setOptimizeCoefficients(true);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setMaxIterations(200);
-  seg.setDistanceThreshold(distance_m);
-  if (eps_deg > 0.0) {
-    seg.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
-    seg.setAxis(axis.cast<float>());
-    seg.setEpsAngle(eps_deg * M_PI / 180.0);
-  } else {
-    seg.setModelType(pcl::SACMODEL_PLANE);
-  }
-  seg.setInputCloud(cloud);
-  pcl::PointIndices inliers;
-  pcl::ModelCoefficients coefficients;
-  seg.segment(inliers, coefficients);
-  if (inliers.indices.empty() || coefficients.values.size() != 4) return plane;
-  const Vec3 n(coefficients.values[0], coefficients.values[1], coefficients.values[2]);
+  quiet_pcl();
+  // As PCL's SACSegmentation (SACMODEL_PLANE, SAC_RANSAC, 200 iterations, coefficients optimised)
+  // does it, with the counting model above: the same planes, the same inliers.
+  const auto model = std::make_shared<CountingPlaneModel>(cloud);  // fixed seed: the same planes
+  pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, distance_m);
+  ransac.setMaxIterations(200);
+  if (!ransac.computeModel()) return plane;
+  pcl::Indices inliers;
+  ransac.getInliers(inliers);
+  Eigen::VectorXf coefficients;
+  ransac.getModelCoefficients(coefficients);
+  Eigen::VectorXf refined;
+  model->optimizeModelCoefficients(inliers, coefficients, refined);
+  model->selectWithinDistance(refined, distance_m, inliers);
+  if (inliers.empty() || refined.size() != 4) return plane;
+  const Vec3 n(refined[0], refined[1], refined[2]);
   const double norm = n.norm();
   if (!(norm > 0.0)) return plane;
   plane.normal = n / norm;
-  plane.offset = -coefficients.values[3] / norm;
-  plane.inliers = std::move(inliers.indices);
+  plane.offset = -refined[3] / norm;
+  plane.inliers.assign(inliers.begin(), inliers.end());
   return plane;
 }
 

@@ -17,16 +17,24 @@ using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m,
                           std::size_t max_input = 600000);
 
-// The best plane of `cloud` by RANSAC (PCL's SACSegmentation, least-squares refined): its unit
-// normal n and offset d (n · p = d for its points) and the inliers. `axis`/`eps_deg` > 0: only
-// planes whose normal is within eps_deg of ±axis (SACMODEL_PERPENDICULAR_PLANE). Empty inliers
-// when none is found.
+// The best plane of `cloud` by RANSAC (PCL's, as its SACSegmentation runs it: 200 iterations, the
+// fixed seed, least-squares refined): its unit normal n and offset d (n · p = d for its points) and
+// the inliers, the points within `distance_m`. Empty inliers when none is found.
 struct Plane {
   Vec3 normal = Vec3::UnitZ();
   double offset = 0.0;
   std::vector<int> inliers;
 };
-Plane fit_plane(const Cloud::Ptr& cloud, double distance_m, const Vec3& axis, double eps_deg);
+Plane fit_plane(const Cloud::Ptr& cloud, double distance_m);
+
+// How many of `cloud`'s points at `indices` lie closer than `threshold` to the plane a·x + b·y +
+// c·z + d = 0: PCL's SampleConsensusModelPlane::countWithinDistance, point for point, in a loop the
+// compiler keeps tight (RANSAC's inner loop: Debian builds PCL for plain x86-64, where that count
+// is a per-point dot product of a dynamic-size Eigen vector, 10x slower; docs/benchmarks.md, "The
+// scene step"). Same point for point: the products summed in the order of that dot product's SSE
+// reduction, (a·x + c·z) + (b·y + d), compared with `threshold` as a double.
+std::size_t count_plane_inliers(const Cloud& cloud, const std::vector<int>& indices,
+                                const Eigen::Vector4f& plane, double threshold);
 
 // `cloud` thinned evenly (every n-th point) to at most `max_output` points; `cloud` itself when it
 // has no more.

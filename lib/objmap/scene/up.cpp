@@ -43,7 +43,7 @@ std::vector<PlaneEvidence> dominant_planes(const detail::Cloud::Ptr& sample, con
   const std::size_t min_inliers = std::max<std::size_t>(
       50, static_cast<std::size_t>(o.min_plane_share * static_cast<double>(rest->size())));
   for (int i = 0; i < o.max_planes && rest->size() >= min_inliers; ++i) {
-    detail::Plane plane = detail::fit_plane(rest, o.plane_distance_m, Vec3::Zero(), 0.0);
+    detail::Plane plane = detail::fit_plane(rest, o.plane_distance_m);
     if (plane.inliers.size() < min_inliers) break;
     PlaneEvidence p;
     const double sign = plane.normal.dot(e.camera_prior) < 0 ? -1.0 : 1.0;
