@@ -316,6 +316,22 @@ TEST(Surfaces, AFloorInPiecesAtOneLevelIsFloorEverywhere) {
   EXPECT_EQ(surfaces[2].label_rule, "a patch 0.75 m above the floor");
 }
 
+TEST(Surfaces, ALargeFloorAboveASmallLowPieceIsTheFloor) {
+  // fr1_rpy_every4 in its first camera's frame with an up 3 deg off: the floor's 5.7 m2 lie at
+  // -1.59 m and a 0.5 m2 piece of it, far from the cameras, at -1.72 m (13 cm lower: beyond the
+  // 12 cm of one level). The large patch is the floor; the small one is not a table.
+  std::vector<Vec3f> pts;
+  add_rect(pts, 0.0, 3.0, 0.0, 2.0, 0.13);
+  add_rect(pts, 0.0, 0.7, 2.6, 3.3, 0.0);
+  add_rect(pts, 1.0, 2.0, 0.5, 1.3, 0.9);
+  std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), {});
+  relate_objects({}, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  ASSERT_EQ(surfaces.size(), 3u);
+  EXPECT_EQ(surfaces[0].label, "floor");    // 6 m2, largest first
+  EXPECT_EQ(surfaces[1].label, "table");    // the top at 0.9 m, 0.77 m above the floor
+  EXPECT_EQ(surfaces[2].label, "surface");  // the low piece
+}
+
 TEST(Relations, AMonitorAtTheDesksBackEdgeStandsOnIt) {
   // The desk's visible outline ends where the monitor hides it: the monitor's centre lies 5.5 cm
   // beyond the outline's edge (y = 1.775, the last 4 cm cell's mean; more than the 3 cm margin)
@@ -352,6 +368,59 @@ TEST(Relations, ABookOnABookOfItsSizeIsOnThatBook) {
   ASSERT_TRUE(relations[1].on);
   EXPECT_EQ(relations[1].on->kind, "object");
   EXPECT_EQ(relations[1].on->id, 1);
+}
+
+// A chair seen from above, as fr1_rpy's by the desk: its mask holds the back (0.55-1.1 m), not
+// the seat, whose 0.4 x 0.4 m patch at 0.55 m the table rule labels; the legs are not seen. The
+// floor is seen only in front of the chair, `gap_m` or more from its footprint (the back, y 2.46
+// to 2.5); no floor when `gap_m` < 0.
+struct ChairSeenFromAbove {
+  PointCloud back;
+  std::vector<Vec3f> map;
+  explicit ChairSeenFromAbove(double gap_m) : map(room(/*with_floor=*/false)) {
+    if (gap_m >= 0.0) add_rect(map, 0.0, 3.0, 0.0, 2.46 - gap_m, 0.0);
+    for (double x = 0.4; x <= 0.8; x += 0.01)
+      for (double y = 2.46; y <= 2.5; y += 0.01)
+        for (double z = 0.55; z <= 1.1; z += 0.01) back.push_back(Vec3f(x, y, z), Rgb{});
+    map.insert(map.end(), back.points.begin(), back.points.end());
+    add_rect(map, 0.4, 0.8, 2.1, 2.5, 0.55);
+  }
+  std::vector<Relations> relate(const std::string& class_name) {
+    const std::vector<SceneObject> objects = {{1, class_name, Vec3(0.6, 2.48, 0.8), &back}};
+    surfaces = surfaces_and_tops(map, Vec3::UnitZ(), objects);
+    return relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
+  }
+  std::vector<Surface> surfaces;  // of the last relate()
+};
+
+TEST(Relations, AChairSeenFromAboveStandsOnTheFloorNotOnItsSeat) {
+  for (double gap : {0.0, 0.8}) {  // the floor seen up to the chair, or from 0.8 m away
+    SCOPED_TRACE("floor from " + std::to_string(gap) + " m");
+    ChairSeenFromAbove scene(gap);
+    const auto chair = scene.relate("chair");
+    ASSERT_TRUE(chair[0].on);
+    EXPECT_EQ(chair[0].on->label, "floor");
+    ASSERT_FALSE(scene.surfaces.empty());
+    const Surface& seat = scene.surfaces.back();  // the smallest
+    EXPECT_EQ(seat.label, "seat");
+    EXPECT_EQ(seat.object, std::optional<int>(1));
+    EXPECT_NEAR(chair[0].on->gap_m, 0.55, 0.02);  // the legs the camera did not see
+    const auto box = scene.relate("box");         // no furniture: it stands where it is seen
+    ASSERT_TRUE(box[0].on);
+    EXPECT_EQ(box[0].on->label, "table");
+    EXPECT_NEAR(box[0].on->gap_m, 0.0, 0.02);
+  }
+}
+
+TEST(Relations, AChairSeenFromAboveWithNoFloorNearStaysWhereItIsSeen) {
+  for (double gap : {-1.0, 1.2}) {  // no floor at all, or none within floor_reach_m (1 m)
+    SCOPED_TRACE("floor from " + std::to_string(gap) + " m");
+    ChairSeenFromAbove scene(gap);
+    const auto chair = scene.relate("chair");
+    ASSERT_TRUE(chair[0].on);
+    EXPECT_NE(chair[0].on->label, "floor");
+    EXPECT_NEAR(chair[0].on->gap_m, 0.0, 0.02);
+  }
 }
 
 TEST(Relations, AChairOnThinLegsStandsOnTheFloor) {

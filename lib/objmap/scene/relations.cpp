@@ -16,13 +16,20 @@
 namespace objmap::scene {
 namespace {
 
-// Classes that stand on the floor, not on a table: what the floor rule looks for.
+// Furniture: stands on the floor, not on a table or a desk, wherever it is seen.
+bool furniture(const std::string& name) {
+  const std::string c = segmentation::canonical_class(name);
+  static const std::set<std::string> kClasses = {"chair", "couch",        "sofa",   "bed",
+                                                 "bench", "dining table", "toilet", "refrigerator"};
+  return kClasses.count(c) > 0;
+}
+
+// Classes that stand on the floor, not on a table: furniture and what walks or is set down beside
+// it; what the floor rule looks for.
 bool floor_standing(const std::string& name) {
   const std::string c = segmentation::canonical_class(name);
-  static const std::set<std::string> kClasses = {
-      "chair", "couch",    "sofa", "bed",          "dining table", "potted plant", "person",
-      "bench", "suitcase", "dog",  "refrigerator", "toilet",       "cat"};
-  return kClasses.count(c) > 0;
+  static const std::set<std::string> kOthers = {"potted plant", "person", "suitcase", "dog", "cat"};
+  return furniture(c) || kOthers.count(c) > 0;
 }
 
 bool seat_class(const std::string& name) {
@@ -35,6 +42,12 @@ cv::Point2f xy_in_gravity(const Eigen::Matrix3d& gravity, const Vec3& p) {
   return {static_cast<float>(g.x()), static_cast<float>(g.y())};
 }
 
+std::vector<cv::Point2f> outline_xy(const Surface& s, const Eigen::Matrix3d& gravity) {
+  std::vector<cv::Point2f> hull;
+  for (const Vec3& q : s.outline) hull.push_back(xy_in_gravity(gravity, q));
+  return hull;
+}
+
 // The share of the footprint `own` (a convex hull) that lies over the convex outline `under`.
 double overlap_share(const std::vector<cv::Point2f>& own, const std::vector<cv::Point2f>& under) {
   if (own.size() < 3 || under.size() < 3) return 0.0;
@@ -42,6 +55,14 @@ double overlap_share(const std::vector<cv::Point2f>& own, const std::vector<cv::
   if (!(area > 0.0)) return 0.0;
   std::vector<cv::Point2f> common;
   return cv::intersectConvexConvex(own, under, common, /*handleNested=*/true) / area;
+}
+
+// Seen from above, `under` carries the footprint: it holds the footprint's centre (with
+// outline_margin) or at least min_footprint_overlap of it.
+bool carries(const std::vector<cv::Point2f>& under, const detail::Footprint& f,
+             const RelationOptions& o) {
+  return detail::inside_distance(under, f.centre) >= -o.outline_margin_m ||
+         overlap_share(f.hull, under) >= o.min_footprint_overlap;
 }
 
 // `on`: the support (a surface that is no object's top, or another object) whose top lies
@@ -61,10 +82,7 @@ std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>&
   const auto consider = [&](const std::string& kind, int id, const std::string& label, double top,
                             const std::vector<cv::Point2f>& hull) {
     const double gap = f.bottom - top;
-    if (gap < -o.on_below_m || gap > o.on_above_m) return;
-    if (detail::inside_distance(hull, f.centre) < -o.outline_margin_m &&
-        overlap_share(f.hull, hull) < o.min_footprint_overlap)
-      return;
+    if (gap < -o.on_below_m || gap > o.on_above_m || !carries(hull, f, o)) return;
     if (best && (std::fabs(gap) > std::fabs(best->gap_m) ||
                  (std::fabs(gap) == std::fabs(best->gap_m) && top <= best_top)))
       return;
@@ -73,9 +91,7 @@ std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>&
   };
   for (const Surface& s : surfaces) {
     if (s.object) continue;  // an object's top: the object itself is the candidate below
-    std::vector<cv::Point2f> hull;
-    for (const Vec3& q : s.outline) hull.push_back(xy_in_gravity(gravity, q));
-    consider("surface", s.id, s.label, s.height_m, hull);
+    consider("surface", s.id, s.label, s.height_m, outline_xy(s, gravity));
   }
   const double own_area = f.hull.size() >= 3 ? cv::contourArea(f.hull) : 0.0;
   for (std::size_t j = 0; j < objects.size(); ++j) {
@@ -117,8 +133,10 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
     }
     if (s.area_m2 >= o.floor_min_area_m2 && (!floor || s.height_m < floor->height_m)) floor = &s;
   }
-  // The floor: the largest of the large patches at the lowest one's level (a floor that the
-  // estimated up sees tilted, or that desks and chairs cut apart, leaves pieces a few cm apart).
+  // The floor: the largest of the large patches below table height over the lowest one (a floor
+  // that the estimated up sees tilted, or that desks and chairs cut apart, leaves pieces a few cm
+  // apart, and the lowest may be a small piece 13 cm below the rest); every large patch at its
+  // level is floor too.
   const auto at_level = [&](const Surface& s, double level) {
     return !s.object && s.area_m2 >= o.floor_min_area_m2 &&
            std::fabs(s.height_m - level) <= o.merge_height_m;
@@ -126,7 +144,9 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
   if (floor) {
     const double lowest = floor->height_m;
     for (Surface& s : surfaces)
-      if (at_level(s, lowest) && s.area_m2 > floor->area_m2) floor = &s;
+      if (!s.object && s.area_m2 >= o.floor_min_area_m2 &&
+          s.height_m - lowest < o.table_min_height_m && s.area_m2 > floor->area_m2)
+        floor = &s;
   }
   if (floor && small_on[floor->id] > 0 && standing_on[floor->id] == 0 &&
       floor->area_m2 <= o.table_max_area_m2)
@@ -162,6 +182,53 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
   }
 }
 
+// Furniture on a table or on nothing stands on the floor, if one is seen near it: a chair pushed
+// under a desk shows its back above the desk top, and the desk hides its legs; a chair seen from
+// above has its seat, not in its mask, as a patch at its bottom that the table rule labels. The
+// floor under furniture is hidden by it: a floor piece below its bottom (on_below) whose outline
+// comes within floor_reach_m of its footprint will do, the nearest. The gap is what the camera
+// did not see of its legs. The table a chair, couch, bench or bed was on becomes its seat when
+// nothing else stands on it.
+void furniture_on_floor(const std::vector<SceneObject>& objects,
+                        const std::vector<detail::Footprint>& feet, std::vector<Surface>& surfaces,
+                        const Eigen::Matrix3d& gravity, const RelationOptions& o,
+                        std::vector<Relations>& relations) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::optional<Support>& on = relations[i].on;
+    const detail::Footprint& f = feet[i];
+    if (!furniture(objects[i].class_name) || (on && on->label != "table")) continue;
+    const Surface* floor = nullptr;
+    double floor_reach = -o.floor_reach_m;  // inside_distance of the nearest floor piece
+    for (const Surface& s : surfaces) {
+      if (s.label != "floor" || f.bottom - s.height_m < -o.on_below_m) continue;
+      const std::vector<cv::Point2f> hull = outline_xy(s, gravity);
+      double reach = detail::inside_distance(hull, f.centre);
+      for (const cv::Point2f& p : f.hull) reach = std::max(reach, detail::inside_distance(hull, p));
+      if (reach >= floor_reach) {
+        floor = &s;
+        floor_reach = reach;
+      }
+    }
+    if (!floor) continue;
+    const auto carries_another = [&](int surface_id) {
+      for (std::size_t j = 0; j < objects.size(); ++j)
+        if (j != i && relations[j].on && relations[j].on->kind == "surface" &&
+            relations[j].on->id == surface_id)
+          return true;
+      return false;
+    };
+    if (on && seat_class(objects[i].class_name) && !carries_another(on->id))
+      for (Surface& s : surfaces)
+        if (s.id == on->id) {
+          s.object = objects[i].id;
+          s.label = "seat";
+          s.label_rule = "the seat of object " + std::to_string(objects[i].id) +
+                         ", at its bottom (furniture stands on the floor)";
+        }
+    relations[i].on = Support{"surface", floor->id, floor->label, f.bottom - floor->height_m};
+  }
+}
+
 void near_above_under(const std::vector<SceneObject>& objects,
                       const std::vector<detail::Footprint>& feet, const RelationOptions& o,
                       std::vector<Relations>& relations) {
@@ -192,6 +259,7 @@ void RelationOptions::check() const {
   require(near_radius_m > 0.0, "RelationOptions.near_radius_m", "must be > 0");
   require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
   require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");
+  require(floor_reach_m >= 0.0, "RelationOptions.floor_reach_m", "must be >= 0");
 }
 
 void SceneOptions::check() const {
@@ -213,10 +281,15 @@ std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
   for (std::size_t i = 0; i < objects.size(); ++i)
     relations[i].on = support_of(i, objects, feet, surfaces, gravity, options);
   label_surfaces(surfaces, objects, relations, surface_options);
-  for (auto& r : relations)
-    if (r.on && r.on->kind == "surface")
-      for (const Surface& s : surfaces)
-        if (s.id == r.on->id) r.on->label = s.label;
+  const auto refresh_labels = [&] {
+    for (auto& r : relations)
+      if (r.on && r.on->kind == "surface")
+        for (const Surface& s : surfaces)
+          if (s.id == r.on->id) r.on->label = s.label;
+  };
+  refresh_labels();
+  furniture_on_floor(objects, feet, surfaces, gravity, options, relations);
+  refresh_labels();  // a table that was a chair's seat
   near_above_under(objects, feet, options, relations);
   return relations;
 }

@@ -116,6 +116,7 @@ struct RelationOptions {
   double near_radius_m = 0.5;           // `near`: box centres within this distance
   double stack_tolerance_m = 0.03;      // `above`: bottom at least top − this
   double support_min_area_ratio = 0.5;  // an object support's footprint ≥ this × the object's
+  double floor_reach_m = 1.0;  // furniture stands on a floor piece seen this near its footprint
   void check() const;
 };
 
