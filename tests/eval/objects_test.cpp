@@ -273,6 +273,7 @@ io::MappedObject mapped(int id, const std::string& cls, const Vec3& c, const Vec
   o.id = id;
   o.class_name = cls;
   o.centroid = c;
+  o.position = c;
   o.obb.center = c;
   o.obb.half_extent = half;
   return o;
@@ -283,9 +284,34 @@ ReferenceObject ref(int id, const std::string& cls, const Vec3& c, const Vec3& h
   o.id = id;
   o.class_name = cls;
   o.centroid = c;
+  o.position = c;
   o.obb.center = c;
   o.obb.half_extent = half;
   return o;
+}
+
+TEST(EvaluateObjects, PositionsAreScoredAgainstTheTrueBoxCentre) {
+  // A chair whose volume centroid (seat and back) lies 12 cm above its box centre, as objmap
+  // synth's: the map object's centroid is near the volume centroid, its position near the box
+  // centre. distance_m is the paper's centroid measure, position_distance_m objmap's.
+  TempDir tmp;
+  write_text(tmp / "gt.json",
+             R"({"objects":[{"id":1,"class":"chair","centroid":[1,2,0.57],
+                 "obb":{"center":[1,2,0.45],"rotation":[1,0,0, 0,1,0, 0,0,1],
+                        "half_extent":[0.25,0.25,0.45]}}]})");
+  const auto gt = read_objects_gt(tmp / "gt.json");
+  ASSERT_EQ(gt.size(), 1u);
+  EXPECT_TRUE(gt[0].position.isApprox(Vec3(1, 2, 0.45)));
+  io::MappedObject chair = mapped(7, "chair", {1, 2, 0.6}, Vec3(0.25, 0.25, 0.45));
+  chair.position = Vec3(1.03, 2, 0.49);
+  const ObjectEvalResult r = evaluate_objects({chair}, gt, ObjectEvalOptions{});
+  ASSERT_EQ(r.matches.size(), 1u);
+  EXPECT_NEAR(r.matches[0].distance_m, 0.03, 1e-12);
+  EXPECT_NEAR(r.matches[0].position_distance_m, 0.05, 1e-12);
+  EXPECT_NEAR(r.errors.back().position_distance_m.mean, 0.05, 1e-12);
+  // A fr3_cabinet-style cuboid: its position is its centre.
+  write_text(tmp / "cuboid.txt", "1 2 0.3 0.0 0.4 0.2 0.3\n");
+  EXPECT_TRUE(read_objects_gt(tmp / "cuboid.txt")[0].position.isApprox(Vec3(1, 2, 0.3)));
 }
 
 TEST(EvaluateObjects, KnownCountsErrorsAndPrecisionRecall) {
@@ -588,6 +614,7 @@ TEST(AlignObjects, TransformMovesCentroidsAndBoxes) {
   quarter.translation = Vec3(0, 0, 1);
   const io::MappedObject m = transform_objects({o}, quarter)[0];
   EXPECT_TRUE(m.centroid.isApprox(Vec3(0, 1, 1), 1e-12));
+  EXPECT_TRUE(m.position.isApprox(Vec3(0, 1, 1), 1e-12));
   EXPECT_TRUE(m.obb.center.isApprox(Vec3(0, 1, 1), 1e-12));
   EXPECT_TRUE(m.obb.rotation.isApprox(quarter.rotation, 1e-12));
   EXPECT_TRUE(m.aabb.min.isApprox(Vec3(-0.2, 0.9, 0.7), 1e-12));
@@ -663,6 +690,9 @@ TEST(EvalObjectsCli, HandMadeFilesGiveTheExactNumbers) {
   EXPECT_EQ(overall.at("class"), "overall");
   EXPECT_EQ(overall.at("matched"), 3);
   EXPECT_NEAR(overall.at("distance_m").at("mean").get<double>(), (0.03 + 0.04 + 0.09) / 3, 1e-12);
+  // objects.json without `position`: the centroid stands in on both sides.
+  EXPECT_NEAR(overall.at("position_distance_m").at("mean").get<double>(), (0.03 + 0.04 + 0.09) / 3,
+              1e-12);
   EXPECT_NEAR(json.at("counts").back().at("error").get<double>(), 0.25, 1e-12);
   EXPECT_TRUE(json.at("counts").front().at("error").is_number());  // book: 0 vs 1 → 100%
   EXPECT_EQ(json.at("points").at("dense_map"), 400);

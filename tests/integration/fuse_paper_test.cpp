@@ -74,7 +74,11 @@ TEST(FusePaper, RunJsonRecordsTheMethodAndThePapersOptions) {
   EXPECT_EQ(o.at("objects").at("final_merge"), false);
   EXPECT_EQ(o.at("outlier").at("on_points"), true);
   EXPECT_EQ(o.at("objects").at("voxel_nearest_centre"), true);
+  EXPECT_EQ(o.at("objects").at("position_is_centroid"), true);
   EXPECT_EQ(o.at("depth").at("min_m"), 0.01);
+  // The position is the centroid (eq 16).
+  for (const auto& obj : read_json(r.out / "objects.json").at("objects"))
+    EXPECT_EQ(obj.at("position"), obj.at("centroid")) << obj.at("id");
   // Masks as given: none refined or gated (objmap refines 169 of the 336 on this scene).
   const auto errors = validate_json(o, load_schema("fuse_config.schema.json"));
   EXPECT_TRUE(errors.empty()) << errors.front();

@@ -16,6 +16,7 @@ std::vector<io::MappedObject> transform_objects(const std::vector<io::MappedObje
   std::vector<io::MappedObject> out = objects;
   for (io::MappedObject& o : out) {
     o.centroid = transform * o.centroid;
+    o.position = transform * o.position;
     o.obb.center = transform * o.obb.center;
     o.obb.rotation = transform.rotation * o.obb.rotation;
     o.obb.half_extent *= transform.scale;

@@ -263,6 +263,7 @@ std::vector<ReferenceObject> read_objects_gt_json(const std::filesystem::path& f
     r.obb.half_extent = {half[0], half[1], half[2]};
     if (r.obb.half_extent.minCoeff() < 0)
       throw InputError(where + ".obb.half_extent", "negative half extent; expected >= 0");
+    r.position = r.obb.center;
     out.push_back(std::move(r));
   }
   return out;
@@ -290,6 +291,7 @@ std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path
       r.obb.center = r.centroid;
       r.obb.rotation = Eigen::Matrix3d::Identity();
       r.obb.half_extent = Vec3::Zero();
+      r.position = r.centroid;
       out.push_back(std::move(r));
       continue;
     }
@@ -303,7 +305,7 @@ std::vector<ReferenceObject> read_objects_gt_cuboids(const std::filesystem::path
     r.obb.half_extent = {in.number(4, "half_x"), in.number(5, "half_y"), in.number(6, "half_z")};
     if (r.obb.half_extent.minCoeff() < 0)
       throw InputError(in.where(), "negative half extent; expected half sizes >= 0");
-    r.centroid = r.obb.center;
+    r.centroid = r.position = r.obb.center;
     out.push_back(std::move(r));
   }
   if (out.empty())
@@ -331,7 +333,8 @@ std::vector<ReferenceObject> read_objects_gt(const std::filesystem::path& file,
 
 std::vector<ReferenceObject> to_reference(const std::vector<io::MappedObject>& objects) {
   std::vector<ReferenceObject> out;
-  for (const io::MappedObject& o : objects) out.push_back({o.id, o.class_name, o.centroid, o.obb});
+  for (const io::MappedObject& o : objects)
+    out.push_back({o.id, o.class_name, o.centroid, o.obb, o.position});
   return out;
 }
 
@@ -390,6 +393,7 @@ ObjectMatch make_match(const io::MappedObject& m, const ReferenceObject& r,
   match.error_xyz_m = m.centroid - r.centroid;
   match.distance_m = match.error_xyz_m.norm();
   match.iou = obb_iou(m.obb, r.obb);
+  match.position_distance_m = (m.position - r.position).norm();
   return match;
 }
 
@@ -472,15 +476,17 @@ ErrorRow error_row(const std::string& name, std::size_t mapped, std::size_t refe
   row.beyond_gate = beyond.size();
   row.missed = reference - matches.size() - beyond.size();
   row.false_positives = mapped - matches.size();
-  std::vector<double> distances, ious;
+  std::vector<double> distances, ious, positions;
   for (const ObjectMatch* m : matches) {
     distances.push_back(m->distance_m);
     ious.push_back(m->iou);
+    positions.push_back(m->position_distance_m);
     row.mean_abs_xyz_m += m->error_xyz_m.cwiseAbs();
   }
   if (!matches.empty()) row.mean_abs_xyz_m /= static_cast<double>(matches.size());
   row.distance_m = compute_stats(distances);
   row.iou = compute_stats(ious);
+  row.position_distance_m = compute_stats(positions);
   for (const ObjectMatch* m : beyond) {
     distances.push_back(m->distance_m);
     ious.push_back(m->iou);
@@ -638,6 +644,7 @@ ordered_json errors_json(const std::vector<ErrorRow>& rows) {
     e["iou"] = stats_json(row.iou);
     e["distance_all_m"] = stats_json(row.distance_all_m);
     e["iou_all"] = stats_json(row.iou_all);
+    e["position_distance_m"] = stats_json(row.position_distance_m);
     errors.push_back(e);
   }
   return errors;
@@ -664,6 +671,7 @@ ordered_json match_json(const ObjectMatch& m) {
   e["distance_m"] = m.distance_m;
   e["error_xyz_m"] = vec3_json(m.error_xyz_m);
   e["iou"] = m.iou;
+  e["position_distance_m"] = m.position_distance_m;
   return e;
 }
 
@@ -798,6 +806,13 @@ std::string errors_text(const ObjectEvalResult& r, double gate_m) {
                 row.false_positives, row.distance_m.mean, row.distance_m.median, row.distance_m.max,
                 row.mean_abs_xyz_m.x(), row.mean_abs_xyz_m.y(), row.mean_abs_xyz_m.z(),
                 row.iou.mean, all.c_str());
+  }
+  if (!r.errors.empty() && r.errors.back().matched > 0) {
+    const ErrorStats& p = r.errors.back().position_distance_m;
+    out += line(
+        "  position (the map's box centre) to the reference's box centre [m], overall: "
+        "mean %.4f, median %.4f, max %.4f",
+        p.mean, p.median, p.max);
   }
   return out;
 }

@@ -48,6 +48,9 @@ struct ReferenceObject {
   std::string class_name;
   Vec3 centroid = Vec3::Zero();  // world, metres
   Obb obb;
+  // Where the object is: the box centre of a true object (obb.center; a position list's position),
+  // a reference map's `position`.
+  Vec3 position = Vec3::Zero();
 };
 
 // Reads ground-truth objects, detecting the format by content:
@@ -91,6 +94,8 @@ struct ObjectMatch {
   double distance_m = 0.0;          // ‖c_map − c_ref‖
   Vec3 error_xyz_m = Vec3::Zero();  // c_map − c_ref, world axes
   double iou = 0.0;                 // 3D IoU of the two oriented boxes
+  // ‖p_map − p_ref‖: the map object's `position` to the reference's (a true object's box centre).
+  double position_distance_m = 0.0;
 };
 
 // Tables 4–5: centroid errors of the matched objects of one class (or of all).
@@ -104,6 +109,7 @@ struct ErrorRow {
   ErrorStats distance_m;               // of the matched pairs' centroid distances
   Vec3 mean_abs_xyz_m = Vec3::Zero();  // mean |c_map − c_ref| per world axis
   ErrorStats iou;                      // of the matched pairs' 3D IoU
+  ErrorStats position_distance_m;      // of the matched pairs' position distances
   // Over every reference object (count = reference): a matched or beyond-gate object at its
   // distance, a missed one at the gate; so a gate never hides a bad object.
   ErrorStats distance_all_m;

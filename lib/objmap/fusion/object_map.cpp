@@ -876,7 +876,9 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     r.points_raw = o.voxels.points_inserted();
     filter_record(o, options, r);
     r.centroid = geometry::centroid(r.cloud);  // eq 16: the mean of the points
-    r.position = geometry::percentile_box_centre(r.cloud, options.position_percentile);
+    r.position = options.position_is_centroid
+                     ? r.centroid
+                     : geometry::percentile_box_centre(r.cloud, options.position_percentile);
     r.aabb = geometry::compute_aabb(r.cloud);
     r.obb = geometry::compute_obb(r.cloud);
     out.push_back(std::move(r));

@@ -250,6 +250,7 @@ struct ObjectRecord {
 
 struct RecordOptions {
   double position_percentile = 0.01;  // ObjectRecord::position: centre of [q, 1 − q] per axis
+  bool position_is_centroid = false;  // ... or the centroid (eq 16, the paper's position)
   bool confirmed_only = true;         // leave out objects with < min_observations
   bool outlier_filter = true;         // apply eq 18 to each object's voxel cloud
   // Before eq 18: keep only voxels that were in at least max(1, this × observations) of the

@@ -78,6 +78,7 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
     m.class_name = cls.get<std::string>();
     m.score = number(o, "score", where);
     m.centroid = vec3(o, "centroid", where);
+    m.position = o.contains("position") ? vec3(o, "position", where) : m.centroid;
     const json& aabb = field(o, "aabb", where);
     m.aabb.min = vec3(aabb, "min", where + ".aabb");
     m.aabb.max = vec3(aabb, "max", where + ".aabb");

@@ -15,6 +15,7 @@ struct MappedObject {
   std::string class_name;
   double score = 0.0;
   Vec3 centroid = Vec3::Zero();  // the paper's position: mean of the filtered points
+  Vec3 position = Vec3::Zero();  // objmap's: its box centre (`position`; the centroid without one)
   Aabb aabb;
   Obb obb;
   std::size_t points = 0;  // filtered points (its PLY)

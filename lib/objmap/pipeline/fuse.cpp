@@ -212,6 +212,10 @@ std::vector<ConfigField> filters_and_masks_fields(FuseOptions& o) {
        "the voxel filter keeps each voxel's point nearest its centre (the paper); false: the mean "
        "of its points",
        &o.voxel_nearest_centre},
+      {"objects.position_is_centroid", "--position-is-centroid",
+       "an object's position is its centroid, the mean of its points (eq 16, the paper); false: "
+       "the centre of the box of its points' 1st-99th percentiles",
+       &o.position_is_centroid},
       {"box_mask.bin_m", "--box-bin", "box masks: depth histogram bin, m", &b.bin_m},
       {"box_mask.near_mode_min_share", "--box-near-share",
        "box masks: share of the largest peak for the nearest peak to win", &b.near_mode_min_share},
@@ -300,6 +304,8 @@ void set_method_preset(FuseOptions& o) {
   o.outlier_filter = true;
   o.outlier_on_points = true;
   o.voxel_nearest_centre = true;
+  // The object's position is its centroid (eq 16).
+  o.position_is_centroid = true;
 }
 
 void FuseOptions::check() const {
@@ -1095,20 +1101,26 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
   if (dense) result.dense_voxels_pruned = dense->voxels_pruned();
 }
 
+// How each confirmed object's record is made: filters and position.
+fusion::RecordOptions record_options(const FuseOptions& options, int threads) {
+  fusion::RecordOptions r;
+  r.confirmed_only = true;
+  r.outlier_filter = options.outlier_filter;
+  r.outlier = options.outlier;
+  r.outlier.threads = threads;
+  r.min_voxel_support = options.min_voxel_support;
+  r.outlier_on_points = options.outlier_on_points;
+  r.voxel_nearest_centre = options.voxel_nearest_centre;
+  r.position_is_centroid = options.position_is_centroid;
+  return r;
+}
+
 // Step 4: the final merge pass (ID-switch repair), then each confirmed object's filtered record.
 void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& objects,
                               FuseResult& result) {
   result.merges = objects.merge_pass();
   result.objects_total = objects.size();
-  fusion::RecordOptions record_options;
-  record_options.confirmed_only = true;
-  record_options.outlier_filter = options.outlier_filter;
-  record_options.outlier = options.outlier;
-  record_options.outlier.threads = result.threads;
-  record_options.min_voxel_support = options.min_voxel_support;
-  record_options.outlier_on_points = options.outlier_on_points;
-  record_options.voxel_nearest_centre = options.voxel_nearest_centre;
-  result.objects = objects.records(record_options);
+  result.objects = objects.records(record_options(options, result.threads));
   for (const auto& r : result.objects) {
     result.object_points_raw += r.points_raw;
     result.object_points_voxel += r.points_voxel;
@@ -1342,7 +1354,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 4c. The objects' boxes stand on up; the surfaces that are objects' tops; the relations (on,
   //     near, above, under).
-  relate_to_scene(result.objects, options.scene, result.scene);
+  relate_to_scene(result.objects, options.scene, record_options(options, result.threads),
+                  result.scene);
   result.times.push_back({"boxes upright and relations", result.scene.seconds_relations});
 
   // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.

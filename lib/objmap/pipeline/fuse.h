@@ -60,6 +60,7 @@ struct FuseOptions {
   filters::OutlierOptions outlier;      // K = 20, k = 1.0
   bool outlier_on_points = false;       // eq 18 before the voxel filter, on the points (paper)
   bool voxel_nearest_centre = false;    // the voxel filter keeps the point nearest the centre
+  bool position_is_centroid = false;    // objects.json `position`: the centroid (eq 16, paper)
   fusion::DuplicateOptions duplicates;  // suspected duplicates in run.json: touching = 2 cm
   scene::SceneOptions scene;            // up direction, support surfaces, relations
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count

@@ -67,12 +67,12 @@ ordered_json surface_json(const scene::Surface& s) {
 }  // namespace
 
 void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
-                     scene::SceneGraph& graph) {
+                     const fusion::RecordOptions& record_options, scene::SceneGraph& graph) {
   const auto t0 = Clock::now();
-  const fusion::RecordOptions defaults;
   for (auto& r : records) {
-    r.position = geometry::percentile_box_centre(r.cloud, defaults.position_percentile,
-                                                 graph.up.gravity_from_world);
+    if (!record_options.position_is_centroid)
+      r.position = geometry::percentile_box_centre(r.cloud, record_options.position_percentile,
+                                                   graph.up.gravity_from_world);
     r.obb = geometry::compute_upright_obb(r.cloud, graph.up.up);
   }
   const std::vector<scene::SceneObject> objects = scene_objects(records);

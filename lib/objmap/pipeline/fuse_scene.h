@@ -12,11 +12,12 @@
 namespace objmap::pipeline {
 
 // Step 1 is scene::find_up_and_surfaces, on the dense map alone (it runs beside the objects'
-// filtering). Step 2, with the objects: every record's position (percentile box) and oriented box
-// taken in the gravity frame (the box turns about up only; with up = +z the positions are those of
-// fusion::ObjectMap::records, bit for bit), the surfaces that are an object's top, the relations.
+// filtering). Step 2, with the objects: every record's position (percentile box, unless
+// `record_options` makes it the centroid) and oriented box taken in the gravity frame (the box
+// turns about up only; with up = +z the positions are those of fusion::ObjectMap::records, bit for
+// bit), the surfaces that are an object's top, the relations.
 void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
-                     scene::SceneGraph& graph);
+                     const fusion::RecordOptions& record_options, scene::SceneGraph& graph);
 
 // objects.json: "up_in_world", "gravity_from_world", "surfaces" (top level) and each object's
 // "relations" (in the order of the records).
