@@ -32,7 +32,7 @@ demo: deps configure
 
 # make bench [DATA=DIR]: every table of docs/benchmarks.md on the sequences under DATA plus three
 # synthetic scenes (scripts/bench.sh; about 10 minutes on 2 cores), then the ablation (below,
-# about 30 minutes more; BENCH_ABLATION=0 leaves it out); writes the generated sections of
+# about 20 minutes more; BENCH_ABLATION=0 leaves it out); writes the generated sections of
 # docs/benchmarks.md and docs/fusion.md and out/bench/. Installs python3-open3d for the Open3D
 # baseline if it can.
 bench: deps build

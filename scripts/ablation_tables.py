@@ -5,7 +5,7 @@
                             [--fusion-doc docs/fusion.md] [--objmap BIN] [--command ...]
                             [--seconds N]
       reads out/ablation/{features.txt, columns.txt, ablation/<row>/<column>/,
-      sweep/seed<N>/<cell>/}
+      sweep/<set>/seed<N>/<cell>/}
       and writes out/ablation/tables.md; the ablation tables replace the part of --doc between
       <!-- ablation:begin --> and <!-- ablation:end -->, the sweep the part of --fusion-doc between
       <!-- sweep:begin --> and <!-- sweep:end --> (each appended at the end of its file when it
@@ -13,10 +13,12 @@
 
 A cell against the true objects reads "13/12 d1 · 2.1 cm": 13 objects mapped for 12 true ones, one
 duplicate (a map object that is not matched but lies within the gate, 0.3 m, of a true object of its
-class that another map object matches), mean centroid error of the matched objects (eval objects);
-"· 1 missed" follows when a true object has no match. A cell of the estimate: mean centroid error
-of the map fused with the estimate against the map fused with groundtruth.txt (Tables 4-5, objects
-matched one-to-one by class) and the object points kept (run.json, outlier-filtered).
+class that another map object matches), mean position error of the matched objects (eval objects'
+position_distance_m: the map object's `position`, the centroid under --method paper (eq 16), to
+the true object's box centre); "· 1 missed" follows when a true object has no match. A cell of the
+estimate: mean centroid error of the map fused with the estimate against the map fused with
+groundtruth.txt (Tables 4-5, objects matched one-to-one by class) and the object points kept
+(run.json, outlier-filtered).
 """
 import argparse
 import datetime
@@ -58,7 +60,9 @@ def same_class(a, b):
 
 
 def truth_summary(ev, objects):
-    """Counts, duplicates, missed and mean centroid error of eval objects --gt-objects."""
+    """Counts, duplicates and missed of eval objects --gt-objects (one-to-one by class within the
+    gate, on the point means), and the position error of each matched object (position_distance_m:
+    its `position` to the true object's box centre; the paper's `position` is its centroid)."""
     if not ev:
         return None
     counts = next((c for c in ev["counts"] if c["class"] == "overall"), None)
@@ -68,10 +72,14 @@ def truth_summary(ev, objects):
     # The true objects' centroids from the matches (error = map centroid - true centroid).
     by_id = {o["id"]: o for o in (objects or {}).get("objects", [])}
     truth = []
+    dists = []
     for m in matches:
         o = by_id.get(m["map_id"])
-        if o:
-            truth.append((m["class"], [c - e for c, e in zip(o["centroid"], m["error_xyz_m"])]))
+        if not o:
+            continue
+        truth.append((m["class"], [c - e for c, e in zip(o["centroid"], m["error_xyz_m"])]))
+        if "position_distance_m" in m:
+            dists.append(m["position_distance_m"])
     dup = 0
     for mid in ev.get("unmatched_map_ids", []):
         o = by_id.get(mid)
@@ -81,7 +89,6 @@ def truth_summary(ev, objects):
                sum((a - b) ** 2 for a, b in zip(o["centroid"], c)) ** 0.5 <= GATE_M
                for cls, c in truth):
             dup += 1
-    dists = [m["distance_m"] for m in matches]
     return {"mapped": counts["mapped"], "truth": counts["reference"], "dup": dup,
             "matched": len(matches), "missed": counts["reference"] - len(matches),
             "dists": dists, "mean": sum(dists) / len(dists) if dists else None}
@@ -216,9 +223,16 @@ def ablation_section(root, cols):
     return out
 
 
-def sweep_section(root, wm, synth_args):
+SWEEP_SETS = [  # (name in scripts/ablation.sh's sweep_sets, what the table is titled)
+    ("hard", "Scenes that put the weights to the test"),
+    ("default", "Scenes at the default orbit and rates"),
+]
+
+
+def sweep_section(root, set_name, title, wm, synth_args):
     cells = {}
-    for path in glob.glob(os.path.join(root, "sweep", "seed*", "*")):
+    set_dir = os.path.join(root, "sweep", set_name)
+    for path in glob.glob(os.path.join(set_dir, "seed*", "*")):
         m = re.match(r"wid([\d.]+)_wd([\d.]+)_wm([\d.]+)_k([\d.]+)$", os.path.basename(path))
         if not m:
             continue
@@ -238,10 +252,12 @@ def sweep_section(root, wm, synth_args):
     if not cells:
         return []
     seeds = sorted({os.path.basename(p)[4:]
-                    for p in glob.glob(os.path.join(root, "sweep", "seed*"))}, key=int)
+                    for p in glob.glob(os.path.join(set_dir, "seed*"))}, key=int)
     ks = sorted({k[3] for k in cells}, key=float)
     pairs = sorted({(k[0], k[1]) for k in cells}, key=lambda p: (float(p[0]), float(p[1])))
     body = []
+    exact_cells = []
+    default_key = (DEFAULTS["wid"], DEFAULTS["wd"], DEFAULTS["wm"], DEFAULTS["k"])
     for wid, wd in pairs:
         row = ["%s, %s" % (wid, wd)]
         for k in ks:
@@ -254,19 +270,28 @@ def sweep_section(root, wm, synth_args):
                 " · %d missed" % c["missed"] if c["missed"] else "",
                 cm(sum(c["dists"]) / len(c["dists"]) if c["dists"] else None), c["exact"],
                 c["seeds"])
-            if (wid, wd, wm, k) == (DEFAULTS["wid"], DEFAULTS["wd"], DEFAULTS["wm"], DEFAULTS["k"]):
+            if c["exact"] == c["seeds"] == len(seeds):
+                exact_cells.append((wid, wd, wm, k))
+            if (wid, wd, wm, k) == default_key:
                 text = "**%s** (default)" % text
             row.append(text)
         body.append(row)
+    reading = "Cells that map every seed exactly: %d of %d%s." % (
+        len(exact_cells), sum(1 for c in cells.values() if c["seeds"]),
+        "; objmap's default is one of them" if default_key in exact_cells
+        else "; objmap's default is not one of them")
     return [
-        "Sweep of eq 22 on `objmap synth --seed N%s` for N = %s, fused with "
-        "groundtruth.txt; w_m = %s held (P > K is unchanged when the weights and K are scaled "
-        "together). A cell sums the seeds: objects mapped / true, duplicates, missed, the mean "
-        "centroid error of all matched objects, and the seeds mapped exactly (every true object "
-        "matched, no extra object)." % ((" " + synth_args) if synth_args else "",
-                                        ", ".join(seeds), wm),
+        "#### %s: `objmap synth --seed N%s`" % (title, (" " + synth_args) if synth_args else ""),
+        "",
+        "N = %s, fused with groundtruth.txt; w_m = %s held (P > K is unchanged when the "
+        "weights and K are scaled together). A cell sums the seeds: objects mapped / true, "
+        "duplicates, missed, the mean position error of all matched objects (`position` to "
+        "the true box centre), and the seeds "
+        "mapped exactly (every true object matched, no extra object)." % (", ".join(seeds), wm),
         "",
         md_table(["w_id, w_d"] + ["K = %s" % k for k in ks], body),
+        "",
+        reading,
         "",
     ]
 
@@ -283,9 +308,14 @@ def render(args):
                   args.command, date, took, version or "objmap",
                   (" (git " + commit + ")") if commit else "", cpu,
                   features.get("load_start", "?")))
-    abl = ablation_section(root, cols) if cols else []
-    sweep = sweep_section(root, features.get("sweep_wm", DEFAULTS["wm"]),
-                          features.get("sweep_synth", ""))
+    # A part that did not run (ABLATION_PARTS) leaves its table in the docs as it is.
+    ran = glob.glob(os.path.join(root, "ablation", "*", "*", "run_gt"))
+    abl = ablation_section(root, cols) if cols and ran else []
+    sweep = []
+    for name, title in SWEEP_SETS:
+        if "sweep_set_" + name in features:
+            sweep += sweep_section(root, name, title, features.get("sweep_wm", DEFAULTS["wm"]),
+                                   features["sweep_set_" + name])
     tables = []
     if abl:
         b, e = MARKERS["ablation"]
@@ -296,19 +326,23 @@ def render(args):
             "seed 5 with `--confusion-rate 0.2 --id-switch-rate 0.2`, and the sequences of DATA "
             "(as `make bench` finds them; short clips with `--keyframes all`). Columns: `fuse "
             "--method paper`, objmap's defaults, and the defaults with one option set as the "
-            "paper has it. Every fuse runs with `--dense-map false` (the same objects and "
-            "centroids; docs/benchmarks.md, How make bench works).",
+            "paper has it. Every fuse runs with `--dense-stride 4` (the dense map at every 4th "
+            "pixel: it gives the up direction, the frame of the positions; docs/benchmarks.md, "
+            "How make bench works).",
             "",
             "Objects vs the true objects (fused with groundtruth.txt): `13/12 d1 · 2.1 cm` = 13 "
             "objects mapped for 12 true ones, 1 duplicate (an unmatched map object within 0.3 m "
-            "of a true object of its class that another map object matches), mean centroid error "
-            "of the matched objects (`objmap eval objects --gt-objects`, one-to-one by class "
-            "within 0.3 m); `· 1 missed`: a true object without a match. Sequences without true "
+            "of a true object of its class that another map object matches), mean position error "
+            "of the matched objects (`objmap eval objects --gt-objects`: matched one-to-one by "
+            "class within 0.3 m on the point means; `position_distance_m`, the object's "
+            "`position`, the centroid under `--method paper` (eq 16), to the true object's box "
+            "centre: `obb.center` of objects_gt.json, fr3_cabinet's cuboid, the YCB-Video "
+            "model origins); `· 1 missed`: a true object without a match. Sequences without true "
             "objects: `17 of 48` = objects confirmed of all objects the fusion made (run.json "
             "`counts`).", "",
         ] + abl + [
             "The sum row: Σ |mapped − true| over the rows, Σ duplicates, Σ missed, and the "
-            "mean centroid error of all matched objects.", "",
+            "mean position error of all matched objects.", "",
             "Estimate cells: `4.7 cm (12/12) · 35.1k` = mean centroid error of the map fused "
             "with the estimate against the map fused with groundtruth.txt (the same column's "
             "options, over the estimate's frames; `eval objects --reference`), matched of the "

@@ -185,7 +185,7 @@ if [ -d "$data" ]; then
     [ "$(frames_of "$dir")" -le 30 ] && extra=(--keyframes all)
     bench_sequence "$name" real "$dir" "$seg" "$est" "$gtobj" "${extra[@]}"
     [ "$(basename "$dir")" = fr1_rpy_every4 ] && rpy=$dir && rpy_name=$name
-  done < <(find "$data" -mindepth 1 -maxdepth 4 -name rgb.txt | sort)
+  done < <(find -L "$data" -mindepth 1 -maxdepth 4 -name rgb.txt | sort)
 else
   step "no data folder $data: synthetic scenes only"
 fi

@@ -337,17 +337,21 @@ TEST(BenchTables, PrepareMovesASlamEstimateOntoTheGroundTruth) {
   EXPECT_EQ(poses, 3);
 }
 
-// scripts/ablation_tables.py (make ablation) on a fixture: one row, three columns, one sweep cell.
+// scripts/ablation_tables.py (make ablation) on a fixture: one row, three columns, one sweep cell
+// of the hard scene set; then a run of the sweep alone, which leaves the ablation's table be.
 TEST(AblationTables, RenderCellsIntoTheirMarkers) {
   if (!has_python3()) GTEST_SKIP() << "no python3";
   TempDir dir;
   const fs::path root = dir / "ablation";
-  write_text(root / "features.txt", "load_start=1.0 1.0 1.0\ndate=2026-01-01 00:00 UTC\n");
+  write_text(
+      root / "features.txt",
+      "load_start=1.0 1.0 1.0\ndate=2026-01-01 00:00 UTC\nsweep_set_hard=--orbit-speed 60\n");
   write_text(root / "columns.txt",
              "paper|paper (--method paper)|--method paper\nobjmap|objmap (defaults)|\n"
              "iou|--overlap iou|--overlap iou\n");
-  // Two true objects (cups at x = 0 and x = 1); map objects: 0 and 1 matched 2 cm off, 2 a
-  // second cup 5 cm from the first (a duplicate), 3 a book far away (not a duplicate).
+  // Two true objects (cups at x = 0 and x = 1); map objects: 0 and 1 matched 2 cm off (their
+  // positions 1 and 3 cm from the true box centres), 2 a second cup 5 cm from the first (a
+  // duplicate), 3 a book far away (not a duplicate).
   const auto objects = [](int n) {
     const double x[] = {0.02, 1.02, 0.05, 5.0};
     const char* cls[] = {"cup", "cup", "cup", "book"};
@@ -362,8 +366,10 @@ TEST(AblationTables, RenderCellsIntoTheirMarkers) {
     for (int id : unmatched) u += (u.empty() ? "" : ",") + std::to_string(id);
     return R"({"counts": [{"class": "overall", "reference": 2, "mapped": )" +
            std::to_string(mapped) + R"(, "error": 0}], "matches": [
-             {"map_id": 0, "class": "cup", "distance_m": 0.02, "error_xyz_m": [0.02, 0, 0]},
-             {"map_id": 1, "class": "cup", "distance_m": 0.02, "error_xyz_m": [0.02, 0, 0]}],
+             {"map_id": 0, "class": "cup", "distance_m": 0.02, "error_xyz_m": [0.02, 0, 0],
+              "position_distance_m": 0.01},
+             {"map_id": 1, "class": "cup", "distance_m": 0.02, "error_xyz_m": [0.02, 0, 0],
+              "position_distance_m": 0.03}],
              "unmatched_map_ids": [)" +
            u + "]}";
   };
@@ -381,7 +387,7 @@ TEST(AblationTables, RenderCellsIntoTheirMarkers) {
   write_text(root / "ablation" / "synth_seed9" / "objmap" / "est_vs_gtmap.json",
              R"({"centroid_error": [{"class": "overall", "reference": 2, "matched": 2,
                  "distance_m": {"mean": 0.047}}]})");
-  const fs::path cell = root / "sweep" / "seed11" / "wid0.3_wd0.2_wm0.5_k0.4";
+  const fs::path cell = root / "sweep" / "hard" / "seed11" / "wid0.3_wd0.2_wm0.5_k0.4";
   write_text(cell / "run_gt" / "objects.json", objects(2));
   write_text(cell / "vs_truth.json", eval(2, {}));
 
@@ -389,10 +395,13 @@ TEST(AblationTables, RenderCellsIntoTheirMarkers) {
   write_text(dir / "bench.md", "# B\n\n<!-- ablation:begin -->\nOLD\n<!-- ablation:end -->" + tail);
   write_text(dir / "fusion.md", "# F\n\n<!-- sweep:begin -->\nOLD\n<!-- sweep:end -->" + tail);
   const fs::path script = fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "scripts" / "ablation_tables.py";
-  const std::string cmd = "python3 " + script.string() + " render --ablation " + root.string() +
-                          " --doc " + (dir / "bench.md").string() + " --fusion-doc " +
-                          (dir / "fusion.md").string() + " >" + (dir / "log").string() + " 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_text(dir / "log");
+  const auto render = [&](const fs::path& from) {
+    const std::string cmd = "python3 " + script.string() + " render --ablation " + from.string() +
+                            " --doc " + (dir / "bench.md").string() + " --fusion-doc " +
+                            (dir / "fusion.md").string() + " >" + (dir / "log").string() + " 2>&1";
+    return std::system(cmd.c_str());
+  };
+  ASSERT_EQ(render(root), 0) << read_text(dir / "log");
   const std::string bench = read_text(dir / "bench.md");
   EXPECT_EQ(bench.find("OLD"), std::string::npos) << bench;
   EXPECT_EQ(bench.substr(bench.size() - tail.size()), tail) << bench;
@@ -407,6 +416,18 @@ TEST(AblationTables, RenderCellsIntoTheirMarkers) {
   EXPECT_NE(fusion.find("| 0.3, 0.2 | **2/2 d0 · 2.0 cm · 1/1 exact** (default) |"),
             std::string::npos)
       << fusion;
+  EXPECT_NE(fusion.find("#### Scenes that put the weights to the test: `objmap synth --seed N "
+                        "--orbit-speed 60`"),
+            std::string::npos)
+      << fusion;
+  EXPECT_NE(fusion.find("Cells that map every seed exactly: 1 of 1; objmap's default is one of "
+                        "them."),
+            std::string::npos)
+      << fusion;
+  // The sweep alone (ABLATION_PARTS=sweep): the ablation's table stays as it was.
+  fs::remove_all(root / "ablation");
+  ASSERT_EQ(render(root), 0) << read_text(dir / "log");
+  EXPECT_EQ(read_text(dir / "bench.md"), bench);
 }
 
 }  // namespace
