@@ -11,6 +11,9 @@
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -428,6 +431,51 @@ TEST(AblationTables, RenderCellsIntoTheirMarkers) {
   fs::remove_all(root / "ablation");
   ASSERT_EQ(render(root), 0) << read_text(dir / "log");
   EXPECT_EQ(read_text(dir / "bench.md"), bench);
+}
+
+// scripts/frame_planes.sh (docs/scene.md's per-frame plane lean) on the synthetic scene, whose
+// groundtruth.txt is z up and whose floor is level: in each frame it checks, the floor (height 0)
+// leans under a degree. A missing sequence is refused in one line with exit code 2.
+TEST(FramePlanes, ALevelSyntheticFloorLeansUnderADegreeInEveryFrame) {
+  if (!has_python3()) GTEST_SKIP() << "no python3";
+  const SyntheticRuns& s = synthetic();
+  ASSERT_TRUE(fs::exists(s.scene)) << s.synth.err;
+  TempDir dir;
+  const fs::path script = fs::path(OBJMAP_SOURCE_DIR_FOR_TESTS) / "scripts" / "frame_planes.sh";
+  const auto run = [&](const fs::path& sequence) {
+    const std::string cmd = "bash " + script.string() + " " + sequence.string() +
+                            " segmentation 45 " + objmap_binary().string() + " >" +
+                            (dir / "out").string() + " 2>" + (dir / "err").string();
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  ASSERT_EQ(run(s.scene), 0) << read_text(dir / "err");
+  std::istringstream out(read_text(dir / "out"));
+  std::string line;
+  std::getline(out, line);
+  EXPECT_EQ(line.rfind("frame  planes within 20 deg of +z", 0), 0u) << line;
+  int frames = 0;
+  while (std::getline(out, line)) {
+    SCOPED_TRACE(line);
+    ++frames;
+    // "FRAME ANGLE@POINTS (HEIGHT) [X Y] ...": the floor is the plane at height 0.
+    std::istringstream fields(line);
+    std::string frame, plane, height, x, y;
+    fields >> frame;
+    bool floor = false;
+    while (fields >> plane >> height >> x >> y)
+      if (std::fabs(std::stod(height.substr(1))) < 0.03) {
+        floor = true;
+        EXPECT_LT(std::stod(plane.substr(0, plane.find('@'))), 1.0);
+      }
+    EXPECT_TRUE(floor) << "no floor plane in this frame";
+  }
+  EXPECT_GE(frames, 2);
+
+  EXPECT_EQ(run(dir / "nowhere"), 2);
+  const std::string err = read_text(dir / "err");
+  EXPECT_NE(err.find("nowhere: no such folder; expected a TUM sequence"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
 }
 
 }  // namespace

@@ -103,6 +103,8 @@ void copy_tree(const fs::path& from, const fs::path& to) {
   fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
 }
 
+fs::path objmap_binary() { return OBJMAP_BINARY; }
+
 RunResult run_objmap(const std::vector<std::string>& args) {
   return run_objmap_interrupted(args, nullptr, 0);
 }

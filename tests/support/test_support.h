@@ -48,6 +48,9 @@ struct RunResult {
   std::string err;  // stderr
 };
 
+// The built objmap binary (for scripts that take its path).
+fs::path objmap_binary();
+
 // Runs the built objmap binary with `args` (no shell interpretation of the arguments).
 RunResult run_objmap(const std::vector<std::string>& args);
 
