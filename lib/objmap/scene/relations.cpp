@@ -121,6 +121,9 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
       if (obj.id == id) return obj.class_name;
     return std::string();
   };
+  const auto floor_sized = [&](const Surface& s) {  // a floor piece by its size: no object's top
+    return !s.object && s.area_m2 >= o.floor_min_area_m2;
+  };
   Surface* floor = nullptr;
   for (Surface& s : surfaces) {
     s.label = "surface";
@@ -131,21 +134,17 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
       s.label_rule = "the top of object " + std::to_string(*s.object);
       continue;
     }
-    if (s.area_m2 >= o.floor_min_area_m2 && (!floor || s.height_m < floor->height_m)) floor = &s;
+    if (floor_sized(s) && (!floor || s.height_m < floor->height_m)) floor = &s;
   }
   // The floor: the largest of the large patches below table height over the lowest one (a floor
   // that the estimated up sees tilted, or that desks and chairs cut apart, leaves pieces a few cm
   // apart, and the lowest may be a small piece 13 cm below the rest); every large patch at its
   // level is floor too.
-  const auto at_level = [&](const Surface& s, double level) {
-    return !s.object && s.area_m2 >= o.floor_min_area_m2 &&
-           std::fabs(s.height_m - level) <= o.merge_height_m;
-  };
   if (floor) {
     const double lowest = floor->height_m;
     for (Surface& s : surfaces)
-      if (!s.object && s.area_m2 >= o.floor_min_area_m2 &&
-          s.height_m - lowest < o.table_min_height_m && s.area_m2 > floor->area_m2)
+      if (floor_sized(s) && s.height_m - lowest < o.table_min_height_m &&
+          s.area_m2 > floor->area_m2)
         floor = &s;
   }
   if (floor && small_on[floor->id] > 0 && standing_on[floor->id] == 0 &&
@@ -154,7 +153,7 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
   if (floor) {
     const std::string large = fixed_text(o.floor_min_area_m2, 2) + " m2";
     for (Surface& s : surfaces)
-      if (at_level(s, floor->height_m)) {
+      if (floor_sized(s) && std::fabs(s.height_m - floor->height_m) <= o.merge_height_m) {
         s.label = "floor";
         s.label_rule = &s == floor
                            ? "the largest patch of at least " + large + " at the lowest level"
