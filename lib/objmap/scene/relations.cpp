@@ -155,9 +155,9 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
     for (Surface& s : surfaces)
       if (floor_sized(s) && std::fabs(s.height_m - floor->height_m) <= o.merge_height_m) {
         s.label = "floor";
-        s.label_rule = &s == floor
-                           ? "the largest patch of at least " + large + " at the lowest level"
-                           : "a patch of at least " + large + " at the floor's level";
+        s.label_rule = &s == floor ? "the largest patch of at least " + large + " less than " +
+                                         fixed_text(o.table_min_height_m, 2) + " m above the lowest"
+                                   : "a patch of at least " + large + " at the floor's level";
       }
     for (Surface& s : surfaces) {
       const double above = s.height_m - floor->height_m;
