@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
     // 2. Decoding the same keyframes' PNGs, nothing else.
     io::TumOptions tum;
     tum.max_diff_s = options.max_diff_s;
-    const io::TumDataset data = io::read_tum_dataset(dataset, tum);
+    const io::Dataset data = io::read_tum_dataset(dataset, tum);
     std::vector<io::FramePair> frames;
     for (const auto& k : result.keyframes.keyframes) frames.push_back(data.frames[k.frame]);
     double dec1_s = 1e30, decn_s = 1e30, dec1_cpu_s = 1e30, cv1_s = 1e30;

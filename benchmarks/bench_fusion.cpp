@@ -242,7 +242,7 @@ void BM_MaskFromBoxReal(benchmark::State& state) {
     std::vector<Job> out;
     const fs::path dir = data_dir() / "tum" / "fr1_rpy_every4";
     if (!fs::exists(dir / "detections_yolofastest")) return out;
-    const io::TumDataset dataset = io::read_tum_dataset(dir);
+    const io::Dataset dataset = io::read_tum_dataset(dir);
     segmentation::ReadOptions read;
     read.image_width = 640;
     read.image_height = 480;
@@ -298,7 +298,7 @@ void BM_CleanGivenMaskYcb(benchmark::State& state) {
     std::vector<Job> out;
     const fs::path dir = data_dir() / "ycbv_0000_10f";
     if (!fs::exists(dir / "masks")) return out;
-    const io::TumDataset dataset = io::read_tum_dataset(dir);
+    const io::Dataset dataset = io::read_tum_dataset(dir);
     segmentation::ReadOptions read;
     read.image_width = 640;
     read.image_height = 480;

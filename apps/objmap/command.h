@@ -24,6 +24,15 @@ void setup_all(CLI::App& app);
 void check_naming_flags(const std::function<void()>& check,
                         const std::vector<std::pair<std::string, std::string>>& option_to_flag);
 
+// --dataset and --layout as every command that reads a recording takes them.
+inline constexpr const char* kDatasetHelp =
+    "recording folder in any layout: TUM RGB-D (rgb.txt, depth.txt), 7-Scenes / 3DMatch, ScanNet "
+    "(SensReader export), Replica (NICE-SLAM), Open3D reconstruction system, or any posed capture "
+    "described by an objmap_layout.json (docs/formats.md)";
+inline constexpr const char* kLayoutHelp =
+    "auto (detected from the folder's contents), tum, 7scenes, scannet, replica, open3d, generic, "
+    "or the path of an objmap_layout.json";
+
 }  // namespace objmap::app
 
 #define OBJMAP_COMMAND(order, name, fn) \

@@ -27,11 +27,12 @@ namespace fs = std::filesystem;
 
 struct DetectCommand {
   std::string dataset;
+  std::string layout = "auto";
   std::string out;
   std::string model;
   std::string config;
   std::string classes_file;
-  std::string classes;  // comma list, "all", or empty = the paper's eight
+  std::string classes;  // comma list, "paper", "all", or empty = every class
   bool nms_per_class = false;
   std::string frames = "all";  // all | keyframes
   std::string trajectory;      // --frames keyframes: the trajectory fuse will be given
@@ -62,7 +63,15 @@ std::vector<std::string> split_classes(const std::string& list) {
 std::vector<segmentation::DetectFrame> frames_to_detect(const DetectCommand& cmd) {
   require(cmd.frames == "all" || cmd.frames == "keyframes", "--frames",
           "'" + cmd.frames + "'; expected all or keyframes");
-  std::vector<segmentation::DetectFrame> frames = segmentation::list_rgb_frames(cmd.dataset);
+  // A TUM folder: every frame rgb.txt lists; other layouts: their frames as fuse reads them.
+  const bool listing = io::is_tum_listing(cmd.dataset, cmd.layout);
+  std::vector<segmentation::DetectFrame> frames;
+  if (listing) {
+    frames = segmentation::list_rgb_frames(cmd.dataset);
+  } else {
+    for (const io::FramePair& f : io::read_dataset(cmd.dataset, {cmd.layout}).frames)
+      frames.push_back({f.rgb_timestamp, f.rgb_file});
+  }
   if (cmd.frames == "all") {
     require(cmd.trajectory.empty(), "--trajectory",
             "is used with --frames keyframes only; expected no trajectory with --frames all");
@@ -70,7 +79,7 @@ std::vector<segmentation::DetectFrame> frames_to_detect(const DetectCommand& cmd
   }
   require(!cmd.trajectory.empty(), "--trajectory",
           "missing; --frames keyframes needs the trajectory that fuse will be given");
-  const io::TumDataset dataset = io::read_tum_dataset(cmd.dataset);
+  const io::Dataset dataset = io::read_dataset(cmd.dataset, {cmd.layout});
   pipeline::KeyframeOptions options;
   options.min_keyframes = 3;  // fuse's default: the views an object needs
   const pipeline::KeyframeSelection selection =
@@ -97,11 +106,13 @@ void run_detect(DetectCommand& cmd) {
   o.nms_across_classes = !cmd.nms_per_class;
   if (cmd.classes == "all") {
     o.classes.clear();
+  } else if (cmd.classes == "paper") {
+    o.classes = segmentation::paper_detect_classes();
   } else if (!cmd.classes.empty()) {
     o.classes = split_classes(cmd.classes);
   }
   require(fs::is_directory(cmd.dataset), cmd.dataset,
-          "no such folder; expected a TUM RGB-D folder with rgb.txt");
+          "no such folder; expected a recording folder (TUM rgb.txt, or another layout)");
   require(cmd.threads >= 0 && cmd.threads <= 64, "--threads",
           "must be in [0, 64] (0: the cores), got " + std::to_string(cmd.threads));
   if (cmd.threads > 0) cv::setNumThreads(cmd.threads);
@@ -172,7 +183,10 @@ void setup_detect(CLI::App& app) {
       "e.g. Yolo-Fastest; boxes), TensorFlow Mask R-CNN (frozen_inference_graph.pb + .pbtxt; "
       "instance masks) or an Ultralytics YOLOv5-seg / YOLOv8-seg ONNX export (.onnx; instance "
       "masks). Nothing is downloaded (docs/cli.md says how to get or export the models).");
-  c->add_option("--dataset", cmd->dataset, "TUM RGB-D folder (rgb.txt, rgb/)")->required();
+  c->add_option("--dataset", cmd->dataset,
+                std::string(kDatasetHelp) + "; a TUM folder may hold rgb.txt and rgb/ alone")
+      ->required();
+  c->add_option("--layout", cmd->layout, kLayoutHelp)->capture_default_str();
   c->add_option("--model", cmd->model,
                 "model weights: Darknet .weights, TensorFlow Mask R-CNN .pb, or an Ultralytics "
                 "YOLOv5-seg / YOLOv8-seg export .onnx (the whole network in one file)")
@@ -184,8 +198,9 @@ void setup_detect(CLI::App& app) {
                 "class names, one per line, line i = class id i-1 (default: built-in COCO-80 for "
                 "Darknet and ONNX, COCO-90 for Mask R-CNN)");
   c->add_option("--classes", cmd->classes,
-                "comma-separated classes to keep, or 'all' (default: the paper's eight: chair, "
-                "cup, tv monitor, teddy bear, bottle, book, keyboard, mouse)");
+                "comma-separated classes to keep, 'paper' (the paper's eight: chair, cup, tv "
+                "monitor, teddy bear, bottle, book, keyboard, mouse, the benchmark tables' preset) "
+                "or 'all' (default: every class the model knows)");
   c->add_option("--score-threshold", o.score_threshold, "minimum class score of a detection")
       ->capture_default_str();
   c->add_option(

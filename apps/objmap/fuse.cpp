@@ -82,14 +82,13 @@ void setup_fuse(CLI::App& app) {
       "OUT/objects.json, "
       "OUT/objects/<id>_<class>.ply, OUT/map_dense.ply, OUT/map_semantic.ply, OUT/map_objects.ply, "
       "OUT/run.json (the two dense maps not with --dense-map false).");
-  cmd->add_option("--dataset", options->dataset,
-                  "TUM RGB-D folder (rgb.txt, depth.txt, rgb/, depth/)")
-      ->required();
+  cmd->add_option("--dataset", options->dataset, kDatasetHelp)->required();
+  cmd->add_option("--layout", options->layout, kLayoutHelp)->capture_default_str();
   cmd->add_option(
-         "--trajectory", options->trajectory,
-         "trajectory, TUM format (ORB-SLAM2 KeyFrameTrajectory.txt / CameraTrajectory.txt, "
-         "groundtruth.txt)")
-      ->required();
+      "--trajectory", options->trajectory,
+      "trajectory, TUM format (ORB-SLAM2 KeyFrameTrajectory.txt / CameraTrajectory.txt, "
+      "groundtruth.txt); optional where the recording carries its own poses (7-Scenes, ScanNet, "
+      "Replica, Open3D, generic): they are used and copied to OUT/dataset_trajectory.txt");
   cmd->add_option("--segmentation", options->segmentation,
                   "segmentation folder (canonical JSON, PNG instance images, paper txt, box txt)")
       ->required();

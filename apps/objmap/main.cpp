@@ -121,6 +121,7 @@ int main(int argc, char** argv) {
   objmap::app::take_interrupts();  // first: before any thread starts
   CLI::App app{
       "objmap: object-oriented semantic maps from a finished RGB-D SLAM run.\n"
+      "One command: objmap run (detect -> track -> fuse -> report on a recording).\n"
       "Pipeline: synth | validate -> detect -> track -> fuse -> correct -> eval -> report.\n"
       "Run 'objmap <command> --help' for the options of one command."};
   app.set_version_flag("--version", std::string("objmap ") + objmap::version());

@@ -5,12 +5,14 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "command.h"
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/camera_io.h"
+#include "objmap/io/dataset.h"
 #include "objmap/io/image.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/segmentation/read.h"
@@ -25,6 +27,7 @@ namespace fs = std::filesystem;
 
 struct TrackCommand {
   std::string dataset;
+  std::string layout = "auto";
   std::string segmentation;
   std::string out;
   std::string seg_format = "auto";
@@ -59,11 +62,18 @@ void run_track(TrackCommand& cmd) {
                                                 {"--camera", cmd.camera}});
   io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
   require(fs::is_directory(cmd.dataset), cmd.dataset,
-          "no such folder; expected a TUM RGB-D folder with rgb.txt");
+          "no such folder; expected a recording folder (TUM rgb.txt, or another layout)");
   segmentation::ReadOptions read;
   read.format = cmd.seg_format;
   const segmentation::Segmentation input = segmentation::read_segmentation(cmd.segmentation, read);
-  const track::FrameImages images = track::find_frame_images(cmd.dataset, input);
+  // A TUM folder gives every frame rgb.txt lists (it may hold rgb.txt alone); other layouts
+  // their frames as fuse reads them.
+  std::optional<io::Dataset> dataset;
+  if (!io::is_tum_listing(cmd.dataset, cmd.layout) || !cmd.trajectory.empty())
+    dataset = io::read_dataset(cmd.dataset, {cmd.layout});
+  const track::FrameImages images = io::is_tum_listing(cmd.dataset, cmd.layout)
+                                        ? track::find_frame_images(cmd.dataset, input)
+                                        : track::find_frame_images(*dataset, input);
   // Appearance needs the rgb images; a stream of boxes without images is tracked on motion alone.
   o.tracker.use_appearance = !cmd.no_appearance && images.has_images;
 
@@ -72,10 +82,10 @@ void run_track(TrackCommand& cmd) {
   track::FramePositionsFn positions;
   std::string camera_reason;
   if (o.tracker.use_gate_3d) {
-    const io::CameraChoice choice = io::choose_camera(cmd.dataset, cmd.camera);
+    const io::CameraChoice choice = io::choose_camera(*dataset, cmd.camera);
     camera_reason = choice.reason;
     const Trajectory trajectory = io::read_trajectory(cmd.trajectory);
-    positions = track::depth_positions(cmd.dataset, input, trajectory, choice.camera, cmd.position);
+    positions = track::depth_positions(*dataset, input, trajectory, choice.camera, cmd.position);
   }
 
   std::unique_ptr<ProgressBar> bar;
@@ -139,9 +149,11 @@ void setup_track(CLI::App& app) {
       "Give the instances of a segmentation track ids with DeepSORT (Kalman filter on the box, "
       "Mahalanobis gate, colour appearance, matching cascade, IoU matching, Hungarian "
       "assignment). Writes the canonical segmentation with track_id and tracks.json.");
-  c->add_option("--dataset", cmd->dataset,
-                "TUM RGB-D folder (rgb.txt; rgb images for appearance when present)")
+  c->add_option(
+       "--dataset", cmd->dataset,
+       std::string(kDatasetHelp) + "; a TUM folder may hold rgb.txt alone (appearance then off)")
       ->required();
+  c->add_option("--layout", cmd->layout, kLayoutHelp)->capture_default_str();
   c->add_option("--segmentation", cmd->segmentation,
                 "segmentation folder (any supported format; input track ids are ignored)")
       ->required();

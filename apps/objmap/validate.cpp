@@ -21,8 +21,12 @@ void run_validate(const pipeline::ValidateOptions& options) {
 
   const auto& s = summary;
   const std::size_t n_frames = s.rgb_only ? s.rgb_rows : s.pairs;
-  std::printf("dataset       %s%s\n", options.dataset.c_str(),
+  std::printf("dataset       %s%s%s\n", options.dataset.c_str(),
+              s.layout.empty() ? "" : (" (" + s.layout + " layout)").c_str(),
               s.recorded_from.empty() ? "" : (" (recorded from " + s.recorded_from + ")").c_str());
+  if (s.dataset_poses > 0)
+    std::printf("poses         %zu of the recording's own (%zu frames dropped: lost tracking)\n",
+                s.dataset_poses, s.lost_poses);
   if (s.rgb_only)
     std::printf("frames        %zu rgb, no depth.txt (a listing without images: not checked)\n",
                 s.rgb_rows);
@@ -66,9 +70,8 @@ void setup_validate(CLI::App& app) {
       "a summary (frames, associated pairs, time span, camera, trajectory and segmentation "
       "coverage, "
       "instances per class). Exit 2 with one line at the first thing that is wrong.");
-  cmd->add_option("--dataset", options->dataset,
-                  "TUM RGB-D folder (rgb.txt, depth.txt, rgb/, depth/)")
-      ->required();
+  cmd->add_option("--dataset", options->dataset, kDatasetHelp)->required();
+  cmd->add_option("--layout", options->layout, kLayoutHelp)->capture_default_str();
   cmd->add_option("--trajectory", options->trajectory,
                   "trajectory in TUM format (t tx ty tz qx qy qz qw, world_from_cam)");
   cmd->add_option("--segmentation", options->segmentation,

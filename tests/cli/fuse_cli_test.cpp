@@ -154,7 +154,7 @@ TEST_F(FuseBadInput, OutThatIsNotAnEarlierRunIsNeverReplaced) {
 TEST(FuseCli, MissingRequiredFlagIsAUsageError) {
   const auto r = run_objmap({"fuse", "--dataset", "x"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--trajectory"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--segmentation"), std::string::npos) << r.err;
 }
 
 TEST(FuseCli, UnknownConfigKeyIsNamed) {

@@ -45,7 +45,7 @@ TEST(EvalFlagsCli, BadOptionNamesItsFlag) {
 TEST(CommandsCli, AnUnknownCommandIsNamed) {
   const RunResult top = run_objmap({"frobnicate", "--x"});
   EXPECT_EQ(top.exit_code, 2);
-  EXPECT_NE(top.err.find("unknown command 'frobnicate'; expected one of synth, validate"),
+  EXPECT_NE(top.err.find("unknown command 'frobnicate'; expected one of synth, run, validate"),
             std::string::npos)
       << top.err;
   const RunResult eval = run_objmap({"eval", "atee"});

@@ -71,8 +71,13 @@ TEST(DetectCli, WholeFolderValidatesAndRerunsIdentically) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
   OBJMAP_DATA_OR_SKIP(models, kModels);
   test::TempDir tmp;
-  const std::vector<std::string> args = {"detect", "--dataset", data.string(), "--model",
-                                         (models / "yolo-fastest-1.1-xl.weights").string()};
+  const std::vector<std::string> args = {"detect",
+                                         "--dataset",
+                                         data.string(),
+                                         "--model",
+                                         (models / "yolo-fastest-1.1-xl.weights").string(),
+                                         "--classes",
+                                         "paper"};
   auto first = args;
   first.insert(first.end(), {"--out", (tmp / "seg").string()});
   const auto r = run_objmap(first);
@@ -116,8 +121,8 @@ TEST(DetectCli, DetectTrackFuseEndToEnd) {
   OBJMAP_DATA_OR_SKIP(models, kModels);
   test::TempDir tmp;
   const auto d = run_objmap({"detect", "--dataset", data.string(), "--model",
-                             (models / "yolo-fastest-1.1-xl.weights").string(), "--out",
-                             (tmp / "seg").string()});
+                             (models / "yolo-fastest-1.1-xl.weights").string(), "--classes",
+                             "paper", "--out", (tmp / "seg").string()});
   ASSERT_EQ(d.exit_code, 0) << d.err;
   const auto t = run_objmap({"track", "--dataset", data.string(), "--segmentation",
                              (tmp / "seg").string(), "--out", (tmp / "tracked").string()});

@@ -21,9 +21,9 @@ std::string read_error(const fs::path& dir, std::string* where = nullptr) {
   return test::error_reason([&] { read_tum_dataset(dir); }, dir.string(), where);
 }
 
-TEST(ReadTumDataset, Fr1Desk9) {
+TEST(ReadDataset, Fr1Desk9) {
   OBJMAP_DATA_OR_SKIP(dir, "tum/fr1_desk_9");
-  const TumDataset d = read_tum_dataset(dir);
+  const Dataset d = read_tum_dataset(dir);
   EXPECT_EQ(d.rgb_rows, 9u);
   EXPECT_EQ(d.depth_rows, 9u);
   ASSERT_EQ(d.frames.size(), 9u);
@@ -35,9 +35,9 @@ TEST(ReadTumDataset, Fr1Desk9) {
   EXPECT_EQ(d.root, dir);
 }
 
-TEST(ReadTumDataset, Fr1RpyEvery4) {
+TEST(ReadDataset, Fr1RpyEvery4) {
   OBJMAP_DATA_OR_SKIP(dir, "tum/fr1_rpy_every4");
-  const TumDataset d = read_tum_dataset(dir);
+  const Dataset d = read_tum_dataset(dir);
   EXPECT_EQ(d.rgb_rows, 174u);
   ASSERT_EQ(d.frames.size(), 174u);
   EXPECT_EQ(d.frames.back().rgb_timestamp, 1305031253.56567);
@@ -47,18 +47,18 @@ TEST(ReadTumDataset, Fr1RpyEvery4) {
     ASSERT_LT(d.frames[i - 1].rgb_timestamp, d.frames[i].rgb_timestamp);
 }
 
-TEST(ReadTumDataset, Fr3CabinetJpeg) {
+TEST(ReadDataset, Fr3CabinetJpeg) {
   OBJMAP_DATA_OR_SKIP(dir, "tum/fr3_cabinet_58kf");
-  const TumDataset d = read_tum_dataset(dir);
+  const Dataset d = read_tum_dataset(dir);
   ASSERT_EQ(d.frames.size(), 58u);
   EXPECT_EQ(d.frames[0].rgb_file.extension(), ".jpg");
   EXPECT_EQ(d.frames[0].rgb_timestamp, d.frames[0].depth_timestamp);
   EXPECT_EQ(d.recorded_from, "");
 }
 
-TEST(ReadTumDataset, Ycbv) {
+TEST(ReadDataset, Ycbv) {
   OBJMAP_DATA_OR_SKIP(dir, "ycbv_0000_10f");
-  const TumDataset d = read_tum_dataset(dir);
+  const Dataset d = read_tum_dataset(dir);
   ASSERT_EQ(d.frames.size(), 10u);
   EXPECT_EQ(d.frames[9].rgb_timestamp, 0.3);
 }
@@ -78,7 +78,7 @@ TEST(AssociateStamps, MatchesAssociatePyOnContestedCase) {
   EXPECT_TRUE(associate_stamps({1.0}, {1.25}, 0.25).empty());
 }
 
-TEST(ReadTumDataset, ContestedCaseFromFiles) {
+TEST(ReadDataset, ContestedCaseFromFiles) {
   TempDir dir;
   fs::create_directories(dir / "rgb");
   fs::create_directories(dir / "depth");
@@ -93,7 +93,7 @@ TEST(ReadTumDataset, ContestedCaseFromFiles) {
   }
   write_text(dir / "rgb.txt", rgb);
   write_text(dir / "depth.txt", depth);
-  const TumDataset d = read_tum_dataset(dir.path());
+  const Dataset d = read_tum_dataset(dir.path());
   ASSERT_EQ(d.frames.size(), 3u);
   EXPECT_EQ(d.frames[0].rgb_timestamp, 1.012);
   EXPECT_EQ(d.frames[0].depth_timestamp, 1.009);
@@ -102,7 +102,7 @@ TEST(ReadTumDataset, ContestedCaseFromFiles) {
   EXPECT_EQ(d.depth_rows, 4u);
 }
 
-TEST(ReadTumDataset, EmptyFolderMissingListsAndFolder) {
+TEST(ReadDataset, EmptyFolderMissingListsAndFolder) {
   TempDir dir;
   std::string where;
   EXPECT_EQ(read_error(dir.path(), &where),
@@ -115,7 +115,7 @@ TEST(ReadTumDataset, EmptyFolderMissingListsAndFolder) {
   EXPECT_EQ(where, (dir / "rgb.txt").string());
 }
 
-TEST(ReadTumDataset, MalformedCopiesOfFr1Desk9) {
+TEST(ReadDataset, MalformedCopiesOfFr1Desk9) {
   OBJMAP_DATA_OR_SKIP(src, "tum/fr1_desk_9");
   TempDir tmp;
   const fs::path dir = tmp / "fr1_desk_9";
@@ -162,7 +162,7 @@ TEST(ReadTumDataset, MalformedCopiesOfFr1Desk9) {
   EXPECT_EQ(read_error(dir), "lists no image; expected lines 'timestamp filename'");
 }
 
-TEST(ReadTumDataset, NoPairWithinMaxDiff) {
+TEST(ReadDataset, NoPairWithinMaxDiff) {
   OBJMAP_DATA_OR_SKIP(src, "tum/fr1_desk_9");
   TumOptions tight;
   tight.max_diff_s = 1e-6;

@@ -6,8 +6,8 @@ namespace objmap::pipeline {
 namespace {
 
 // `n` frames at 30 Hz and a pose for each, the camera moving `step_m` along x per frame.
-std::pair<io::TumDataset, Trajectory> clip(int n, double step_m) {
-  io::TumDataset dataset;
+std::pair<io::Dataset, Trajectory> clip(int n, double step_m) {
+  io::Dataset dataset;
   Trajectory trajectory;
   for (int i = 0; i < n; ++i) {
     const double t = 100.0 + i / 30.0;

@@ -149,6 +149,7 @@ const OutputKind kSyntheticSequence{"objmap synth sequence", {"synth.json"}, fal
 const OutputKind kSegmentationFolder{
     "segmentation (<timestamp>.json files)", {"tracks.json"}, true};
 const OutputKind kReportFolder{"objmap report", {"report.html"}, false};
+const OutputKind kPipelineFolder{"objmap run", {"stages.json"}, false};
 
 namespace {
 

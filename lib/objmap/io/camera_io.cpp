@@ -244,4 +244,21 @@ CameraChoice choose_camera(const fs::path& dataset_dir, const std::string& camer
                    "camera file (.json, ORB-SLAM2 .yaml)");
 }
 
+CameraChoice choose_camera(const Dataset& dataset, const std::string& camera_arg) {
+  CameraChoice choice;
+  if (camera_arg.empty() && dataset.camera) {
+    choice = {*dataset.camera,
+              "the " + dataset.layout + " layout's camera (" + dataset.camera_source + ")"};
+  } else {
+    choice = choose_camera(dataset.root, camera_arg);
+  }
+  // The layout fixes the depth units (7-Scenes millimetres, Replica 1/6553.5 m, ...).
+  if (dataset.depth_factor > 0 && choice.camera.depth_factor != dataset.depth_factor) {
+    choice.camera.depth_factor = dataset.depth_factor;
+    choice.reason += "; depth factor " + nlohmann::json(dataset.depth_factor).dump() + " of the " +
+                     dataset.layout + " layout";
+  }
+  return choice;
+}
+
 }  // namespace objmap::io

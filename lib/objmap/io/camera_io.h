@@ -3,6 +3,7 @@
 #include <string>
 
 #include "objmap/core/camera.h"
+#include "objmap/io/dataset.h"
 
 // Camera files: objmap's JSON (schemas/camera.schema.json) and ORB-SLAM2 settings YAML.
 namespace objmap::io {
@@ -35,6 +36,11 @@ struct CameraChoice {
 // named by rgb.txt's "# file: 'rgbd_dataset_freiburgN_...'" header; else InputError asking for
 // --camera.
 CameraChoice choose_camera(const std::filesystem::path& dataset_dir, const std::string& camera_arg);
+
+// The camera of a run on `dataset`: `camera_arg` when given; else the layout's own camera where it
+// has one (7scenes, scannet, replica, open3d, generic); else as above on the folder. A layout that
+// fixes its depth units sets the depth factor whatever the camera's source.
+CameraChoice choose_camera(const Dataset& dataset, const std::string& camera_arg);
 
 // "fr1".."fr3" when `name` contains freiburg1..3 or fr1..fr3 as a word part (case-insensitive;
 // "fr1_desk_9", "rgbd_dataset_freiburg3_cabinet"), else "".

@@ -114,7 +114,7 @@ std::string recorded_from_header(const fs::path& list_file) {
   return "";
 }
 
-TumDataset read_tum_dataset(const fs::path& dir, const TumOptions& options) {
+Dataset read_tum_dataset(const fs::path& dir, const TumOptions& options) {
   options.check();
   std::error_code ec;
   if (!fs::exists(dir, ec)) throw InputError(dir.string(), "folder not found");
@@ -124,7 +124,7 @@ TumDataset read_tum_dataset(const fs::path& dir, const TumOptions& options) {
     throw InputError(dir.string(),
                      "empty folder; expected a TUM RGB-D folder with rgb.txt, "
                      "depth.txt, rgb/ and depth/");
-  TumDataset dataset;
+  Dataset dataset;
   dataset.root = dir;
   const std::vector<ListRow> rgb = read_list(dir, "rgb.txt", &dataset.recorded_from);
   const std::vector<ListRow> depth = read_list(dir, "depth.txt", nullptr);

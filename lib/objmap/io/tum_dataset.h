@@ -5,23 +5,11 @@
 #include <utility>
 #include <vector>
 
-// A TUM RGB-D folder: rgb.txt and depth.txt list `timestamp filename` (filename relative to the
-// folder; '#' comments and blank lines allowed), the images are in rgb/ and depth/.
+#include "objmap/io/dataset.h"
+
+// The tum layout: a TUM RGB-D folder: rgb.txt and depth.txt list `timestamp filename` (filename
+// relative to the folder; '#' comments and blank lines allowed), the images are in rgb/ and depth/.
 namespace objmap::io {
-
-struct FramePair {
-  double rgb_timestamp = 0;
-  double depth_timestamp = 0;
-  std::filesystem::path rgb_file, depth_file;  // root / the name listed in rgb.txt / depth.txt
-};
-
-struct TumDataset {
-  std::filesystem::path root;
-  std::vector<FramePair> frames;  // associated pairs, sorted by rgb timestamp
-  std::size_t rgb_rows = 0, depth_rows = 0;
-  std::string recorded_from;  // from rgb.txt's "# file: '<name>'" header, e.g.
-                              // "rgbd_dataset_freiburg1_desk.bag"; empty when there is none
-};
 
 struct TumOptions {
   double max_diff_s = 0.02;  // rgb and depth stamps pair when |t_rgb - t_depth| < max_diff_s
@@ -35,7 +23,7 @@ struct TumOptions {
 // Every listed image must exist. Throws InputError for a missing folder, rgb.txt or depth.txt, a
 // line that is not `timestamp filename`, timestamps not strictly increasing, a listed image that
 // does not exist, a list with no image, and no associated pair at all.
-TumDataset read_tum_dataset(const std::filesystem::path& dir, const TumOptions& options = {});
+Dataset read_tum_dataset(const std::filesystem::path& dir, const TumOptions& options = {});
 
 // The association alone, on two increasing lists of stamps: pairs of indices (rgb, depth), sorted
 // by rgb index.

@@ -255,6 +255,7 @@ FuseOptions fuse_options_of(const fs::path& run_dir, const json& run, const fs::
   io::write_file_atomic(options_file, field<json>(run, "options", file, "").dump(2));
   apply_config_file(options_file, fuse_config_fields(fo));
   fo.dataset = input_path(run, file, "dataset");
+  fo.layout = run_json::input_layout(run, file);
   fo.segmentation = input_path(run, file, "segmentation");
   fo.seg_format = field<std::string>(
       field<json>(field<json>(run, "inputs", file, ""), "segmentation", file, "inputs"), "format",

@@ -36,6 +36,9 @@ using ordered_json = nlohmann::ordered_json;
 
 namespace {
 
+// The dataset's own poses, written into the run folder when no --trajectory is given.
+const char* const kDatasetTrajectory = "dataset_trajectory.txt";
+
 // Association windows, threads, keyframes, depth range and the dense map.
 std::vector<ConfigField> inputs_fields(FuseOptions& o) {
   auto& k = o.keyframes;
@@ -309,8 +312,10 @@ void set_method_preset(FuseOptions& o) {
 }
 
 void FuseOptions::check() const {
-  require(!dataset.empty(), "--dataset", "missing; expected a TUM RGB-D folder");
-  require(!trajectory.empty(), "--trajectory", "missing; expected a TUM trajectory file");
+  require(!dataset.empty(), "--dataset", "missing; expected a recording folder");
+  io::DatasetOptions dataset_options;
+  dataset_options.layout = layout;
+  dataset_options.check();
   require(!segmentation.empty(), "--segmentation", "missing; expected a segmentation folder");
   require(!out.empty(), "--out", "missing; expected the run folder to write");
   require(std::isfinite(max_diff_s) && max_diff_s > 0 && max_diff_s < 1, "max_diff_s",
@@ -672,15 +677,15 @@ std::vector<bool> drop_duplicates(const FuseOptions& options, std::vector<Instan
 // merged, not pixels) and added to `dense` in keyframe order, and each instance's pixels
 // into an observation. Without `dense` (and `order`, `pool`), the observations only.
 FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
-                           const geometry::RayTable& rays, const io::FramePair& frame,
-                           const Keyframe& keyframe, int keyframe_index,
+                           const geometry::RayTable& rays, const io::Dataset& dataset,
+                           const io::FramePair& frame, const Keyframe& keyframe, int keyframe_index,
                            const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
                            ShardedMergeOrder* order, FrameVoxelsPool* pool) {
   FrameWork work;
 
   // 1. The images (checked: size, type).
   const cv::Mat bgr = io::read_rgb(frame.rgb_file, camera.width, camera.height);
-  const cv::Mat depth = io::read_depth(frame.depth_file, camera.width, camera.height);
+  const cv::Mat depth = io::read_frame_depth(dataset, frame, camera);
   if (dense && options.dense_prune.every_keyframes > 0) work.depth = depth;
 
   // 2. Dense map: every valid pixel (eqs 11-15) with its colour.
@@ -870,7 +875,7 @@ ordered_json duplicates_json(const fusion::DuplicateReport& report,
 // What a fuse reads before the keyframes: the TUM folder, the camera, the trajectory, the
 // segmentation, and the keyframes with their segmentation frames.
 struct FuseInputs {
-  io::TumDataset dataset;
+  io::Dataset dataset;
   Trajectory trajectory;
   segmentation::ReadOptions read;
   SegmentationSource seg_source;
@@ -883,16 +888,25 @@ FuseInputs load_inputs(const FuseOptions& options, FuseResult& result) {
   FuseInputs in;
   // 1. Inputs: the TUM folder, the camera, the trajectory, the segmentation.
   auto t0 = Clock::now();
-  io::TumOptions tum;
-  tum.max_diff_s = options.max_diff_s;
-  in.dataset = io::read_tum_dataset(options.dataset, tum);
-  const io::TumDataset& dataset = in.dataset;
+  in.dataset = io::read_dataset(options.dataset, {options.layout, options.max_diff_s});
+  const io::Dataset& dataset = in.dataset;
   result.frames = dataset.frames.size();
-  const io::CameraChoice choice = io::choose_camera(options.dataset, options.camera);
+  result.layout = dataset.layout;
+  const io::CameraChoice choice = io::choose_camera(dataset, options.camera);
   result.camera = choice.camera;
   result.camera_reason = choice.reason;
   const Camera& camera = result.camera;
-  in.trajectory = io::read_trajectory(options.trajectory);
+  if (options.trajectory.empty()) {
+    // The recording's own poses (7-Scenes, ScanNet, Replica, Open3D, generic).
+    require(!dataset.poses.empty(), "--trajectory",
+            "missing, and the " + dataset.layout + " recording " + options.dataset.string() +
+                " carries no camera poses; expected a TUM trajectory of a SLAM run");
+    in.trajectory = dataset.poses;
+    result.trajectory_source = "the dataset's own poses (" + dataset.poses.source + ")";
+  } else {
+    in.trajectory = io::read_trajectory(options.trajectory);
+    result.trajectory_source = options.trajectory.string();
+  }
   result.warnings.insert(result.warnings.end(), in.trajectory.warnings.begin(),
                          in.trajectory.warnings.end());
   const Trajectory& trajectory = in.trajectory;
@@ -1043,9 +1057,9 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
         // segmentation.
         segmentation::FrameSegmentation lazy;
         const segmentation::FrameSegmentation* seg_frame = keyframe_segmentation(inputs, i, lazy);
-        return process_keyframe(options, camera, rays, inputs.dataset.frames[keyframes[i].frame],
-                                keyframes[i], static_cast<int>(i), seg_frame, dense, &merge_order,
-                                &frame_voxels);
+        return process_keyframe(options, camera, rays, inputs.dataset,
+                                inputs.dataset.frames[keyframes[i].frame], keyframes[i],
+                                static_cast<int>(i), seg_frame, dense, &merge_order, &frame_voxels);
       } catch (...) {
         merge_order.fail();  // later keyframes must not wait for this one's merge
         throw;
@@ -1193,21 +1207,39 @@ void write_objects_json(const fs::path& dir, const ordered_json& objects_json,
   io::write_file_atomic(dir / "objects.json", doc.dump(2) + "\n");
 }
 
-// run.json "inputs": the paths with their checksums, the camera and why it was chosen.
-ordered_json inputs_json(const FuseOptions& options, const FuseResult& result) {
-  return {
-      {"dataset",
-       {{"path", options.dataset.string()},
-        {"rgb.txt", file_checksum(options.dataset / "rgb.txt")},
-        {"depth.txt", file_checksum(options.dataset / "depth.txt")}}},
-      {"trajectory",
-       {{"path", options.trajectory.string()}, {"checksum", file_checksum(options.trajectory)}}},
-      {"segmentation",
-       {{"path", options.segmentation.string()},
-        {"format", result.seg_format},
-        {"checksum", folder_checksum(options.segmentation)}}},
-      {"camera", nlohmann::ordered_json::parse(io::camera_json(result.camera))},
-      {"camera_reason", result.camera_reason}};
+// run.json "inputs": the paths with their checksums, the camera and why it was chosen. The
+// trajectory of a run on the dataset's own poses is the copy written into the run folder.
+ordered_json inputs_json(const FuseOptions& options, const FuseInputs& inputs,
+                         const FuseResult& result) {
+  ordered_json dataset = {{"path", options.dataset.string()}, {"layout", result.layout}};
+  if (result.layout == "tum") {
+    dataset["rgb.txt"] = file_checksum(options.dataset / "rgb.txt");
+    dataset["depth.txt"] = file_checksum(options.dataset / "depth.txt");
+  } else {
+    std::string names;
+    for (const io::FramePair& f : inputs.dataset.frames)
+      names += f.rgb_file.filename().string() + " " + f.depth_file.filename().string() + "\n";
+    dataset["frames"] = hex64(fnv1a(names));
+  }
+  ordered_json trajectory;
+  if (options.trajectory.empty()) {
+    const std::string text = io::format_trajectory(inputs.trajectory);
+    trajectory = {{"path", (options.out / kDatasetTrajectory).string()},
+                  {"from", "dataset"},
+                  {"source", inputs.trajectory.source},
+                  {"checksum", hex64(fnv1a(text))}};
+  } else {
+    trajectory = {{"path", options.trajectory.string()},
+                  {"checksum", file_checksum(options.trajectory)}};
+  }
+  return {{"dataset", dataset},
+          {"trajectory", trajectory},
+          {"segmentation",
+           {{"path", options.segmentation.string()},
+            {"format", result.seg_format},
+            {"checksum", folder_checksum(options.segmentation)}}},
+          {"camera", nlohmann::ordered_json::parse(io::camera_json(result.camera))},
+          {"camera_reason", result.camera_reason}};
 }
 
 // run.json "counts": per stage.
@@ -1280,7 +1312,7 @@ void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseI
   run["schema_version"] = 1;
   run["generator"] = std::string("objmap ") + objmap::version();
   run["command"] = "fuse";
-  run["inputs"] = inputs_json(options, result);
+  run["inputs"] = inputs_json(options, inputs, result);
   run["options"] = ordered_json::parse(config_to_json(fuse_config_fields(echo)));
   run["counts"] = counts_json(inputs, result);
   run["points"] = points_json(result, maps);
@@ -1372,6 +1404,10 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   // 5b. run.json: options, inputs with checksums, counts per stage, Table 6, time per stage,
   //     memory.
   write_run_json(dir, options, inputs, object_options, map_points, result);
+  if (options.trajectory.empty())
+    io::write_trajectory(dir / kDatasetTrajectory, inputs.trajectory,
+                         "the camera poses of " + options.dataset.string() + " (" + result.layout +
+                             " layout: " + inputs.trajectory.source + ")");
   staging.commit();
   return result;
 }
@@ -1398,10 +1434,10 @@ std::vector<fusion::Observation> remake_observations(const FuseOptions& options,
     const std::size_t i = static_cast<std::size_t>(keyframe_indices[j]);
     segmentation::FrameSegmentation lazy;
     const segmentation::FrameSegmentation* seg = keyframe_segmentation(inputs, i, lazy);
-    per_keyframe[j] =
-        process_keyframe(options, result.camera, rays, inputs.dataset.frames[keyframes[i].frame],
-                         keyframes[i], static_cast<int>(i), seg, nullptr, nullptr, nullptr)
-            .observations;
+    per_keyframe[j] = process_keyframe(options, result.camera, rays, inputs.dataset,
+                                       inputs.dataset.frames[keyframes[i].frame], keyframes[i],
+                                       static_cast<int>(i), seg, nullptr, nullptr, nullptr)
+                          .observations;
   });
   std::vector<fusion::Observation> out;
   for (auto& v : per_keyframe)

@@ -31,8 +31,10 @@ struct FuseOptions {
   // records the method.
   std::string method = "objmap";
   // Inputs and output.
-  std::filesystem::path dataset;         // TUM folder
-  std::filesystem::path trajectory;      // TUM trajectory, world_from_cam
+  std::filesystem::path dataset;         // recording folder in any layout (io/dataset.h)
+  std::string layout = "auto";           // its layout: auto (detected), a name or a layout JSON
+  std::filesystem::path trajectory;      // TUM trajectory, world_from_cam; empty: the dataset's own
+                                         // poses (written to OUT/dataset_trajectory.txt)
   std::filesystem::path segmentation;    // segmentation folder, any supported format
   std::filesystem::path out;             // run folder (replaced atomically when complete)
   std::string camera;                    // empty: camera.json, folder name or rgb.txt header
@@ -75,6 +77,8 @@ struct StageTime {
 struct FuseResult {
   Camera camera;
   std::string camera_reason;
+  std::string layout;             // the dataset's layout as read
+  std::string trajectory_source;  // the trajectory file, or the dataset's own poses (their files)
   std::vector<std::string> warnings;  // what the readers accepted but the user should know
   std::string seg_format;
   std::size_t frames = 0;  // associated rgb/depth pairs

@@ -31,7 +31,7 @@ std::string time_text(double t) {
 
 // No frame has a pose: the two time spans side by side, and a hint when the trajectory's
 // timestamps look like another unit than seconds (nanoseconds, as many ROS tools write them).
-InputError no_pose_error(const io::TumDataset& dataset, const Trajectory& trajectory,
+InputError no_pose_error(const io::Dataset& dataset, const Trajectory& trajectory,
                          double max_diff_s) {
   char window[32];
   std::snprintf(window, sizeof window, "%g", max_diff_s);
@@ -82,7 +82,7 @@ std::vector<Keyframe> motion_keyframes(const std::vector<Keyframe>& posed,
 
 }  // namespace
 
-KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajectory& trajectory,
+KeyframeSelection select_keyframes(const io::Dataset& dataset, const Trajectory& trajectory,
                                    const KeyframeOptions& options) {
   options.check();
   io::PoseLookupOptions lookup;

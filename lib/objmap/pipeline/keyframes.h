@@ -25,7 +25,7 @@ struct KeyframeOptions {
 };
 
 struct Keyframe {
-  std::size_t frame = 0;   // index into TumDataset::frames
+  std::size_t frame = 0;   // index into Dataset::frames
   double timestamp = 0.0;  // rgb timestamp
   Pose world_from_cam = Pose::Identity();
 };
@@ -41,7 +41,7 @@ struct KeyframeSelection {
 };
 
 // Throws InputError naming the trajectory when no frame has a pose.
-KeyframeSelection select_keyframes(const io::TumDataset& dataset, const Trajectory& trajectory,
+KeyframeSelection select_keyframes(const io::Dataset& dataset, const Trajectory& trajectory,
                                    const KeyframeOptions& options);
 
 }  // namespace objmap::pipeline

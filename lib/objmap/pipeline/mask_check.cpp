@@ -69,7 +69,7 @@ struct ObservationRef {
 // The run's inputs, as fuse used them.
 struct RunInputs {
   Camera camera;
-  io::TumDataset dataset;
+  io::Dataset dataset;
   Trajectory trajectory;
   segmentation::Segmentation segmentation;
   segmentation::BoxMaskOptions box_mask;
@@ -83,9 +83,7 @@ RunInputs read_inputs(const fs::path& run) {
   RunInputs in;
   in.camera = run_json::camera(doc, file);
   in.max_diff_s = field<json>(doc, "options", file, "").value("max_diff_s", 0.02);
-  io::TumOptions tum;
-  tum.max_diff_s = in.max_diff_s;
-  in.dataset = io::read_tum_dataset(run_json::input_path(doc, file, "dataset"), tum);
+  in.dataset = run_json::dataset(doc, file);
   in.trajectory = io::read_trajectory(run_json::input_path(doc, file, "trajectory"));
   segmentation::ReadOptions read;
   read.format = field<std::string>(
@@ -162,7 +160,7 @@ MaskCheckResult check_run_masks(const fs::path& run, const MaskCheckOptions& opt
       result.unmatched_observations += observations.size();
       continue;
     }
-    const cv::Mat depth = io::read_depth(frame->depth_file, in.camera.width, in.camera.height);
+    const cv::Mat depth = io::read_frame_depth(in.dataset, *frame, in.camera);
     for (const ObservationRef* ref : observations) {
       const segmentation::Instance* instance = find_instance(*seg, *ref);
       if (!instance) {

@@ -40,4 +40,18 @@ std::string input_path(const json& run, const fs::path& file, const std::string&
                             "inputs." + which);
 }
 
+std::string input_layout(const json& run, const fs::path& file) {
+  const json inputs = field<json>(run, "inputs", file, "");
+  const json dataset = field<json>(inputs, "dataset", file, "inputs");
+  if (!dataset.contains("layout")) return "auto";
+  return field<std::string>(dataset, "layout", file, "inputs.dataset");
+}
+
+io::Dataset dataset(const json& run, const fs::path& file) {
+  io::DatasetOptions options;
+  options.layout = input_layout(run, file);
+  options.max_diff_s = field<json>(run, "options", file, "").value("max_diff_s", 0.02);
+  return io::read_dataset(input_path(run, file, "dataset"), options);
+}
+
 }  // namespace objmap::pipeline::run_json

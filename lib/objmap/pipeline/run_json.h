@@ -7,6 +7,7 @@
 #include "objmap/core/camera.h"
 #include "objmap/core/error.h"
 #include "objmap/core/types.h"
+#include "objmap/io/dataset.h"
 
 // Reading what `objmap fuse` wrote into a run folder (run.json, objects.json) for the stages that
 // start from a run (objmap correct, objmap eval masks): every missing or mistyped field is an
@@ -42,5 +43,12 @@ Camera camera(const json& run, const std::filesystem::path& file);
 // run.json's inputs.<which>.path (dataset, trajectory, segmentation).
 std::string input_path(const json& run, const std::filesystem::path& file,
                        const std::string& which);
+
+// The recording of the run, read again in the layout fuse read it in (inputs.dataset.layout;
+// detected for runs that do not name it), with the run's options.max_diff_s.
+io::Dataset dataset(const json& run, const std::filesystem::path& file);
+
+// inputs.dataset.layout, or "auto" for runs that do not name it.
+std::string input_layout(const json& run, const std::filesystem::path& file);
 
 }  // namespace objmap::pipeline::run_json

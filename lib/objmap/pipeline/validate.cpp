@@ -56,9 +56,10 @@ DatasetSummary validate_dataset(const ValidateOptions& options, const Progress& 
   //    (a detection stream without images, such as the fr3_long_office annotations) is summarised
   //    on its rgb stamps.
   std::vector<double> stamps;
-  const bool rgb_only =
-      !fs::exists(options.dataset / "depth.txt") && fs::exists(options.dataset / "rgb.txt");
-  io::TumDataset dataset;
+  const bool rgb_only = (options.layout == "auto" || options.layout == "tum") &&
+                        !fs::exists(options.dataset / "depth.txt") &&
+                        fs::exists(options.dataset / "rgb.txt");
+  io::Dataset dataset;
   if (rgb_only) {
     io::LineReader in(options.dataset / "rgb.txt");
     while (in.next()) {
@@ -75,9 +76,10 @@ DatasetSummary validate_dataset(const ValidateOptions& options, const Progress& 
     s.recorded_from = io::recorded_from_header(options.dataset / "rgb.txt");
     s.frames_span = {stamps.front(), stamps.back()};
   } else {
-    io::TumOptions tum;
-    tum.max_diff_s = options.max_diff_s;
-    dataset = io::read_tum_dataset(options.dataset, tum);
+    dataset = io::read_dataset(options.dataset, {options.layout, options.max_diff_s});
+    s.layout = dataset.layout;
+    s.dataset_poses = dataset.poses.size();
+    s.lost_poses = dataset.lost_poses;
     s.rgb_rows = dataset.rgb_rows;
     s.depth_rows = dataset.depth_rows;
     s.pairs = dataset.frames.size();
@@ -90,7 +92,8 @@ DatasetSummary validate_dataset(const ValidateOptions& options, const Progress& 
   }
 
   // 2. The camera: given, camera.json in the folder, or a preset from the folder's name.
-  const io::CameraChoice choice = io::choose_camera(options.dataset, options.camera);
+  const io::CameraChoice choice = rgb_only ? io::choose_camera(options.dataset, options.camera)
+                                           : io::choose_camera(dataset, options.camera);
   s.camera = choice.camera;
   s.camera_reason = choice.reason;
 
@@ -100,7 +103,7 @@ DatasetSummary validate_dataset(const ValidateOptions& options, const Progress& 
   for (std::size_t i = 0; i < to_check; ++i) {
     const auto& f = dataset.frames[i];
     io::read_rgb(f.rgb_file, s.camera.width, s.camera.height);
-    io::read_depth(f.depth_file, s.camera.width, s.camera.height);
+    io::read_frame_depth(dataset, f, s.camera);
     ++s.images_checked;
     if (progress) progress(i + 1, to_check);
   }

@@ -12,7 +12,8 @@ namespace objmap::pipeline {
 // `objmap validate`: reads every input of a run the way `fuse` will and reports what it found, or
 // throws InputError at the first thing that is wrong.
 struct ValidateOptions {
-  std::filesystem::path dataset;       // TUM folder (rgb.txt, depth.txt, rgb/, depth/)
+  std::filesystem::path dataset;       // recording folder in any layout (io/dataset.h)
+  std::string layout = "auto";         // its layout: auto (detected), a name or a layout JSON
   std::filesystem::path trajectory;    // optional: TUM trajectory (world_from_cam)
   std::filesystem::path segmentation;  // optional: segmentation folder (any supported format)
   std::string camera;                  // empty: camera.json in the folder, else a preset by name
@@ -34,7 +35,10 @@ struct DatasetSummary {
   std::size_t pairs = 0;  // associated rgb/depth pairs
   bool rgb_only = false;  // the folder has rgb.txt but no depth.txt (a listing without images)
   TimeSpan frames_span;
-  std::string recorded_from;  // "# file:" header of rgb.txt
+  std::string recorded_from;      // "# file:" header of rgb.txt
+  std::string layout;             // the layout read
+  std::size_t dataset_poses = 0;  // the layout's own camera poses (0: none)
+  std::size_t lost_poses = 0;     // frames dropped because their pose marks lost tracking
   Camera camera;
   std::string camera_reason;
   std::size_t images_checked = 0;  // pairs whose rgb and depth were decoded and checked

@@ -52,8 +52,9 @@ struct DetectOptions {
   // R-CNN). The model's class count must match.
   std::filesystem::path classes_file;
   // Only these classes are kept (any spelling canonical_class accepts; each must be a class of
-  // the model). Empty: every class. Default: the paper's eight (paper_detect_classes()).
-  std::vector<std::string> classes = paper_detect_classes();
+  // the model). Empty (the default): every class the model knows; paper_detect_classes() is the
+  // paper's eight (`--classes paper`, the preset of the benchmark tables).
+  std::vector<std::string> classes;
   // A detection is kept when its class score is >= this. 0.25: Darknet's default threshold (the
   // shared Yolo-Fastest detections go down to 0.28). Mask R-CNN's sample uses 0.5.
   double score_threshold = 0.25;

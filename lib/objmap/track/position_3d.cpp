@@ -7,9 +7,9 @@
 #include <utility>
 
 #include "objmap/core/error.h"
+#include "objmap/io/dataset.h"
 #include "objmap/io/image.h"
 #include "objmap/io/trajectory.h"
-#include "objmap/io/tum_dataset.h"
 
 namespace objmap::track {
 
@@ -80,20 +80,20 @@ InstancePosition instance_position(const segmentation::Instance& instance, const
   return out;
 }
 
-FramePositionsFn depth_positions(const fs::path& dataset,
+FramePositionsFn depth_positions(const io::Dataset& dataset,
                                  const segmentation::Segmentation& segmentation,
                                  const Trajectory& trajectory, const Camera& camera,
                                  const Position3dOptions& options) {
   options.check();
   camera.check();
-  const io::TumDataset tum = io::read_tum_dataset(dataset);
+  const io::Dataset& tum = dataset;
   io::PoseLookupOptions lookup;
   lookup.max_diff_s = options.pose_max_diff_s;
   lookup.check();
 
   // Per segmentation frame: its depth image and pose, when both exist.
   struct FrameInput {
-    std::optional<fs::path> depth_file;
+    const io::FramePair* frame = nullptr;
     std::optional<Pose> world_from_cam;
   };
   auto inputs = std::make_shared<std::vector<FrameInput>>();
@@ -103,19 +103,19 @@ FramePositionsFn depth_positions(const fs::path& dataset,
         std::lower_bound(tum.frames.begin(), tum.frames.end(), frame.timestamp,
                          [](const io::FramePair& p, double t) { return p.rgb_timestamp < t; });
     for (auto c = it == tum.frames.begin() ? it : it - 1; c != tum.frames.end() && c <= it; ++c)
-      if (std::abs(c->rgb_timestamp - frame.timestamp) <= 1e-4) in.depth_file = c->depth_file;
+      if (std::abs(c->rgb_timestamp - frame.timestamp) <= 1e-4) in.frame = &*c;
     in.world_from_cam = io::lookup_pose(trajectory, frame.timestamp, lookup);
     inputs->push_back(std::move(in));
   }
   auto rays = std::make_shared<geometry::RayTable>(geometry::make_ray_table(camera));
-  return [inputs, rays, camera, options, &segmentation](std::size_t index) {
+  return [inputs, rays, camera, options, &segmentation, &dataset](std::size_t index) {
     FramePositions out;
     const FrameInput& in = inputs->at(index);
-    if (!in.depth_file || !in.world_from_cam) return out;
+    if (!in.frame || !in.world_from_cam) return out;
     out.has_pose = true;
     const auto& instances = segmentation.frames.at(index).instances;
     if (instances.empty()) return out;
-    const cv::Mat depth = io::read_depth(*in.depth_file, camera.width, camera.height);
+    const cv::Mat depth = io::read_frame_depth(dataset, *in.frame, camera);
     for (const auto& instance : instances)
       out.instances.push_back(
           instance_position(instance, depth, camera, *rays, *in.world_from_cam, options));

@@ -12,6 +12,7 @@
 #include "objmap/core/trajectory.h"
 #include "objmap/core/types.h"
 #include "objmap/geometry/backproject.h"
+#include "objmap/io/dataset.h"
 #include "objmap/segmentation/box_mask.h"
 #include "objmap/segmentation/types.h"
 
@@ -60,14 +61,13 @@ struct FramePositions {
 // Positions of frame `index` of a segmentation (called once per frame, in order).
 using FramePositionsFn = std::function<FramePositions(std::size_t index)>;
 
-// Positions for the frames of `segmentation` from a TUM folder (depth.txt and depth/ associated to
-// rgb.txt as fuse does) and a trajectory (world_from_cam, looked up at each frame's timestamp):
-// the returned function reads the frame's depth image and computes instance_position for each
-// instance. A frame whose timestamp is not an rgb frame of the dataset (within 1e-4 s) or that has
-// no pose gets has_pose = false. `segmentation` must outlive the returned function. Throws
-// InputError for an unreadable TUM folder (read_tum_dataset) and bad options; the function throws
-// for an unreadable depth image.
-FramePositionsFn depth_positions(const std::filesystem::path& dataset,
+// Positions for the frames of `segmentation` from a recording (its frames as fuse reads them) and a
+// trajectory (world_from_cam, looked up at each frame's timestamp): the returned function reads the
+// frame's depth image and computes instance_position for each instance. A frame whose timestamp is
+// not an rgb frame of the dataset (within 1e-4 s) or that has no pose gets has_pose = false.
+// `segmentation` and `dataset` must outlive the returned function. Throws InputError for bad
+// options; the function throws for an unreadable depth image.
+FramePositionsFn depth_positions(const io::Dataset& dataset,
                                  const segmentation::Segmentation& segmentation,
                                  const Trajectory& trajectory, const Camera& camera,
                                  const Position3dOptions& options);

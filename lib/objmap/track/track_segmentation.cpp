@@ -228,6 +228,41 @@ LengthStats length_stats(const std::vector<TrackSummary>& tracks) {
   return s;
 }
 
+namespace {
+
+// The image of each segmentation frame among `rows` (timestamp, image), sorted by timestamp.
+FrameImages match_frame_images(const std::vector<std::pair<double, fs::path>>& rows,
+                               const segmentation::Segmentation& segmentation, double max_diff_s,
+                               const std::string& list) {
+  FrameImages out;
+  out.listed = rows.size();
+  // The images are there when the first listed one is; the folder is then a full recording.
+  out.has_images = !rows.empty() && fs::exists(rows.front().second);
+  if (!out.has_images) return out;
+  for (const auto& frame : segmentation.frames) {
+    const auto it = std::lower_bound(
+        rows.begin(), rows.end(), frame.timestamp,
+        [](const std::pair<double, fs::path>& row, double t) { return row.first < t; });
+    const fs::path* best = nullptr;
+    double best_diff = max_diff_s;
+    for (auto c = it == rows.begin() ? it : it - 1; c != rows.end() && c <= it; ++c) {
+      const double diff = std::abs(c->first - frame.timestamp);
+      if (diff <= best_diff) {
+        best_diff = diff;
+        best = &c->second;
+      }
+    }
+    require(best != nullptr, frame.source.empty() ? segmentation.source : frame.source,
+            "no rgb image of " + list +
+                " at this frame's timestamp; expected the "
+                "segmentation's frames to be rgb frames of the dataset (or use --no-appearance)");
+    out.files.push_back(*best);
+  }
+  return out;
+}
+
+}  // namespace
+
 FrameImages find_frame_images(const fs::path& dataset,
                               const segmentation::Segmentation& segmentation, double max_diff_s) {
   require(fs::is_directory(dataset), dataset.string(),
@@ -244,31 +279,15 @@ FrameImages find_frame_images(const fs::path& dataset,
     rows.emplace_back(t, dataset / in.field(1));
   }
   require(!rows.empty(), list.string(), "no image listed; expected lines 'timestamp filename'");
-  FrameImages out;
-  out.listed = rows.size();
-  // The images are there when the first listed one is; the folder is then a full TUM folder.
-  out.has_images = fs::exists(rows.front().second);
-  if (!out.has_images) return out;
-  for (const auto& frame : segmentation.frames) {
-    const auto it = std::lower_bound(
-        rows.begin(), rows.end(), frame.timestamp,
-        [](const std::pair<double, fs::path>& row, double t) { return row.first < t; });
-    const fs::path* best = nullptr;
-    double best_diff = max_diff_s;
-    for (auto c = it == rows.begin() ? it : it - 1; c != rows.end() && c <= it; ++c) {
-      const double diff = std::abs(c->first - frame.timestamp);
-      if (diff <= best_diff) {
-        best_diff = diff;
-        best = &c->second;
-      }
-    }
-    require(best != nullptr, frame.source.empty() ? segmentation.source : frame.source,
-            "no rgb image of " + list.string() +
-                " at this frame's timestamp; expected the "
-                "segmentation's frames to be rgb frames of the dataset (or use --no-appearance)");
-    out.files.push_back(*best);
-  }
-  return out;
+  return match_frame_images(rows, segmentation, max_diff_s, list.string());
+}
+
+FrameImages find_frame_images(const io::Dataset& dataset,
+                              const segmentation::Segmentation& segmentation, double max_diff_s) {
+  std::vector<std::pair<double, fs::path>> rows;
+  for (const io::FramePair& f : dataset.frames) rows.emplace_back(f.rgb_timestamp, f.rgb_file);
+  return match_frame_images(rows, segmentation, max_diff_s,
+                            dataset.root.string() + " (" + dataset.layout + " layout)");
 }
 
 }  // namespace objmap::track

@@ -7,6 +7,7 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "objmap/io/dataset.h"
 #include "objmap/segmentation/types.h"
 #include "objmap/track/position_3d.h"
 #include "objmap/track/tracker.h"
@@ -97,6 +98,10 @@ struct FrameImages {
 // missing folder or rgb.txt, a bad line, or (when the images exist) a segmentation frame without
 // an rgb image.
 FrameImages find_frame_images(const std::filesystem::path& dataset,
+                              const segmentation::Segmentation& segmentation,
+                              double max_diff_s = 1e-4);
+// The same over the frames of a recording read in any layout (io/dataset.h).
+FrameImages find_frame_images(const io::Dataset& dataset,
                               const segmentation::Segmentation& segmentation,
                               double max_diff_s = 1e-4);
 

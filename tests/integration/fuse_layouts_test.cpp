@@ -1,0 +1,174 @@
+// objmap detect and fuse on recordings in their own layouts: the same frames read through two
+// layouts give the same objects.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "fuse_helpers.h"
+#include "objmap/io/dataset.h"
+#include "objmap/io/image.h"
+#include "objmap/io/trajectory.h"
+
+namespace objmap::test {
+namespace {
+
+const char* const kSevenScenes = "7scenes_redkitchen_3dmatch_50f";
+const char* const kYoloSeg = "../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx";
+
+// Every number of two JSON values equal within `tol`, everything else exactly, paths apart
+// (keys "ply", "mesh", "thumbnail" hold file names under each run).
+::testing::AssertionResult same_json(const nlohmann::json& a, const nlohmann::json& b,
+                                     const std::string& where, double tol) {
+  if (a.is_number() && b.is_number()) {
+    if (std::abs(a.get<double>() - b.get<double>()) <= tol) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << where << ": " << a << " vs " << b;
+  }
+  if (a.type() != b.type()) return ::testing::AssertionFailure() << where << ": types differ";
+  if (a.is_object()) {
+    if (a.size() != b.size()) return ::testing::AssertionFailure() << where << ": sizes differ";
+    for (const auto& [key, value] : a.items()) {
+      if (!b.contains(key)) return ::testing::AssertionFailure() << where << "." << key << " missing";
+      auto r = same_json(value, b[key], where + "." + key, tol);
+      if (!r) return r;
+    }
+    return ::testing::AssertionSuccess();
+  }
+  if (a.is_array()) {
+    if (a.size() != b.size())
+      return ::testing::AssertionFailure() << where << ": " << a.size() << " vs " << b.size();
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      auto r = same_json(a[i], b[i], where + "[" + std::to_string(i) + "]", tol);
+      if (!r) return r;
+    }
+    return ::testing::AssertionSuccess();
+  }
+  if (a == b) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << where << ": " << a << " vs " << b;
+}
+
+// The 7-Scenes sample converted to a TUM folder as a user would: rgb.txt/depth.txt at the
+// sequence's frame times (number / 30 s), depth copied with its "no depth" 65535 set to 0, the
+// camera as camera.json (585, 320, 240, depth factor 1000) and the poses as groundtruth.txt.
+void convert_seven_scenes_to_tum(const fs::path& src, const fs::path& dst) {
+  const io::Dataset d = io::read_dataset(src);
+  fs::create_directories(dst / "rgb");
+  fs::create_directories(dst / "depth");
+  std::ofstream rgb_list(dst / "rgb.txt"), depth_list(dst / "depth.txt");
+  for (const io::FramePair& f : d.frames) {
+    char t[40];
+    std::snprintf(t, sizeof t, "%.17g", f.rgb_timestamp);
+    const std::string stem = f.rgb_file.filename().string().substr(0, 12);
+    fs::copy_file(f.rgb_file, dst / "rgb" / (stem + ".png"));
+    cv::Mat depth = io::read_depth(f.depth_file, 640, 480);
+    depth.setTo(0, depth == 65535);
+    cv::imwrite((dst / "depth" / (stem + ".png")).string(), depth);
+    rgb_list << t << " rgb/" << stem << ".png\n";
+    depth_list << t << " depth/" << stem << ".png\n";
+  }
+  std::ofstream(dst / "camera.json") << R"({"fx": 585, "fy": 585, "cx": 320, "cy": 240,
+      "width": 640, "height": 480, "depth_factor": 1000})";
+  io::write_trajectory(dst / "groundtruth.txt", d.poses);
+}
+
+TEST(FuseLayouts, SevenScenesFromItsOwnPosesEqualsItsTumConversion) {
+  OBJMAP_DATA_OR_SKIP(scenes, kSevenScenes);
+  OBJMAP_DATA_OR_SKIP(model, kYoloSeg);
+  TempDir tmp;
+  // detect reads the 7-Scenes folder as it is.
+  const RunResult detect = run_objmap({"detect", "--dataset", scenes.string(), "--model",
+                                       model.string(), "--out", (tmp / "seg").string()});
+  ASSERT_EQ(detect.exit_code, 0) << detect.err;
+  const RunResult a = run_objmap({"fuse", "--dataset", scenes.string(), "--segmentation",
+                                  (tmp / "seg").string(), "--out", (tmp / "run7").string()});
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  convert_seven_scenes_to_tum(scenes, tmp / "tum");
+  const RunResult b =
+      run_objmap({"fuse", "--dataset", (tmp / "tum").string(), "--trajectory",
+                  (tmp / "tum" / "groundtruth.txt").string(), "--segmentation",
+                  (tmp / "seg").string(), "--out", (tmp / "runtum").string()});
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+
+  const nlohmann::json run7 = read_json(tmp / "run7" / "run.json");
+  EXPECT_EQ(run7["inputs"]["dataset"]["layout"], "7scenes");
+  EXPECT_EQ(run7["inputs"]["trajectory"]["from"], "dataset");
+  EXPECT_EQ(run7["counts"]["frames"], 50);
+  EXPECT_TRUE(fs::exists(tmp / "run7" / "dataset_trajectory.txt"));
+  const nlohmann::json objects7 = read_json(tmp / "run7" / "objects.json");
+  const nlohmann::json objects_tum = read_json(tmp / "runtum" / "objects.json");
+  ASSERT_GE(objects7["objects"].size(), 2u) << "the kitchen's table, chairs or cup";
+  EXPECT_TRUE(same_json(objects7["objects"], objects_tum["objects"], "objects", 1e-9));
+}
+
+TEST(FuseLayouts, ARecordingWithoutPosesNeedsATrajectory) {
+  OBJMAP_DATA_OR_SKIP(desk, "tum/fr1_desk_9");
+  TempDir tmp;
+  const RunResult r =
+      run_objmap({"fuse", "--dataset", desk.string(), "--segmentation",
+                  (desk / "detections_yolofastest").string(), "--out", (tmp / "run").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--trajectory: missing, and the tum recording"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(tmp / "run"));
+}
+
+// Lines of `text` that contain `what`.
+int lines_with(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST(ObjmapRun, RerunReusesEveryStageAndAChangedOptionRerunsOnlyTheStagesAfterIt) {
+  OBJMAP_DATA_OR_SKIP(desk, "tum/fr1_desk_9");
+  OBJMAP_DATA_OR_SKIP(model, kYoloSeg);
+  TempDir tmp;
+  const fs::path out = tmp / "run";
+  std::vector<std::string> args = {"run",     "--dataset", desk.string(), "--model", model.string(),
+                                   "--trajectory", (desk / "groundtruth.txt").string(),
+                                   "--out",   out.string()};
+  const RunResult first = run_objmap(args);
+  ASSERT_EQ(first.exit_code, 0) << first.err << first.out;
+  EXPECT_EQ(lines_with(first.out, "running ... done"), 4) << first.out;
+  EXPECT_NE(first.out.find("map         "), std::string::npos);
+  EXPECT_NE(first.out.find((out / "report" / "report.html").string()), std::string::npos);
+  for (const char* f : {"detect", "track/tracks.json", "map/objects.json", "report/report.html"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  // The query works on its output.
+  const RunResult query = run_objmap({"query", "--run", (out / "map").string(), "tv"});
+  EXPECT_EQ(query.exit_code, 0) << query.err;
+
+  const RunResult second = run_objmap(args);
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  EXPECT_EQ(lines_with(second.out, " reused "), 4) << second.out;
+  EXPECT_EQ(lines_with(second.out, "running"), 0) << second.out;
+
+  // A fuse option changed: detect and track are reused, fuse and report run again.
+  std::ofstream(tmp / "fuse.json") << R"({"map": {"voxel_m": 0.02}})";
+  args.insert(args.end(), {"--fuse-config", (tmp / "fuse.json").string()});
+  const RunResult third = run_objmap(args);
+  ASSERT_EQ(third.exit_code, 0) << third.err;
+  EXPECT_NE(third.out.find("detect   reused"), std::string::npos) << third.out;
+  EXPECT_NE(third.out.find("track    reused"), std::string::npos) << third.out;
+  EXPECT_NE(third.out.find("fuse     running ... done"), std::string::npos) << third.out;
+  EXPECT_NE(third.out.find("report   running ... done"), std::string::npos) << third.out;
+  EXPECT_EQ(read_json(out / "map" / "run.json")["options"]["map"]["voxel_m"], 0.02);
+}
+
+TEST(ObjmapRun, AFailingStageIsNamedWithItsError) {
+  OBJMAP_DATA_OR_SKIP(desk, "tum/fr1_desk_9");
+  OBJMAP_DATA_OR_SKIP(model, kYoloSeg);
+  TempDir tmp;
+  std::ofstream(tmp / "broken.txt") << "1305031453.3595 1 2 3\n";
+  const RunResult r = run_objmap({"run", "--dataset", desk.string(), "--model", model.string(),
+                                  "--trajectory", (tmp / "broken.txt").string(), "--out",
+                                  (tmp / "run").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("objmap run: stage fuse:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("broken.txt:1"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(tmp / "run" / "map"));
+}
+
+}  // namespace
+}  // namespace objmap::test
