@@ -1,6 +1,7 @@
 // objmap report: one self-contained HTML page (and a Markdown summary) of a fuse run: the semantic
 // map seen from above with the objects, the trajectories coloured by their error, the error over
 // time, a thumbnail per object and the paper's tables.
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -505,7 +506,12 @@ report::PageObject page_object(const ReportOptions& options, std::size_t index,
   const PointCloud cloud = io::read_ply(ply);
   const std::string label = std::to_string(o.id) + " " + o.class_name;
   const cv::Mat thumb = report::render_thumbnail(cloud, label, thumb_options);
-  p.thumbnail.file = "thumbnails/" + ply.stem().string() + ".png";
+  // Named as its PLY (fuse's "<id>_<class>"), every character but letters, digits, '-' and '_'
+  // made '_': the name goes into report.md's links as it is.
+  std::string name = ply.stem().string();
+  for (char& ch : name)
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-') ch = '_';
+  p.thumbnail.file = "thumbnails/" + (name.empty() ? std::to_string(o.id) : name) + ".png";
   p.thumbnail.bytes = png_bytes(thumb);
   p.thumbnail.width_px = thumb.cols;
   p.thumbnail.height_px = thumb.rows;

@@ -448,6 +448,10 @@ TEST(ReportCli, RunNamesAreTextOnThePageNeverMarkup) {
   auto objects = nlohmann::json::parse(read_text(c.run / "objects.json"));
   objects["objects"][0]["class"] = "<script>alert(1)</script>";
   objects["objects"][1]["class"] = "a\"b&c";
+  // An object file named with markup (inside the run): its thumbnail's name is made plain.
+  fs::copy_file(c.run / objects["objects"][2]["ply"].get<std::string>(),
+                run / "objects" / "x<b>(y).ply");
+  objects["objects"][2]["ply"] = "objects/x<b>(y).ply";
   write_text(run / "objects.json", objects.dump(1));
   auto doc = nlohmann::json::parse(read_text(c.run / "run.json"));
   ASSERT_GE(doc["duplicates"]["pairs"].size(), 1u);
@@ -475,6 +479,9 @@ TEST(ReportCli, RunNamesAreTextOnThePageNeverMarkup) {
   EXPECT_EQ(md.find("<img"), std::string::npos) << md;
   EXPECT_NE(md.find("&lt;script&gt;alert(1)&lt;/script&gt;"), std::string::npos) << md;
   EXPECT_NE(md.find("a\"b&amp;c"), std::string::npos) << md;
+  EXPECT_EQ(md.find("<b>"), std::string::npos) << md;
+  EXPECT_NE(md.find("](thumbnails/x_b__y_.png)"), std::string::npos) << md;
+  EXPECT_TRUE(fs::exists(dir / "rep" / "thumbnails" / "x_b__y_.png"));
 }
 
 TEST(ReportCli, BadGroundTruthIsExit2NamingTheLine) {
