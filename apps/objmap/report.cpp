@@ -1,6 +1,7 @@
 // objmap report: one self-contained HTML page (and a Markdown summary) of a fuse run: the semantic
 // map seen from above with the objects, the trajectories coloured by their error, the error over
 // time, a thumbnail per object and the paper's tables.
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include "objmap/io/objects_json.h"
 #include "objmap/io/ply.h"
 #include "objmap/io/png_encode.h"
+#include "objmap/io/run_path.h"
 #include "objmap/io/scene_json.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/report/page.h"
@@ -351,9 +353,14 @@ void add_scene_graph(const ReportOptions& options, report::PageContent& page) {
   }
   page.scene_graph.file = "scene_graph.svg";
   page.scene_graph.bytes = report::scene_graph_svg(map);
+  page.scene_graph_list = report::scene_graph_markdown(map);
   page.scene_graph.caption =
-      "Scene graph: the support surfaces (bottom row, floor first), each object above what it "
-      "stands on, an edge to its support (objects.json relations.on).";
+      std::string(
+          "Scene graph: each support surface (floor first, then by height) with the "
+          "objects that stand on it, an object on another indented under it "
+          "(objects.json relations.on); ") +
+      (report::floor_height_m(map) ? "heights above the floor (its largest piece)."
+                                   : "no floor found, so no heights.");
 }
 
 // Step 3: the ATE per pose and the plots (the trajectories from above, the error over time).
@@ -473,15 +480,17 @@ void add_top_view(const ReportOptions& options, const RunFiles& files, const Tra
   std::snprintf(caption, sizeof caption,
                 "%s seen from above (%s up, %.1f mm per pixel, %zu points): each "
                 "object's oriented box outlined in its class colour and labelled \"id class\" "
-                "(\"(dup N)\": a suspected duplicate of object N)%s; the bar is 1 m.",
+                "(\"(dup N)\": a suspected duplicate of object N; where objects crowd, the id "
+                "alone or nothing, and the label in the list on the right)%s; the bar is 1 m.",
                 map_name.c_str(), up_text(options, gravity).c_str(), view.pixel_m * 1000,
                 map.size(), t.est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;
 }
 
 // One object of the page: its thumbnail and the point counts before the filters (objects.json).
-report::PageObject page_object(const ReportOptions& options, const io::MappedObject& o,
-                               const json& record, const report::ThumbnailOptions& thumb_options) {
+report::PageObject page_object(const ReportOptions& options, std::size_t index,
+                               const io::MappedObject& o, const json& record,
+                               const report::ThumbnailOptions& thumb_options) {
   report::PageObject p;
   p.object = o;
   if (record.contains("points") && record["points"].is_object()) {
@@ -491,12 +500,18 @@ report::PageObject page_object(const ReportOptions& options, const io::MappedObj
     if (pts.contains("voxel_filtered") && pts["voxel_filtered"].is_number_unsigned())
       p.points_voxel = pts["voxel_filtered"].get<std::size_t>();
   }
-  const fs::path ply =
-      options.run / (o.ply.empty() ? "objects/" + std::to_string(o.id) + ".ply" : o.ply);
+  const fs::path ply = io::path_in_run(
+      options.run, o.ply.empty() ? "objects/" + std::to_string(o.id) + ".ply" : o.ply,
+      options.run / "objects.json", "objects[" + std::to_string(index) + "].ply");
   const PointCloud cloud = io::read_ply(ply);
   const std::string label = std::to_string(o.id) + " " + o.class_name;
   const cv::Mat thumb = report::render_thumbnail(cloud, label, thumb_options);
-  p.thumbnail.file = "thumbnails/" + ply.stem().string() + ".png";
+  // Named as its PLY (fuse's "<id>_<class>"), every character but letters, digits, '-' and '_'
+  // made '_': the name goes into report.md's links as it is.
+  std::string name = ply.stem().string();
+  for (char& ch : name)
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-') ch = '_';
+  p.thumbnail.file = "thumbnails/" + (name.empty() ? std::to_string(o.id) : name) + ".png";
   p.thumbnail.bytes = png_bytes(thumb);
   p.thumbnail.width_px = thumb.cols;
   p.thumbnail.height_px = thumb.rows;
@@ -517,7 +532,7 @@ void add_thumbnails(const ReportOptions& options, const RunFiles& files, int up_
   if (const auto voxel_m = run_voxel_m(files.run, "objects")) thumb_options.point_size_m = *voxel_m;
   for (std::size_t i = 0; i < files.objects.size(); ++i)
     page.objects.push_back(
-        page_object(options, files.objects[i], files.objects_doc["objects"][i], thumb_options));
+        page_object(options, i, files.objects[i], files.objects_doc["objects"][i], thumb_options));
 }
 
 // Step 7: the page, the summary and every picture beside them, staged and renamed into OUT.

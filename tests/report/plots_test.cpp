@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
+#include <vector>
 
 #include "objmap/core/error.h"
 #include "objmap/report/svg.h"
@@ -87,6 +89,52 @@ TEST(Plots, ErrorOverTimeShowsEachSeriesWithItsRmse) {
   const auto start = doc.find("<polyline points=\"");
   const std::string points = doc.substr(start, doc.find('"', start + 18) - start);
   EXPECT_EQ(count_of(points, ","), 3u) << points;
+}
+
+TEST(Plots, AxisLabelsSayTheTicksAtAnyScale) {
+  // Metres with the decimals the step needs.
+  AxisLabels l = axis_labels({0.0, 0.05, 0.1, 0.15}, "m");
+  EXPECT_EQ(l.ticks, (std::vector<std::string>{"0.00", "0.05", "0.10", "0.15"}));
+  EXPECT_EQ(l.unit, "m");
+  // An almost perfect trajectory's errors: nanometres, not "0, 0, 0, 0".
+  l = axis_labels(nice_ticks(0.0, 6.3e-8, 4), "m");
+  EXPECT_EQ(l.ticks, (std::vector<std::string>{"0", "20", "40", "60"}));
+  EXPECT_EQ(l.unit, "nm");
+  l = axis_labels({0.0, 2e-4, 4e-4, 6e-4}, "m");
+  EXPECT_EQ(l.ticks, (std::vector<std::string>{"0", "200", "400", "600"}));
+  EXPECT_EQ(l.unit, "µm");
+  l = axis_labels({0.0, 5e-4, 1e-3, 1.5e-3}, "m");
+  EXPECT_EQ(l.ticks, (std::vector<std::string>{"0.0", "0.5", "1.0", "1.5"}));
+  EXPECT_EQ(l.unit, "mm");
+  l = axis_labels({0.0, 1e5, 2e5}, "s");  // large: a prefix too
+  EXPECT_EQ(l.ticks, (std::vector<std::string>{"0", "100", "200"}));
+  EXPECT_EQ(l.unit, "ks");
+  l = axis_labels({0.0, 1e-21, 2e-21}, "m");  // beyond the prefixes: a power of ten
+  EXPECT_EQ(l.ticks, (std::vector<std::string>{"0", "1", "2"}));
+  EXPECT_EQ(l.unit, "×10^-21 m");
+  // Every scale from 1e-12 to 1e9: as many labels as ticks, all different.
+  for (int e = -12; e <= 9; ++e)
+    for (const double span : {1.0, 3.7, 6.3}) {
+      const double hi = span * std::pow(10.0, e);
+      const auto ticks = nice_ticks(0.0, hi, 5);
+      const AxisLabels a = axis_labels(ticks, "m");
+      ASSERT_EQ(a.ticks.size(), ticks.size());
+      std::set<std::string> distinct(a.ticks.begin(), a.ticks.end());
+      EXPECT_EQ(distinct.size(), ticks.size()) << "0.." << hi << " " << a.unit;
+      for (const std::string& t : a.ticks) EXPECT_LE(t.size(), 7u) << t << " of 0.." << hi;
+    }
+}
+
+TEST(Plots, ErrorOverTimeOfANearlyPerfectTrajectoryIsInNanometres) {
+  PlotSeries a = circle("estimated", 4, 1.0, false);
+  a.errors_m = {1e-8, 3e-8, 5e-8, 2e-8};
+  const std::string doc = error_over_time_svg({a}, PlotOptions{});
+  EXPECT_EQ(xml_problem(doc), "") << doc;
+  EXPECT_NE(doc.find("absolute error [nm]"), std::string::npos) << doc;
+  EXPECT_NE(doc.find(">40</text>"), std::string::npos) << doc;  // a tick at 40 nm
+  EXPECT_NE(doc.find("(RMSE 3.12e-08 m)"), std::string::npos) << doc;
+  const std::string bar = trajectory_svg({a}, PlotOptions{});
+  EXPECT_NE(bar.find("error [nm]"), std::string::npos) << bar;  // the colour bar's unit
 }
 
 TEST(Plots, BadOptionsAreNamed) {

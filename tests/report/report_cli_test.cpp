@@ -82,13 +82,21 @@ std::vector<cv::Mat> embedded_pngs(const std::string& html) {
   return images;
 }
 
+// DIR/run: the files `names` of the run linked (the big maps), its objects/ copied: the object
+// PLYs that objects.json names must lie inside the run folder, and a link leads out of it.
+fs::path copy_of_run(const fs::path& run, const std::vector<std::string>& names,
+                     const fs::path& dir) {
+  const fs::path copy = dir / "run";
+  fs::create_directories(copy);
+  for (const std::string& name : names) fs::create_symlink(fs::absolute(run / name), copy / name);
+  fs::copy(run / "objects", copy / "objects", fs::copy_options::recursive);
+  return copy;
+}
+
 // A copy of the run (big files linked) whose run.json names `trajectory` as the estimate, so that
 // the dataset's groundtruth.txt is a different file: the ground truth of the report.
 fs::path run_with_estimate(const fs::path& run, const fs::path& trajectory, const fs::path& dir) {
-  const fs::path copy = dir / "run";
-  fs::create_directories(copy);
-  for (const char* name : {"objects.json", "map_semantic.ply", "objects"})
-    fs::create_symlink(fs::absolute(run / name), copy / name);
+  const fs::path copy = copy_of_run(run, {"objects.json", "map_semantic.ply"}, dir);
   auto doc = nlohmann::json::parse(read_text(run / "run.json"));
   doc["inputs"]["trajectory"]["path"] = fs::absolute(trajectory).string();
   write_text(copy / "run.json", doc.dump(1));
@@ -176,10 +184,7 @@ TEST(ReportCli, SuspectedDuplicatesOfRunJsonAreShownAndMarkedInTheTopView) {
   // A run.json without the section (an older objmap): no section; a broken one: exit 2.
   auto doc = run;
   doc.erase("duplicates");
-  const fs::path copy = dir / "run";
-  fs::create_directories(copy);
-  for (const char* name : {"objects.json", "map_semantic.ply", "objects"})
-    fs::create_symlink(fs::absolute(c.run / name), copy / name);
+  const fs::path copy = copy_of_run(c.run, {"objects.json", "map_semantic.ply"}, dir.path());
   write_text(copy / "run.json", doc.dump(1));
   const RunResult old =
       run_objmap({"report", "--run", copy.string(), "--out", (dir / "rep_old").string()});
@@ -200,10 +205,8 @@ TEST(ReportCli, ARunWithoutTheDenseMapsShowsTheObjectsMap) {
   const Cached& c = cached_run();
   ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
   TempDir dir;
-  const fs::path copy = dir / "run";
-  fs::create_directories(copy);
-  for (const char* name : {"objects.json", "map_objects.ply", "objects", "run.json"})
-    fs::create_symlink(fs::absolute(c.run / name), copy / name);
+  const fs::path copy =
+      copy_of_run(c.run, {"objects.json", "map_objects.ply", "run.json"}, dir.path());
   const RunResult r =
       run_objmap({"report", "--run", copy.string(), "--out", (dir / "rep").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -323,8 +326,14 @@ TEST(ReportCli, SceneGraphHoldsTheObjectsSurfacesAndOnEdgesOfObjectsJson) {
   const auto svg_edges = attribute_values(svg, "data-edge");
   EXPECT_EQ(std::multiset<std::string>(svg_nodes.begin(), svg_nodes.end()), nodes);
   EXPECT_EQ(std::multiset<std::string>(svg_edges.begin(), svg_edges.end()), edges);
-  EXPECT_EQ(count_of(svg, "<rect"), nodes.size());
-  EXPECT_EQ(count_of(svg, "<line"), edges.size());
+  // Heights above the floor, the svg within the page's width.
+  EXPECT_NE(svg.find("m above the floor"), std::string::npos) << svg;
+  const std::string md = read_text(out / "report.md");
+  for (const auto& o : doc.at("objects"))  // the nested list names every object
+    EXPECT_NE(md.find("  - " + std::to_string(o.at("id").get<int>()) + " " +
+                      o.at("class").get<std::string>() + "\n"),
+              std::string::npos)
+        << md;
 
   // On the page (inline) and in report.md (the file), and named in the summary.
   const std::string html = read_text(out / "report.html");
@@ -360,6 +369,119 @@ TEST(ReportCli, RunWithoutObjectsJsonIsExit2NamingTheFile) {
   EXPECT_NE(r.err.find((dir / "run" / "objects.json").string()), std::string::npos) << r.err;
   EXPECT_EQ(count_of(r.err, "\n"), 1u) << r.err;
   EXPECT_FALSE(fs::exists(dir / "run" / "report"));
+}
+
+// A copy of the run whose objects.json gives objects[3] the PLY path `ply`; `outside.ply` (a real
+// object cloud) lies beside the run folder.
+fs::path run_with_ply(const fs::path& run, const std::string& ply, const fs::path& dir) {
+  const fs::path copy = copy_of_run(run, {"map_semantic.ply", "run.json"}, dir);
+  auto doc = nlohmann::json::parse(read_text(run / "objects.json"));
+  if (!fs::exists(dir / "outside.ply"))
+    fs::copy_file(run / doc["objects"][3]["ply"].get<std::string>(), dir / "outside.ply");
+  doc["objects"][3]["ply"] = ply;
+  write_text(copy / "objects.json", doc.dump(1));
+  return copy;
+}
+
+TEST(ReportCli, AnObjectFileOutsideTheRunIsExit2NamingTheFieldAndThePath) {
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  const fs::path outside = fs::absolute(dir / "outside.ply");
+  const auto expect_refused = [&](const std::string& ply, const std::string& why) {
+    const fs::path run = run_with_ply(c.run, ply, dir.path());
+    const RunResult r =
+        run_objmap({"report", "--run", run.string(), "--out", (dir / "rep").string()});
+    EXPECT_EQ(r.exit_code, 2) << why << ": " << r.err;
+    EXPECT_NE(r.err.find((run / "objects.json").string() + ": objects[3].ply: '" + ply +
+                         "' resolves outside the run folder"),
+              std::string::npos)
+        << why << ": " << r.err;
+    EXPECT_EQ(count_of(r.err, "\n"), 1u) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "rep")) << why;
+    // Every other reader of a run's object files: the same refusal, before any work.
+    const std::vector<std::vector<std::string>> readers = {
+        {"eval", "objects", "--map", (run / "objects.json").string(), "--reference",
+         (c.run / "objects.json").string()},
+        {"eval", "masks", "--run", run.string()},
+        {"correct", "--run", run.string(), "--out", (dir / "corrected").string()}};
+    for (const auto& args : readers) {
+      const RunResult e = run_objmap(args);
+      EXPECT_EQ(e.exit_code, 2) << why << ", " << args[0] << " " << args[1] << ": " << e.err;
+      EXPECT_NE(e.err.find("objects.json: objects[3].ply: '" + ply + "' resolves outside"),
+                std::string::npos)
+          << e.err;
+    }
+    EXPECT_FALSE(fs::exists(dir / "corrected"));
+    fs::remove_all(run);
+  };
+  expect_refused("../outside.ply", "up and out");
+  expect_refused("objects/../../outside.ply", "in and then out");
+  expect_refused(outside.string(), "an absolute path");
+  // A link inside the run that points out of it.
+  {
+    const fs::path run = run_with_ply(c.run, "objects/link.ply", dir.path());
+    fs::create_symlink(outside, run / "objects" / "link.ply");
+    const RunResult r =
+        run_objmap({"report", "--run", run.string(), "--out", (dir / "rep").string()});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("objects[3].ply: 'objects/link.ply' resolves outside the run folder"),
+              std::string::npos)
+        << r.err;
+    fs::remove_all(run);
+  }
+  // A path that goes up and comes back stays inside: read.
+  const auto doc = nlohmann::json::parse(read_text(c.run / "objects.json"));
+  const std::string back = "objects/../" + doc["objects"][3]["ply"].get<std::string>();
+  const fs::path run = run_with_ply(c.run, back, dir.path());
+  const RunResult r =
+      run_objmap({"report", "--run", run.string(), "--out", (dir / "rep").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+TEST(ReportCli, RunNamesAreTextOnThePageNeverMarkup) {
+  // A run from someone else: class names and a duplicate's reason with markup in them.
+  const Cached& c = cached_run();
+  ASSERT_TRUE(fs::exists(c.run)) << c.result.err;
+  TempDir dir;
+  const fs::path run = copy_of_run(c.run, {"map_semantic.ply"}, dir.path());
+  auto objects = nlohmann::json::parse(read_text(c.run / "objects.json"));
+  objects["objects"][0]["class"] = "<script>alert(1)</script>";
+  objects["objects"][1]["class"] = "a\"b&c";
+  // An object file named with markup (inside the run): its thumbnail's name is made plain.
+  fs::copy_file(c.run / objects["objects"][2]["ply"].get<std::string>(),
+                run / "objects" / "x<b>(y).ply");
+  objects["objects"][2]["ply"] = "objects/x<b>(y).ply";
+  write_text(run / "objects.json", objects.dump(1));
+  auto doc = nlohmann::json::parse(read_text(c.run / "run.json"));
+  ASSERT_GE(doc["duplicates"]["pairs"].size(), 1u);
+  doc["duplicates"]["pairs"][0]["class"] = "<img src=x onerror=alert(1)>";
+  doc["duplicates"]["pairs"][0]["merge_reason"] = "<script>alert(2)</script>";
+  write_text(run / "run.json", doc.dump(1));
+  const RunResult r =
+      run_objmap({"report", "--run", run.string(), "--out", (dir / "rep").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* file : {"report.html", "scene_graph.svg"}) {
+    const std::string text = read_text(dir / "rep" / file);
+    EXPECT_EQ(xml_problem(text), "") << file;
+    EXPECT_EQ(text.find("<script"), std::string::npos) << file;
+    EXPECT_EQ(text.find("<img src=x"), std::string::npos) << file;
+    EXPECT_EQ(text.find("a\"b"), std::string::npos) << file;  // a quote would end an attribute
+    EXPECT_NE(text.find("&lt;script&gt;alert(1)&lt;/script&gt;"), std::string::npos) << file;
+    EXPECT_NE(text.find("a&quot;b&amp;c"), std::string::npos) << file;
+  }
+  const std::string html = read_text(dir / "rep" / "report.html");
+  EXPECT_NE(html.find("&lt;script&gt;alert(2)&lt;/script&gt;"), std::string::npos);
+  EXPECT_NE(html.find("&lt;img src=x onerror=alert(1)&gt;"), std::string::npos);
+  // report.md: Markdown passes raw HTML on, so the names are entities there too.
+  const std::string md = read_text(dir / "rep" / "report.md");
+  EXPECT_EQ(md.find("<script"), std::string::npos) << md;
+  EXPECT_EQ(md.find("<img"), std::string::npos) << md;
+  EXPECT_NE(md.find("&lt;script&gt;alert(1)&lt;/script&gt;"), std::string::npos) << md;
+  EXPECT_NE(md.find("a\"b&amp;c"), std::string::npos) << md;
+  EXPECT_EQ(md.find("<b>"), std::string::npos) << md;
+  EXPECT_NE(md.find("](thumbnails/x_b__y_.png)"), std::string::npos) << md;
+  EXPECT_TRUE(fs::exists(dir / "rep" / "thumbnails" / "x_b__y_.png"));
 }
 
 TEST(ReportCli, BadGroundTruthIsExit2NamingTheLine) {

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "objmap/core/error.h"
 
@@ -38,7 +40,70 @@ TEST(TopView, HighestPointWinsAndObjectsAreDrawn) {
   block.obb.half_extent = Vec3(0.05, 0.05, 0.05);
   block.color = Rgb{0, 255, 0};
   const TopView drawn = render_top_view(cloud, {block}, options);
-  EXPECT_GT(cv::norm(drawn.image, bare.image, cv::NORM_L1), 0.0);
+  ASSERT_GE(drawn.map_width_px, bare.image.cols);
+  EXPECT_GT(cv::norm(drawn.image(cv::Rect(0, 0, bare.image.cols, bare.image.rows)), bare.image,
+                     cv::NORM_L1),
+            0.0);
+}
+
+// 31 chairs round two tables 1.6 m apart (16 and 15 on circles of 0.7 m), as on a real
+// walk-through of a meeting room.
+std::vector<TopViewObject> chairs_round_two_tables() {
+  std::vector<TopViewObject> chairs;
+  for (int i = 0; i < 31; ++i) {
+    const int table = i < 16 ? 0 : 1, n = table == 0 ? 16 : 15, k = table == 0 ? i : i - 16;
+    const double a = 2 * M_PI * k / n;
+    TopViewObject o;
+    o.id = 100 + i;
+    o.label = std::to_string(o.id) + " chair";
+    o.obb.center = Vec3(1.6 * table + 0.7 * std::cos(a), 0.7 * std::sin(a), 0.45);
+    o.obb.half_extent = Vec3(0.22, 0.22, 0.45);
+    o.color = Rgb{200, 120, 0};
+    chairs.push_back(o);
+  }
+  return chairs;
+}
+
+TEST(TopView, CrowdedLabelsNeverOverlapAndTheRestAreListedBeside) {
+  PointCloud floor;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 40; ++j) floor.push_back(Vec3f(-1.0f + 0.06f * i, -1.2f + 0.06f * j, 0.0f));
+  const std::vector<TopViewObject> chairs = chairs_round_two_tables();
+  TopViewOptions options;
+  options.pixel_m = 0.01;
+  const TopView view = render_top_view(floor, chairs, options);
+  ASSERT_EQ(view.labels.size(), chairs.size());
+  int whole = 0, listed = 0;
+  for (std::size_t i = 0; i < view.labels.size(); ++i) {
+    const TopViewLabel& a = view.labels[i];
+    EXPECT_EQ(a.id, chairs[i].id);
+    a.listed ? ++listed : ++whole;
+    if (a.box.area() == 0) {
+      EXPECT_TRUE(a.listed) << a.id << ": neither on the map nor listed";
+      continue;
+    }
+    // On the map, inside it, over no other label.
+    EXPECT_LE(a.box.x + a.box.width, view.map_width_px) << a.id;
+    for (std::size_t j = 0; j < i; ++j)
+      EXPECT_EQ((a.box & view.labels[j].box).area(), 0) << a.id << " over " << view.labels[j].id;
+  }
+  EXPECT_EQ(whole + listed, 31);
+  EXPECT_GT(whole, 0);
+  // A list beside the map exactly when a label is in it.
+  EXPECT_EQ(view.image.cols > view.map_width_px, listed > 0) << listed;
+
+  // The same chairs drawn at a quarter of the size crowd more: more labels go to the list, still
+  // none over another.
+  options.pixel_m = 0.04;
+  const TopView small = render_top_view(floor, chairs, options);
+  int small_listed = 0;
+  for (std::size_t i = 0; i < small.labels.size(); ++i) {
+    small_listed += small.labels[i].listed;
+    for (std::size_t j = 0; j < i; ++j)
+      EXPECT_EQ((small.labels[i].box & small.labels[j].box).area(), 0);
+  }
+  EXPECT_GT(small_listed, listed);
+  EXPECT_GT(small.image.cols, small.map_width_px);
 }
 
 TEST(TopView, BadOptionsAreNamed) {

@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "objmap/core/error.h"
+#include "objmap/io/run_path.h"
 
 namespace objmap::io {
 
@@ -98,6 +99,8 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
     m.observations = static_cast<int>(whole_number(o, "observation_count", where, 0, kIntMax));
     const json& ply = field(o, "ply", where);
     if (ply.is_string()) m.ply = ply.get<std::string>();
+    if (!m.ply.empty())  // a file of the run: it must stay inside the run folder
+      path_in_run(file.parent_path(), m.ply, file, "objects[" + std::to_string(i) + "].ply");
     out.push_back(std::move(m));
   }
   return out;

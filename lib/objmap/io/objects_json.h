@@ -20,7 +20,7 @@ struct MappedObject {
   Obb obb;
   std::size_t points = 0;  // filtered points (its PLY)
   int observations = 0;
-  std::string ply;  // relative to the run folder
+  std::string ply;  // relative to the run folder; checked to resolve inside it (io/run_path.h)
 };
 
 // Throws InputError "<file>: <field>: ..." for malformed JSON, a missing field or a wrong type.

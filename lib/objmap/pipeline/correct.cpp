@@ -20,6 +20,7 @@
 #include "objmap/io/atomic.h"
 #include "objmap/io/camera_io.h"
 #include "objmap/io/ply.h"
+#include "objmap/io/run_path.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/run_json.h"
@@ -593,7 +594,7 @@ ObjectsRead read_objects(const fs::path& run, const json& objects, const fs::pat
     const std::string where = "objects[" + std::to_string(i) + "]";
     const int id = field<int>(o, "id", objects_file, where);
     const std::string ply = field<std::string>(o, "ply", objects_file, where);
-    PointCloud model = io::read_ply(run / ply);
+    PointCloud model = io::read_ply(io::path_in_run(run, ply, objects_file, where + ".ply"));
     pose::Landmark landmark;
     landmark.id = id;
     if (model.empty()) {

@@ -8,6 +8,7 @@
 #include "objmap/core/error.h"
 #include "objmap/io/image.h"
 #include "objmap/io/ply.h"
+#include "objmap/io/run_path.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/run_json.h"
@@ -102,11 +103,15 @@ std::vector<ObservationRef> read_objects(const fs::path& run, MaskCheckResult& r
   const fs::path file = run / "objects.json";
   const json doc = run_json::read_file(file);
   std::vector<ObservationRef> refs;
-  for (const json& o : field<json>(doc, "objects", file, "")) {
+  const json objects = field<json>(doc, "objects", file, "");
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const json& o = objects[i];
     ObjectMaskCheck check;
     check.id = field<int>(o, "id", file, "objects[]");
     check.class_name = field<std::string>(o, "class", file, "objects[]");
-    clouds.push_back(io::read_ply(run / field<std::string>(o, "ply", file, "objects[]")));
+    const std::string where = "objects[" + std::to_string(i) + "]";
+    const std::string ply = field<std::string>(o, "ply", file, where);
+    clouds.push_back(io::read_ply(io::path_in_run(run, ply, file, where + ".ply")));
     for (const json& l : field<json>(o, "observations", file, "objects[]")) {
       ObservationRef ref;
       ref.object = result.objects.size();

@@ -43,11 +43,9 @@ bool is_numeric(const Table& t, std::size_t column) {
 
 std::string markdown_cell(const std::string& text) {
   std::string out;
-  for (const char c : text) {
+  for (const char c : markdown_text(text)) {
     if (c == '|')
       out += "\\|";
-    else if (c == '\n')
-      out += ' ';
     else
       out += c;
   }
@@ -55,6 +53,23 @@ std::string markdown_cell(const std::string& text) {
 }
 
 }  // namespace
+
+std::string markdown_text(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else if (c == '\n' || c == '\r')
+      out += ' ';
+    else
+      out += c;
+  }
+  return out;
+}
 
 std::string html_table(const Table& table) {
   std::string out = "<table>\n";

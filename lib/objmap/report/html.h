@@ -12,6 +12,10 @@ std::string base64_encode(std::string_view bytes);
 // "data:image/png;base64,..." for a PNG file's bytes.
 std::string png_data_uri(std::string_view png_bytes);
 
+// Plain text for Markdown: '<', '>' and '&' as entities (no HTML of a run's names gets into a
+// rendered report.md), line breaks as spaces.
+std::string markdown_text(std::string_view text);
+
 // A table of text cells; cells are plain text (escaped when rendered).
 struct Table {
   std::string caption;                         // shown above the table (may be empty)

@@ -1,6 +1,7 @@
 #include "objmap/report/page.h"
 #include "objmap/core/format.h"
 
+#include <cmath>
 #include <cstdio>
 #include <map>
 
@@ -21,6 +22,15 @@ std::string count_text(double value) {  // 1234567 -> "1 234 567" (thin groups r
     out += digits[i];
   }
   return out;
+}
+
+// Metres with 4 decimals; below 0.1 mm (an almost perfect trajectory) 3 significant digits, so
+// that the figure does not read 0.0000.
+std::string metres_text(double value) {
+  if (value == 0 || std::abs(value) >= 1e-4) return fixed_text(value, 4);
+  char s[32];
+  std::snprintf(s, sizeof s, "%.3g", value);
+  return s;
 }
 
 std::string percent(double ratio) { return fixed_text(100.0 * ratio, 1) + "%"; }
@@ -44,10 +54,10 @@ Table ate_table(const PageContent& c) {
   t.header = {"trajectory", "pairs", "RMSE", "mean", "median", "std", "min", "max"};
   t.numeric = {false, true, true, true, true, true, true, true};
   for (const PageAte& a : c.ate)
-    t.rows.push_back({a.name, std::to_string(a.stats.count), fixed_text(a.stats.rmse, 4),
-                      fixed_text(a.stats.mean, 4), fixed_text(a.stats.median, 4),
-                      fixed_text(a.stats.stddev, 4), fixed_text(a.stats.min, 4),
-                      fixed_text(a.stats.max, 4)});
+    t.rows.push_back({a.name, std::to_string(a.stats.count), metres_text(a.stats.rmse),
+                      metres_text(a.stats.mean), metres_text(a.stats.median),
+                      metres_text(a.stats.stddev), metres_text(a.stats.min),
+                      metres_text(a.stats.max)});
   return t;
 }
 
@@ -191,6 +201,7 @@ ul.notes { color: #8a4b00; font-size: 13px; }
 figure { margin: 8px 0; }
 figcaption { font-size: 13px; color: #555; }
 figure.map img { max-width: 100%; height: auto; border: 1px solid #ddd; }
+figure.scene-graph svg { max-width: 100%; height: auto; }
 div.plots { display: flex; flex-wrap: wrap; gap: 16px; }
 div.plots figure { flex: 1 1 480px; margin: 0; }
 div.plots svg { max-width: 100%; height: auto; border: 1px solid #eee; }
@@ -242,7 +253,7 @@ std::string summary_line(const PageContent& c) {
   } else {
     for (std::size_t i = 0; i < c.ate.size(); ++i)
       s += (i == 0 ? "; ATE RMSE " : ", ") + c.ate[i].name + " " +
-           fixed_text(c.ate[i].stats.rmse, 4) + " m";
+           metres_text(c.ate[i].stats.rmse) + " m";
     s += " (" + std::to_string(c.ate[0].stats.count) + " pose pairs)";
   }
   if (c.object_eval) {
@@ -321,20 +332,23 @@ std::string page_html(const PageContent& c) {
 }
 
 std::string page_markdown(const PageContent& c) {
-  std::string m = "# " + c.title + "\n\n" + summary_line(c) + "\n\n";
-  for (const std::string& n : c.notes) m += "- " + n + "\n";
+  // Every text of the run (names, paths, notes) as Markdown text: no HTML gets through.
+  std::string m = "# " + markdown_text(c.title) + "\n\n" + markdown_text(summary_line(c)) + "\n\n";
+  for (const std::string& n : c.notes) m += "- " + markdown_text(n) + "\n";
   if (!c.notes.empty()) m += "\n";
   if (!c.topview.bytes.empty())
-    m += "![top view of the semantic map](" + c.topview.file + ")\n\n" + c.topview.caption + "\n\n";
+    m += "![top view of the semantic map](" + c.topview.file + ")\n\n" +
+         markdown_text(c.topview.caption) + "\n\n";
   if (!c.scene_graph.bytes.empty())
-    m += "![scene graph](" + c.scene_graph.file + ")\n\n" + c.scene_graph.caption + "\n\n";
+    m += "![scene graph](" + c.scene_graph.file + ")\n\n" + markdown_text(c.scene_graph.caption) +
+         "\n\n" + c.scene_graph_list;
   for (const PagePicture* p : {&c.trajectory_plot, &c.ate_plot})
-    if (!p->bytes.empty()) m += "![" + p->caption + "](" + p->file + ")\n\n";
+    if (!p->bytes.empty()) m += "![" + markdown_text(p->caption) + "](" + p->file + ")\n\n";
   if (!c.ate.empty()) m += markdown_table(ate_table(c));
   m += "## Objects\n\n";
   for (const PageObject& o : c.objects)
-    m += "![" + std::to_string(o.object.id) + " " + o.object.class_name + "](" + o.thumbnail.file +
-         ") ";
+    m += "![" + markdown_text(std::to_string(o.object.id) + " " + o.object.class_name) + "](" +
+         o.thumbnail.file + ") ";
   if (!c.objects.empty()) m += "\n\n";
   m += markdown_table(objects_table(c));
   m += markdown_table(class_table(c));
@@ -348,7 +362,7 @@ std::string page_markdown(const PageContent& c) {
     m += c.duplicates->empty() ? std::string(kNoDuplicates) + "\n\n"
                                : markdown_table(duplicates_table(*c.duplicates));
   }
-  for (const std::string& line : c.inputs) m += line + "  \n";
+  for (const std::string& line : c.inputs) m += markdown_text(line) + "  \n";
   return m;
 }
 

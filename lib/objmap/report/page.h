@@ -60,6 +60,7 @@ struct PageContent {
   PagePicture trajectory_plot;                        // SVG; empty bytes: none
   PagePicture ate_plot;                               // SVG; empty bytes: none
   PagePicture scene_graph;                            // SVG; empty bytes: none
+  std::string scene_graph_list;                       // the same as a nested Markdown list
   std::vector<PageAte> ate;                           // one per trajectory with a ground truth
   std::vector<PageObject> objects;                    // in objects.json order
   std::optional<eval::ObjectEvalReport> object_eval;  // Tables 3–5 against ground truth

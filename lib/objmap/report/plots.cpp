@@ -75,20 +75,55 @@ const std::string kGrid = "#e4e4e4";
 const std::string kFrame = "#8a8a8a";
 const std::string kText = "#333333";
 
-// Tick label: as many decimals as the step needs.
-std::string tick_text(double value, double step) {
-  int decimals = 0;
-  while (decimals < 6 && std::abs(step * std::pow(10.0, decimals) -
-                                  std::round(step * std::pow(10.0, decimals))) > 1e-6)
-    ++decimals;
-  char s[64];
-  std::snprintf(s, sizeof s, "%.*f", decimals, value);
-  return s;
-}
-
 double step_of(const std::vector<double>& ticks) {
   return ticks.size() >= 2 ? ticks[1] - ticks[0] : 1.0;
 }
+
+// The decimals that a step (in the unit written) needs: relative to the step itself, so that a
+// step of 2e-8 needs 8 and a step of 0.1 one.
+int decimals_of(double step) {
+  int decimals = 0;
+  while (decimals < 15) {
+    const double scaled = std::abs(step) * std::pow(10.0, decimals);
+    if (std::abs(scaled - std::round(scaled)) <= 1e-6 * scaled) break;
+    ++decimals;
+  }
+  return decimals;
+}
+
+// The unit for a power of ten (a multiple of 3): an SI prefix, or "×10^k unit" beyond them.
+std::string scaled_unit(int exponent, const std::string& unit) {
+  static const char* const kPrefixes[] = {"p", "n", "µ", "m", "", "k", "M", "G", "T"};
+  const int k = exponent / 3 + 4;
+  if (exponent % 3 == 0 && k >= 0 && k < 9) return kPrefixes[k] + unit;
+  return "×10^" + std::to_string(exponent) + " " + unit;
+}
+
+}  // namespace
+
+AxisLabels axis_labels(const std::vector<double>& ticks, const std::string& unit) {
+  AxisLabels labels;
+  labels.unit = unit;
+  double largest = 0;
+  for (const double t : ticks) largest = std::max(largest, std::abs(t));
+  const double step = std::abs(step_of(ticks));
+  int exponent = 0;
+  if (ticks.size() >= 2 && step > 0 && std::isfinite(step) &&
+      (decimals_of(step) > 3 || largest >= 1e5)) {
+    exponent = 3 * static_cast<int>(std::floor(std::log10(std::max(largest, step)) / 3.0));
+    labels.unit = scaled_unit(exponent, unit);
+  }
+  const double scale = std::pow(10.0, -exponent);
+  const int decimals = ticks.size() >= 2 ? decimals_of(step * scale) : 0;
+  for (const double t : ticks) {
+    char s[64];
+    std::snprintf(s, sizeof s, "%.*f", decimals, t * scale);
+    labels.ticks.push_back(std::string(s) == "-0" ? "0" : s);
+  }
+  return labels;
+}
+
+namespace {
 
 bool has_errors(const PlotSeries& s) {
   return !s.errors_m.empty() && s.errors_m.size() == s.positions_m.size();
@@ -119,15 +154,18 @@ void color_bar(Svg& svg, double x, double top, double bottom, double max_error) 
   svg.close_group();
   svg.rect(x, top, 12, bottom - top, {{"fill", "none"}, {"stroke", kFrame}});
   const auto ticks = nice_ticks(0.0, max_error, 4);
-  for (const double v : ticks) {
-    const double y = bottom - v / max_error * (bottom - top);
+  const AxisLabels labels = axis_labels(ticks, "m");
+  for (std::size_t i = 0; i < ticks.size(); ++i) {
+    const double y = bottom - ticks[i] / max_error * (bottom - top);
     svg.line(x + 12, y, x + 16, y, {{"stroke", kFrame}});
-    svg.text(x + 18, y + 4, tick_text(v, step_of(ticks)), {{"fill", kText}, {"font-size", "11"}});
+    svg.text(x + 18, y + 4, labels.ticks[i], {{"fill", kText}, {"font-size", "11"}});
   }
-  svg.text(x - 6, top - 8, "error [m]", {{"fill", kText}, {"font-size", "11"}});
+  svg.text(x - 6, top - 8, "error [" + labels.unit + "]", {{"fill", kText}, {"font-size", "11"}});
 }
 
-std::string axis_name(int axis) { return std::string(1, static_cast<char>('x' + axis)) + " [m]"; }
+std::string axis_name(int axis, const std::string& unit) {
+  return std::string(1, static_cast<char>('x' + axis)) + " [" + unit + "]";
+}
 
 // What a trajectory plot shows: the data's extent on the two horizontal axes and, when a series
 // carries errors, the top of the colour scale.
@@ -195,17 +233,26 @@ void plan_grid(Svg& svg, const PlanArea& v, int ax, int bx) {
   for (const double x : ga) svg.line(v.X(x), v.top, v.X(x), v.bottom, {});
   for (const double y : gb) svg.line(v.left, v.Y(y), v.right, v.Y(y), {});
   svg.close_group();
+  // Both axes in one unit (equal axes): the labels of both sets of ticks made together.
+  std::vector<double> both = ga;
+  both.insert(both.end(), gb.begin(), gb.end());
+  std::sort(both.begin(), both.end());
+  both.erase(std::unique(both.begin(), both.end()), both.end());
+  if (both.size() < 2) both.push_back(both.empty() ? step : both.back() + step);
+  const AxisLabels labels = axis_labels(both, "m");
+  const auto label = [&](double t) {
+    const auto at = std::lower_bound(both.begin(), both.end(), t);
+    return labels.ticks[static_cast<std::size_t>(at - both.begin())];
+  };
   svg.open_group({{"fill", kText}, {"font-size", "11"}});
-  for (const double x : ga)
-    svg.text(v.X(x), v.bottom + 15, tick_text(x, step), {{"text-anchor", "middle"}});
-  for (const double y : gb)
-    svg.text(v.left - 5, v.Y(y) + 4, tick_text(y, step), {{"text-anchor", "end"}});
+  for (const double x : ga) svg.text(v.X(x), v.bottom + 15, label(x), {{"text-anchor", "middle"}});
+  for (const double y : gb) svg.text(v.left - 5, v.Y(y) + 4, label(y), {{"text-anchor", "end"}});
   svg.close_group();
   svg.rect(v.left, v.top, v.pw, v.ph, {{"fill", "none"}, {"stroke", kFrame}});
-  svg.text(0.5 * (v.left + v.right), v.bottom + 33, axis_name(ax),
+  svg.text(0.5 * (v.left + v.right), v.bottom + 33, axis_name(ax, labels.unit),
            {{"fill", kText}, {"text-anchor", "middle"}});
   const std::string ylabel_y = svg_number(0.5 * (v.top + v.bottom));
-  svg.text(16, 0.5 * (v.top + v.bottom), axis_name(bx),
+  svg.text(16, 0.5 * (v.top + v.bottom), axis_name(bx, labels.unit),
            {{"fill", kText},
             {"text-anchor", "middle"},
             {"transform", "rotate(-90 16 " + ylabel_y + ")"}});
@@ -298,18 +345,20 @@ std::string error_over_time_svg(const std::vector<PlotSeries>& series, const Plo
   for (const double v : tt) svg.line(X(t0 + v), top, X(t0 + v), bottom, {});
   for (const double v : te) svg.line(left, Y(v), right, Y(v), {});
   svg.close_group();
+  const AxisLabels time_labels = axis_labels(tt, "s"), error_labels = axis_labels(te, "m");
   svg.open_group({{"fill", kText}, {"font-size", "11"}});
-  for (const double v : tt)
-    svg.text(X(t0 + v), bottom + 15, tick_text(v, step_of(tt)), {{"text-anchor", "middle"}});
-  for (const double v : te)
-    svg.text(left - 5, Y(v) + 4, tick_text(v, step_of(te)), {{"text-anchor", "end"}});
+  for (std::size_t i = 0; i < tt.size(); ++i)
+    svg.text(X(t0 + tt[i]), bottom + 15, time_labels.ticks[i], {{"text-anchor", "middle"}});
+  for (std::size_t i = 0; i < te.size(); ++i)
+    svg.text(left - 5, Y(te[i]) + 4, error_labels.ticks[i], {{"text-anchor", "end"}});
   svg.close_group();
   svg.rect(left, top, right - left, bottom - top, {{"fill", "none"}, {"stroke", kFrame}});
-  svg.text(0.5 * (left + right), bottom + 33, "time since the first pose [s]",
+  svg.text(0.5 * (left + right), bottom + 33,
+           "time since the first pose [" + time_labels.unit + "]",
            {{"fill", kText}, {"text-anchor", "middle"}});
   const std::string mid = svg_number(0.5 * (top + bottom));
   svg.text(
-      16, 0.5 * (top + bottom), "absolute error [m]",
+      16, 0.5 * (top + bottom), "absolute error [" + error_labels.unit + "]",
       {{"fill", kText}, {"text-anchor", "middle"}, {"transform", "rotate(-90 16 " + mid + ")"}});
 
   std::vector<std::string> labels;
@@ -328,7 +377,8 @@ std::string error_over_time_svg(const std::vector<PlotSeries>& series, const Plo
     if (s.dashed) a.push_back({"stroke-dasharray", "6 4"});
     svg.polyline(pts, a);
     char rmse[64];
-    std::snprintf(rmse, sizeof rmse, " (RMSE %.4f m)", n ? std::sqrt(sum2 / n) : 0.0);
+    const double r = n ? std::sqrt(sum2 / n) : 0.0;  // 4 decimals, or 3 digits below 1 mm
+    std::snprintf(rmse, sizeof rmse, r >= 1e-3 || r == 0 ? " (RMSE %.4f m)" : " (RMSE %.3g m)", r);
     labels.push_back(s.name + rmse);
   }
   legend(svg, plotted, left, 20, labels);

@@ -39,6 +39,16 @@ std::string trajectory_svg(const std::vector<PlotSeries>& series, const PlotOpti
 // <polyline> per such series (NaN errors skipped), axes in seconds and metres, legend with RMSE.
 std::string error_over_time_svg(const std::vector<PlotSeries>& series, const PlotOptions& options);
 
+// The tick labels of an axis and the unit they are in: as many decimals as the step needs (at any
+// scale); when the ticks would need more than 3 decimals or reach 100000, they are written in
+// the unit with an SI prefix (0.00000005 m → "50" nm; 1.5e5 s → "150" ks), or with "×10^k" beyond
+// the prefixes. Every two different ticks get different labels.
+struct AxisLabels {
+  std::vector<std::string> ticks;  // one per tick
+  std::string unit;                // e.g. "m", "mm", "nm", "×10^-21 m"
+};
+AxisLabels axis_labels(const std::vector<double>& ticks, const std::string& unit);
+
 // "Nice" tick positions (1, 2, 5 × 10^k steps) covering [lo, hi], about `target` of them.
 std::vector<double> nice_ticks(double lo, double hi, int target);
 

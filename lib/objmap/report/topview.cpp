@@ -149,70 +149,151 @@ std::vector<cv::Point> draw_object_boxes(TopView& view, const std::vector<TopVie
   return centers;
 }
 
-// A label box's place: the first free place on rings around the centre c that lies inside the
-// image and keeps 2 px from every placed box; right of c when there is none.
-cv::Rect place_label(const cv::Point& c, const cv::Size& box, const std::vector<cv::Rect>& placed,
-                     int width, int height) {
-  for (int ring = 0; ring <= 8; ++ring) {
+// The scale bar's white box in the bottom-left corner (step 6), kept free of labels.
+cv::Rect scale_bar_box(const TopView& view, const TopViewOptions& options) {
+  const int bar = static_cast<int>(1.0 / view.pixel_m);
+  const cv::Point s0(options.margin_px / 2 + 4, view.image.rows - 8);
+  return cv::Rect(s0.x - 4, s0.y - 22, bar + 8, 28);
+}
+
+// Whether `rect` lies inside a width × height image and keeps 2 px from every box of `taken`.
+bool free_place(const cv::Rect& rect, const std::vector<cv::Rect>& taken, int width, int height) {
+  if (rect.x < 0 || rect.y < 0 || rect.x + rect.width > width || rect.y + rect.height > height)
+    return false;
+  for (const cv::Rect& q : taken)
+    if ((rect & cv::Rect(q.x - 2, q.y - 2, q.width + 4, q.height + 4)).area() > 0) return false;
+  return true;
+}
+
+// A label box's place: the first free place on rings around the centre c (right of it first, then
+// round it, further out ring by ring); an empty rect when there is none within `rings` rings.
+cv::Rect place_label(const cv::Point& c, const cv::Size& box, const std::vector<cv::Rect>& taken,
+                     int width, int height, int rings) {
+  for (int ring = 0; ring <= rings; ++ring) {
     const int r = ring * (box.height + 2);
-    const int steps = ring == 0 ? 1 : 12;
+    const int steps = ring == 0 ? 1 : 8 + 4 * ring;
     for (int s = 0; s < steps; ++s) {
       const double angle = -M_PI / 4 + 2 * M_PI * s / steps;
       const cv::Point p(c.x + 7 + static_cast<int>(std::lround(r * std::cos(angle))),
                         c.y - box.height / 2 + static_cast<int>(std::lround(r * std::sin(angle))));
       const bool left = std::cos(angle) < -0.3;
       const cv::Rect rect(left ? p.x - 14 - box.width : p.x, p.y, box.width, box.height);
-      if (rect.x < 0 || rect.y < 0 || rect.x + rect.width > width || rect.y + rect.height > height)
-        continue;
-      bool free = true;
-      for (const cv::Rect& q : placed)
-        if ((rect & cv::Rect(q.x - 2, q.y - 2, q.width + 4, q.height + 4)).area() > 0) free = false;
-      if (free) return rect;
+      if (free_place(rect, taken, width, height)) return rect;
     }
   }
-  return cv::Rect(c.x + 7, c.y - box.height / 2, box.width, box.height);
+  return {};
 }
 
-// Step 5: a dot at each centre, then the labels: each at the first free place on rings around its
-// centre (none hides another), with a leader line when moved away; a white box with a border in
-// the class colour.
+// A label's box: the text's size with a 4 px border.
+cv::Size label_box(const std::string& text, double font_scale, int* text_height) {
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, font_scale, 1, &baseline);
+  *text_height = size.height;
+  return {size.width + 8, size.height + baseline + 6};
+}
+
+void draw_label(TopView& view, const cv::Point& c, const cv::Rect& chosen, const std::string& text,
+                const cv::Scalar& color, double font_scale) {
+  int text_height = 0;
+  label_box(text, font_scale, &text_height);
+  const cv::Point near(std::clamp(c.x, chosen.x, chosen.x + chosen.width),
+                       std::clamp(c.y, chosen.y, chosen.y + chosen.height));
+  if (cv::norm(near - c) > 9) cv::line(view.image, c, near, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+  cv::rectangle(view.image, chosen, cv::Scalar(255, 255, 255), cv::FILLED);
+  cv::rectangle(view.image, chosen, color, 2);
+  cv::putText(view.image, text, cv::Point(chosen.x + 4, chosen.y + 3 + text_height),
+              cv::FONT_HERSHEY_SIMPLEX, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+}
+
+// Step 5: a dot at each centre, then the labels: "id class" at the first free place around its
+// centre (no label over another label or another object's dot), with a leader line when moved
+// away; when there is none, the id alone, and the label goes to the list beside the map.
 void draw_labels(TopView& view, const std::vector<TopViewObject>& objects,
                  const std::vector<cv::Point>& centers, const TopViewOptions& options) {
+  std::vector<cv::Rect> dots;
+  const cv::Rect bar = scale_bar_box(view, options);
   for (std::size_t k = 0; k < objects.size(); ++k) {
     cv::circle(view.image, centers[k], 4, cv::Scalar(0, 0, 0), -1, cv::LINE_AA);
     cv::circle(view.image, centers[k], 2,
                cv::Scalar(objects[k].color.b, objects[k].color.g, objects[k].color.r), -1,
                cv::LINE_AA);
+    dots.emplace_back(centers[k].x - 4, centers[k].y - 4, 9, 9);
   }
   std::vector<cv::Rect> placed;
-  const double font_scale = options.label_scale;
   for (std::size_t k = 0; k < objects.size(); ++k) {
     const auto& o = objects[k];
-    const cv::Point c = centers[k];
-    const cv::Scalar color(o.color.b, o.color.g, o.color.r);
-    int baseline = 0;
-    const cv::Size text =
-        cv::getTextSize(o.label, cv::FONT_HERSHEY_SIMPLEX, font_scale, 1, &baseline);
-    const cv::Size box(text.width + 8, text.height + baseline + 6);
-    const cv::Rect chosen = place_label(c, box, placed, view.image.cols, view.image.rows);
-    placed.push_back(chosen);
-    const cv::Point near(std::clamp(c.x, chosen.x, chosen.x + chosen.width),
-                         std::clamp(c.y, chosen.y, chosen.y + chosen.height));
-    if (cv::norm(near - c) > 9)
-      cv::line(view.image, c, near, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
-    cv::rectangle(view.image, chosen, cv::Scalar(255, 255, 255), cv::FILLED);
-    cv::rectangle(view.image, chosen, color, 2);
-    cv::putText(view.image, o.label, cv::Point(chosen.x + 4, chosen.y + 3 + text.height),
-                cv::FONT_HERSHEY_SIMPLEX, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    // Free of the placed labels and of every other object's dot.
+    std::vector<cv::Rect> taken = placed;
+    taken.push_back(bar);
+    for (std::size_t d = 0; d < dots.size(); ++d)
+      if (d != k) taken.push_back(dots[d]);
+    TopViewLabel label{o.id, {}, false};
+    std::string text = o.label;
+    for (const bool whole : {true, false}) {
+      if (!whole) text = std::to_string(o.id);
+      int text_height = 0;
+      const cv::Size box = label_box(text, options.label_scale, &text_height);
+      // The whole label near its object (a short leader line), the id a little further.
+      label.box =
+          place_label(centers[k], box, taken, view.image.cols, view.image.rows, whole ? 4 : 8);
+      label.listed = !whole;
+      if (label.box.area() > 0) break;
+    }
+    if (label.box.area() > 0) {
+      placed.push_back(label.box);
+      draw_label(view, centers[k], label.box, text, cv::Scalar(o.color.b, o.color.g, o.color.r),
+                 options.label_scale);
+    }
+    view.labels.push_back(label);
   }
+}
+
+// Step 7: the labels that did not fit on the map, listed in columns on its right: a swatch in the
+// class colour and "id class" per line.
+void draw_label_list(TopView& view, const std::vector<TopViewObject>& objects,
+                     const TopViewOptions& options) {
+  std::vector<std::size_t> listed;
+  for (std::size_t k = 0; k < objects.size(); ++k)
+    if (view.labels[k].listed) listed.push_back(k);
+  if (listed.empty()) return;
+  const std::string title = "labels of crowded objects:";
+  int text_height = 0, line_w = 0;
+  const int title_w = label_box(title, options.label_scale, &text_height).width;
+  for (const std::size_t k : listed)
+    line_w =
+        std::max(line_w, label_box(objects[k].label, options.label_scale, &text_height).width + 16);
+  // As many columns as the map's height needs, at most as many as make the list as wide as the
+  // map; then the list runs below the map's bottom (the picture grows white below the map).
+  const int line_h = text_height + 10, top = options.margin_px + line_h + 4;
+  const int n = static_cast<int>(listed.size());
+  const int fit_rows = std::max(1, (view.image.rows - top - options.margin_px) / line_h);
+  const int columns =
+      std::clamp((n + fit_rows - 1) / fit_rows, 1, std::max(1, view.image.cols / (line_w + 12)));
+  const int rows = (n + columns - 1) / columns;
+  cv::Mat out(std::max(view.image.rows, top + rows * line_h + options.margin_px),
+              view.image.cols + std::max(title_w, columns * (line_w + 12)) + options.margin_px,
+              CV_8UC3, cv::Scalar(255, 255, 255));
+  view.image.copyTo(out(cv::Rect(0, 0, view.image.cols, view.image.rows)));
+  const int x0 = view.image.cols + 8;
+  cv::putText(out, title, cv::Point(x0, options.margin_px + text_height), cv::FONT_HERSHEY_SIMPLEX,
+              options.label_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  for (std::size_t i = 0; i < listed.size(); ++i) {
+    const TopViewObject& o = objects[listed[i]];
+    const int x = x0 + static_cast<int>(i / rows) * (line_w + 12);
+    const int y = top + static_cast<int>(i % rows) * line_h;
+    cv::rectangle(out, cv::Rect(x, y + 2, 10, text_height),
+                  cv::Scalar(o.color.b, o.color.g, o.color.r), cv::FILLED);
+    cv::putText(out, o.label, cv::Point(x + 16, y + 2 + text_height), cv::FONT_HERSHEY_SIMPLEX,
+                options.label_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  view.image = out;
 }
 
 // Step 6: a 1 m scale bar in the bottom-left corner.
 void draw_scale_bar(TopView& view, const TopViewOptions& options) {
   const int bar = static_cast<int>(1.0 / view.pixel_m);
   const cv::Point s0(options.margin_px / 2 + 4, view.image.rows - 8);
-  cv::rectangle(view.image, cv::Rect(s0.x - 4, s0.y - 22, bar + 8, 28), cv::Scalar(255, 255, 255),
-                cv::FILLED);
+  cv::rectangle(view.image, scale_bar_box(view, options), cv::Scalar(255, 255, 255), cv::FILLED);
   cv::line(view.image, s0, s0 + cv::Point(bar, 0), cv::Scalar(0, 0, 0), 2);
   cv::putText(view.image, "1 m", s0 + cv::Point(4, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
@@ -241,6 +322,9 @@ TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject
   }
   // 6. A 1 m scale bar in the bottom-left corner.
   draw_scale_bar(view, options);
+  view.map_width_px = view.image.cols;
+  // 7. The labels that did not fit on the map, listed on its right.
+  if (options.draw_objects) draw_label_list(view, objects, options);
   return view;
 }
 

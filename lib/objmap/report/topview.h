@@ -37,11 +37,22 @@ struct TopViewPath {
   Rgb color{20, 20, 20};
 };
 
+// Where an object's label went: each label is placed where it overlaps no other label and no
+// other object's centre dot; when "id class" finds no such place near its object, the id alone is
+// tried, and the label is listed beside the map (a column on the right) instead.
+struct TopViewLabel {
+  int id = -1;
+  cv::Rect box;         // on the map, in pixels; empty: no room even for the id
+  bool listed = false;  // the whole label is in the list beside the map (the map shows the id)
+};
+
 struct TopView {
-  cv::Mat image;  // CV_8UC3 BGR
+  cv::Mat image;  // CV_8UC3 BGR: the map, and the list of labels on its right when there is one
   double pixel_m = 0.0;
   // World coordinates (the two horizontal axes) of the image's top-left pixel centre.
   double origin_a = 0.0, origin_b = 0.0;
+  int map_width_px = 0;              // the map's columns (the list, if any, is to their right)
+  std::vector<TopViewLabel> labels;  // one per object, in the objects' order
 };
 
 // Each pixel shows the highest point above it (z-buffer along up_axis); empty pixels are white.
