@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # make fuzz: builds the fuzz targets of fuzz/ with clang, libFuzzer, ASan and UBSan in build-fuzz/
 # and runs each for FUZZ_SECONDS (default 60) seconds on a corpus seeded from the real data
-# (fuzz/seeds.txt) and fuzz/seeds/<target>/ where it exists. A finding (a crash, a sanitizer report, an exception other than
+# (fuzz/seeds.txt), fuzz/seeds/<target>/ and the images fuzz_make_seeds makes, where they exist. A finding (a crash, a sanitizer report, an exception other than
 # InputError, an InputError of several lines, an input taking > 10 s or > 2 GB) stops that target:
 # the input is saved in build-fuzz/findings/<target>/, and the script exits 1 after the others.
 #   scripts/fuzz.sh [DATA]   env: FUZZ_SECONDS, FUZZ_TARGETS="png ply" (default: all), JOBS
@@ -20,10 +20,14 @@ if [ ! -f "$build/CMakeCache.txt" ]; then
     -DOBJMAP_FUZZ=ON -DOBJMAP_BUILD_TESTS=OFF -DOBJMAP_BUILD_BENCHMARKS=OFF >/dev/null
 fi
 start=$(date +%s)
-if ! cmake --build "$build" -j"${JOBS:-2}" --target "${targets[@]/#/fuzz_}" >"$build/build.log" 2>&1; then
+if ! cmake --build "$build" -j"${JOBS:-2}" --target "${targets[@]/#/fuzz_}" fuzz_make_seeds \
+    >"$build/build.log" 2>&1; then
   tail -30 "$build/build.log" >&2
   exit 1
 fi
+# The image seeds made with objmap's PNG encoder and libjpeg (fuzz/make_seeds.cpp): seeds of the
+# image targets without the real data.
+"$build/bin/fuzz_make_seeds" "$build/made_seeds" >/dev/null
 echo "fuzz: built ${#targets[@]} targets in $(($(date +%s) - start)) s; ${seconds} s each"
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}
@@ -37,8 +41,9 @@ for t in "${targets[@]}"; do
       echo "fuzz: $t: seed $data/$f missing (set OBJMAP_DATA)" >&2
     fi
   done
-  hand_made=()  # tiny text seeds of fuzz/seeds/<target>/, when the target has some
-  [ -d "fuzz/seeds/$t" ] && hand_made=("fuzz/seeds/$t")
+  hand_made=()  # tiny text seeds of fuzz/seeds/<target>/ and made images, when the target has some
+  [ -d "fuzz/seeds/$t" ] && hand_made+=("fuzz/seeds/$t")
+  [ -d "$build/made_seeds/$t" ] && hand_made+=("$build/made_seeds/$t")
   if "$build/bin/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "${hand_made[@]}" >"$log" 2>&1; then
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")

@@ -92,5 +92,22 @@ TEST(Validate, TrajectoryOfAnotherSequenceIsRejected) {
   EXPECT_TRUE(has(r.err, "groundtruth.txt")) << r.err;
 }
 
+// Settings YAML that OpenCV reads but whose top level is no mapping (fuzz_camera_yaml's finding:
+// an assertion of OpenCV's FileStorage, once "internal error", exit 1): exit 2, one line naming
+// the file.
+TEST(Validate, AMalformedCameraFileIsExit2InOneLineNamingIt) {
+  TempDir dir;
+  const auto s = run_objmap({"synth", "--out", (dir / "s").string(), "--frames", "2"});
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const fs::path yaml = dir / "bad.yaml";
+  write_text(yaml, "%YAML:1.\n- 1\n");
+  const auto r =
+      run_objmap({"validate", "--dataset", (dir / "s").string(), "--camera", yaml.string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err, "objmap: error: " + yaml.string() +
+                       ": the top level is a sequence, not a mapping; expected ORB-SLAM2 "
+                       "settings (Camera.fx: ...)\n");
+}
+
 }  // namespace
 }  // namespace objmap::test

@@ -162,11 +162,13 @@ TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   EXPECT_GE(mice, 2);
 }
 
-TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairsOnTheFloor) {
+TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairsOnNothingSeen) {
   // Fused with groundtruth.txt as it is (z up): the desk is a table 0.7 m above the floor, with
   // the keyboards, the mice and the monitor on it. The monitor stands at the desk's back edge,
   // where it hides the desk: it is on it by a quarter of its footprint, not by its centre. The
-  // chairs are seen from above, their legs hidden: they stand on the floor, not on their seats.
+  // chairs are seen from above, their legs hidden (bottoms 0.47 and 0.69 m above the floor): they
+  // stand on nothing seen, neither on their seats nor on the floor far below them. Whatever is on
+  // the floor has its bottom near it, and nothing is on an object of its own class.
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
   RunResult why;
   const fs::path run = fuse_cached("fr1-rpy-groundtruth", data, data / "groundtruth.txt",
@@ -174,19 +176,27 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
   ASSERT_TRUE(fs::exists(run)) << why.err;
   EXPECT_LT(angle_deg(up_of(run), Eigen::Vector3d::UnitZ()), 3.0);
   const nlohmann::json doc = read_json(run / "objects.json");
+  std::map<int, std::string> class_of;
+  for (const auto& o : doc["objects"]) class_of[o["id"].get<int>()] = o["class"];
   std::map<std::string, int> on_table, on_floor, count;
   for (const auto& o : doc["objects"]) {
     const auto& on = o["relations"]["on"];
     const std::string c = o["class"].get<std::string>();
     ++count[c];
-    if (!on.is_null() && on["label"] == "table") ++on_table[c];
-    if (!on.is_null() && on["label"] == "floor") ++on_floor[c];
+    if (on.is_null()) continue;
+    if (on["label"] == "table") ++on_table[c];
+    if (on["label"] == "floor") {
+      ++on_floor[c];
+      EXPECT_LE(on["gap_m"].get<double>(), 0.15) << c << " " << o["id"] << " on the floor";
+    }
+    if (on["kind"] == "object")
+      EXPECT_NE(class_of[on["id"].get<int>()], c) << o["id"] << " on its own class";
   }
   EXPECT_GE(on_table["keyboard"], 2);
   EXPECT_GE(on_table["mouse"], 3);
   EXPECT_GE(on_table["tv monitor"], 1);
-  EXPECT_GE(count["chair"], 1);
-  EXPECT_EQ(on_floor["chair"], count["chair"]) << "every chair stands on the floor";
+  EXPECT_EQ(count["chair"], 2);
+  EXPECT_EQ(on_floor["chair"], 0) << "the chairs' bottoms are 0.47 and 0.69 m above the floor";
   EXPECT_EQ(doc["surfaces"][0]["label"], "floor") << "the largest surface is the floor";
 }
 

@@ -114,6 +114,27 @@ TEST(ReadCameraFile, YamlMissingOrBadField) {
             std::string::npos);
 }
 
+// A top level that is no mapping: OpenCV's FileStorage reads the file, then asserts isMap() when a
+// key is looked up (a cv::Exception that was "internal error", exit 1; found by fuzz_camera_yaml,
+// fuzz/seeds/camera_yaml/finding_top_level_sequence.yaml).
+TEST(ReadCameraFile, AYamlWhoseTopLevelIsNoMappingIsAnInputErrorNamingTheFile) {
+  TempDir dir;
+  std::string where;
+  write_text(dir / "seq.yaml", "%YAML:1.\n- 1\n");
+  EXPECT_EQ(camera_error(dir / "seq.yaml", &where),
+            "the top level is a sequence, not a mapping; expected ORB-SLAM2 settings "
+            "(Camera.fx: ...)");
+  EXPECT_EQ(where, (dir / "seq.yaml").string());
+  write_text(dir / "list.yaml", "%YAML:1.0\n- Camera.fx: 500\n- Camera.fy: 500\n");
+  EXPECT_EQ(camera_error(dir / "list.yaml", &where),
+            "the top level is a sequence, not a mapping; expected ORB-SLAM2 settings "
+            "(Camera.fx: ...)");
+  // An empty document is a mapping without keys.
+  write_text(dir / "empty.yaml", "%YAML:1.0\n");
+  EXPECT_EQ(camera_error(dir / "empty.yaml", &where), "missing; it is required");
+  EXPECT_EQ(where, (dir / "empty.yaml").string() + ": Camera.fx");
+}
+
 TEST(ReadCameraFile, JsonMissingOrBadField) {
   TempDir dir;
   const std::string good =

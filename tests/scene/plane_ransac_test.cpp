@@ -3,12 +3,12 @@
 #include <gtest/gtest.h>
 #include <pcl/ModelCoefficients.h>
 #include <pcl/PointIndices.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
+#include <pcl/sample_consensus/ransac.h>
 #include <pcl/sample_consensus/sac_model_plane.h>
-#include <pcl/segmentation/sac_segmentation.h>
 
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <numeric>
 #include <random>
 
@@ -17,18 +17,27 @@
 namespace objmap::scene::detail {
 namespace {
 
-// PCL's own segmentation, as fit_plane ran it before it counted inliers itself.
+// PCL's own segmentation, as fit_plane ran it before it counted inliers itself: SACSegmentation's
+// segment() with SACMODEL_PLANE, SAC_RANSAC, 200 iterations and optimised coefficients, step for
+// step (pcl/segmentation/impl/sac_segmentation.hpp), with PCL's own plane model and RANSAC. Not
+// SACSegmentation itself: it makes its model in Debian's PCL, built as C++14, where
+// PCL_MAKE_ALIGNED_OPERATOR_NEW gives the model Eigen's operator new (malloc), and objmap's C++17
+// code, where that macro is empty, deletes it with the global operator delete (ASan:
+// alloc-dealloc-mismatch). Here the model is made and deleted on objmap's side, as in fit_plane.
 pcl::PointIndices pcl_segment(const Cloud::Ptr& cloud, double distance_m,
                               pcl::ModelCoefficients& coefficients) {
-  pcl::SACSegmentation<pcl::PointXYZ> seg;
-  seg.setOptimizeCoefficients(true);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setModelType(pcl::SACMODEL_PLANE);
-  seg.setMaxIterations(200);
-  seg.setDistanceThreshold(distance_m);
-  seg.setInputCloud(cloud);
+  const auto model = std::make_shared<pcl::SampleConsensusModelPlane<pcl::PointXYZ>>(cloud);
+  pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, distance_m);
+  ransac.setMaxIterations(200);
   pcl::PointIndices inliers;
-  seg.segment(inliers, coefficients);
+  if (!ransac.computeModel(0)) return inliers;
+  ransac.getInliers(inliers.indices);
+  Eigen::VectorXf found(model->getModelSize());
+  ransac.getModelCoefficients(found);
+  Eigen::VectorXf refined(model->getModelSize());
+  model->optimizeModelCoefficients(inliers.indices, found, refined);
+  coefficients.values.assign(refined.data(), refined.data() + refined.size());
+  model->selectWithinDistance(refined, distance_m, inliers.indices);
   return inliers;
 }
 

@@ -14,6 +14,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
+#include "objmap/io/library_errors.h"
 #include "objmap/io/tum_dataset.h"
 
 namespace objmap::io {
@@ -124,20 +125,7 @@ double yaml_number(const cv::FileStorage& fs, const std::string& key, const std:
   return node.real();
 }
 
-Camera read_camera_yaml(const fs::path& path) {
-  const std::string file = path.string();
-  cv::FileStorage storage;
-  try {
-    if (!storage.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML))
-      throw InputError(file, "cannot open the camera file for reading");
-  } catch (const cv::Exception& e) {
-    // OpenCV's own message (its `err` part: "Incorrect indentation" and where), on one line.
-    std::string reason = e.err;
-    std::replace(reason.begin(), reason.end(), '\n', ' ');
-    while (!reason.empty() && reason.back() == ' ') reason.pop_back();
-    throw InputError(file, "not a readable OpenCV YAML file (" + reason +
-                               "); expected ORB-SLAM2 settings starting with %YAML:1.0");
-  }
+Camera camera_from_yaml(const cv::FileStorage& storage, const std::string& file) {
   Camera camera;
   camera.name = file;
   camera.fx = yaml_number(storage, "Camera.fx", file, true, 0);
@@ -159,6 +147,32 @@ Camera read_camera_yaml(const fs::path& path) {
   return camera;
 }
 
+// OpenCV's FileStorage throws cv::Exception on a malformed file, in its parser and in the
+// assertions of its lookups; read_camera_file names the file of any that this does not.
+Camera read_camera_yaml(const fs::path& path) {
+  const std::string file = path.string();
+  cv::FileStorage storage;
+  try {
+    if (!storage.open(file, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML))
+      throw InputError(file, "cannot open the camera file for reading");
+  } catch (const cv::Exception& e) {
+    // OpenCV's own message (its `err` part: "Incorrect indentation" and where), on one line.
+    std::string reason = e.err;
+    std::replace(reason.begin(), reason.end(), '\n', ' ');
+    while (!reason.empty() && reason.back() == ' ') reason.pop_back();
+    throw InputError(file, "not a readable OpenCV YAML file (" + reason +
+                               "); expected ORB-SLAM2 settings starting with %YAML:1.0");
+  }
+  // A top level that is a sequence or a single value has no keys (a lookup asserts); an empty
+  // file is a mapping without any (Camera.fx is missing).
+  const cv::FileNode root = storage.root();
+  if (!root.isNone() && !root.isMap())
+    throw InputError(file, std::string("the top level is ") +
+                               (root.isSeq() ? "a sequence" : "a single value") +
+                               ", not a mapping; expected ORB-SLAM2 settings (Camera.fx: ...)");
+  return camera_from_yaml(storage, file);
+}
+
 }  // namespace
 
 Camera read_camera_file(const fs::path& file) {
@@ -167,13 +181,17 @@ Camera read_camera_file(const fs::path& file) {
   if (!fs::is_regular_file(file, ec)) throw InputError(file.string(), "is not a file");
   const std::string ext = extension_of(file);
   Camera camera;
-  if (ext == ".json")
-    camera = read_camera_json(file);
-  else if (ext == ".yaml" || ext == ".yml")
-    camera = read_camera_yaml(file);
-  else
-    throw InputError(file.string(), "unknown camera file type '" + ext +
-                                        "'; expected .json or ORB-SLAM2 settings .yaml/.yml");
+  try {
+    if (ext == ".json")
+      camera = read_camera_json(file);
+    else if (ext == ".yaml" || ext == ".yml")
+      camera = read_camera_yaml(file);
+    else
+      throw InputError(file.string(), "unknown camera file type '" + ext +
+                                          "'; expected .json or ORB-SLAM2 settings .yaml/.yml");
+  } catch (...) {
+    rethrow_naming_file(file.string());
+  }
   camera.check(file.string());
   return camera;
 }

@@ -12,6 +12,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/io/codecs.h"
+#include "objmap/io/library_errors.h"
 #include "objmap/io/png_fast.h"
 
 namespace objmap::io {
@@ -127,10 +128,16 @@ std::string depth_name(int depth) {
 }  // namespace
 
 cv::Mat read_image(const fs::path& file, bool allow_jpeg) {
-  return decode(file, read_bytes(file), allow_jpeg, 0, 0);
+  try {
+    return decode(file, read_bytes(file), allow_jpeg, 0, 0);
+  } catch (...) {
+    rethrow_naming_file(file.string());
+  }
 }
 
-cv::Mat read_rgb(const fs::path& file, int width, int height) {
+namespace {
+
+cv::Mat rgb_of(const fs::path& file, int width, int height) {
   const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/true, width, height);
   if (image.depth() != CV_8U)
     throw InputError(file.string(),
@@ -151,7 +158,7 @@ cv::Mat read_rgb(const fs::path& file, int width, int height) {
   return bgr;
 }
 
-cv::Mat read_depth(const fs::path& file, int width, int height) {
+cv::Mat depth_of(const fs::path& file, int width, int height) {
   const cv::Mat image = decode(file, read_bytes(file), /*allow_jpeg=*/false, width, height);
   if (image.channels() != 1)
     throw InputError(file.string(), std::to_string(image.channels()) +
@@ -163,6 +170,25 @@ cv::Mat read_depth(const fs::path& file, int width, int height) {
                                         "(metres x depth_factor)");
   check_size(file, image.cols, image.rows, width, height);
   return image;
+}
+
+}  // namespace
+
+// OpenCV's exceptions (a Mat that cannot be allocated, a conversion) name the file too.
+cv::Mat read_rgb(const fs::path& file, int width, int height) {
+  try {
+    return rgb_of(file, width, height);
+  } catch (...) {
+    rethrow_naming_file(file.string());
+  }
+}
+
+cv::Mat read_depth(const fs::path& file, int width, int height) {
+  try {
+    return depth_of(file, width, height);
+  } catch (...) {
+    rethrow_naming_file(file.string());
+  }
 }
 
 }  // namespace objmap::io

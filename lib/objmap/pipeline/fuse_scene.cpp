@@ -45,6 +45,9 @@ ordered_json relations_json(const scene::Relations& r) {
   o["near"] = neighbours_json(r.near, "distance_m");
   o["above"] = neighbours_json(r.above, "gap_m");
   o["under"] = neighbours_json(r.under, "gap_m");
+  ordered_json duplicates = ordered_json::array();
+  for (const auto& d : r.duplicates) duplicates.push_back({{"id", d.id}, {"overlap", d.overlap}});
+  o["suspected_duplicates"] = duplicates;
   return o;
 }
 

@@ -16,12 +16,15 @@ struct Footprint {
   // on its legs, so a higher bottom percentile would stand it in the air.
   double bottom = 0.0, top = 0.0;
   double mean_height = 0.0;
+  // The outline of the points within the top band below `top` (what stands on the object stands
+  // on these): a table's top, a book's cover, a chair's backrest (not its seat or legs).
+  std::vector<cv::Point2f> top_hull;
 };
 
 // `gravity_from_world` rotates world points into the gravity frame. For an object, `centre_world`
 // is its position (box centre); empty points give an empty hull.
 Footprint footprint(const std::vector<Vec3f>& points, const Eigen::Matrix3d& gravity_from_world,
-                    const Vec3& centre_world);
+                    const Vec3& centre_world, double top_band_m = 0.05);
 
 // Signed distance of `p` to the hull's boundary: > 0 inside, < 0 outside (metres).
 double inside_distance(const std::vector<cv::Point2f>& hull, const cv::Point2f& p);

@@ -65,17 +65,63 @@ bool carries(const std::vector<cv::Point2f>& under, const detail::Footprint& f,
          overlap_share(f.hull, under) >= o.min_footprint_overlap;
 }
 
+// How far two objects interpenetrate: the share of the smaller footprint over the other's times
+// the share of the smaller height range inside the other's, in [0, 1] (0 for a book on a book: its
+// heights start where the other's end).
+double interpenetration(const detail::Footprint& a, const detail::Footprint& b) {
+  if (a.hull.size() < 3 || b.hull.size() < 3) return 0.0;
+  const double area_a = cv::contourArea(a.hull), area_b = cv::contourArea(b.hull);
+  const double ground =
+      area_a <= area_b ? overlap_share(a.hull, b.hull) : overlap_share(b.hull, a.hull);
+  const double common = std::min(a.top, b.top) - std::max(a.bottom, b.bottom);
+  const double shorter = std::min(a.top - a.bottom, b.top - b.bottom);
+  if (!(common > 0.0) || !(shorter > 0.0)) return 0.0;
+  return ground * std::min(1.0, common / shorter);
+}
+
+bool same_class(const SceneObject& a, const SceneObject& b) {
+  return segmentation::canonical_class(a.class_name) == segmentation::canonical_class(b.class_name);
+}
+
+// Pairs of one class that interpenetrate by at least duplicate_overlap: suspected duplicates of
+// one physical object (fusion/duplicates.h reports them from the boxes and surfaces too), listed
+// on both.
+void suspected_duplicates(const std::vector<SceneObject>& objects,
+                          const std::vector<detail::Footprint>& feet, const RelationOptions& o,
+                          std::vector<Relations>& relations) {
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    for (std::size_t j = i + 1; j < objects.size(); ++j) {
+      if (!same_class(objects[i], objects[j])) continue;
+      const double overlap = interpenetration(feet[i], feet[j]);
+      if (overlap < o.duplicate_overlap) continue;
+      relations[i].duplicates.push_back({objects[j].id, overlap});
+      relations[j].duplicates.push_back({objects[i].id, overlap});
+    }
+  for (auto& r : relations)
+    std::sort(r.duplicates.begin(), r.duplicates.end(),
+              [](const SuspectedDuplicate& a, const SuspectedDuplicate& b) { return a.id < b.id; });
+}
+
+bool listed_duplicate(const Relations& r, int id) {
+  for (const SuspectedDuplicate& d : r.duplicates)
+    if (d.id == id) return true;
+  return false;
+}
+
 // `on`: the support (a surface that is no object's top, or another object) whose top lies
 // within [bottom − on_below, bottom + on_above] of the object's bottom, nearest to it (ties: the
 // higher), and whose outline holds the object's centre (seen from above, with outline_margin) or
 // at least min_footprint_overlap of its footprint: the visible outline of a desk ends where the
 // monitor at its back edge hides it, so the monitor's centre may lie beyond it. The
 // nearest, not the highest: a mouse beside a keyboard whose box it bleeds into sits at the table's
-// height, 3 cm below the keyboard's top; a book on a book sits at the lower book's top.
+// height, 3 cm below the keyboard's top; a book on a book sits at the lower book's top. An object's
+// top is the outline of its points in the top band (a chair's backrest, not its seat), and a
+// suspected duplicate of the object is no support of it.
 std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>& objects,
                                   const std::vector<detail::Footprint>& feet,
                                   const std::vector<Surface>& surfaces,
-                                  const Eigen::Matrix3d& gravity, const RelationOptions& o) {
+                                  const Eigen::Matrix3d& gravity, const RelationOptions& o,
+                                  const Relations& own) {
   const detail::Footprint& f = feet[i];
   std::optional<Support> best;
   double best_top = -std::numeric_limits<double>::infinity();
@@ -95,11 +141,11 @@ std::optional<Support> support_of(std::size_t i, const std::vector<SceneObject>&
   }
   const double own_area = f.hull.size() >= 3 ? cv::contourArea(f.hull) : 0.0;
   for (std::size_t j = 0; j < objects.size(); ++j) {
-    if (j == i || feet[j].hull.size() < 3) continue;
-    // A support is not much smaller than what it carries, seen from above (a cup on a book, a
-    // book on a book of its size; not a keyboard on a mouse).
-    if (cv::contourArea(feet[j].hull) < o.support_min_area_ratio * own_area) continue;
-    consider("object", objects[j].id, objects[j].class_name, feet[j].top, feet[j].hull);
+    if (j == i || feet[j].top_hull.size() < 3 || listed_duplicate(own, objects[j].id)) continue;
+    // A support's top is not much smaller than what it carries, seen from above (a cup on a book,
+    // a book on a book of its size; not a keyboard on a mouse, nor a bowl on a chair's backrest).
+    if (cv::contourArea(feet[j].top_hull) < o.support_min_area_ratio * own_area) continue;
+    consider("object", objects[j].id, objects[j].class_name, feet[j].top, feet[j].top_hull);
   }
   return best;
 }
@@ -181,13 +227,14 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
   }
 }
 
-// Furniture on a table or on nothing stands on the floor, if one is seen near it: a chair pushed
-// under a desk shows its back above the desk top, and the desk hides its legs; a chair seen from
-// above has its seat, not in its mask, as a patch at its bottom that the table rule labels. The
-// floor under furniture is hidden by it: a floor piece below its bottom (on_below) whose outline
-// comes within floor_reach_m of its footprint will do, the nearest. The gap is what the camera
-// did not see of its legs. The table a chair, couch, bench or bed was on becomes its seat when
-// nothing else stands on it.
+// Furniture on a table or on nothing stands on the floor if one is seen near it and its bottom
+// is within floor_gap_m of the floor's height: the floor under furniture is hidden by it, so a
+// floor piece below its bottom (on_below) whose outline comes within floor_reach_m of its
+// footprint will do, the nearest. A chair seen from above has its seat, not in its mask, as a
+// patch at its bottom that the table rule labels: the table a chair, couch, bench or bed was on
+// becomes its seat when nothing else stands on it and a floor is seen below. With a floor seen
+// below but further than floor_gap_m under its bottom (a chair pushed under a desk, its back above
+// the desk top and its legs hidden), furniture stands on nothing seen, not on the table.
 void furniture_on_floor(const std::vector<SceneObject>& objects,
                         const std::vector<detail::Footprint>& feet, std::vector<Surface>& surfaces,
                         const Eigen::Matrix3d& gravity, const RelationOptions& o,
@@ -224,7 +271,13 @@ void furniture_on_floor(const std::vector<SceneObject>& objects,
           s.label_rule = "the seat of object " + std::to_string(objects[i].id) +
                          ", at its bottom (furniture stands on the floor)";
         }
-    relations[i].on = Support{"surface", floor->id, floor->label, f.bottom - floor->height_m};
+    // On the floor only when its bottom is near the floor's height; otherwise what it stands on is
+    // not seen (furniture does not stand on a table, nor on its own seat).
+    const double gap = f.bottom - floor->height_m;
+    if (gap <= o.floor_gap_m)
+      relations[i].on = Support{"surface", floor->id, floor->label, gap};
+    else
+      relations[i].on.reset();
   }
 }
 
@@ -259,6 +312,10 @@ void RelationOptions::check() const {
   require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
   require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");
   require(floor_reach_m >= 0.0, "RelationOptions.floor_reach_m", "must be >= 0");
+  require(top_band_m >= 0.0, "RelationOptions.top_band_m", "must be >= 0");
+  require(floor_gap_m >= 0.0, "RelationOptions.floor_gap_m", "must be >= 0");
+  require(duplicate_overlap > 0.0 && duplicate_overlap <= 1.0, "RelationOptions.duplicate_overlap",
+          "must be in (0, 1]");
 }
 
 void SceneOptions::check() const {
@@ -275,10 +332,11 @@ std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
   std::vector<detail::Footprint> feet;
   for (const auto& obj : objects)
     feet.push_back(detail::footprint(obj.cloud ? obj.cloud->points : std::vector<Vec3f>{}, gravity,
-                                     obj.position));
+                                     obj.position, options.top_band_m));
   std::vector<Relations> relations(objects.size());
+  suspected_duplicates(objects, feet, options, relations);
   for (std::size_t i = 0; i < objects.size(); ++i)
-    relations[i].on = support_of(i, objects, feet, surfaces, gravity, options);
+    relations[i].on = support_of(i, objects, feet, surfaces, gravity, options, relations[i]);
   label_surfaces(surfaces, objects, relations, surface_options);
   const auto refresh_labels = [&] {
     for (auto& r : relations)

@@ -115,8 +115,14 @@ struct RelationOptions {
   double min_footprint_overlap = 0.25;  // ... or this share of the footprint over the outline
   double near_radius_m = 0.5;           // `near`: box centres within this distance
   double stack_tolerance_m = 0.03;      // `above`: bottom at least top − this
-  double support_min_area_ratio = 0.5;  // an object support's footprint ≥ this × the object's
+  double support_min_area_ratio = 0.5;  // an object support's top ≥ this × the object's footprint
+  double top_band_m = 0.05;    // an object's top: its points this close below its top height
   double floor_reach_m = 1.0;  // furniture stands on a floor piece seen this near its footprint
+  double floor_gap_m = 0.15;   // ... when its bottom is at most this above the floor's height
+  // Two objects of one class whose boxes interpenetrate by this share of the smaller box (the
+  // footprints' overlap share × the height ranges' overlap share) are a suspected duplicate: one
+  // physical object seen as two, neither on the other.
+  double duplicate_overlap = 0.3;
   void check() const;
 };
 
@@ -132,9 +138,17 @@ struct Neighbour {
   double distance_m = 0.0;  // box centre to box centre, or the vertical gap for above/under
 };
 
+// Another object of the same class that interpenetrates this one (RelationOptions::
+// duplicate_overlap): likely the same physical object.
+struct SuspectedDuplicate {
+  int id = 0;
+  double overlap = 0.0;  // share of the smaller box, in [0, 1]
+};
+
 struct Relations {
   std::optional<Support> on;
-  std::vector<Neighbour> near;   // nearest first
+  std::vector<SuspectedDuplicate> duplicates;  // ascending id
+  std::vector<Neighbour> near;                 // nearest first
   std::vector<Neighbour> above;  // objects this one is above (gap = its bottom − their top)
   std::vector<Neighbour> under;  // objects above this one
 };
