@@ -6,7 +6,9 @@
 
 #include <Eigen/SVD>
 #include <cmath>
+#include <cstdio>
 #include <map>
+#include <random>
 
 #include "fuse_helpers.h"
 #include "objmap/io/trajectory.h"
@@ -57,6 +59,56 @@ FirstCameraRun fuse_in_first_camera_frame(const std::string& key, const fs::path
   r.truth = first_camera_frame(data / "groundtruth.txt", trajectory);
   r.run = fuse_cached(key, data, trajectory, data / segmentation, &r.why);
   return r;
+}
+
+// `trajectory` moved into another world frame (new = moved · old) and written to `out` with
+// `decimals` decimals, as a SLAM system might write it.
+void write_moved(const fs::path& trajectory, const fs::path& out, const Eigen::Isometry3d& moved,
+                 int decimals) {
+  const Trajectory t = io::read_trajectory(trajectory);
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
+  char line[256];
+  for (const auto& p : t.poses) {
+    const Eigen::Isometry3d m = moved * p.world_from_cam;
+    const Eigen::Vector3d x = m.translation();
+    const Eigen::Quaterniond q(m.linear());
+    std::snprintf(line, sizeof line, "%.6f %.*f %.*f %.*f %.*f %.*f %.*f %.*f\n", p.timestamp,
+                  decimals, x.x(), decimals, x.y(), decimals, x.z(), decimals, q.x(), decimals,
+                  q.y(), decimals, q.z(), decimals, q.w());
+    text += line;
+  }
+  write_text(out, text);
+}
+
+// The ups (brought back into the ground truth's frame) of `data` fused with its z-up ground truth
+// as it is and moved by 5 random rigid motions, written with 5, 6, 7, 8 and 9 decimals.
+std::vector<Eigen::Vector3d> ups_in_moved_frames(const fs::path& data, const fs::path& seg,
+                                                 const std::vector<std::string>& extra) {
+  TempDir tmp;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<Eigen::Vector3d> ups;
+  for (int k = -1; k < 5; ++k) {
+    Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+    fs::path trajectory = data / "groundtruth.txt";
+    if (k >= 0) {
+      const Eigen::Vector4d q(uniform(rng), uniform(rng), uniform(rng), uniform(rng));
+      moved.linear() = Eigen::Quaterniond(q.normalized()).toRotationMatrix();
+      moved.translation() = 5.0 * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
+      trajectory = tmp / ("moved" + std::to_string(k) + ".txt");
+      write_moved(data / "groundtruth.txt", trajectory, moved, 5 + k);
+    }
+    const fs::path run = tmp / ("run" + std::to_string(k + 1));
+    std::vector<std::string> args = {
+        "fuse",           "--dataset",  data.string(), "--trajectory", trajectory.string(),
+        "--segmentation", seg.string(), "--out",       run.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const RunResult r = run_objmap(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    if (r.exit_code != 0) return {};
+    ups.push_back(moved.linear().transpose() * up_of(run));
+  }
+  return ups;
 }
 
 TEST(FuseScene, SyntheticScenesInTheSlamFrameUpSurfacesAndOnRelations) {
@@ -188,6 +240,35 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
   EXPECT_GE(count["chair"], 1);
   EXPECT_EQ(on_floor["chair"], count["chair"]) << "every chair stands on the floor";
   EXPECT_EQ(doc["surfaces"][0]["label"], "floor") << "the largest surface is the floor";
+}
+
+TEST(FuseScene, UpIsTheSameInAnyWorldFrameOnFr1Rpy) {
+  // Every 4th of fr1_rpy_every4's frames (the camera rolls, pitches and turns over a desk) fused
+  // with its ground truth as it is and moved into 5 random frames written with 5-9 decimals: the
+  // grid is laid in the cameras' frame and up is the mode of the sample's normals, so the ups
+  // agree within 0.3 deg (before: 1.7-5.6 deg from the truth by the rounding alone). fr1's depth
+  // leans 2-7 deg from its ground truth's z (docs/scene.md): up within 3 deg of it.
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
+  const std::vector<Eigen::Vector3d> ups = ups_in_moved_frames(
+      data, data / "detections_yolofastest", {"--keyframes", "stride", "--stride", "4"});
+  ASSERT_EQ(ups.size(), 6u);
+  for (const auto& u : ups) {
+    EXPECT_LT(angle_deg(u, ups.front()), 0.3) << u.transpose();
+    EXPECT_LT(angle_deg(u, Eigen::Vector3d::UnitZ()), 3.0) << u.transpose();
+  }
+}
+
+TEST(FuseScene, UpIsTheSameInAnyWorldFrameOnASyntheticScene) {
+  RunResult why;
+  const fs::path scene =
+      cached_output("seed1-motion-scene", {"synth", "--out", "{OUT}", "--seed", "1"}, &why);
+  ASSERT_TRUE(fs::exists(scene)) << why.err;
+  const std::vector<Eigen::Vector3d> ups = ups_in_moved_frames(scene, scene / "segmentation", {});
+  ASSERT_EQ(ups.size(), 6u);
+  for (const auto& u : ups) {
+    EXPECT_LT(angle_deg(u, ups.front()), 0.3) << u.transpose();
+    EXPECT_LT(angle_deg(u, Eigen::Vector3d::UnitZ()), 1.0) << u.transpose();
+  }
 }
 
 }  // namespace

@@ -7,13 +7,14 @@
 
 namespace objmap::scene::detail {
 
-std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_m) {
+std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_m,
+                                          const GridFrame& frame) {
   const std::size_t n = sample->size();
-  const float inv_cell = static_cast<float>(1.0 / cell_m);
+  const float inv_cell = 1.0f / static_cast<float>(cell_m);  // as sample_on_grid's
   std::vector<geometry::VoxelKey> keys(n);
   geometry::VoxelHashTable<std::uint32_t> first_in_cell(n);  // index + 1 of the cell's point
   for (std::size_t i = 0; i < n; ++i) {
-    keys[i] = geometry::voxel_key((*sample)[i].getVector3fMap(), inv_cell);
+    keys[i] = geometry::voxel_key(frame.to_grid((*sample)[i].getVector3fMap()), inv_cell);
     if (keys[i] == geometry::kNoVoxel) continue;
     std::uint32_t& slot = first_in_cell[keys[i]];
     if (slot == 0) slot = static_cast<std::uint32_t>(i + 1);
