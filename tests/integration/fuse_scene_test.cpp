@@ -36,13 +36,13 @@ fs::path fuse_cached(const std::string& key, const fs::path& data, const fs::pat
 }
 
 // The ground truth moved into its first camera's frame (T0⁻¹ · T_i), written to `out`; returns
-// the world's +z in that frame (the true up of a run fused with it).
-Eigen::Vector3d first_camera_frame(const fs::path& groundtruth, const fs::path& out) {
+// the rotation from the ground truth's world to that frame.
+Eigen::Matrix3d first_camera_frame(const fs::path& groundtruth, const fs::path& out) {
   Trajectory t = io::read_trajectory(groundtruth);
   const Pose first_from_world = t.poses.front().world_from_cam.inverse();
   for (auto& p : t.poses) p.world_from_cam = first_from_world * p.world_from_cam;
   io::write_trajectory(out, t);
-  return first_from_world.linear() * Eigen::Vector3d::UnitZ();
+  return first_from_world.linear();
 }
 
 // A real sequence fused with its ground truth moved into its first camera's frame (cached as
@@ -50,13 +50,15 @@ Eigen::Vector3d first_camera_frame(const fs::path& groundtruth, const fs::path& 
 struct FirstCameraRun {
   fs::path run;
   RunResult why;
-  Eigen::Vector3d truth;
+  Eigen::Vector3d truth;  // the world's +z in the first camera's frame
+  Eigen::Matrix3d first_from_world;
 };
 FirstCameraRun fuse_in_first_camera_frame(const std::string& key, const fs::path& data,
                                           const std::string& segmentation) {
   const fs::path trajectory = fs::path(::testing::TempDir()) / (key + ".txt");
   FirstCameraRun r;
-  r.truth = first_camera_frame(data / "groundtruth.txt", trajectory);
+  r.first_from_world = first_camera_frame(data / "groundtruth.txt", trajectory);
+  r.truth = r.first_from_world * Eigen::Vector3d::UnitZ();
   r.run = fuse_cached(key, data, trajectory, data / segmentation, &r.why);
   return r;
 }
@@ -150,7 +152,7 @@ TEST(FuseScene, Fr3CabinetInItsFirstCameraFrameFindsUp) {
   const FirstCameraRun r =
       fuse_in_first_camera_frame("fr3-cabinet-first-camera", data, "boxes_yolov2");
   ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
-  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 1.0);  // 0.47 deg measured
+  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 1.0);  // 0.07 deg measured
   // The hall's floor is the floor (26 m2, no table however few objects stand on it).
   const nlohmann::json doc = read_json(r.run / "objects.json");
   ASSERT_FALSE(doc["surfaces"].empty());
@@ -182,7 +184,7 @@ TEST(FuseScene, Fr1RpyWithTheVisualOdometryEstimateFindsUp) {
   const fs::path run = fuse_cached("fr1-rpy-vo-first100", data, data / "vo_estimate_first100.txt",
                                    data / "detections_yolofastest", &why);
   ASSERT_TRUE(fs::exists(run)) << why.err;
-  EXPECT_LT(angle_deg(up_of(run), truth), 1.5);  // 0.57 deg measured
+  EXPECT_LT(angle_deg(up_of(run), truth), 1.5);  // 0.89 deg measured
 }
 
 TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
@@ -190,11 +192,9 @@ TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   const FirstCameraRun r =
       fuse_in_first_camera_frame("fr1-rpy-first-camera", data, "detections_yolofastest");
   ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
-  // fr1's depth planes themselves lie 2.6-6.9 deg from the ground truth's z (the map's floor and
-  // desk planes; each frame's own: 3.0 deg median), and their mean moves with the RANSAC sample:
-  // 2.98 deg with the trajectory written to 6 decimals, 4.04 deg with it written exactly
-  // (docs/scene.md), so 3 deg is not reached on fr1.
-  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 4.5);
+  // fr1's depth planes themselves lie 2-7 deg from the ground truth's z frame by frame
+  // (docs/scene.md); the levels' planes of the whole map: 0.94-0.99 deg in any frame.
+  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 3.0);
   const nlohmann::json doc = read_json(r.run / "objects.json");
   double table_height = -1e9, floor_height = 1e9;
   for (const auto& s : doc["surfaces"]) {
@@ -212,6 +212,19 @@ TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   }
   EXPECT_GE(keyboards, 1);
   EXPECT_GE(mice, 2);
+}
+
+TEST(FuseScene, Fr1Desk9UpIsNearItsFloorsOwnNormal) {
+  // fr1_desk_9's depth and ground truth disagree by about 3 deg: its floor leans 3.1 +- 0.5 deg
+  // toward -y in every frame (scripts/frame_planes.sh; normal (0, -0.053, 0.999) in the ground
+  // truth's world). Up is judged against that floor: 1.75 deg measured (4.64 from +z; its desk
+  // leans more).
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
+  const FirstCameraRun r =
+      fuse_in_first_camera_frame("fr1-desk9-first-camera", data, "detections_yolofastest");
+  ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
+  const Eigen::Vector3d floor = r.first_from_world * Eigen::Vector3d(0.0, -0.053, 0.999);
+  EXPECT_LT(angle_deg(up_of(r.run), floor), 3.0);
 }
 
 TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairsOnTheFloor) {
