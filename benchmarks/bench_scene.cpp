@@ -1,7 +1,7 @@
 // bench_scene: the parts of fuse's scene step (docs/scene.md, docs/benchmarks.md "The scene step")
 // on the dense map of fr1_rpy_every4 (fused once with its ground truth at start-up): the 4 cm
 // sample, its normals by objmap's grid against PCL's NormalEstimation (12 nearest by a kd-tree,
-// what the grid replaced), the up's RANSAC and the surfaces on the sample.
+// what the grid replaced), the up from the normals and the surfaces on the sample.
 //   OBJMAP_DATA=../shared/data build/bin/bench_scene
 #include <benchmark/benchmark.h>
 #include <pcl/features/normal_3d.h>
@@ -83,12 +83,13 @@ void BM_NormalsPclKnn12(benchmark::State& state) {
   }
 }
 
-void BM_UpRansac(benchmark::State& state) {
+// The up from the sample's normals (their densest direction, mean shift, the levels along it).
+void BM_UpFromNormals(benchmark::State& state) {
   NEED_MAP(state);
   const scene::UpOptions o;
-  const auto thinned =
-      scene::detail::thin(map.sample, static_cast<std::size_t>(o.max_sample_points));
-  for (auto _ : state) benchmark::DoNotOptimize(scene::detail::estimate_up({}, thinned, o).up);
+  const auto normals = scene::detail::grid_normals(map.sample, o.sample_voxel_m);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(scene::detail::estimate_up({}, map.sample, normals, o).up);
 }
 
 void BM_SurfacesOnSample(benchmark::State& state) {
@@ -103,7 +104,7 @@ void BM_SurfacesOnSample(benchmark::State& state) {
 BENCHMARK(BM_SampleOnGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NormalsGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NormalsPclKnn12)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_UpRansac)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_UpFromNormals)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SurfacesOnSample)->Unit(benchmark::kMillisecond);
 
 }  // namespace

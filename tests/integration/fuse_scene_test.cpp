@@ -6,7 +6,9 @@
 
 #include <Eigen/SVD>
 #include <cmath>
+#include <cstdio>
 #include <map>
+#include <random>
 
 #include "fuse_helpers.h"
 #include "objmap/io/trajectory.h"
@@ -34,13 +36,13 @@ fs::path fuse_cached(const std::string& key, const fs::path& data, const fs::pat
 }
 
 // The ground truth moved into its first camera's frame (T0⁻¹ · T_i), written to `out`; returns
-// the world's +z in that frame (the true up of a run fused with it).
-Eigen::Vector3d first_camera_frame(const fs::path& groundtruth, const fs::path& out) {
+// the rotation from the ground truth's world to that frame.
+Eigen::Matrix3d first_camera_frame(const fs::path& groundtruth, const fs::path& out) {
   Trajectory t = io::read_trajectory(groundtruth);
   const Pose first_from_world = t.poses.front().world_from_cam.inverse();
   for (auto& p : t.poses) p.world_from_cam = first_from_world * p.world_from_cam;
   io::write_trajectory(out, t);
-  return first_from_world.linear() * Eigen::Vector3d::UnitZ();
+  return first_from_world.linear();
 }
 
 // A real sequence fused with its ground truth moved into its first camera's frame (cached as
@@ -48,15 +50,67 @@ Eigen::Vector3d first_camera_frame(const fs::path& groundtruth, const fs::path& 
 struct FirstCameraRun {
   fs::path run;
   RunResult why;
-  Eigen::Vector3d truth;
+  Eigen::Vector3d truth;  // the world's +z in the first camera's frame
+  Eigen::Matrix3d first_from_world;
 };
 FirstCameraRun fuse_in_first_camera_frame(const std::string& key, const fs::path& data,
                                           const std::string& segmentation) {
   const fs::path trajectory = fs::path(::testing::TempDir()) / (key + ".txt");
   FirstCameraRun r;
-  r.truth = first_camera_frame(data / "groundtruth.txt", trajectory);
+  r.first_from_world = first_camera_frame(data / "groundtruth.txt", trajectory);
+  r.truth = r.first_from_world * Eigen::Vector3d::UnitZ();
   r.run = fuse_cached(key, data, trajectory, data / segmentation, &r.why);
   return r;
+}
+
+// `trajectory` moved into another world frame (new = moved · old) and written to `out` with
+// `decimals` decimals, as a SLAM system might write it.
+void write_moved(const fs::path& trajectory, const fs::path& out, const Eigen::Isometry3d& moved,
+                 int decimals) {
+  const Trajectory t = io::read_trajectory(trajectory);
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
+  char line[256];
+  for (const auto& p : t.poses) {
+    const Eigen::Isometry3d m = moved * p.world_from_cam;
+    const Eigen::Vector3d x = m.translation();
+    const Eigen::Quaterniond q(m.linear());
+    std::snprintf(line, sizeof line, "%.6f %.*f %.*f %.*f %.*f %.*f %.*f %.*f\n", p.timestamp,
+                  decimals, x.x(), decimals, x.y(), decimals, x.z(), decimals, q.x(), decimals,
+                  q.y(), decimals, q.z(), decimals, q.w());
+    text += line;
+  }
+  write_text(out, text);
+}
+
+// The ups (brought back into the ground truth's frame) of `data` fused with its z-up ground truth
+// as it is and moved by 5 random rigid motions, written with 5, 6, 7, 8 and 9 decimals.
+std::vector<Eigen::Vector3d> ups_in_moved_frames(const fs::path& data, const fs::path& seg,
+                                                 const std::vector<std::string>& extra) {
+  TempDir tmp;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<Eigen::Vector3d> ups;
+  for (int k = -1; k < 5; ++k) {
+    Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+    fs::path trajectory = data / "groundtruth.txt";
+    if (k >= 0) {
+      const Eigen::Vector4d q(uniform(rng), uniform(rng), uniform(rng), uniform(rng));
+      moved.linear() = Eigen::Quaterniond(q.normalized()).toRotationMatrix();
+      moved.translation() = 5.0 * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
+      trajectory = tmp / ("moved" + std::to_string(k) + ".txt");
+      write_moved(data / "groundtruth.txt", trajectory, moved, 5 + k);
+    }
+    const fs::path run = tmp / ("run" + std::to_string(k + 1));
+    std::vector<std::string> args = {
+        "fuse",           "--dataset",  data.string(), "--trajectory", trajectory.string(),
+        "--segmentation", seg.string(), "--out",       run.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const RunResult r = run_objmap(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    if (r.exit_code != 0) return {};
+    ups.push_back(moved.linear().transpose() * up_of(run));
+  }
+  return ups;
 }
 
 TEST(FuseScene, SyntheticScenesInTheSlamFrameUpSurfacesAndOnRelations) {
@@ -98,7 +152,7 @@ TEST(FuseScene, Fr3CabinetInItsFirstCameraFrameFindsUp) {
   const FirstCameraRun r =
       fuse_in_first_camera_frame("fr3-cabinet-first-camera", data, "boxes_yolov2");
   ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
-  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 1.0);  // 0.47 deg measured
+  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 1.0);  // 0.07 deg measured
   // The hall's floor is the floor (26 m2, no table however few objects stand on it).
   const nlohmann::json doc = read_json(r.run / "objects.json");
   ASSERT_FALSE(doc["surfaces"].empty());
@@ -130,7 +184,7 @@ TEST(FuseScene, Fr1RpyWithTheVisualOdometryEstimateFindsUp) {
   const fs::path run = fuse_cached("fr1-rpy-vo-first100", data, data / "vo_estimate_first100.txt",
                                    data / "detections_yolofastest", &why);
   ASSERT_TRUE(fs::exists(run)) << why.err;
-  EXPECT_LT(angle_deg(up_of(run), truth), 1.5);  // 0.57 deg measured
+  EXPECT_LT(angle_deg(up_of(run), truth), 1.5);  // 0.89 deg measured
 }
 
 TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
@@ -138,11 +192,9 @@ TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   const FirstCameraRun r =
       fuse_in_first_camera_frame("fr1-rpy-first-camera", data, "detections_yolofastest");
   ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
-  // fr1's depth planes themselves lie 2.6-6.9 deg from the ground truth's z (the map's floor and
-  // desk planes; each frame's own: 3.0 deg median), and their mean moves with the RANSAC sample:
-  // 2.98 deg with the trajectory written to 6 decimals, 4.04 deg with it written exactly
-  // (docs/scene.md), so 3 deg is not reached on fr1.
-  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 4.5);
+  // fr1's depth planes themselves lie 2-7 deg from the ground truth's z frame by frame
+  // (docs/scene.md); the levels' planes of the whole map: 0.94-0.99 deg in any frame.
+  EXPECT_LT(angle_deg(up_of(r.run), r.truth), 3.0);
   const nlohmann::json doc = read_json(r.run / "objects.json");
   double table_height = -1e9, floor_height = 1e9;
   for (const auto& s : doc["surfaces"]) {
@@ -160,6 +212,19 @@ TEST(FuseScene, Fr1RpyGroundTruthDeskIsATableWithTheKeyboardAndMiceOnIt) {
   }
   EXPECT_GE(keyboards, 1);
   EXPECT_GE(mice, 2);
+}
+
+TEST(FuseScene, Fr1Desk9UpIsNearItsFloorsOwnNormal) {
+  // fr1_desk_9's depth and ground truth disagree by about 3 deg: its floor leans 3.1 +- 0.5 deg
+  // toward -y in every frame (scripts/frame_planes.sh; normal (0, -0.053, 0.999) in the ground
+  // truth's world). Up is judged against that floor: 1.75 deg measured (4.64 from +z; its desk
+  // leans more).
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
+  const FirstCameraRun r =
+      fuse_in_first_camera_frame("fr1-desk9-first-camera", data, "detections_yolofastest");
+  ASSERT_TRUE(fs::exists(r.run)) << r.why.err;
+  const Eigen::Vector3d floor = r.first_from_world * Eigen::Vector3d(0.0, -0.053, 0.999);
+  EXPECT_LT(angle_deg(up_of(r.run), floor), 3.0);
 }
 
 TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairsOnNothingSeen) {
@@ -198,6 +263,35 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
   EXPECT_EQ(count["chair"], 2);
   EXPECT_EQ(on_floor["chair"], 0) << "the chairs' bottoms are 0.47 and 0.69 m above the floor";
   EXPECT_EQ(doc["surfaces"][0]["label"], "floor") << "the largest surface is the floor";
+}
+
+TEST(FuseScene, UpIsTheSameInAnyWorldFrameOnFr1Rpy) {
+  // Every 4th of fr1_rpy_every4's frames (the camera rolls, pitches and turns over a desk) fused
+  // with its ground truth as it is and moved into 5 random frames written with 5-9 decimals: the
+  // grid is laid in the cameras' frame and up is the mode of the sample's normals, so the ups
+  // agree within 0.3 deg (before: 1.7-5.6 deg from the truth by the rounding alone). fr1's depth
+  // leans 2-7 deg from its ground truth's z (docs/scene.md): up within 3 deg of it.
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
+  const std::vector<Eigen::Vector3d> ups = ups_in_moved_frames(
+      data, data / "detections_yolofastest", {"--keyframes", "stride", "--stride", "4"});
+  ASSERT_EQ(ups.size(), 6u);
+  for (const auto& u : ups) {
+    EXPECT_LT(angle_deg(u, ups.front()), 0.3) << u.transpose();
+    EXPECT_LT(angle_deg(u, Eigen::Vector3d::UnitZ()), 3.0) << u.transpose();
+  }
+}
+
+TEST(FuseScene, UpIsTheSameInAnyWorldFrameOnASyntheticScene) {
+  RunResult why;
+  const fs::path scene =
+      cached_output("seed1-motion-scene", {"synth", "--out", "{OUT}", "--seed", "1"}, &why);
+  ASSERT_TRUE(fs::exists(scene)) << why.err;
+  const std::vector<Eigen::Vector3d> ups = ups_in_moved_frames(scene, scene / "segmentation", {});
+  ASSERT_EQ(ups.size(), 6u);
+  for (const auto& u : ups) {
+    EXPECT_LT(angle_deg(u, ups.front()), 0.3) << u.transpose();
+    EXPECT_LT(angle_deg(u, Eigen::Vector3d::UnitZ()), 1.0) << u.transpose();
+  }
 }
 
 }  // namespace

@@ -5,6 +5,11 @@
 #include <cmath>
 #include <random>
 
+#include <pcl/filters/voxel_grid.h>
+
+#include <array>
+#include <map>
+
 #include "objmap/scene/sampled.h"
 
 namespace objmap::scene::detail {
@@ -73,6 +78,63 @@ TEST(GridNormals, AStraightLineOfCellsGivesANormalAcrossIt) {
     EXPECT_TRUE(n.allFinite());
     EXPECT_NEAR(n.x(), 0.0f, 1e-4f);
   }
+}
+
+}  // namespace
+}  // namespace objmap::scene::detail
+
+namespace objmap::scene::detail {
+namespace {
+
+TEST(SampleOnGrid, IsPclsVoxelGridOnTheWorldsGridAndMovesWithItsFrame) {
+  // The cells' means, as PCL's VoxelGrid gives them (compared as sorted point sets).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.f, 2.f);
+  std::vector<Vec3f> map;
+  for (int i = 0; i < 20000; ++i) map.emplace_back(u(rng), u(rng), 0.3f * u(rng));
+  Cloud::Ptr all(new Cloud);
+  for (const Vec3f& p : map) all->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  pcl::VoxelGrid<pcl::PointXYZ> grid;
+  grid.setInputCloud(all);
+  grid.setLeafSize(0.04f, 0.04f, 0.04f);
+  Cloud pcl_sample;
+  grid.filter(pcl_sample);
+  const auto sorted = [](const Cloud& c) {
+    std::vector<std::array<float, 3>> v;
+    for (const auto& p : c) v.push_back({p.x, p.y, p.z});
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  const auto ours = sorted(*sample_on_grid(map, 0.04));
+  const auto theirs = sorted(pcl_sample);
+  ASSERT_EQ(ours.size(), theirs.size());
+  for (std::size_t i = 0; i < ours.size(); ++i)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(ours[i][k], theirs[i][k], 1e-5f) << i;
+  // Laid in a moved frame, the sample of the moved map is the moved sample (but for the few points
+  // that the move's rounding takes across a cell's side).
+  GridFrame frame;
+  frame.grid_from_world = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  frame.origin = Vec3(0.3, -2.0, 1.0);
+  std::vector<Vec3f> moved;
+  for (const Vec3f& p : map)
+    moved.push_back(
+        (frame.grid_from_world.transpose() * p.cast<double>() + frame.origin).cast<float>());
+  const Cloud::Ptr moved_sample = sample_on_grid(moved, 0.04, frame);
+  std::map<std::array<float, 3>, int> cell_means;
+  for (const auto& p : ours) cell_means[p] = 1;
+  std::size_t same = 0;
+  for (const auto& p : *moved_sample) {
+    const Vec3 q = frame.grid_from_world * (Vec3(p.x, p.y, p.z) - frame.origin);
+    const auto near = cell_means.lower_bound(
+        {static_cast<float>(q.x()) - 1e-4f, static_cast<float>(q.y()), static_cast<float>(q.z())});
+    for (auto it = near; it != cell_means.end() && it->first[0] <= q.x() + 1e-4; ++it)
+      if ((Vec3(it->first[0], it->first[1], it->first[2]) - q).norm() < 1e-4) {
+        ++same;
+        break;
+      }
+  }
+  EXPECT_NEAR(static_cast<double>(moved_sample->size()), static_cast<double>(ours.size()), 5.0);
+  EXPECT_GE(same, ours.size() * 995 / 1000);
 }
 
 }  // namespace

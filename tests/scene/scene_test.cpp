@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "objmap/core/error.h"
 #include "objmap/scene/scene.h"
@@ -126,6 +127,59 @@ TEST(Up, FoundFromTheTableAndFloorInAFrameThatIsNotZUp) {
   int used = 0;
   for (const auto& p : e.planes) used += p.used ? 1 : 0;
   EXPECT_EQ(used, 2);  // floor and table top; the wall is not
+}
+
+// A pose written with `decimals` decimals, as a TUM file holds it (position, unit quaternion).
+Pose rounded(const Pose& p, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  const auto round = [&](double v) { return std::round(v * scale) / scale; };
+  const Eigen::Quaterniond q(p.linear());
+  Pose out = Pose::Identity();
+  out.linear() = Eigen::Quaterniond(round(q.w()), round(q.x()), round(q.y()), round(q.z()))
+                     .normalized()
+                     .toRotationMatrix();
+  out.translation() = p.translation().unaryExpr(round);
+  return out;
+}
+
+TEST(Up, TheSameInAnyWorldFrameAndRoundingOfTheCameras) {
+  // The room with a floor that leans 2 deg one way and a table top 5 deg another, both with 1 cm
+  // of noise: up is their area-weighted mean, the same whichever frame the world is given in (the
+  // grid is laid in the cameras' frame) and however the cameras' poses are rounded.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Vec3f> pts;
+  const Eigen::Matrix3d floor_tilt(Eigen::AngleAxisd(2.0 * M_PI / 180.0, Vec3::UnitX()));
+  const Eigen::Matrix3d table_tilt(Eigen::AngleAxisd(5.0 * M_PI / 180.0, Vec3::UnitY()));
+  for (const Vec3f& p : room()) {
+    Vec3 q = p.cast<double>();
+    if (q.z() == 0.0 && q.x() < 3.0) q = floor_tilt * (q - Vec3(1.5, 1.5, 0)) + Vec3(1.5, 1.5, 0);
+    if (q.z() == 0.75) q = table_tilt * (q - Vec3(1.6, 1.4, 0.75)) + Vec3(1.6, 1.4, 0.75);
+    pts.push_back((q + Vec3(noise(rng), noise(rng), noise(rng))).cast<float>());
+  }
+  std::vector<Vec3> ups;
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int k = 0; k < 5; ++k) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() =
+        Eigen::Quaterniond(
+            Eigen::Vector4d(uniform(rng), uniform(rng), uniform(rng), uniform(rng)).normalized())
+            .toRotationMatrix();
+    t.translation() = 5.0 * Vec3(uniform(rng), uniform(rng), uniform(rng));
+    std::vector<Vec3f> moved;
+    for (const Vec3f& p : pts) moved.push_back((t * p.cast<double>()).cast<float>());
+    std::vector<Pose> cams;
+    for (const Pose& c : cameras(40.0, 10.0)) cams.push_back(rounded(t * c, 5 + k));
+    const UpEstimate e = estimate_up(cams, moved, UpOptions{});
+    EXPECT_EQ(e.source, "planes");
+    ups.push_back(t.linear().transpose() * e.up);
+  }
+  for (const Vec3& u : ups) {
+    EXPECT_LT(angle_deg(u, ups.front()), 0.3) << u.transpose();
+    // The floor (9 m2) leans 2 deg, the table (1 m2) 5 deg: up lies between, nearer the floor.
+    EXPECT_LT(angle_deg(u, floor_tilt * Vec3::UnitZ()), 1.0) << u.transpose();
+    EXPECT_GT(angle_deg(u, Vec3::UnitZ()), 1.5) << u.transpose();
+  }
 }
 
 TEST(Up, WithoutPlanesUpIsTheCamerasMeanUpAxisAndItIsSaid) {
@@ -291,8 +345,10 @@ TEST(Surfaces, AFloorLargerThanATableIsTheFloorWithOnlySmallObjectsOnIt) {
   std::vector<Surface> surfaces = surfaces_and_tops(pts, Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
-  ASSERT_EQ(surfaces.size(), 1u);
+  // The floor, and the bag's 0.04 m2 top as its top.
+  ASSERT_EQ(surfaces.size(), 2u);
   EXPECT_EQ(surfaces[0].label, "floor");
+  EXPECT_EQ(surfaces[1].object, std::optional<int>(1));
   ASSERT_TRUE(relations[0].on);
   EXPECT_EQ(relations[0].on->label, "floor");
 }

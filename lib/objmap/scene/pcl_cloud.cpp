@@ -4,13 +4,15 @@
 #include <pcl/PointIndices.h>
 #include <pcl/console/print.h>
 #include <pcl/filters/extract_indices.h>
-#include <pcl/filters/voxel_grid.h>
 #include <pcl/sample_consensus/ransac.h>
 #include <pcl/sample_consensus/sac_model_plane.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
+
+#include "objmap/geometry/voxel_key.h"
 
 namespace objmap::scene::detail {
 
@@ -25,21 +27,46 @@ void quiet_pcl() {
 }
 }  // namespace
 
-Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m, std::size_t max_input) {
-  quiet_pcl();
-  Cloud::Ptr all(new Cloud);
-  const std::size_t in_stride =
-      std::max<std::size_t>(1, (points.size() + max_input - 1) / max_input);
-  all->reserve(points.size() / in_stride + 1);
-  for (std::size_t i = 0; i < points.size(); i += in_stride)
-    all->push_back(pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z()));
+Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m,
+                          const GridFrame& frame) {
+  // Every point counts: a sample of a thinned map (every n-th point) moves with the thinning's
+  // phase, which a point more or less in the map shifts.
+  const float inv_cell = 1.0f / static_cast<float>(voxel_m);  // as VoxelGrid's
+  const Eigen::Matrix3f grid_from_world = frame.grid_from_world.cast<float>();
+  const Eigen::Vector3f origin = frame.origin.cast<float>();
+  struct Cell {
+    geometry::VoxelKey key;
+    Eigen::Vector3f sum;  // grid frame, relative to the cell's corner
+    std::uint32_t count;
+  };
+  std::vector<Cell> cells;
+  geometry::VoxelHashTable<std::uint32_t> cell_of(points.size() / 8 + 16);  // index + 1
+  for (const Vec3f& p : points) {
+    const Eigen::Vector3f g = grid_from_world * (p - origin);
+    Eigen::Vector3i ijk;
+    Eigen::Vector3f offset;
+    if (!geometry::voxel_coords(g, inv_cell, ijk, offset)) continue;
+    std::uint32_t& slot = cell_of[geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z())];
+    if (slot == 0) {
+      cells.push_back(
+          {geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z()), Eigen::Vector3f::Zero(), 0});
+      slot = static_cast<std::uint32_t>(cells.size());
+    }
+    Cell& c = cells[slot - 1];
+    c.sum += offset;
+    ++c.count;
+  }
+  std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) { return a.key < b.key; });
   Cloud::Ptr sampled(new Cloud);
-  if (all->empty()) return sampled;
-  pcl::VoxelGrid<pcl::PointXYZ> grid;
-  grid.setInputCloud(all);
-  const float leaf = static_cast<float>(voxel_m);
-  grid.setLeafSize(leaf, leaf, leaf);
-  grid.filter(*sampled);
+  sampled->reserve(cells.size());
+  const Eigen::Matrix3f world_from_grid = grid_from_world.transpose();
+  for (const Cell& c : cells) {
+    const Eigen::Vector3f g =
+        (geometry::unpack_voxel(c.key).cast<float>() + c.sum / static_cast<float>(c.count)) /
+        inv_cell;
+    const Eigen::Vector3f w = world_from_grid * g + origin;
+    sampled->push_back(pcl::PointXYZ(w.x(), w.y(), w.z()));
+  }
   return sampled;
 }
 

@@ -11,11 +11,22 @@ namespace objmap::scene::detail {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
-// The points on a grid of `voxel_m` (PCL's VoxelGrid: one point per occupied cell, the mean), from
-// at most `max_input` of them (an even stride through the input: the dense map's points are
-// sorted by voxel, so every n-th is an even thinning).
+// Where a sampling grid lies: its axes (rows of grid_from_world) and its origin in the world. The
+// world's own axes by default; a frame fixed by the cameras (scene::camera_frame) gives the same
+// sample of the same map in any world frame.
+struct GridFrame {
+  Eigen::Matrix3d grid_from_world = Eigen::Matrix3d::Identity();
+  Vec3 origin = Vec3::Zero();
+  Eigen::Vector3f to_grid(const Eigen::Vector3f& p) const {
+    return (grid_from_world.cast<float>() * (p - origin.cast<float>()));
+  }
+};
+
+// The points on a grid of `voxel_m` laid in `frame`: one point per occupied cell, the mean of all
+// the points in it (the cells and means of PCL's VoxelGrid, by a hash table), in the world
+// frame, in the order of the cells' keys (geometry::VoxelKey in the grid frame).
 Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m,
-                          std::size_t max_input = 600000);
+                          const GridFrame& frame = {});
 
 // The best plane of `cloud` by RANSAC (PCL's, as its SACSegmentation runs it: 200 iterations, the
 // fixed seed, least-squares refined): its unit normal n and offset d (n · p = d for its points) and

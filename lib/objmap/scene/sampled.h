@@ -8,16 +8,24 @@
 
 namespace objmap::scene::detail {
 
-// estimate_up with the dense map sampled on options.sample_voxel_m and thinned to
-// options.max_sample_points (sample_on_grid); the sample is not used when the mode gives up.
+// The grid frame fixed by the cameras: its z the cameras' prior (the mean of their -y axes), its x
+// their mean viewing direction made perpendicular to it, its origin their mean position. The same
+// map in another world frame (rotated, moved) has the same sample on it. The world's axes when
+// there is no camera.
+GridFrame camera_frame(const std::vector<Pose>& cameras);
+
+// estimate_up with the dense map sampled on options.sample_voxel_m in camera_frame(cameras)
+// (sample_on_grid) and the sample's normals (grid_normals on that grid); neither is used when the
+// mode gives up.
 UpEstimate estimate_up(const std::vector<Pose>& cameras, const Cloud::Ptr& sample,
-                       const UpOptions& options);
+                       const std::vector<Eigen::Vector3f>& normals, const UpOptions& options);
 
 // Each sample point's unit surface normal: the plane (PCA) of the sample points in its grid cell
-// and the 26 cells around it (`sample` one point per cell of `cell_m`, as sample_on_grid gives
-// it); zero where fewer than 3. PCL's NormalEstimation (k nearest by a kd-tree) gives the same
-// on planes at 3x the time (docs/benchmarks.md, "The scene step").
-std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_m);
+// and the 26 cells around it (`sample` one point per cell of `cell_m` laid in `frame`, as
+// sample_on_grid gives it); zero where fewer than 3. PCL's NormalEstimation (k nearest by a
+// kd-tree) gives the same on planes at 3x the time (docs/benchmarks.md, "The scene step").
+std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_m,
+                                          const GridFrame& frame = {});
 
 // find_surfaces with the dense map sampled on options.sample_voxel_m (sample_on_grid, not thinned)
 // and the sample's normals (grid_normals(sample, options.sample_voxel_m)).

@@ -18,26 +18,27 @@ struct UpOptions {
   // "auto": estimated from the cameras and the dense map's planes; "x", "-y", "z", ...: a world
   // axis; "x,y,z": a given vector (normalised).
   std::string mode = "auto";
-  double sample_voxel_m = 0.04;        // the dense map is sampled on this grid for the plane search
-  int max_sample_points = 10000;       // ... and thinned evenly to at most this many points
-  double plane_distance_m = 0.02;      // RANSAC inlier distance
-  int max_planes = 8;                  // planes taken out of the sample one after another
-  double min_plane_share = 0.02;       // a plane holds at least this share of the sample
-  double max_prior_angle_deg = 70.0;   // a plane this close to the cameras' up may be horizontal
+  double sample_voxel_m = 0.04;        // the dense map is sampled on this grid (the cameras' frame)
+  double max_prior_angle_deg = 70.0;   // a normal this close to the cameras' up may be horizontal
   double max_view_elevation = 0.25;    // ... when the cameras do not look up at it (mean sin)
-  double parallel_deg = 5.0;           // planes this close to the chosen one refine it
+  double density_cell_deg = 2.0;       // the normals' density: cells of this size, 5 × 5 summed
+  double family_deg = 10.0;            // up: the mean of the normals this close to it (mean shift)
+  double min_plane_share = 0.02;       // ... which hold at least this share of the sample
+  double plane_distance_m = 0.02;      // levels along up (floor, table tops): split at gaps ...
+  int max_planes = 8;                  // ... at most this many, largest first
+  double parallel_deg = 5.0;           // up: the mean of the levels' planes this close to it
   double disagree_warning_deg = 45.0;  // planes vs cameras beyond this: a warning
   void check() const;                  // throws InputError naming the field
 };
 
-// One plane found in the dense map, as evidence for the up direction.
+// One horizontal level of the dense map (a floor, a table top), as evidence for the up direction.
 struct PlaneEvidence {
-  Vec3 normal = Vec3::UnitZ();  // unit, signed toward the cameras' up
+  Vec3 normal = Vec3::UnitZ();  // unit, its points' own plane (least squares), signed toward up
   double offset = 0.0;          // normal · p for the plane's points
   std::size_t inliers = 0;      // sample points
   double angle_to_prior_deg = 0.0;
   double view_elevation = 0.0;  // mean of the cameras' viewing directions · normal
-  bool used = false;            // one of the horizontal planes the up direction is the mean of
+  bool used = false;            // its points' normals are among those up is the mean of
 };
 
 struct UpEstimate {

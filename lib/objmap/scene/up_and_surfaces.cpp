@@ -1,7 +1,6 @@
 // The up direction and the support surfaces of one dense map in one pass (docs/benchmarks.md,
-// "The scene step"): the map sampled once, the sample's normals computed beside the up's RANSAC.
+// "The scene step"): the map sampled once on the cameras' grid, its normals used by both.
 #include <chrono>
-#include <future>
 
 #include "objmap/scene/sampled.h"
 
@@ -31,19 +30,15 @@ void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Ve
     graph.seconds_surfaces = seconds_since(t0);
     return;
   }
-  // The same sample as estimate_up's before it is thinned, and find_surfaces' (sample_on_grid).
-  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, so.sample_voxel_m);
-  std::future<std::vector<Eigen::Vector3f>> normals = std::async(
-      std::launch::async, [&] { return detail::grid_normals(sample, so.sample_voxel_m); });
-  const bool auto_up = !parse_up(uo.mode, "--up");
-  graph.up = detail::estimate_up(
-      cameras,
-      auto_up ? detail::thin(sample, static_cast<std::size_t>(uo.max_sample_points))
-              : detail::Cloud::Ptr(new detail::Cloud),
-      uo);
+  // The same sample and normals as estimate_up's, on the grid fixed by the cameras.
+  const detail::GridFrame frame = detail::camera_frame(cameras);
+  const detail::Cloud::Ptr sample = detail::sample_on_grid(map_points, so.sample_voxel_m, frame);
+  const std::vector<Eigen::Vector3f> normals =
+      detail::grid_normals(sample, so.sample_voxel_m, frame);
+  graph.up = detail::estimate_up(cameras, sample, normals, uo);
   graph.seconds_up = seconds_since(t0);
   t0 = Clock::now();
-  graph.surfaces = detail::find_surfaces(sample, normals.get(), graph.up.up, so);
+  graph.surfaces = detail::find_surfaces(sample, normals, graph.up.up, so);
   graph.seconds_surfaces = seconds_since(t0);
 }
 
