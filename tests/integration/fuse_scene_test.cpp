@@ -254,8 +254,9 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
       ++on_floor[c];
       EXPECT_LE(on["gap_m"].get<double>(), 0.15) << c << " " << o["id"] << " on the floor";
     }
-    if (on["kind"] == "object")
+    if (on["kind"] == "object") {
       EXPECT_NE(class_of[on["id"].get<int>()], c) << o["id"] << " on its own class";
+    }
   }
   EXPECT_GE(on_table["keyboard"], 2);
   EXPECT_GE(on_table["mouse"], 3);
