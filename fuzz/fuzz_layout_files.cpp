@@ -29,8 +29,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string identity = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
   const auto parts = fuzz::split(data, size, 6);
   const auto root = fuzz::fresh_dir();
-  const fuzz::fs::path seven = root / "7scenes", open3d = root / "open3d", replica = root / "replica" / "s",
-                 scannet = root / "scannet";
+  const fuzz::fs::path seven = root / "7scenes", open3d = root / "open3d",
+                       replica = root / "replica" / "s", scannet = root / "scannet";
   fuzz::write_file(seven, "frame-000000.color.png", color);
   fuzz::write_file(seven, "frame-000000.depth.png", depth);
   fuzz::write_file(seven, "frame-000000.pose.txt", parts[0]);
@@ -45,7 +45,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::write_file(scannet, "color/0.png", color);
   fuzz::write_file(scannet, "depth/0.png", depth);
   fuzz::write_file(scannet, "pose/0.txt", identity);
-  fuzz::write_file(scannet, "intrinsic/intrinsic_color.txt", "4 0 3.5 0\n0 4 2.5 0\n0 0 1 0\n0 0 0 1\n");
+  fuzz::write_file(scannet, "intrinsic/intrinsic_color.txt",
+                   "4 0 3.5 0\n0 4 2.5 0\n0 0 1 0\n0 0 0 1\n");
   fuzz::write_file(scannet, "intrinsic/intrinsic_depth.txt", parts[5]);
   for (const fuzz::fs::path& dir : {seven, open3d, replica, scannet})
     fuzz::accept_input_error([&] {

@@ -9,8 +9,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -42,9 +42,9 @@ struct RunCommand {
   std::string out;
   std::string trajectory;  // empty: the recording's own poses
   std::string camera;
-  std::string classes;       // detect --classes; empty: every class the model knows
-  std::string fuse_config;   // fuse --config
-  bool force = false;        // run every stage again
+  std::string classes;      // detect --classes; empty: every class the model knows
+  std::string fuse_config;  // fuse --config
+  bool force = false;       // run every stage again
 };
 
 // One stage: its name, the objmap arguments, the folder it writes and the file that says it is
@@ -116,13 +116,14 @@ std::vector<Stage> plan(const RunCommand& c) {
               run / "track", "tracks.json"};
   Stage fuse{"fuse",
              with(with({"fuse"}, recording),
-                  with(with({"--segmentation", track.out.string(), "--out",
-                             (run / "map").string()},
+                  with(with({"--segmentation", track.out.string(), "--out", (run / "map").string()},
                             optional("--trajectory", c.trajectory)),
                        with(optional("--camera", c.camera), optional("--config", c.fuse_config)))),
              run / "map", "objects.json"};
-  Stage report{"report", {"report", "--run", fuse.out.string(), "--out", (run / "report").string()},
-               run / "report", "report.html"};
+  Stage report{"report",
+               {"report", "--run", fuse.out.string(), "--out", (run / "report").string()},
+               run / "report",
+               "report.html"};
   return {detect, track, fuse, report};
 }
 
@@ -163,7 +164,8 @@ int spawn_objmap(const std::vector<std::string>& args, const fs::path& log) {
   pid_t pid = 0;
   const int failed = posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (failed != 0) throw std::runtime_error("cannot start objmap: " + std::string(strerror(failed)));
+  if (failed != 0)
+    throw std::runtime_error("cannot start objmap: " + std::string(strerror(failed)));
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
@@ -203,7 +205,8 @@ void run_run(const RunCommand& c) {
   for (const Stage& stage : plan(c)) {
     const std::string key = stage_key(stage, c, previous);
     previous = key;
-    const bool complete = fs::exists(stage.done_file.empty() ? stage.out : stage.out / stage.done_file);
+    const bool complete =
+        fs::exists(stage.done_file.empty() ? stage.out : stage.out / stage.done_file);
     if (!rerun && complete && record.contains(stage.name) &&
         record[stage.name].value("key", "") == key) {
       std::printf("%-8s reused      %s\n", stage.name.c_str(), stage.out.c_str());
@@ -222,8 +225,8 @@ void run_run(const RunCommand& c) {
       std::printf("failed\n");
       record.erase(stage.name);
       io::write_file_atomic(stages_file, record.dump(2) + "\n");
-      const std::string why = last_line(log) + " (exit " + std::to_string(code) + "; " +
-                              log.string() + ")";
+      const std::string why =
+          last_line(log) + " (exit " + std::to_string(code) + "; " + log.string() + ")";
       if (code == 2) throw InputError("objmap run: stage " + stage.name, why);
       throw std::runtime_error("objmap run: stage " + stage.name + ": " + why);
     }
@@ -252,8 +255,9 @@ void setup_run(CLI::App& app) {
                 "detector: an Ultralytics YOLOv5-seg / YOLOv8-seg .onnx export (masks), a "
                 "Darknet .weights or a TF Mask R-CNN .pb (as objmap detect)")
       ->required();
-  c->add_option("--out", cmd->out, "output folder (created; an earlier objmap run output is "
-                                   "updated, any other folder refused)")
+  c->add_option("--out", cmd->out,
+                "output folder (created; an earlier objmap run output is "
+                "updated, any other folder refused)")
       ->required();
   c->add_option("--trajectory", cmd->trajectory,
                 "SLAM trajectory (TUM format); default: the recording's own poses");

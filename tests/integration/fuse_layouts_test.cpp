@@ -29,7 +29,8 @@ const char* const kYoloSeg = "../models/yolov5n-seg_coco/yolov5n-seg_480x640.onn
   if (a.is_object()) {
     if (a.size() != b.size()) return ::testing::AssertionFailure() << where << ": sizes differ";
     for (const auto& [key, value] : a.items()) {
-      if (!b.contains(key)) return ::testing::AssertionFailure() << where << "." << key << " missing";
+      if (!b.contains(key))
+        return ::testing::AssertionFailure() << where << "." << key << " missing";
       auto r = same_json(value, b[key], where + "." + key, tol);
       if (!r) return r;
     }
@@ -84,10 +85,9 @@ TEST(FuseLayouts, SevenScenesFromItsOwnPosesEqualsItsTumConversion) {
                                   (tmp / "seg").string(), "--out", (tmp / "run7").string()});
   ASSERT_EQ(a.exit_code, 0) << a.err;
   convert_seven_scenes_to_tum(scenes, tmp / "tum");
-  const RunResult b =
-      run_objmap({"fuse", "--dataset", (tmp / "tum").string(), "--trajectory",
-                  (tmp / "tum" / "groundtruth.txt").string(), "--segmentation",
-                  (tmp / "seg").string(), "--out", (tmp / "runtum").string()});
+  const RunResult b = run_objmap({"fuse", "--dataset", (tmp / "tum").string(), "--trajectory",
+                                  (tmp / "tum" / "groundtruth.txt").string(), "--segmentation",
+                                  (tmp / "seg").string(), "--out", (tmp / "runtum").string()});
   ASSERT_EQ(b.exit_code, 0) << b.err;
 
   const nlohmann::json run7 = read_json(tmp / "run7" / "run.json");
@@ -108,8 +108,7 @@ TEST(FuseLayouts, ARecordingWithoutPosesNeedsATrajectory) {
       run_objmap({"fuse", "--dataset", desk.string(), "--segmentation",
                   (desk / "detections_yolofastest").string(), "--out", (tmp / "run").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--trajectory: missing, and the tum recording"), std::string::npos)
-      << r.err;
+  EXPECT_NE(r.err.find("--trajectory: missing, and the tum recording"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(tmp / "run"));
 }
 
@@ -125,9 +124,15 @@ TEST(ObjmapRun, RerunReusesEveryStageAndAChangedOptionRerunsOnlyTheStagesAfterIt
   OBJMAP_DATA_OR_SKIP(model, kYoloSeg);
   TempDir tmp;
   const fs::path out = tmp / "run";
-  std::vector<std::string> args = {"run",     "--dataset", desk.string(), "--model", model.string(),
-                                   "--trajectory", (desk / "groundtruth.txt").string(),
-                                   "--out",   out.string()};
+  std::vector<std::string> args = {"run",
+                                   "--dataset",
+                                   desk.string(),
+                                   "--model",
+                                   model.string(),
+                                   "--trajectory",
+                                   (desk / "groundtruth.txt").string(),
+                                   "--out",
+                                   out.string()};
   const RunResult first = run_objmap(args);
   ASSERT_EQ(first.exit_code, 0) << first.err << first.out;
   EXPECT_EQ(lines_with(first.out, "running ... done"), 4) << first.out;
@@ -161,9 +166,9 @@ TEST(ObjmapRun, AFailingStageIsNamedWithItsError) {
   OBJMAP_DATA_OR_SKIP(model, kYoloSeg);
   TempDir tmp;
   std::ofstream(tmp / "broken.txt") << "1305031453.3595 1 2 3\n";
-  const RunResult r = run_objmap({"run", "--dataset", desk.string(), "--model", model.string(),
-                                  "--trajectory", (tmp / "broken.txt").string(), "--out",
-                                  (tmp / "run").string()});
+  const RunResult r =
+      run_objmap({"run", "--dataset", desk.string(), "--model", model.string(), "--trajectory",
+                  (tmp / "broken.txt").string(), "--out", (tmp / "run").string()});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("objmap run: stage fuse:"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("broken.txt:1"), std::string::npos) << r.err;

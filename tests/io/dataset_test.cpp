@@ -130,7 +130,8 @@ TEST(Dataset, ReplicaReadsTrajAndCamParamsOneFolderUp) {
     std::snprintf(n, sizeof n, "%06zu", i);
     cv::imwrite((scene / "results" / ("frame" + std::string(n) + ".jpg")).string(),
                 cv::imread(tum.frames[i].rgb_file.string()));
-    fs::copy_file(tum.frames[i].depth_file, scene / "results" / ("depth" + std::string(n) + ".png"));
+    fs::copy_file(tum.frames[i].depth_file,
+                  scene / "results" / ("depth" + std::string(n) + ".png"));
     std::string row = matrix_text(*lookup_pose(gt, tum.frames[i].rgb_timestamp, {}));
     std::replace(row.begin(), row.end(), '\n', ' ');
     traj += row + "\n";
@@ -208,7 +209,8 @@ TEST(Dataset, ScanNetDepthFromItsOwnCameraIsRegisteredIntoTheColourImage) {
   TempDir tmp;
   const Dataset tum = read_tum_dataset(desk());
   // Colour at twice the depth camera's resolution (as ScanNet's 1296x968 against 640x480), depth
-  // in millimetres, the same optical centre: a colour pixel (2u+0.5, 2v+0.5) sees depth pixel (u, v).
+  // in millimetres, the same optical centre: a colour pixel (2u+0.5, 2v+0.5) sees depth pixel (u,
+  // v).
   const cv::Mat rgb = cv::imread(tum.frames[0].rgb_file.string());
   cv::Mat big;
   cv::resize(rgb, big, {1280, 960});
@@ -221,7 +223,8 @@ TEST(Dataset, ScanNetDepthFromItsOwnCameraIsRegisteredIntoTheColourImage) {
   write_text(tmp / "pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
   write_text(tmp / "intrinsic/intrinsic_color.txt",
              "1000 0 639.5 0\n0 1000 479.5 0\n0 0 1 0\n0 0 0 1\n");
-  write_text(tmp / "intrinsic/intrinsic_depth.txt", "500 0 319.25 0\n0 500 239.25 0\n0 0 1 0\n0 0 0 1\n");
+  write_text(tmp / "intrinsic/intrinsic_depth.txt",
+             "500 0 319.25 0\n0 500 239.25 0\n0 0 1 0\n0 0 0 1\n");
   const Dataset d = read_dataset(tmp.path());
   EXPECT_EQ(d.layout, "scannet");
   ASSERT_TRUE(d.depth_camera);
@@ -383,8 +386,9 @@ TEST(DatasetErrors, GenericLayoutNamesTheField) {
                 .find("matches no file"),
             std::string::npos);
   write_text(tmp / "cap" / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
-  EXPECT_NE(error_with("{" + base +
-                       R"(, "depth_scale": 1000, "poses": "poses.txt", "pose_format": "matrix_per_line"})")
+  EXPECT_NE(error_with(
+                "{" + base +
+                R"(, "depth_scale": 1000, "poses": "poses.txt", "pose_format": "matrix_per_line"})")
                 .find("poses.txt:2 | 11 numbers; expected 12 or 16"),
             std::string::npos);
 }
@@ -415,7 +419,6 @@ TEST(DatasetErrors, AnUnknownLayoutNameIsRefused) {
   EXPECT_EQ(where, "--layout");
 }
 
-
 // --- depth from another camera: how much of each real mask lands on its object ---
 
 // The share of `mask` pixels whose depth is within `band_mm` of the object's median true depth.
@@ -444,7 +447,8 @@ TEST(Dataset, RegisteredDepthPutsRealMasksBackOnTheirObjects) {
   Camera c;  // camera.json of the clip
   c.fx = 1066.778, c.fy = 1067.487, c.cx = 312.9869, c.cy = 241.3109, c.depth_factor = 10000;
   const cv::Mat depth = read_depth(src.frames[0].depth_file, 640, 480);
-  const cv::Mat labels = cv::imread((ycb / "masks" / "0.000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat labels =
+      cv::imread((ycb / "masks" / "0.000000.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(labels.empty());
   // The depth camera: half resolution, 2.5 cm to the colour camera's right.
   Camera dc = c;
@@ -459,7 +463,8 @@ TEST(Dataset, RegisteredDepthPutsRealMasksBackOnTheirObjects) {
       if (raw == 0) continue;
       const Vec3 p = color_from_depth.inverse() * c.unproject(u, v, raw / 10000.0);
       const Eigen::Vector2d px = dc.project(p);
-      const int du = static_cast<int>(std::lround(px.x())), dv = static_cast<int>(std::lround(px.y()));
+      const int du = static_cast<int>(std::lround(px.x())),
+                dv = static_cast<int>(std::lround(px.y()));
       if (du < 0 || dv < 0 || du >= 320 || dv >= 240) continue;
       const auto mm = static_cast<std::uint16_t>(std::lround(p.z() * 1000));
       auto& cell = seen.at<std::uint16_t>(dv, du);
@@ -470,8 +475,8 @@ TEST(Dataset, RegisteredDepthPutsRealMasksBackOnTheirObjects) {
   cv::imwrite((tmp / "depth" / "0.png").string(), seen);
   write_text(tmp / "pose" / "0.txt", matrix_text(Pose::Identity()));
   char k[200];
-  std::snprintf(k, sizeof k, "%.17g 0 %.17g 0\n0 %.17g %.17g 0\n0 0 1 0\n0 0 0 1\n", c.fx, c.cx, c.fy,
-                c.cy);
+  std::snprintf(k, sizeof k, "%.17g 0 %.17g 0\n0 %.17g %.17g 0\n0 0 1 0\n0 0 0 1\n", c.fx, c.cx,
+                c.fy, c.cy);
   write_text(tmp / "intrinsic" / "intrinsic_color.txt", k);
   std::snprintf(k, sizeof k, "%.17g 0 %.17g 0\n0 %.17g %.17g 0\n0 0 1 0\n0 0 0 1\n", dc.fx, dc.cx,
                 dc.fy, dc.cy);
@@ -498,9 +503,10 @@ TEST(Dataset, RegisteredDepthPutsRealMasksBackOnTheirObjects) {
     const double before = share_on_object(naive, mask, median, 30.0);
     const double after = share_on_object(registered, mask, median, 30.0);
     const double truth = share_on_object(truth_mm, mask, median, 30.0);
-    std::printf("label %2d: mask pixels within 3 cm of the object's depth: true depth %.3f, "
-                "unregistered %.3f, registered %.3f\n",
-                label, truth, before, after);
+    std::printf(
+        "label %2d: mask pixels within 3 cm of the object's depth: true depth %.3f, "
+        "unregistered %.3f, registered %.3f\n",
+        label, truth, before, after);
     EXPECT_GT(after, before + 0.05) << label;
     EXPECT_GT(after, truth - 0.05) << label;
   }

@@ -89,8 +89,9 @@ Dataset read_seven_scenes(const fs::path& dir, const DatasetOptions& options) {
   d.layout = "7scenes";
   const std::vector<fs::path> folders = seven_scenes_folders(dir);
   if (folders.empty())
-    throw InputError(dir.string(), "no frame-XXXXXX.color.png|jpg here or in seq-NN/ subfolders; "
-                                   "expected a 7-Scenes sequence");
+    throw InputError(dir.string(),
+                     "no frame-XXXXXX.color.png|jpg here or in seq-NN/ subfolders; "
+                     "expected a 7-Scenes sequence");
   std::vector<std::optional<Pose>> poses;
   std::size_t with_pose = 0;
   std::int64_t offset = 0;  // seq-NN/ folders follow one another in time
@@ -106,7 +107,8 @@ Dataset read_seven_scenes(const fs::path& dir, const DatasetOptions& options) {
       name = name.substr(0, name.find('.')) + ".pose.txt";
       const fs::path pose_file = f.rgb_file.parent_path() / name;
       if (is_file(pose_file)) {
-        poses.push_back(layout::pose_from_numbers(layout::read_numbers(pose_file), pose_file.string()));
+        poses.push_back(
+            layout::pose_from_numbers(layout::read_numbers(pose_file), pose_file.string()));
         ++with_pose;
       } else {
         poses.emplace_back();
@@ -121,7 +123,8 @@ Dataset read_seven_scenes(const fs::path& dir, const DatasetOptions& options) {
                      "has no frame-XXXXXX.pose.txt beside it; expected a pose for every frame or "
                      "for none");
   }
-  if (with_pose > 0) layout::attach_poses(d, poses, (folders.front() / "frame-*.pose.txt").string());
+  if (with_pose > 0)
+    layout::attach_poses(d, poses, (folders.front() / "frame-*.pose.txt").string());
   // 7-Scenes publishes no calibration between its depth and colour cameras; its users take the
   // depth as registered to the colour image, with fx = fy = 585 at the image centre.
   const auto [width, height] = layout::image_size(d.frames.front().rgb_file);
@@ -173,14 +176,16 @@ Dataset read_replica(const fs::path& dir, const DatasetOptions& options) {
     attach_poses_in_order(d, poses, traj.string());
   }
   double fx = 600.0, fy = 600.0, cx = 599.5, cy = 339.5, scale = 6553.5;
-  d.camera_source = "NICE-SLAM's Replica defaults (fx = fy = 600, cx 599.5, cy 339.5, scale 6553.5)";
+  d.camera_source =
+      "NICE-SLAM's Replica defaults (fx = fy = 600, cx 599.5, cy 339.5, scale 6553.5)";
   for (const fs::path& file : {dir / "cam_params.json", dir.parent_path() / "cam_params.json"}) {
     if (!is_file(file)) continue;
     const nlohmann::json doc = read_json_file(file, "cannot open");
     const std::string where = file.string() + ": camera";
     if (!doc.is_object() || !doc.contains("camera") || !doc["camera"].is_object())
-      throw InputError(where, "missing; expected {\"camera\": {\"fx\", \"fy\", \"cx\", \"cy\", "
-                              "\"scale\", ...}}");
+      throw InputError(where,
+                       "missing; expected {\"camera\": {\"fx\", \"fy\", \"cx\", \"cy\", "
+                       "\"scale\", ...}}");
     const nlohmann::json& cam = doc["camera"];
     auto number = [&](const char* key, double& value) {
       if (!cam.contains(key)) return;

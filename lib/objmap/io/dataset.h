@@ -24,8 +24,8 @@ struct FramePair {
 
 struct Dataset {
   std::filesystem::path root;
-  std::string layout = "tum";  // the layout it was read as (kLayouts)
-  std::vector<FramePair> frames;  // sorted by strictly increasing rgb timestamp
+  std::string layout = "tum";                // the layout it was read as (kLayouts)
+  std::vector<FramePair> frames;             // sorted by strictly increasing rgb timestamp
   std::size_t rgb_rows = 0, depth_rows = 0;  // colour and depth images listed or found
   std::string recorded_from;  // tum: rgb.txt's "# file: '<name>'" header; empty when there is none
   // The camera the layout describes (its intrinsics file, its image size, its depth scale), with
@@ -81,6 +81,7 @@ Dataset read_dataset(const std::filesystem::path& dir, const DatasetOptions& opt
 // (dataset.depth_camera) is registered: each depth pixel is back-projected with the depth camera,
 // moved into the colour camera and splatted over the colour pixels it covers, the nearest depth
 // winning. Throws InputError as read_depth does.
-cv::Mat read_frame_depth(const Dataset& dataset, const FramePair& frame, const Camera& color_camera);
+cv::Mat read_frame_depth(const Dataset& dataset, const FramePair& frame,
+                         const Camera& color_camera);
 
 }  // namespace objmap::io

@@ -35,7 +35,8 @@ cv::Mat register_depth(const cv::Mat& depth, const Dataset::DepthCamera& from, c
       const double value = std::round(point_in_color.z() * to.depth_factor);
       if (!(value >= 1 && value <= 65535)) continue;
       const auto z = static_cast<std::uint16_t>(value);
-      const int cu = static_cast<int>(std::lround(px.x())), cv_ = static_cast<int>(std::lround(px.y()));
+      const int cu = static_cast<int>(std::lround(px.x())),
+                cv_ = static_cast<int>(std::lround(px.y()));
       for (int y = cv_ - half; y <= cv_ + half; ++y) {
         if (y < 0 || y >= to.height) continue;
         auto* out_row = out.ptr<std::uint16_t>(y);
@@ -49,7 +50,8 @@ cv::Mat register_depth(const cv::Mat& depth, const Dataset::DepthCamera& from, c
 
 }  // namespace
 
-cv::Mat read_frame_depth(const Dataset& dataset, const FramePair& frame, const Camera& color_camera) {
+cv::Mat read_frame_depth(const Dataset& dataset, const FramePair& frame,
+                         const Camera& color_camera) {
   if (dataset.depth_camera) {
     const Camera& dc = dataset.depth_camera->camera;
     cv::Mat depth = read_depth(frame.depth_file, dc.width, dc.height);

@@ -20,7 +20,8 @@ namespace fs = std::filesystem;
 namespace {
 
 bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 std::string fixed(double v) {
@@ -45,8 +46,8 @@ std::vector<NumberedFile> numbered_files(const fs::path& dir, const std::string&
       if (!ends_with(name, suffix) || name.size() <= prefix.size() + suffix.size()) continue;
       const std::string digits =
           name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
-      if (digits.size() > 12 ||
-          !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
+      if (digits.size() > 12 || !std::all_of(digits.begin(), digits.end(),
+                                             [](unsigned char c) { return std::isdigit(c); }))
         continue;
       const std::int64_t number = std::stoll(digits);
       const auto [it, fresh] = by_number.emplace(number, entry.path());
@@ -76,7 +77,8 @@ std::vector<double> read_numbers(const fs::path& file) {
   while (in.next()) {
     for (std::size_t i = 0; i < in.size(); ++i) {
       std::string f = in.field(i);
-      std::transform(f.begin(), f.end(), f.begin(), [](unsigned char c) { return std::tolower(c); });
+      std::transform(f.begin(), f.end(), f.begin(),
+                     [](unsigned char c) { return std::tolower(c); });
       if (f == "inf" || f == "+inf")
         numbers.push_back(std::numeric_limits<double>::infinity());
       else if (f == "-inf")
@@ -90,7 +92,8 @@ std::vector<double> read_numbers(const fs::path& file) {
   return numbers;
 }
 
-std::optional<Pose> pose_from_numbers(const std::vector<double>& numbers, const std::string& where) {
+std::optional<Pose> pose_from_numbers(const std::vector<double>& numbers,
+                                      const std::string& where) {
   if (numbers.size() != 16 && numbers.size() != 12)
     throw InputError(where, std::to_string(numbers.size()) +
                                 " numbers; expected a 4x4 matrix (16 numbers, row-major) or its "
@@ -99,7 +102,8 @@ std::optional<Pose> pose_from_numbers(const std::vector<double>& numbers, const 
     return std::nullopt;
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   for (int i = 0; i < static_cast<int>(numbers.size()); ++i) m(i / 4, i % 4) = numbers[i];
-  if (numbers.size() == 16 && (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6)
+  if (numbers.size() == 16 &&
+      (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6)
     throw InputError(where, "last row is not 0 0 0 1; expected a rigid 4x4 pose matrix");
   const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);

@@ -21,7 +21,8 @@ struct NumberedFile {
 // The regular files of `dir` whose name is `prefix` + a decimal number + one of `suffixes`
 // (e.g. "frame-", {".color.png", ".color.jpg"}), sorted by number. Two files with one number are
 // an InputError naming both.
-std::vector<NumberedFile> numbered_files(const std::filesystem::path& dir, const std::string& prefix,
+std::vector<NumberedFile> numbered_files(const std::filesystem::path& dir,
+                                         const std::string& prefix,
                                          const std::vector<std::string>& suffixes);
 
 // The number in a file name: the last run of digits of its stem ("frame000012" -> 12), or nullopt.
@@ -59,8 +60,8 @@ void attach_poses(Dataset& dataset, const std::vector<std::optional<Pose>>& pose
 
 // The readers of io/layout_readers.cpp (io/dataset.cpp reads tum, 7scenes and replica itself).
 // Open3D's reconstruction system: color/, depth/ (mm), the .log trajectory `log` when there is one.
-Dataset read_open3d(const std::filesystem::path& dir, const std::optional<std::filesystem::path>& log,
-                    const DatasetOptions& options);
+Dataset read_open3d(const std::filesystem::path& dir,
+                    const std::optional<std::filesystem::path>& log, const DatasetOptions& options);
 // ScanNet as its SensReader exports it, depth registered into the colour camera.
 Dataset read_scannet(const std::filesystem::path& dir, const DatasetOptions& options);
 // Any posed capture described by an objmap_layout.json (`layout_file`).

@@ -21,8 +21,8 @@ using nlohmann::json;
 
 namespace {
 
-const std::set<std::string> kKeys = {"color",     "depth",       "depth_scale",     "depth_invalid",
-                                     "intrinsics", "poses",      "pose_format",     "pose_convention",
+const std::set<std::string> kKeys = {"color",      "depth",  "depth_scale", "depth_invalid",
+                                     "intrinsics", "poses",  "pose_format", "pose_convention",
                                      "fps",        "$schema"};
 
 // One field of the layout file, with its place for messages.
@@ -93,8 +93,9 @@ Camera generic_camera(const Field& f, const fs::path& dir, int width, int height
   const json& k = f.doc.contains("intrinsics") ? f.doc["intrinsics"] : json();
   if (k.is_string()) return camera_from_k_file(dir / k.get<std::string>(), width, height, scale);
   if (!k.is_object())
-    throw InputError(f.where("intrinsics"),
-                     "missing; expected a path to a 3x3 matrix or {\"fx\", \"fy\", \"cx\", \"cy\"}");
+    throw InputError(
+        f.where("intrinsics"),
+        "missing; expected a path to a 3x3 matrix or {\"fx\", \"fy\", \"cx\", \"cy\"}");
   const Field kf{k, f.file + ": intrinsics"};
   for (const auto& [key, value] : k.items())
     if (key != "fx" && key != "fy" && key != "cx" && key != "cy")
