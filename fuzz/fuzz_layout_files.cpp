@@ -4,28 +4,16 @@
 // traj.txt, separator, a ScanNet intrinsic_depth.txt. Each layout's folder holds one 8x6 frame.
 #include <cstddef>
 #include <cstdint>
-#include <opencv2/core.hpp>
 #include <string>
-#include <vector>
 
 #include "fuzz_util.h"
 #include "objmap/io/dataset.h"
-#include "objmap/io/png_encode.h"
-
-namespace {
-
-std::string png_of(const cv::Mat& image) {
-  std::vector<std::uint8_t> png;
-  objmap::io::encode_png(image, &png);
-  return std::string(png.begin(), png.end());
-}
-
-}  // namespace
+#include "tiny_frame.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace objmap;
-  static const std::string color = png_of(cv::Mat(6, 8, CV_8UC3, cv::Scalar(1, 2, 3)));
-  static const std::string depth = png_of(cv::Mat(6, 8, CV_16UC1, cv::Scalar(1000)));
+  const std::string& color = fuzz::tiny_color_png();
+  const std::string& depth = fuzz::tiny_depth_png();
   const std::string identity = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
   const auto parts = fuzz::split(data, size, 6);
   const auto root = fuzz::fresh_dir();

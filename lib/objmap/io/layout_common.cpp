@@ -159,6 +159,27 @@ std::vector<FramePair> pair_by_number(const std::vector<NumberedFile>& color,
   return frames;
 }
 
+std::vector<FramePair> pair_in_order(const std::vector<NumberedFile>& color,
+                                     const std::vector<NumberedFile>& depth,
+                                     const std::function<double(const NumberedFile&)>& time_of) {
+  if (color.size() != depth.size()) {
+    const std::size_t n = std::min(color.size(), depth.size());
+    const fs::path& lone = color.size() > n ? color[n].file : depth[n].file;
+    throw InputError(lone.string(), std::to_string(color.size()) + " colour and " +
+                                        std::to_string(depth.size()) +
+                                        " depth images; expected one depth image per colour "
+                                        "image (this one has no partner)");
+  }
+  std::vector<FramePair> frames;
+  for (std::size_t i = 0; i < color.size(); ++i) {
+    const double t = time_of(color[i]);
+    if (!frames.empty() && t <= frames.back().rgb_timestamp)
+      throw InputError(color[i].file.string(), "timestamp not after the previous frame's");
+    frames.push_back({t, t, color[i].file, depth[i].file});
+  }
+  return frames;
+}
+
 void attach_poses(Dataset& dataset, const std::vector<std::optional<Pose>>& poses,
                   const std::string& source) {
   std::vector<FramePair> kept;

@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,6 +53,13 @@ std::pair<int, int> image_size(const std::filesystem::path& file);
 // Timestamps are number / fps.
 std::vector<FramePair> pair_by_number(const std::vector<NumberedFile>& color,
                                       const std::vector<NumberedFile>& depth, double fps);
+
+// Colour i with depth i in the order of their numbers, whatever the numbers (one depth image per
+// colour image: a lone image is an InputError naming it), at the times `time_of` gives each
+// colour image; times must increase strictly.
+std::vector<FramePair> pair_in_order(const std::vector<NumberedFile>& color,
+                                     const std::vector<NumberedFile>& depth,
+                                     const std::function<double(const NumberedFile&)>& time_of);
 
 // Keeps the frames whose pose is known (poses[i] for frame i), counting the lost ones, and fills
 // dataset.poses stamped with each kept frame's rgb timestamp; `source` names the pose files.

@@ -182,20 +182,7 @@ Dataset read_generic(const fs::path& dir, const fs::path& layout_file,
   const auto depth = glob_numbered(dir, f.text("depth"), f.where("depth"));
   d.rgb_rows = color.size();
   d.depth_rows = depth.size();
-  if (color.size() != depth.size()) {
-    const std::size_t n = std::min(color.size(), depth.size());
-    const fs::path& lone = color.size() > n ? color[n].file : depth[n].file;
-    throw InputError(lone.string(), std::to_string(color.size()) + " colour and " +
-                                        std::to_string(depth.size()) +
-                                        " depth images; expected one depth image per colour "
-                                        "image (this one has no partner)");
-  }
-  for (std::size_t i = 0; i < color.size(); ++i) {
-    const double t = frame_time(color[i], fps);
-    if (!d.frames.empty() && t <= d.frames.back().rgb_timestamp)
-      throw InputError(color[i].file.string(), "timestamp not after the previous frame's");
-    d.frames.push_back({t, t, color[i].file, depth[i].file});
-  }
+  d.frames = pair_in_order(color, depth, [&](const NumberedFile& c) { return frame_time(c, fps); });
   d.depth_factor = f.number("depth_scale", 1e-6, 1e9);
   if (f.has("depth_invalid"))
     d.depth_invalid = static_cast<std::uint16_t>(f.number("depth_invalid", 1, 65535));

@@ -48,27 +48,6 @@ std::vector<NumberedFile> images_of(const fs::path& dir, const std::vector<std::
   return files;
 }
 
-// Colour i with depth i in number order; both lists of one length.
-std::vector<FramePair> pair_in_order(const std::vector<NumberedFile>& color,
-                                     const std::vector<NumberedFile>& depth, double fps) {
-  if (color.size() != depth.size()) {
-    const std::size_t n = std::min(color.size(), depth.size());
-    const fs::path& first = color.size() > n ? color[n].file : depth[n].file;
-    throw InputError(first.string(), std::to_string(color.size()) + " colour and " +
-                                         std::to_string(depth.size()) +
-                                         " depth images; expected one depth image per colour "
-                                         "image (this one has no partner)");
-  }
-  std::vector<FramePair> frames;
-  for (std::size_t i = 0; i < color.size(); ++i) {
-    const double t = static_cast<double>(color[i].number) / fps;
-    if (!frames.empty() && t <= frames.back().rgb_timestamp)
-      throw InputError(color[i].file.string(), "frame number not after the previous one");
-    frames.push_back({t, t, color[i].file, depth[i].file});
-  }
-  return frames;
-}
-
 // An Open3D PinholeCameraIntrinsic JSON of `dir` ({"width", "height", "intrinsic_matrix": 9
 // numbers, column-major}), or nullopt when the folder has none.
 std::optional<std::pair<Camera, fs::path>> open3d_intrinsic(const fs::path& dir) {
@@ -138,7 +117,9 @@ Dataset read_open3d(const fs::path& dir, const std::optional<fs::path>& log,
     throw InputError((dir / "color").string(), "no image; expected an Open3D dataset folder");
   d.rgb_rows = color.size();
   d.depth_rows = depth.size();
-  d.frames = pair_in_order(color, depth, options.fps);
+  d.frames = pair_in_order(color, depth, [&](const NumberedFile& f) {
+    return static_cast<double>(f.number) / options.fps;
+  });
   if (log) {
     const auto poses = read_log_trajectory(*log);
     if (poses.size() != d.frames.size())
