@@ -127,13 +127,15 @@ std::vector<Stage> plan(const RunCommand& c) {
   return {detect, track, fuse, report};
 }
 
-// The key of a stage: objmap's version, its arguments, what its input files are and the key of
-// the stage before it.
-std::string stage_key(const Stage& stage, const RunCommand& c, const std::string& previous) {
+// The key of a stage: objmap's version, its arguments, what its input files are (`recording`:
+// the fingerprint of the recording, trajectory and camera, taken once per run) and the key of the
+// stage before it.
+std::string stage_key(const Stage& stage, const RunCommand& c, const std::string& recording,
+                      const std::string& previous) {
   std::string text = std::string(objmap::version()) + "\n" + previous + "\n";
   for (const std::string& a : stage.args) text += a + "\n";
   if (stage.name != "report") {
-    text += fingerprint(c.dataset) + fingerprint(c.trajectory) + fingerprint(c.camera);
+    text += recording;
     if (stage.name == "detect") text += fingerprint(c.model);
     if (stage.name == "fuse") text += fingerprint(c.fuse_config);
   }
@@ -200,10 +202,12 @@ void run_run(const RunCommand& c) {
   const fs::path stages_file = run / "stages.json";
   json record = fs::exists(stages_file) ? io::read_json_file(stages_file, "cannot open") : json();
   if (!record.is_object()) record = json::object();
+  const std::string recording =
+      fingerprint(c.dataset) + fingerprint(c.trajectory) + fingerprint(c.camera);
   std::string previous;
   bool rerun = c.force;
   for (const Stage& stage : plan(c)) {
-    const std::string key = stage_key(stage, c, previous);
+    const std::string key = stage_key(stage, c, recording, previous);
     previous = key;
     const bool complete =
         fs::exists(stage.done_file.empty() ? stage.out : stage.out / stage.done_file);
