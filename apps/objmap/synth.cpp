@@ -18,6 +18,7 @@ struct SynthCommand {
   std::string out;
   bool noise_free = false;
   std::optional<double> confusion_rate;  // unset: keep the per-pair defaults
+  std::optional<int> new_track_after;    // unset: the preset's (walkthrough 30 frames, else never)
   sim::SynthOptions options;
 };
 
@@ -25,6 +26,8 @@ void run_synth(SynthCommand& cmd) {
   sim::SynthOptions& o = cmd.options;
   if (cmd.confusion_rate)
     for (auto& c : o.seg_noise.confusions) c.probability = *cmd.confusion_rate;
+  o.seg_noise.new_track_after_frames =
+      cmd.new_track_after.value_or(o.preset == "walkthrough" ? 30 : 0);
   if (cmd.noise_free) o.set_noise_free();
   o.check();
   sim::check_output_dir(cmd.out);
@@ -55,8 +58,9 @@ void run_synth(SynthCommand& cmd) {
   const auto& st = seq.seg_stats;
   std::printf(
       "segmentation  %d true instances: %d missed, %d confused, %d false positives, "
-      "%d id switches (%d re-used ids)\n",
-      st.true_instances, st.missed, st.confused, st.false_positives, st.id_switches, st.id_reuses);
+      "%d id switches (%d re-used ids), %d new ids after an object was out of view\n",
+      st.true_instances, st.missed, st.confused, st.false_positives, st.id_switches, st.id_reuses,
+      st.revisit_ids);
   if (o.seg_noise.bleed_px > 0)
     std::printf("mask bleed    %lld pixels added behind the objects (up to %d px from the masks)\n",
                 st.bleed_pixels, o.seg_noise.bleed_px);
@@ -89,8 +93,11 @@ void setup_synth(CLI::App& app) {
                 "camera azimuth rate around the table, deg/s (0: the preset's, 20 for tabletop)")
       ->capture_default_str();
   c->add_option("--preset", o.preset,
-                "scene: tabletop (one table), office (two tables) or edge (a small table, its "
-                "objects at the edges, the floor behind them: for the mask bleed)")
+                "scene: tabletop (one table), office (two tables), edge (a small table, its "
+                "objects at the edges, the floor behind them: for the mask bleed) or walkthrough "
+                "(an 8 x 6 m room, three tables, 12 chairs, objects on the tables and the floor; "
+                "the camera walks round it, 318 frames a loop: --frames 954 passes every table "
+                "three times)")
       ->capture_default_str();
   c->add_flag("--noise-free", cmd->noise_free,
               "exact depth and segmentation, no image noise, no drift (overrides the knobs below)");
@@ -139,6 +146,10 @@ void setup_synth(CLI::App& app) {
   c->add_option("--id-switch-rate", o.seg_noise.id_switch_prob,
                 "probability per instance and frame that a track changes its ID")
       ->capture_default_str();
+  c->add_option("--new-track-after", cmd->new_track_after,
+                "an object out of view for more than this many frames gets a new track ID when "
+                "seen again, as a tracker that lost it gives (default: 30 for walkthrough, else "
+                "never; 0 = never)");
   c->add_option("--id-reuse", o.seg_noise.id_reuse_prob,
                 "share of ID switches that re-use an ID dropped by another track")
       ->capture_default_str();

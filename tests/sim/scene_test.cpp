@@ -98,7 +98,7 @@ TEST(Scene, CentroidAndVolumeOfSimpleSolids) {
 }
 
 TEST(Scene, PresetsHaveThePaperClassesAndTheirBoxesCoverEveryPart) {
-  for (const std::string preset : {"tabletop", "office"}) {
+  for (const std::string preset : {"tabletop", "office", "walkthrough"}) {
     const Scene scene = make_scene(preset, 3);
     std::multiset<std::string> classes;
     for (const auto& o : scene.objects) classes.insert(o.class_name);
@@ -166,6 +166,29 @@ TEST(Scene, EdgePresetObjectsStandOnTheTableCentimetresFromItsEdge) {
       EXPECT_NEAR(o.obb.center.z() - o.obb.half_extent.z(), table_z, 0.006) << o.class_name;
     }
   }
+}
+
+TEST(Scene, WalkthroughRoomHasTwelveChairsSomePackedSideBySide) {
+  const Scene scene = make_scene("walkthrough", 5);
+  EXPECT_EQ(scene.objects.size(), 32u);
+  std::vector<Vec3> chairs;
+  int on_floor = 0;
+  for (const auto& o : scene.objects) {
+    if (o.class_name == "chair") chairs.push_back(o.world_from_object.translation());
+    on_floor += o.class_name != "chair" && o.world_from_object.translation().z() < 0.01;
+  }
+  EXPECT_EQ(chairs.size(), 12u);
+  EXPECT_EQ(on_floor, 2) << "a teddy bear and a bottle on the floor";
+  // Packed: a chair's nearest same-class neighbour 0.44-0.56 m away (seats 0.44 m wide) for the
+  // dining table's long sides and the row along the wall: at least 8 chairs.
+  int packed = 0;
+  for (std::size_t i = 0; i < chairs.size(); ++i) {
+    double nearest = 1e9;
+    for (std::size_t j = 0; j < chairs.size(); ++j)
+      if (j != i) nearest = std::min(nearest, (chairs[i] - chairs[j]).head<2>().norm());
+    packed += nearest < 0.6;
+  }
+  EXPECT_GE(packed, 8);
 }
 
 TEST(Scene, UnknownPresetIsAnInputError) {

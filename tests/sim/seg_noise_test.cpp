@@ -353,6 +353,39 @@ std::string named_by_check(const SegNoiseOptions& o) {
   return "";
 }
 
+TEST(SegNoise, AnObjectOutOfViewLongerThanTheLimitComesBackWithANewTrackId) {
+  Fixture f;
+  const auto exact = exact_segmentation(f.labels, f.scene, 1.0, 1);
+  // Object 4 leaves the view for frames 5..44 (40 frames); the others stay in view.
+  cv::Mat without = f.labels.clone();
+  without.setTo(0, f.labels == 4);
+  const auto partial = exact_segmentation(without, f.scene, 1.0, 1);
+  auto track_of = [](const seg::FrameSegmentation& s, const std::string& cls) {
+    for (const auto& i : s.instances)
+      if (i.class_name == cls) return *i.track_id;
+    return -1;
+  };
+  for (const int limit : {0, 30, 60}) {
+    SegNoiseOptions o = SegNoiseOptions::none();
+    o.new_track_after_frames = limit;
+    SegmentationNoise noise(o, 1);
+    int before = -1, after = -1, cup_before = -1, cup_after = -1;
+    for (int frame = 0; frame < 50; ++frame) {
+      const auto out = noise.apply(frame >= 5 && frame < 45 ? partial : exact, 80, 60);
+      if (frame == 4) before = track_of(out, "book"), cup_before = track_of(out, "cup");
+      if (frame == 45) after = track_of(out, "book"), cup_after = track_of(out, "cup");
+    }
+    EXPECT_EQ(cup_after, cup_before) << "in view throughout: the same ID, limit " << limit;
+    if (limit == 30) {
+      EXPECT_NE(after, before) << "out of view 40 frames > 30: a new ID";
+      EXPECT_EQ(noise.stats().revisit_ids, 1);
+    } else {
+      EXPECT_EQ(after, before) << "limit " << limit;
+      EXPECT_EQ(noise.stats().revisit_ids, 0);
+    }
+  }
+}
+
 TEST(SegNoise, BadOptionsNameTheKnob) {
   SegNoiseOptions o;
   o.miss_prob = -0.1;

@@ -6,6 +6,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "objmap/core/error.h"
+#include "objmap/sim/camera_path.h"
+#include "objmap/sim/presets.h"
 #include "objmap/sim/synth.h"
 #include "objmap/sim/writer.h"
 #include "support/test_support.h"
@@ -201,6 +203,37 @@ TEST(Synth, BleedIsRecordedInSynthJsonOnlyWhenOn) {
   const std::string on = synth_json(synthesize(o));
   EXPECT_NE(on.find("\"bleed_px\": 2"), std::string::npos) << on;
   EXPECT_NE(on.find("\"bleed_pixels\": "), std::string::npos) << on;
+}
+
+TEST(Synth, WalkReturnsToEachPlaceOncePerLoop) {
+  // The walkthrough preset's path without jitter: after one loop (its length / the walking speed)
+  // the camera is where it was, and between two loops it has been metres away.
+  CameraPathOptions path = preset_camera_path("walkthrough");
+  path.jitter_translation_m = 0.0;
+  path.jitter_rotation_deg = 0.0;
+  double loop = 0.0;
+  for (std::size_t i = 0; i < path.waypoints.size(); ++i)
+    loop +=
+        (path.waypoints[(i + 1) % path.waypoints.size()].eye_world - path.waypoints[i].eye_world)
+            .norm();
+  const double period = loop / path.walk_speed_m_per_s;
+  std::vector<double> stamps;
+  for (int i = 0; i <= 100; ++i) stamps.push_back(2.0 + period * i / 50.0);  // two loops
+  const Trajectory t = make_camera_path(path, stamps, 7);
+  const Pose& first = t.poses.front().world_from_cam;
+  EXPECT_LT((t.poses[50].world_from_cam.matrix() - first.matrix()).norm(), 1e-6);
+  EXPECT_LT((t.poses[100].world_from_cam.matrix() - first.matrix()).norm(), 1e-6);
+  double farthest = 0.0;
+  for (const auto& p : t.poses)
+    farthest = std::max(farthest, (p.world_from_cam.translation() - first.translation()).norm());
+  EXPECT_GT(farthest, 3.0);
+  EXPECT_NEAR(path_length_m(t), 2.0 * loop, 0.05 * loop);
+  // The first pose is at the first waypoint, looking at its target.
+  EXPECT_LT((first.translation() - path.waypoints[0].eye_world).norm(), 1e-9);
+  const Vec3 forward = first.linear().col(2);
+  EXPECT_GT(
+      forward.dot((path.waypoints[0].target_world - path.waypoints[0].eye_world).normalized()),
+      0.999999);
 }
 
 TEST(Synth, BadOptionsNameTheOption) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include "objmap/core/error.h"
 #include "objmap/sim/random.h"
@@ -27,7 +29,40 @@ void CameraPathOptions::check() const {
           "must be >= 0, got " + num(jitter_translation_m));
   require(finite_nonneg(jitter_rotation_deg), "CameraPathOptions.jitter_rotation_deg",
           "must be >= 0, got " + num(jitter_rotation_deg));
+  require(std::isfinite(walk_speed_m_per_s) && walk_speed_m_per_s > 0.0,
+          "CameraPathOptions.walk_speed_m_per_s", "must be > 0, got " + num(walk_speed_m_per_s));
+  require(waypoints.empty() || waypoints.size() >= 2, "CameraPathOptions.waypoints",
+          "a walk needs at least 2 waypoints, got 1");
+  for (std::size_t i = 0; i < waypoints.size(); ++i)
+    require(waypoints[i].eye_world.allFinite() && waypoints[i].target_world.allFinite() &&
+                (waypoints[i].target_world - waypoints[i].eye_world).norm() > 1e-6 &&
+                (waypoints[i].eye_world - waypoints[(i + 1) % waypoints.size()].eye_world).norm() >
+                    1e-6,
+            "CameraPathOptions.waypoints[" + std::to_string(i) + "]",
+            "eye and target must be finite and apart, and the eye apart from the next one");
 }
+
+namespace {
+
+// The eye and target at `distance` metres along the closed loop of waypoints.
+std::pair<Vec3, Vec3> on_walk(const std::vector<Waypoint>& w, double distance) {
+  double loop = 0.0;
+  for (std::size_t i = 0; i < w.size(); ++i)
+    loop += (w[(i + 1) % w.size()].eye_world - w[i].eye_world).norm();
+  double d = std::fmod(distance, loop);
+  for (std::size_t i = 0;; i = (i + 1) % w.size()) {
+    const Waypoint &a = w[i], &b = w[(i + 1) % w.size()];
+    const double leg = (b.eye_world - a.eye_world).norm();
+    if (d <= leg) {
+      const double s = d / leg;
+      return {a.eye_world + s * (b.eye_world - a.eye_world),
+              a.target_world + s * (b.target_world - a.target_world)};
+    }
+    d -= leg;
+  }
+}
+
+}  // namespace
 
 void DriftOptions::check() const {
   require(finite_nonneg(translation_fraction), "--drift",
@@ -83,7 +118,9 @@ Trajectory make_camera_path(const CameraPathOptions& o, const std::vector<double
     const Vec3 eye = o.orbit_center_world +
                      Vec3(o.radius_m * std::cos(azimuth), o.radius_m * std::sin(azimuth), 0.0);
     Vec3 eye_world(eye.x(), eye.y(), o.height_m);
-    const Vec3 target(o.orbit_center_world.x(), o.orbit_center_world.y(), o.look_at_height_m);
+    Vec3 target(o.orbit_center_world.x(), o.orbit_center_world.y(), o.look_at_height_m);
+    if (!o.waypoints.empty())
+      std::tie(eye_world, target) = on_walk(o.waypoints, (ts - t0) * o.walk_speed_m_per_s);
     Pose pose = look_at(eye_world, target);
     const double dt = ts - t0;
     const Vec3 dp(shake(0, dt), shake(1, dt), shake(2, dt));

@@ -9,6 +9,12 @@
 // drifting copy of it that looks like a SLAM estimate.
 namespace objmap::sim {
 
+// A place on a walk: where the camera is and what it looks at (world frame).
+struct Waypoint {
+  Vec3 eye_world = Vec3::Zero();
+  Vec3 target_world = Vec3::UnitX();
+};
+
 struct CameraPathOptions {
   Vec3 orbit_center_world = Vec3(0.0, 0.0, 0.0);  // the camera circles this vertical axis
   double radius_m = 1.6;                          // distance from the axis
@@ -18,7 +24,12 @@ struct CameraPathOptions {
   double speed_deg_per_s = 20.0;        // azimuth rate: 0.56 m/s at 1.6 m (TUM fr1_desk: ~0.4 m/s)
   double jitter_translation_m = 0.004;  // hand-held shake: std of the position offset per axis
   double jitter_rotation_deg = 0.3;     // hand-held shake: std of the orientation offset per axis
-  void check() const;                   // throws InputError naming the bad field
+  // A walk instead of the orbit where not empty: the camera goes along the waypoints' eyes (a
+  // closed loop: after the last, back to the first, and round again) at walk_speed_m_per_s, its
+  // target moving between theirs with it.
+  std::vector<Waypoint> waypoints;
+  double walk_speed_m_per_s = 0.7;
+  void check() const;  // throws InputError naming the bad field
 };
 
 // Look-at pose in the TUM/optical convention (x right, y down, z forward), world z up.

@@ -170,8 +170,8 @@ void add_cup(Builder& b, double x, double y, Rgb colour, std::optional<double> y
   o.parts.push_back(part(Shape::kBox, Vec3(0.015, 0.006, 0.03), at(0.05, 0, 0.055), m));  // handle
 }
 
-void add_bottle(Builder& b, double x, double y) {
-  auto& o = b.object("bottle", x, y, kTableHeight, 0.0, 0.02, 180.0);
+void add_bottle(Builder& b, double x, double y, double z = kTableHeight) {
+  auto& o = b.object("bottle", x, y, z, 0.0, 0.02, 180.0);
   const Material glass = b.mat({40, 120, 60}, {20, 80, 35}, Pattern::kNoise, 0.02, 0.05);
   const Material label = b.mat({230, 225, 200}, {180, 40, 40}, Pattern::kStripes, 0.012, 0.05);
   o.parts.push_back(part(Shape::kCylinder, Vec3(0.035, 0.035, 0.055), at(0, 0, 0.055), glass));
@@ -185,8 +185,8 @@ void add_book(Builder& b, double x, double y, double z, double yaw_deg, Rgb colo
                          b.mat(colour, {245, 240, 225}, Pattern::kNoise, 0.015, 0.08)));
 }
 
-void add_teddy(Builder& b, double x, double y, double yaw_deg) {
-  auto& o = b.object("teddy bear", x, y, kTableHeight, yaw_deg, 0.02, 20.0);
+void add_teddy(Builder& b, double x, double y, double yaw_deg, double z = kTableHeight) {
+  auto& o = b.object("teddy bear", x, y, z, yaw_deg, 0.02, 20.0);
   const Material fur = b.mat({150, 100, 55}, {105, 65, 30}, Pattern::kNoise, 0.012, 0.15);
   const Material snout = b.mat({215, 185, 140}, {180, 150, 110}, Pattern::kNoise, 0.01, 0.1);
   o.parts.push_back(part(Shape::kEllipsoid, Vec3(0.075, 0.065, 0.09), at(0, 0, 0.09), fur));
@@ -232,6 +232,48 @@ void edge_table_with_objects(Builder& b) {
   add_book(b, -hx + 0.105, 0.08, kTableHeight, 90.0, {30, 110, 60});  // 17 x 24 cm
 }
 
+// The "walkthrough" room (8 x 6 m): a desk with a full tabletop (A), a dining table (B) with six
+// chairs packed round it (two side by side on each long side, 6 cm apart), a second desk (C) with
+// two chairs, a row of four chairs side by side along the east wall, a teddy bear and a bottle on
+// the floor: 12 chairs, 32 objects in all.
+void walkthrough_room(Builder& b) {
+  add_room(b, 4.0, 3.0, 2.7);
+  add_table(b, -2.2, 1.2, 0.7, 0.4);  // A
+  tabletop_objects(b, -2.2, 1.2, false, 3);
+  add_table(b, 1.5, 0.8, 0.6, 0.4);  // B
+  for (double dx : {-0.25, 0.25}) {
+    add_chair(b, 1.5 + dx, 0.8 - 0.65, 90.0);
+    add_chair(b, 1.5 + dx, 0.8 + 0.65, -90.0);
+  }
+  add_chair(b, 1.5 - 0.85, 0.8, 0.0);
+  add_chair(b, 1.5 + 0.85, 0.8, 180.0);
+  add_cup(b, 1.3, 0.7, {200, 40, 40});
+  add_cup(b, 1.8, 0.9, {40, 90, 200});
+  add_bottle(b, 1.55, 1.0);
+  add_book(b, 1.2, 0.95, kTableHeight, 20.0, {30, 110, 60});
+  add_table(b, -0.5, -1.8, 0.7, 0.4);  // C
+  add_monitor(b, -0.5, -2.0, 180.0);
+  add_keyboard(b, -0.5, -1.7, 180.0);
+  add_mouse(b, -0.15, -1.7, 0.0);
+  add_cup(b, -0.95, -1.6, {220, 170, 30});
+  add_chair(b, -0.5, -1.05, -90.0);
+  add_chair(b, -1.45, -1.8, 0.0);
+  for (double y : {-2.45, -1.95, -1.45, -0.95}) add_chair(b, 3.45, y, 180.0);
+  add_teddy(b, 0.4, -0.4, 30.0, 0.0);
+  add_bottle(b, -1.3, 2.1, 0.0);
+}
+
+// The walk round the room: past desk A, along the dining table B, round its east end, past the
+// chair row to desk C and back; 12.7 m a loop, looking at the table beside the way.
+std::vector<Waypoint> walkthrough_path() {
+  const double eye_z = 1.5, look_z = 0.75;
+  auto w = [&](double ex, double ey, double tx, double ty) {
+    return Waypoint{Vec3(ex, ey, eye_z), Vec3(tx, ty, look_z)};
+  };
+  return {w(-1.0, 0.0, -2.2, 1.2), w(0.0, 2.2, 1.5, 0.8), w(3.2, 0.0, 1.5, 0.8),
+          w(1.5, -1.5, 3.4, -1.7), w(-2.0, -0.6, -0.5, -1.8)};
+}
+
 std::string preset_list() {
   std::string out;
   const auto& names = scene_presets();
@@ -256,7 +298,7 @@ const std::vector<std::string>& paper_classes() {
 }
 
 const std::vector<std::string>& scene_presets() {
-  static const std::vector<std::string> names{"tabletop", "office", "edge"};
+  static const std::vector<std::string> names{"tabletop", "office", "edge", "walkthrough"};
   return names;
 }
 
@@ -279,6 +321,8 @@ Scene make_scene(const std::string& preset, std::uint64_t seed) {
     add_chair(b, -0.9, -0.75, 90.0);
     add_chair(b, 0.8, -0.75, 90.0);
     add_chair(b, 0.0, 0.8, -90.0);
+  } else if (preset == "walkthrough") {
+    walkthrough_room(b);
   } else {  // "edge"
     add_room(b, 2.5, 2.5, 2.6);
     edge_table_with_objects(b);
@@ -298,6 +342,9 @@ CameraPathOptions preset_camera_path(const std::string& preset) {
     path.radius_m = 1.4;
     path.height_m = 1.15;
     path.look_at_height_m = 0.8;
+  } else if (preset == "walkthrough") {
+    path.waypoints = walkthrough_path();
+    path.walk_speed_m_per_s = 1.2;  // a loop in 10.6 s: 318 frames at 30 Hz
   } else if (preset == "office") {
     path.radius_m = 2.3;
     path.height_m = 1.55;

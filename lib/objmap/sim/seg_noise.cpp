@@ -64,6 +64,8 @@ void SegNoiseOptions::check() const {
           "must be a probability in [0, 1], got " + num(id_switch_prob));
   require(probability(id_reuse_prob), "--id-reuse",
           "must be a probability in [0, 1], got " + num(id_reuse_prob));
+  require(new_track_after_frames >= 0, "SegNoiseOptions.new_track_after_frames",
+          "must be >= 0 frames, got " + std::to_string(new_track_after_frames));
   require(std::isfinite(score_min) && std::isfinite(score_max) && 0.0 <= score_min &&
               score_min <= score_max && score_max <= 1.0,
           "SegNoiseOptions.score_min", "scores must satisfy 0 <= score_min <= score_max <= 1");
@@ -247,10 +249,18 @@ seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& ex
     const double score = rng_.uniform(o.score_min, o.score_max);
     const int object_id = truth.track_id.value_or(0);
 
-    // Track identity: the tracker keeps an ID per object, switching now and then.
+    // Track identity: the tracker keeps an ID per object, switching now and then, and gives a
+    // new one to an object it lost while out of view.
     auto it = track_of_object_.find(object_id);
+    const auto seen = last_seen_frame_.find(object_id);
+    const bool lost = o.new_track_after_frames > 0 && seen != last_seen_frame_.end() &&
+                      frame_ - seen->second > o.new_track_after_frames;
+    last_seen_frame_[object_id] = frame_;
     if (it == track_of_object_.end()) {
       it = track_of_object_.emplace(object_id, next_track_id_++).first;
+    } else if (lost) {
+      ++stats_.revisit_ids;
+      it->second = next_track_id_++;
     } else if (switch_draw < o.id_switch_prob) {
       ++stats_.id_switches;
       const int old_id = it->second;
@@ -302,6 +312,7 @@ seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& ex
   }
 
   add_false_positives(width, height, &out);
+  ++frame_;
   return out;
 }
 

@@ -41,6 +41,10 @@ struct SegNoiseOptions {
   // at a table's edge, the floor behind) they back-project far behind the object. Deterministic (no
   // random draws); needs the frames' exact depth. 0 = off.
   int bleed_px = 0;
+  // A tracker loses an object that has been out of view (not in the exact segmentation) for more
+  // than this many frames: seen again, it gets a new track ID, as on a walk-through's revisit.
+  // 0 = never (the object keeps its ID).
+  int new_track_after_frames = 0;
 
   void check() const;             // throws InputError naming the bad field
   static SegNoiseOptions none();  // no error at all: the noisy output equals the exact one
@@ -69,6 +73,7 @@ class SegmentationNoise {
     int false_positives = 0;
     int id_switches = 0;
     int id_reuses = 0;
+    int revisit_ids = 0;         // new IDs given to objects seen again after new_track_after_frames
     long long bleed_pixels = 0;  // pixels added to reported masks by the bleed
   };
   const Stats& stats() const { return stats_; }
@@ -79,6 +84,8 @@ class SegmentationNoise {
   SegNoiseOptions options_;
   Rng rng_;
   std::map<int, int> track_of_object_;  // object id -> current track id
+  std::map<int, int> last_seen_frame_;  // object id -> the last frame it was in view
+  int frame_ = 0;                       // frames applied so far
   std::vector<int> dropped_ids_;        // IDs given up by a switch, candidates for re-use
   int next_track_id_ = 1;
   Stats stats_;

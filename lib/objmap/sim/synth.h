@@ -20,7 +20,7 @@
 namespace objmap::sim {
 
 struct SynthOptions {
-  std::string preset = "tabletop";  // scene: "tabletop", "office" or "edge" (presets.h)
+  std::string preset = "tabletop";  // scene: "tabletop", "office", "edge", "walkthrough"
   std::uint64_t seed = 1;           // everything random derives from it
   int frames = 90;                  // 3 s at 30 Hz
   double frame_rate_hz = 30.0;
