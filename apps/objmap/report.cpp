@@ -568,6 +568,7 @@ void add_view3d(const ReportOptions& options, const RunFiles& files, const Traje
                            : 0);
   in.clouds = std::move(clouds);
   in.map = report::thin_points(map, options.view_points);
+  in.map_points_total = map.size();
   if (const auto voxel_m = run_voxel_m(files.run, "map")) in.map_point_size_m = *voxel_m;
   in.camera_path = camera_path(options, t);
   try {

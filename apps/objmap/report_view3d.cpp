@@ -84,6 +84,7 @@ report::View3dContent view3d_content(View3dInputs in) {
   const Eigen::Matrix3f gf = g.cast<float>();
   report::View3dContent c;
   c.map = std::move(in.map);
+  c.map_points_total = in.map_points_total;
   c.map_point_size_m = in.map_point_size_m;
   for (std::size_t i = 0; i < in.objects->size(); ++i) {
     const io::MappedObject& o = (*in.objects)[i];

@@ -17,6 +17,7 @@ struct View3dInputs {
   std::vector<int> views;                                  // per object: view_count (0: none)
   std::vector<PointCloud> clouds;                          // per object: its PLY, world frame
   PointCloud map;                                          // already in the gravity frame
+  std::size_t map_points_total = 0;                        // before thinning
   double map_point_size_m = 0.01;
   std::vector<Vec3> camera_path;                      // world frame
   std::optional<io::SceneDescription> scene;          // none: a run without the scene fields

@@ -66,7 +66,7 @@ json map_json(const View3dContent& c, const View3dOptions& options) {
     rgb += static_cast<char>(col.b);
   }
   block["rgb"] = base64_encode(rgb);
-  block["of"] = c.map.size();
+  block["of"] = std::max(c.map_points_total, c.map.size());
   block["point_size_m"] = c.map_point_size_m;
   return block;
 }
@@ -98,17 +98,17 @@ json object_json(const View3dObject& o, const View3dOptions& options) {
 // JSON text made safe inside <script>: outside strings JSON has no '<', '>' or '&', and inside
 // them the \u escapes read as the same characters.
 std::string script_safe(const std::string& text) {
+  const std::string_view special = "<>&", codes = "3c3e26";  // \u003c \u003e \u0026
   std::string out;
   out.reserve(text.size());
   for (const char ch : text) {
-    if (ch == '<')
-      out += "\\u003c";
-    else if (ch == '>')
-      out += "\\u003e";
-    else if (ch == '&')
-      out += "\\u0026";
-    else
+    const std::size_t k = special.find(ch);
+    if (k == std::string_view::npos) {
       out += ch;
+    } else {
+      out += "\\u00";
+      out += codes.substr(2 * k, 2);
+    }
   }
   return out;
 }
@@ -136,6 +136,7 @@ const char* kStyle = R"(
 #view3d .panel h3 { margin: 0 0 4px; font-size: 15px; }
 #view3d .panel img { width: 120px; height: 120px; float: right; margin: 0 0 4px 6px; }
 #view3d .panel ul { padding-left: 16px; margin: 4px 0; }
+p.view3d-caption { font-size: 13px; color: #555; margin: 4px 0 0; }
 #view3d .help { position: absolute; left: 8px; bottom: 6px; font-size: 12px; color: #555; }
 )";
 
@@ -196,6 +197,15 @@ std::string view3d_html(const View3dContent& c, const View3dOptions& options) {
   h += "<div class=\"panel\"></div>\n";
   h += "<div class=\"help\">drag: orbit · right-drag or shift-drag: pan · wheel: zoom · click an "
        "object or its label: details</div>\n</div>\n";
+  const std::size_t drawn = std::min(c.map.size(), options.max_map_points);
+  const std::size_t total = std::max(c.map_points_total, c.map.size());
+  h += "<p class=\"view3d-caption\">The run in its gravity frame (z up): the semantic map (" +
+       std::to_string(drawn) + " of its " + std::to_string(total) +
+       " points), each object's points in its class colour with its oriented box and label "
+       "(where labels crowd, the nearest; zoom in for the others), the support surfaces (floor "
+       "grey, tables brown, other surfaces violet) and the camera path in magenta. The search "
+       "takes objmap query's phrases: CLASS [on|near|above|under CLASS|floor|table|seat|"
+       "surface].</p>\n";
   h += "<script type=\"application/json\" id=\"view3d-data\">" + view3d_json(c, options) +
        "</script>\n";
   // three.js (MIT, third_party/three/LICENSE; its licence header is kept in the text) and the

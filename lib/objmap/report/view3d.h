@@ -42,7 +42,8 @@ struct View3dSurface {
 };
 
 struct View3dContent {
-  PointCloud map;  // the semantic map in the gravity frame, with colours
+  PointCloud map;  // the semantic map in the gravity frame, with colours (may be thinned already)
+  std::size_t map_points_total = 0;  // the map's points before any thinning (0: map.size())
   std::vector<View3dObject> objects;
   std::vector<View3dSurface> surfaces;
   std::vector<Vec3> camera_path;   // gravity frame

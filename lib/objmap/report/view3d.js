@@ -26,8 +26,19 @@
   }
 
   // --- scene ------------------------------------------------------------------------------
-  const renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: true,
-                                            preserveDrawingBuffer: true});
+  let renderer;
+  try {
+    renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: true,
+                                        preserveDrawingBuffer: true});
+  } catch (e) {  // no WebGL (disabled, or a headless browser without one): say so, draw nothing
+    const note = document.createElement('p');
+    note.className = 'no-webgl';
+    note.textContent = 'This browser could not start WebGL (' + e.message + '): no 3D view. ' +
+                       'The rest of the page does not need it.';
+    root.replaceChildren(note);
+    root.style.height = 'auto';
+    return;
+  }
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   renderer.setClearColor(0xf4f5f7, 1);
   const scene = new THREE.Scene();
