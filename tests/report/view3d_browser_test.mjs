@@ -145,6 +145,31 @@ async function screenshotOfView(cdp) {
   return Buffer.from(shot.data, 'base64');
 }
 
+// The share of pixels that differ by more than 24 between two screenshots of one size.
+function changedShare(a, b) {
+  let n = 0;
+  for (let i = 0; i < a.width * a.height; ++i) {
+    const o = i * a.channels;
+    if (Math.abs(a.pixels[o] - b.pixels[o]) + Math.abs(a.pixels[o + 1] - b.pixels[o + 1]) +
+        Math.abs(a.pixels[o + 2] - b.pixels[o + 2]) > 24)
+      ++n;
+  }
+  return n / (a.width * a.height);
+}
+
+async function dragBy(cdp, from, dx, dy) {
+  await cdp.send('Input.dispatchMouseEvent', {type: 'mousePressed', x: from.x, y: from.y,
+                                              button: 'left', buttons: 1, clickCount: 1});
+  for (let k = 1; k <= 4; ++k)
+    await cdp.send('Input.dispatchMouseEvent', {type: 'mouseMoved', x: from.x + dx * k / 4,
+                                                y: from.y + dy * k / 4, button: 'left',
+                                                buttons: 1});
+  await cdp.send('Input.dispatchMouseEvent', {type: 'mouseReleased', x: from.x + dx,
+                                              y: from.y + dy, button: 'left', buttons: 0,
+                                              clickCount: 1});
+  await sleep(300);
+}
+
 async function setLayers(cdp, on) {
   const frames = await cdp.evaluate(`Number(document.getElementById('view3d').dataset.frames)`);
   await cdp.evaluate(`(() => { for (const i of document.querySelectorAll('#view3d input[data-layer]'))
@@ -276,6 +301,7 @@ async function main() {
   const html = path.join(runDir, 'report', 'report.html');
   const phrases = ['cup', 'cups on table', 'book on book', 'books on the table', 'chair on floor',
                    'cup near keyboard', 'mouse above floor', 'chair on table', 'tv on surface'];
+  const opening = openPage(chromium, html);  // chromium starts while objmap answers the queries
   const expected = {};
   for (const q of phrases)
     expected[q] = JSON.parse(run(['query', '--run', runDir, q, '--json'])).matches
@@ -284,7 +310,7 @@ async function main() {
         Object.values(expected).some((ids) => ids.length === 0),
         'the phrases include ones with several matches and ones with none');
 
-  const page = await openPage(chromium, html);
+  const page = await opening;
   const cdp = page.cdp;
   try {
 
@@ -302,6 +328,21 @@ async function main() {
     check(mapOnly > 0.05, 'the map alone covers more than 5% of the view');
     check(foregroundShare(all) >= mapOnly, 'all layers cover at least what the map covers');
     check(none < 0.002, 'with every layer off the view is background');
+
+    // Orbit (drag) turns the picture; the wheel zooms in (more of the view covered).
+    const centre = await cdp.evaluate(`(() => { const b = document.querySelector('#view3d canvas')
+        .getBoundingClientRect(); return {x: b.x + b.width / 2, y: b.y + b.height / 2}; })()`);
+    await dragBy(cdp, centre, 160, 40);
+    const turned = decodePng(await screenshotOfView(cdp));
+    const changed = changedShare(all, turned);
+    await cdp.send('Input.dispatchMouseEvent', {type: 'mouseWheel', x: centre.x, y: centre.y,
+                                                deltaX: 0, deltaY: -500});
+    await sleep(300);
+    const zoomed = foregroundShare(decodePng(await screenshotOfView(cdp)));
+    console.log(`orbit changed ${changed.toFixed(3)} of the pixels; zoom: foreground ` +
+                `${foregroundShare(turned).toFixed(3)} -> ${zoomed.toFixed(3)}`);
+    check(changed > 0.02, 'dragging orbits the view (the picture changes)');
+    check(zoomed > foregroundShare(turned) * 1.2, 'the wheel zooms in (more of the view covered)');
 
     // A click on a label that nothing covers opens its object's panel.
     const label = await uncoveredLabel(cdp);

@@ -116,7 +116,6 @@
     label.dataset.id = o.id;
     label.style.borderColor = o.color;
     label.textContent = o.id + ' ' + o.class;
-    label.addEventListener('click', function (e) { e.stopPropagation(); select(o.id); });
     labelsBox.appendChild(label);
     bounds.expandByPoint(top);
     return {data: o, body: body, box: box, label: label, top: top,
@@ -224,13 +223,20 @@
     root.dataset.labelsHidden = String(shown.length - placed.length);
   }
 
+  // Orbit, pan and zoom from anywhere over the view but its toolbar and panel (a drag may start
+  // on a label; a click on a label selects its object, elsewhere the object under the pointer).
   let drag = null;
-  canvas.addEventListener('contextmenu', function (e) { e.preventDefault(); });
-  canvas.addEventListener('pointerdown', function (e) {
-    drag = {x: e.clientX, y: e.clientY, pan: e.button === 2 || e.shiftKey, moved: 0};
-    canvas.setPointerCapture(e.pointerId);
+  const onControls = function (e) { return !!e.target.closest('.toolbar, .panel'); };
+  root.addEventListener('contextmenu', function (e) {
+    if (!onControls(e)) e.preventDefault();
   });
-  canvas.addEventListener('pointermove', function (e) {
+  root.addEventListener('pointerdown', function (e) {
+    if (onControls(e)) return;
+    drag = {x: e.clientX, y: e.clientY, pan: e.button === 2 || e.shiftKey, moved: 0,
+            label: e.target.classList.contains('label') ? Number(e.target.dataset.id) : null};
+    root.setPointerCapture(e.pointerId);
+  });
+  root.addEventListener('pointermove', function (e) {
     if (!drag) return;
     const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
     drag.x = e.clientX;
@@ -247,12 +253,14 @@
     }
     redraw();
   });
-  canvas.addEventListener('pointerup', function (e) {
-    const click = drag && drag.moved < 4;
+  root.addEventListener('pointerup', function (e) {
+    const click = drag && drag.moved < 4 ? drag : null;
     drag = null;
-    if (click) pick(e);
+    if (click && click.label !== null) select(click.label);  // the pointer is captured: no click
+    else if (click) pick(e);
   });
-  canvas.addEventListener('wheel', function (e) {
+  root.addEventListener('wheel', function (e) {
+    if (onControls(e)) return;
     e.preventDefault();
     view.distance = Math.min(400, Math.max(0.05, view.distance * Math.exp(e.deltaY * 0.001)));
     redraw();
