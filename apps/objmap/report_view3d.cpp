@@ -111,6 +111,9 @@ report::View3dContent view3d_content(View3dInputs in) {
   if (in.scene) {
     c.surfaces = view3d_surfaces(*in.scene, g);
     c.queries = all_query_matches(*in.scene);
+  } else {  // no relations to ask about: a class alone still finds its objects
+    for (const io::MappedObject& o : *in.objects)
+      c.queries[segmentation::canonical_class(o.class_name)].push_back(o.id);
   }
   return c;
 }
