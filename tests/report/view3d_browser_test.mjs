@@ -9,7 +9,8 @@
 // Exit 0: passed; 1: failed (each failure on stderr); 77: skipped (no chromium).
 //   node --experimental-websocket view3d_browser_test.mjs --shoot REPORT.html OUT.png [SEARCH]
 // A screenshot of the page's 3D view as a person sees it (labels, toolbar), after SEARCH if given,
-// with the panel of the first label that nothing covers open.
+// with the panel of the first label that nothing covers open; prints the load time and the time a
+// frame takes while zooming.
 import {spawn, spawnSync, execFileSync} from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -266,6 +267,14 @@ function searchFor(cdp, text) {  // the ids of the labels highlighted
 async function shoot(chromium, html, out, text) {
   const page = await openPage(chromium, html);
   try {
+    const timing = await page.cdp.evaluate(`new Promise((done) => { const v = document
+        .getElementById('view3d'); const f0 = Number(v.dataset.frames), t0 = performance.now();
+        let n = 0; const step = () => { v.dispatchEvent(new WheelEvent('wheel', {deltaY: n < 15 ?
+        2 : -2, bubbles: true, cancelable: true})); if (++n < 30) requestAnimationFrame(step);
+        else requestAnimationFrame(() => done({frames: Number(v.dataset.frames) - f0,
+        ms: performance.now() - t0})); }; step(); })`);
+    console.log(`${timing.frames} frames while zooming in ${timing.ms.toFixed(0)} ms: ` +
+                `${(timing.ms / timing.frames).toFixed(1)} ms a frame`);
     if (text) console.log(`search "${text}": ${JSON.stringify(await searchFor(page.cdp, text))}`);
     const label = await uncoveredLabel(page.cdp);
     if (label) await clickAt(page.cdp, label.x, label.y);

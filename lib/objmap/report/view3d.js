@@ -28,7 +28,9 @@
   // --- scene ------------------------------------------------------------------------------
   let renderer;
   try {
-    renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: true,
+    // No antialiasing: it halves the frame rate of a software renderer (SwiftShader, llvmpipe)
+    // and points gain nothing from it.
+    renderer = new THREE.WebGLRenderer({canvas: canvas, antialias: false,
                                         preserveDrawingBuffer: true});
   } catch (e) {  // no WebGL (disabled, or a headless browser without one): say so, draw nothing
     const note = document.createElement('p');
@@ -39,7 +41,7 @@
     root.style.height = 'auto';
     return;
   }
-  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.setPixelRatio(Math.min(2, window.devicePixelRatio || 1));
   renderer.setClearColor(0xf4f5f7, 1);
   const scene = new THREE.Scene();
   const camera = new THREE.PerspectiveCamera(50, 1, 0.01, 500);
@@ -51,18 +53,18 @@
   }
   const bounds = new THREE.Box3();
 
-  function pointCloud(positions, colors, color, size) {
+  function pointCloud(positions, colors, color, size, dimmable) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.BufferAttribute(positions, 3));
     if (colors) g.setAttribute('color', new THREE.BufferAttribute(colors, 3, true));
     const m = new THREE.PointsMaterial({size: size, vertexColors: !!colors,
-                                        color: colors ? 0xffffff : color, transparent: true});
+                                        color: colors ? 0xffffff : color, transparent: dimmable});
     return new THREE.Points(g, m);
   }
 
   if (data.map.count) {
     const pos = positionsOf(data.map);
-    layers.map.add(pointCloud(pos, bytesOf(data.map.rgb), 0, data.map.point_size_m));
+    layers.map.add(pointCloud(pos, bytesOf(data.map.rgb), 0, data.map.point_size_m, false));
     // The view frames the map's 1st to 99th percentile on each axis (a few stray points far away
     // do not shrink it).
     const n = pos.length / 3, step = Math.max(1, Math.floor(n / 20000)), lo = [], hi = [];
@@ -92,7 +94,7 @@
       g.computeVertexNormals();
       body = new THREE.Mesh(g, new THREE.MeshBasicMaterial({color: colour, transparent: true}));
     } else {
-      body = pointCloud(positionsOf(o.points), null, colour, data.map.point_size_m * 1.6);
+      body = pointCloud(positionsOf(o.points), null, colour, data.map.point_size_m * 1.6, true);
     }
     layers.objects.add(body);
     const corners = [];
