@@ -186,16 +186,21 @@ async function openPage(chromium, html) {
   const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'objmap-chromium-'));
   const browser = spawn(chromium, [
     '--headless=new', '--use-gl=swiftshader', '--enable-unsafe-swiftshader', '--no-sandbox',
-    '--no-first-run', '--no-default-browser-check', '--disable-extensions',
+    '--no-first-run', '--no-default-browser-check', '--disable-extensions', '--disable-breakpad',
+    '--disable-crash-reporter',
     '--remote-debugging-port=0', '--user-data-dir=' + profile, '--window-size=1000,900',
     'about:blank'], {stdio: ['ignore', 'ignore', 'pipe'], detached: true});
   const exited = new Promise((resolve) => browser.on('exit', resolve));
   browser.stderr.on('data', () => {});
-  const close = async () => {
+  const killGroup = () => {
     try {
       process.kill(-browser.pid, 'SIGKILL');  // chromium and its children (its process group)
     } catch (e) {
     }
+  };
+  process.on('exit', killGroup);  // also when the script ends early (a timeout, a failure)
+  const close = async () => {
+    killGroup();
     await exited;
     fs.rmSync(profile, {recursive: true, force: true, maxRetries: 10, retryDelay: 100});
   };
