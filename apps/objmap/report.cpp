@@ -29,6 +29,7 @@
 #include "objmap/report/scene_graph.h"
 #include "objmap/report/thumbnail.h"
 #include "objmap/report/topview.h"
+#include "report_view3d.h"
 
 namespace objmap::app {
 namespace {
@@ -47,6 +48,9 @@ struct ReportOptions {
   std::string up = "auto";          // world up axis: auto (objects.json), x, y or z
   double pixel_m = 0.005;           // top view resolution
   int thumbnail_px = 160;           // thumbnail side
+  // The 3D view draws the semantic map thinned to at most this many points: 200k draw smoothly in
+  // a browser and keep report.html at a few MB.
+  std::size_t view_points = 200000;
 };
 
 // The series colours: the casing of a coloured trajectory and its line in the error plot.
@@ -149,6 +153,8 @@ void check_report_options(const ReportOptions& options) {
           std::to_string(options.thumbnail_px) + "; expected 32 to 1024 pixels");
   require(std::isfinite(options.pixel_m) && options.pixel_m >= 0.0005 && options.pixel_m <= 1,
           "--pixel", std::to_string(options.pixel_m) + "; expected 0.0005 to 1 metres per pixel");
+  require(options.view_points >= 1000 && options.view_points <= 5000000, "--view-points",
+          std::to_string(options.view_points) + "; expected 1000 to 5000000 points");
   io::require_replaceable(options.out.empty() ? options.run / "report" : options.out,
                           io::kReportFolder);
 }
@@ -433,12 +439,25 @@ std::optional<double> run_voxel_m(const json& run, const char* section) {
   return std::nullopt;
 }
 
+// The camera positions of the trajectory the map was fused with (world frame): the run's
+// estimate, or the corrected trajectory for a corrected run.
+std::vector<Vec3> camera_path(const ReportOptions& options, const Trajectories& t) {
+  const std::optional<Trajectory>& map_trajectory =
+      fs::exists(options.run / "correction.json") && t.corrected ? t.corrected : t.est;
+  std::vector<Vec3> out;
+  if (map_trajectory)
+    for (const StampedPose& p : map_trajectory->poses)
+      out.push_back(p.world_from_cam.translation());
+  return out;
+}
+
 // Step 5: the top view with the objects and the camera path, in the map's frame: the run's
 // estimate, or the corrected trajectory for a corrected run (fused with it). A run fused with
 // --dense-map false has no semantic map: the objects-only map is drawn.
-void add_top_view(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
-                  int up_axis, const std::optional<Eigen::Matrix3d>& gravity,
-                  report::PageContent& page) {
+// Returns the map in the gravity frame (for the 3D view).
+PointCloud add_top_view(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
+                        int up_axis, const std::optional<Eigen::Matrix3d>& gravity,
+                        report::PageContent& page) {
   const bool has_semantic = fs::exists(options.run / "map_semantic.ply");
   const std::string map_name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
   require(fs::exists(options.run / map_name), (options.run / "map_semantic.ply").string(),
@@ -461,14 +480,10 @@ void add_top_view(const ReportOptions& options, const RunFiles& files, const Tra
       d.obb.rotation = *gravity * d.obb.rotation;
     }
   std::vector<report::TopViewPath> paths;
-  const std::optional<Trajectory>& map_trajectory =
-      fs::exists(options.run / "correction.json") && t.corrected ? t.corrected : t.est;
-  if (map_trajectory) {
+  if (const std::vector<Vec3> cameras = camera_path(options, t); !cameras.empty()) {
     report::TopViewPath path;
     path.color = Rgb{230, 0, 120};
-    for (const StampedPose& p : map_trajectory->poses)
-      path.points_in_world.push_back(gravity ? Vec3(*gravity * p.world_from_cam.translation())
-                                             : Vec3(p.world_from_cam.translation()));
+    for (const Vec3& p : cameras) path.points_in_world.push_back(gravity ? Vec3(*gravity * p) : p);
     paths.push_back(path);
   }
   const report::TopView view = report::render_top_view(map, drawn, view_options, paths);
@@ -485,12 +500,14 @@ void add_top_view(const ReportOptions& options, const RunFiles& files, const Tra
                 map_name.c_str(), up_text(options, gravity).c_str(), view.pixel_m * 1000,
                 map.size(), t.est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;
+  return map;
 }
 
 // One object of the page: its thumbnail and the point counts before the filters (objects.json).
 report::PageObject page_object(const ReportOptions& options, std::size_t index,
                                const io::MappedObject& o, const json& record,
-                               const report::ThumbnailOptions& thumb_options) {
+                               const report::ThumbnailOptions& thumb_options,
+                               PointCloud* cloud_out) {
   report::PageObject p;
   p.object = o;
   if (record.contains("points") && record["points"].is_object()) {
@@ -520,22 +537,51 @@ report::PageObject page_object(const ReportOptions& options, std::size_t index,
   std::snprintf(text, sizeof text, "%s: %zu points, %d observations, %.0f×%.0f×%.0f cm",
                 label.c_str(), cloud.size(), o.observations, size_cm.x(), size_cm.y(), size_cm.z());
   p.thumbnail.caption = text;
+  *cloud_out = cloud;
   return p;
 }
 
-// Step 6: a thumbnail per object.
-void add_thumbnails(const ReportOptions& options, const RunFiles& files, int up_axis,
-                    report::PageContent& page) {
+// Step 6: a thumbnail per object; returns each object's points (world frame).
+std::vector<PointCloud> add_thumbnails(const ReportOptions& options, const RunFiles& files,
+                                       int up_axis, report::PageContent& page) {
   report::ThumbnailOptions thumb_options;
   thumb_options.size_px = options.thumbnail_px;
   thumb_options.up_axis = up_axis;
   if (const auto voxel_m = run_voxel_m(files.run, "objects")) thumb_options.point_size_m = *voxel_m;
+  std::vector<PointCloud> clouds(files.objects.size());
   for (std::size_t i = 0; i < files.objects.size(); ++i)
-    page.objects.push_back(
-        page_object(options, i, files.objects[i], files.objects_doc["objects"][i], thumb_options));
+    page.objects.push_back(page_object(options, i, files.objects[i],
+                                       files.objects_doc["objects"][i], thumb_options, &clouds[i]));
+  return clouds;
 }
 
-// Step 7: the page, the summary and every picture beside them, staged and renamed into OUT.
+// Step 7: the 3D view: the map, the objects' points and boxes, the surfaces, the camera path and
+// the answers of `objmap query` to every phrase of the map's classes.
+void add_view3d(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
+                const std::optional<Eigen::Matrix3d>& gravity, const PointCloud& map,
+                std::vector<PointCloud> clouds, report::PageContent& page) {
+  View3dInputs in;
+  in.objects = &files.objects;
+  for (const json& record : files.objects_doc["objects"])
+    in.views.push_back(record.contains("view_count") && record["view_count"].is_number_integer()
+                           ? record["view_count"].get<int>()
+                           : 0);
+  in.clouds = std::move(clouds);
+  in.map = report::thin_points(map, options.view_points);
+  in.map_points_total = map.size();
+  if (const auto voxel_m = run_voxel_m(files.run, "map")) in.map_point_size_m = *voxel_m;
+  in.camera_path = camera_path(options, t);
+  try {
+    in.scene = io::read_map_scene(options.run / "objects.json");
+  } catch (const InputError&) {
+    page.notes.push_back("3D view: no surfaces, relations nor search (objects.json has no scene)");
+  }
+  in.gravity_from_world = gravity;
+  page.view3d = view3d_content(std::move(in));
+  page.view3d_options.max_map_points = options.view_points;
+}
+
+// Step 8: the page, the summary and every picture beside them, staged and renamed into OUT.
 fs::path write_report(const ReportOptions& options, const report::PageContent& page) {
   const fs::path out = options.out.empty() ? options.run / "report" : options.out;
   io::StagingDir staging(out, io::kReportFolder);
@@ -581,11 +627,13 @@ void run_report(const ReportOptions& options) {
   // 4. Tables 3-5 against ground-truth objects.
   add_object_tables(options, files, page);
   // 5. The top view with the objects and the camera path.
-  add_top_view(options, files, trajectories, up_axis, gravity, page);
+  const PointCloud map = add_top_view(options, files, trajectories, up_axis, gravity, page);
   add_scene_graph(options, page);
   // 6. A thumbnail per object.
-  add_thumbnails(options, files, up_axis, page);
-  // 7. The files: the page, the summary and every picture beside them.
+  std::vector<PointCloud> clouds = add_thumbnails(options, files, up_axis, page);
+  // 7. The 3D view (the map and the objects in the gravity frame).
+  add_view3d(options, files, trajectories, gravity, map, std::move(clouds), page);
+  // 8. The files: the page, the summary and every picture beside them.
   const fs::path out = write_report(options, page);
   print_report_summary(page, out);
 }
@@ -622,6 +670,9 @@ void setup_report(CLI::App& app) {
   cmd->add_option("--pixel", options->pixel_m, "top view resolution, metres per pixel")
       ->capture_default_str();
   cmd->add_option("--thumbnail", options->thumbnail_px, "thumbnail side, pixels")
+      ->capture_default_str();
+  cmd->add_option("--view-points", options->view_points,
+                  "the 3D view draws the semantic map thinned to at most this many points")
       ->capture_default_str();
   cmd->callback([options] { run_report(*options); });
 }

@@ -85,8 +85,11 @@ TEST(FuseFlagsCli, AThresholdNoScoreCanPassIsRefused) {
 
 TEST(ReportFlagsCli, BadOptionNamesItsFlag) {
   TempDir dir;
-  expect_flags_named({"report", "--run", (dir / "run").string()},
-                     {{"--pixel", "0"}, {"--pixel", "nan"}, {"--thumbnail", "5"}, {"--up", "w"}});
+  expect_flags_named({"report", "--run", (dir / "run").string()}, {{"--pixel", "0"},
+                                                                   {"--pixel", "nan"},
+                                                                   {"--thumbnail", "5"},
+                                                                   {"--up", "w"},
+                                                                   {"--view-points", "10"}});
 }
 
 TEST(CorrectCli, BadOptionNamesItsFlag) {

@@ -1,8 +1,8 @@
 #pragma once
 // A small XML well-formedness checker for the report's SVG and HTML: balanced and properly nested
 // tags, attribute values quoted, no duplicate attribute, entities valid, no raw '<' or '&' in text.
-// A leading <!DOCTYPE ...>, comments and <?...?> are skipped; <style> and <script> content is
-// checked for '<' only as text (the report writes none).
+// A leading <!DOCTYPE ...>, comments and <?...?> are skipped; <style> and <script> content is raw
+// text up to its end tag, as HTML reads it (the 3D view's scripts).
 #include <cctype>
 #include <set>
 #include <string>
@@ -129,10 +129,44 @@ inline std::string xml_problem(const std::string& doc) {
     if (roots > 1) return fail("a second root element <" + name + ">");
     if (!self_closing) open.push_back(name);
     i = k;
+    if (!self_closing && (name == "script" || name == "style")) {  // raw text up to its end tag
+      const std::size_t end = doc.find("</" + name, i);
+      if (end == std::string::npos) return fail("unterminated <" + name + ">");
+      i = end;
+    }
   }
   if (!open.empty()) return "unclosed <" + open.back() + "> at the end";
   if (roots == 0) return "no element";
   return "";
+}
+
+// A test decoder, independent of the library's encoder.
+inline std::string base64_decode(const std::string& text) {
+  std::string out;
+  unsigned buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    int v = -1;
+    if (c >= 'A' && c <= 'Z')
+      v = c - 'A';
+    else if (c >= 'a' && c <= 'z')
+      v = c - 'a' + 26;
+    else if (c >= '0' && c <= '9')
+      v = c - '0' + 52;
+    else if (c == '+')
+      v = 62;
+    else if (c == '/')
+      v = 63;
+    else
+      continue;  // padding
+    buffer = buffer << 6 | v;
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += static_cast<char>(buffer >> bits & 0xff);
+    }
+  }
+  return out;
 }
 
 // Occurrences of `needle` in `text`.

@@ -280,7 +280,8 @@ std::string page_html(const PageContent& c) {
     h += "</ul>\n";
   }
 
-  // 1. The map from above, big.
+  // 1. The map in 3D, then from above, big.
+  if (c.view3d) h += "<h2>The map in 3D</h2>\n" + view3d_html(*c.view3d, c.view3d_options);
   if (!c.topview.bytes.empty()) {
     h += "<h2>Semantic map seen from above</h2>\n<figure class=\"map\">" +
          image_tag(c.topview, "topview", "top view of the semantic map") + "<figcaption>" +

@@ -7,6 +7,7 @@
 #include "objmap/eval/objects.h"
 #include "objmap/eval/stats.h"
 #include "objmap/io/objects_json.h"
+#include "objmap/report/view3d.h"
 
 // The report page of a run: everything it shows, gathered by the caller (apps/objmap/report.cpp
 // reads the files), and the two renderings: one self-contained HTML file (pictures embedded as
@@ -67,6 +68,8 @@ struct PageContent {
   std::optional<eval::PointCounts> points;            // Table 6
   // run.json "duplicates" (absent: a run.json without that section, e.g. of an older objmap).
   std::optional<std::vector<PageDuplicate>> duplicates;
+  std::optional<View3dContent> view3d;  // the interactive 3D view; none: the page has none
+  View3dOptions view3d_options;
   std::vector<std::string> notes;   // what could not be shown and why
   std::vector<std::string> inputs;  // "label: path" lines for the footer
 };

@@ -8,7 +8,7 @@ namespace objmap::segmentation {
 namespace {
 
 // Other spellings (after lower-casing, '_' -> ' ' and blank collapsing) -> canonical name.
-const std::map<std::string, std::string>& aliases() {
+const std::map<std::string, std::string>& alias_table() {
   static const std::map<std::string, std::string> table = {
       {"tv", "tv monitor"},
       {"tvmonitor", "tv monitor"},
@@ -34,6 +34,8 @@ const std::map<std::string, std::string>& aliases() {
 
 }  // namespace
 
+const std::map<std::string, std::string>& class_aliases() { return alias_table(); }
+
 std::string canonical_class(const std::string& name) {
   std::string normal;
   bool pending_space = false;
@@ -47,8 +49,8 @@ std::string canonical_class(const std::string& name) {
     pending_space = false;
     normal.push_back(static_cast<char>(std::tolower(u)));
   }
-  const auto alias = aliases().find(normal);
-  return alias == aliases().end() ? normal : alias->second;
+  const auto alias = alias_table().find(normal);
+  return alias == alias_table().end() ? normal : alias->second;
 }
 
 const std::vector<std::string>& coco80_names() {

@@ -1,4 +1,5 @@
 #pragma once
+#include <map>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,9 @@ namespace objmap::segmentation {
 //   "wineglass" -> "wine glass", "hotdog" -> "hot dog"
 // Names outside COCO-80 keep their normalised spelling ("009_gelatin_box" -> "009 gelatin box").
 std::string canonical_class(const std::string& name);
+
+// The aliases above: normalised spelling (lower case, '_' -> ' ', blanks collapsed) -> canonical.
+const std::map<std::string, std::string>& class_aliases();
 
 // The 80 COCO class names in canonical spelling, index = 0-based id of Darknet's coco.names
 // (0 "person", 56 "chair", 62 "tv monitor", 79 "toothbrush").
