@@ -208,7 +208,7 @@ std::string view3d_html(const View3dContent& c, const View3dOptions& options) {
        "surface].</p>\n";
   h += "<script type=\"application/json\" id=\"view3d-data\">" + view3d_json(c, options) +
        "</script>\n";
-  // three.js (MIT, third_party/three/LICENSE; its licence header is kept in the text) and the
+  // three.js (MIT, lib/objmap/report/three/LICENSE; its licence header is kept in the text) and the
   // viewer, one classic script so that it runs from file://.
   h += "<script>\n\"use strict\";\n" + std::string(three_js()) + "\n" + std::string(view3d_js()) +
        "\n</script>\n";
