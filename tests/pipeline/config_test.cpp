@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <set>
 
 #include "objmap/core/error.h"
+#include "objmap/pipeline/config.h"
 #include "objmap/pipeline/fuse.h"
 #include "support/test_support.h"
 
@@ -83,6 +85,22 @@ TEST(CheckPart, NamesTheConfigKeyAndLeavesOtherErrorsAlone) {
               check_part([] { require(false, "file.txt:3", "bad"); }, "PartOptions", "part");
             }),
             "file.txt:3: bad");
+}
+
+TEST(ConfigFile, AnIntegerBeyondIntsRangeIsNamedNotWrapped) {
+  test::TempDir dir;
+  int n = 7;
+  const std::vector<ConfigField> fields = {{"map.count", "--count", "a count", &n}};
+  for (const std::string big : {"3000000000", "-3000000000", "18446744073709551615"}) {
+    std::ofstream(dir / "c.json") << R"({"map": {"count": )" << big << "}}";
+    EXPECT_EQ(error_of([&] { apply_config_file(dir / "c.json", fields); }),
+              (dir / "c.json").string() + ": map.count: is " + big +
+                  "; expected an integer within -2147483648..2147483647");
+    EXPECT_EQ(n, 7) << "left as it was";
+  }
+  std::ofstream(dir / "c.json") << R"({"map": {"count": -2147483648}})";
+  apply_config_file(dir / "c.json", fields);
+  EXPECT_EQ(n, -2147483648);
 }
 
 }  // namespace

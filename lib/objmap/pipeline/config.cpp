@@ -1,5 +1,7 @@
 #include "objmap/pipeline/config.h"
 
+#include <cstdint>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -83,6 +85,16 @@ std::vector<std::string> apply_config_file(const fs::path& file,
           } else if constexpr (std::is_same_v<T, int>) {
             if (!node->is_number_integer())
               throw InputError(where, "expected an integer, got " + node->dump());
+            // 3000000000 would wrap round to a negative int: out of int's range is refused.
+            const bool fits =
+                node->is_number_unsigned()
+                    ? node->get<std::uint64_t>() <= std::numeric_limits<int>::max()
+                    : node->get<std::int64_t>() >= std::numeric_limits<int>::min() &&
+                          node->get<std::int64_t>() <= std::numeric_limits<int>::max();
+            if (!fits)
+              throw InputError(where, "is " + node->dump() + "; expected an integer within " +
+                                          std::to_string(std::numeric_limits<int>::min()) + ".." +
+                                          std::to_string(std::numeric_limits<int>::max()));
             *target = node->get<int>();
           } else if constexpr (std::is_same_v<T, double>) {
             if (!node->is_number())
