@@ -43,8 +43,9 @@ void run_summary(const SummaryCommand& c) {
   }
   std::fputs(markdown.c_str(), stdout);
   if (!c.out.empty())
-    std::printf("\nwritten     %s/{summary.md, summary.csv, summary.json, objects.svg, errors.svg}\n",
-                c.out.c_str());
+    std::printf(
+        "\nwritten     %s/{summary.md, summary.csv, summary.json, objects.svg, errors.svg}\n",
+        c.out.c_str());
 }
 
 void setup_summary(CLI::App& app) {

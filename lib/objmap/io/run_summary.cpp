@@ -173,7 +173,8 @@ void read_evaluations(const fs::path& run, RunSummary* s) {
 RunSummary read_run_summary(const fs::path& run) {
   std::error_code ec;
   if (!fs::is_directory(run, ec))
-    throw InputError(run.string(), "no such folder; expected a run folder (objmap run or workflow)");
+    throw InputError(run.string(),
+                     "no such folder; expected a run folder (objmap run or workflow)");
   if (!fs::is_directory(run / "logs", ec) && !fs::is_directory(run / "map", ec))
     throw InputError(run.string(),
                      "not a run folder: it holds neither logs/ nor map/ (an objmap run or "

@@ -29,9 +29,9 @@ struct StageCost {
 };
 
 struct RunSummary {
-  std::string name;    // the folder's name
-  std::string path;    // as given
-  std::string status;  // "ok" (report written), "failed" (a stage failed), "incomplete"
+  std::string name;          // the folder's name
+  std::string path;          // as given
+  std::string status;        // "ok" (report written), "failed" (a stage failed), "incomplete"
   std::string failed_stage;  // failed: the first stage whose log exists and output does not
   std::string error;         // failed: the last non-empty line of that stage's log
   std::string map;           // the map read: "map" or "corrected"

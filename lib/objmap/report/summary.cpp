@@ -17,8 +17,8 @@ namespace objmap::report {
 
 namespace {
 
-using nlohmann::json;
 using io::RunSummary;
+using nlohmann::json;
 
 // The stages any recording ran, in the pipeline's order.
 std::vector<std::string> stages_run(const std::vector<RunSummary>& runs) {
@@ -150,9 +150,10 @@ std::string row(const std::vector<std::string>& cells) {
   return line + "\n";
 }
 
-std::string header(const std::vector<std::string>& cells) {
+// The header and its rule: the first `text_columns` columns left-aligned, the numbers right.
+std::string header(const std::vector<std::string>& cells, std::size_t text_columns = 1) {
   std::string rule = "|";
-  for (std::size_t i = 0; i < cells.size(); ++i) rule += i == 0 ? "---|" : "--:|";
+  for (std::size_t i = 0; i < cells.size(); ++i) rule += i < text_columns ? "---|" : "--:|";
   return row(cells) + rule + "\n";
 }
 
@@ -162,10 +163,11 @@ int count_status(const std::vector<RunSummary>& runs, const std::string& status)
 }
 
 std::string recordings_table(const std::vector<RunSummary>& runs) {
-  std::string text = header({"recording", "status", "keyframes", "objects", "duplicates",
-                             "ATE RMSE (m)", "RPE RMSE (m)", "RPE RMSE (deg)", "ATE corrected (m)",
-                             "GT objects", "matched", "centroid error mean (m)", "time (s)",
-                             "peak memory (MB)"});
+  std::string text =
+      header({"recording", "status", "keyframes", "objects", "duplicates", "ATE RMSE (m)",
+              "RPE RMSE (m)", "RPE RMSE (deg)", "ATE corrected (m)", "GT objects", "matched",
+              "centroid error mean (m)", "time (s)", "peak memory (MB)"},
+             2);
   for (const RunSummary& r : runs)
     text += row({cell(r.name), r.status == "failed" ? "failed (" + r.failed_stage + ")" : r.status,
                  md(r.keyframes, 0), md(r.objects, 0), md(r.duplicates, 0), md(r.ate_rmse_m, 4),
@@ -220,8 +222,8 @@ std::string csv_value(const json& v) {
 }  // namespace
 
 std::string summary_markdown(const std::vector<RunSummary>& runs) {
-  std::string text = "# objmap summary\n\n" + std::to_string(runs.size()) + " recordings: " +
-                     std::to_string(count_status(runs, "ok")) + " ok, " +
+  std::string text = "# objmap summary\n\n" + std::to_string(runs.size()) +
+                     " recordings: " + std::to_string(count_status(runs, "ok")) + " ok, " +
                      std::to_string(count_status(runs, "failed")) + " failed, " +
                      std::to_string(count_status(runs, "incomplete")) + " incomplete.\n\n";
   text += recordings_table(runs);
@@ -239,17 +241,26 @@ std::string summary_markdown(const std::vector<RunSummary>& runs) {
 }
 
 std::string summary_csv(const std::vector<RunSummary>& runs) {
-  static const std::vector<std::string> fixed = {
-      "name",          "status",
-      "failed_stage",  "error",
-      "map",           "keyframes",
-      "objects",       "duplicates",
-      "ate_rmse_m",    "rpe_translational_rmse_m",
-      "rpe_rotational_rmse_deg", "ate_corrected_rmse_m",
-      "rpe_corrected_translational_rmse_m", "gt_objects",
-      "matched_objects", "count_error",
-      "centroid_error_mean_m", "centroid_error_rmse_m",
-      "seconds",       "max_rss_mb"};
+  static const std::vector<std::string> fixed = {"name",
+                                                 "status",
+                                                 "failed_stage",
+                                                 "error",
+                                                 "map",
+                                                 "keyframes",
+                                                 "objects",
+                                                 "duplicates",
+                                                 "ate_rmse_m",
+                                                 "rpe_translational_rmse_m",
+                                                 "rpe_rotational_rmse_deg",
+                                                 "ate_corrected_rmse_m",
+                                                 "rpe_corrected_translational_rmse_m",
+                                                 "gt_objects",
+                                                 "matched_objects",
+                                                 "count_error",
+                                                 "centroid_error_mean_m",
+                                                 "centroid_error_rmse_m",
+                                                 "seconds",
+                                                 "max_rss_mb"};
   const std::vector<std::string> stages = stages_run(runs);
   const std::vector<std::string> classes = classes_of(runs);
   std::vector<std::string> head = fixed;
@@ -345,7 +356,8 @@ std::string bar_chart_svg(const std::string& title, const std::string& unit,
     svg.text(x_of(ticks[i]), bottom + 16, tick_labels.ticks[i],
              {{"font-size", "11"}, {"text-anchor", "middle"}});
   }
-  svg.text(left + plot_w / 2, bottom + 34, tick_labels.unit.empty() ? "" : "[" + tick_labels.unit + "]",
+  svg.text(left + plot_w / 2, bottom + 34,
+           tick_labels.unit.empty() ? "" : "[" + tick_labels.unit + "]",
            {{"font-size", "11"}, {"text-anchor", "middle"}});
   double lx = left;
   for (const Bars& b : series) {
