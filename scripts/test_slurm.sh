@@ -108,13 +108,17 @@ for n in synthetic1 synthetic2 synthetic3; do
   done
 done
 [ -f "$work/results/synthetic1/corrected/trajectory_corrected.txt" ] || { echo "missing: corrected"; status=1; }
-# Slurm's own record: every job it accepted, with the CPUs and memory it gave it.
+# Slurm's own record: every job it accepted, its state, and the CPUs and memory it gave it.
 accepted=$(grep -c "_slurm_rpc_submit_batch_job: JobId=" "$tmp/slurmctld.log" || true)
-echo "slurmctld   $accepted batch jobs accepted; allocations: $(grep -o "sched: Allocate JobId=[0-9]* NodeList=localhost #CPUs=[0-9]*" "$tmp/slurmctld.log" | grep -o "#CPUs=[0-9]*" | sort | uniq -c | tr -s ' ' | tr '\n' ';')"
+completed=$(scontrol -o show job | grep -c "JobState=COMPLETED" || true)
+echo "slurmctld   $accepted batch jobs accepted, $completed completed; per job name, CPUs and memory:"
+scontrol -o show job | grep -o 'JobName=[^ ]*\|NumCPUs=[0-9]*\|MinMemoryNode=[^ ]*' | paste - - - |
+  sort | uniq -c | sed 's/^ */  /'
+[ "$completed" -eq "$jobs" ] || { echo "Slurm completed $completed jobs, Snakemake submitted $jobs"; status=1; }
 [ "$accepted" -eq "$jobs" ] || { echo "Slurm accepted $accepted jobs, Snakemake submitted $jobs"; status=1; }
 [ "$jobs" -ge 22 ] || { echo "expected at least 22 Slurm jobs, got $jobs"; status=1; }
 echo
-sed -n '1,/^$/p' "$work/results/summary/summary.md"
+grep "recordings:" "$work/results/summary/summary.md"
 sed -n '/^| recording | status/,/^$/p' "$work/results/summary/summary.md"
 sed -n '/^## Time and memory per stage/,/^$/{/^## /!p};/^| stage |/,/^$/p' "$work/results/summary/summary.md" | awk 'NF' | uniq
 if [ -n "${2:-}" ]; then rm -rf "$2"; cp -r "$work" "$2"; echo "kept        $2"; fi
