@@ -152,7 +152,7 @@ def main():
         results = os.path.join(tmp, "results")
 
         first = snakemake(config, tmp)
-        check(first.returncode == 0, "first run: " + first.stderr[-2000:])
+        check(first.returncode == 0, f"first run: exit {first.returncode}: " + first.stderr[-3000:])
         for name in names:
             for f in ("track/tracks.json", "map/objects.json", "map/run.json", "eval/ate.json",
                       "eval/rpe.json", "eval/objects.json", "report/report.html", "benchmarks/fuse.tsv"):
@@ -164,12 +164,13 @@ def main():
         check_summary_figures(results, names)
 
         again = snakemake(config + ["-n"], tmp)
-        check("Nothing to be done" in again.stdout + again.stderr, "second invocation: " + again.stdout[-1500:])
+        check("Nothing to be done" in again.stdout + again.stderr,
+              "second invocation: " + (again.stdout + again.stderr)[:3000])
 
         before = mtimes(results, names)
         os.remove(os.path.join(results, names[1], "map", "objects.json"))
         rerun = snakemake(config, tmp)
-        check(rerun.returncode == 0, "rerun: " + rerun.stderr[-2000:])
+        check(rerun.returncode == 0, f"rerun: exit {rerun.returncode}: " + rerun.stderr[-3000:])
         jobs = rules_run(rerun.stdout + rerun.stderr)
         expected = {("fuse", names[1]), ("eval_ate", names[1]), ("eval_rpe", names[1]),
                     ("eval_objects", names[1]), ("report", names[1]), ("summary", None)}

@@ -37,16 +37,6 @@ bool present(const fs::path& p) {
   return fs::exists(p, ec);
 }
 
-// The last line of a log that says something.
-std::string last_line(const fs::path& log) {
-  std::ifstream in(log);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  while (!last.empty() && (last.back() == '\r' || last.back() == ' ')) last.pop_back();
-  return last;
-}
-
 // A value of a JSON file by its JSON pointer ("/translational/rmse"), or nothing when the file or
 // the value is absent; a value of the wrong type is an InputError naming the file and field.
 template <typename T>
@@ -169,6 +159,15 @@ void read_evaluations(const fs::path& run, RunSummary* s) {
 }
 
 }  // namespace
+
+std::string last_line(const fs::path& log) {
+  std::ifstream in(log);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  while (!last.empty() && (last.back() == '\r' || last.back() == ' ')) last.pop_back();
+  return last;
+}
 
 RunSummary read_run_summary(const fs::path& run) {
   std::error_code ec;

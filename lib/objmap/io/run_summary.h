@@ -44,6 +44,9 @@ struct RunSummary {
   std::vector<StageCost> stages;  // in run_stages() order, those that ran
 };
 
+// The last line of a log that says something (trailing spaces and CRs dropped); "" when none.
+std::string last_line(const std::filesystem::path& log);
+
 // Reads the run folder `run`. Throws InputError(run, ...) when it is not a run folder (neither
 // logs/ nor map/), InputError(file, ...) for a file that is not what it should be.
 RunSummary read_run_summary(const std::filesystem::path& run);
