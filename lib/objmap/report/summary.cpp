@@ -335,7 +335,7 @@ struct Bars {
 // with "nice" ticks in `unit`, a legend on top; each bar is labelled with its value.
 std::string bar_chart_svg(const std::string& title, const std::string& unit,
                           const std::vector<std::string>& labels, const std::vector<Bars>& series) {
-  const double left = 170, right = 40, top = 56, bar = 14, gap = 10, width = 640;
+  const double left = 170, right = 70, top = 56, bar = 14, gap = 10, width = 640;
   const double group = bar * series.size() + gap;
   const double height = top + group * labels.size() + 46;
   Svg svg(width, height);
@@ -387,11 +387,13 @@ std::string bar_chart_svg(const std::string& title, const std::string& unit,
 std::string objects_per_recording_svg(const std::vector<RunSummary>& runs) {
   std::vector<std::string> labels;
   Bars objects{"objects", Rgb{70, 110, 180}, {}};
+  Bars duplicates{"suspected duplicate pairs", Rgb{150, 150, 150}, {}};
   for (const RunSummary& r : runs) {
     labels.push_back(r.status == "failed" ? r.name + " (failed)" : r.name);
     objects.values.push_back(r.objects ? std::optional<double>(*r.objects) : std::nullopt);
+    duplicates.values.push_back(r.duplicates ? std::optional<double>(*r.duplicates) : std::nullopt);
   }
-  return bar_chart_svg("Objects per recording", "", labels, {objects});
+  return bar_chart_svg("Objects per recording", "", labels, {objects, duplicates});
 }
 
 std::string errors_per_recording_svg(const std::vector<RunSummary>& runs) {

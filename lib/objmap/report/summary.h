@@ -19,7 +19,7 @@ std::string summary_csv(const std::vector<io::RunSummary>& runs);
 
 std::string summary_json(const std::vector<io::RunSummary>& runs);
 
-// Objects per recording (a bar each, the suspected duplicates named in the label).
+// Objects and suspected duplicate pairs per recording (a failed one marked in its label).
 std::string objects_per_recording_svg(const std::vector<io::RunSummary>& runs);
 
 // ATE RMSE and mean object centroid error per recording, in metres ("no ground truth" when no
