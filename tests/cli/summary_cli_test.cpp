@@ -110,6 +110,27 @@ TEST(SummaryCli, TheTableCarriesEachRunsOwnFiguresAndNamesTheFailure) {
     EXPECT_EQ(read_text(tmp / "sum" / svg).rfind("<svg", 0), 0u) << svg;
 }
 
+TEST(SummaryCli, AnObjmapRunFolderGivesItsStageTimesFromStagesJson) {
+  TempDir tmp;
+  const fs::path run = tmp / "run";
+  fs::create_directories(run / "map");
+  fs::create_directories(run / "report");
+  write_text(run / "map" / "objects.json", R"({"objects":[{"class":"chair"}]})");
+  write_text(run / "map" / "run.json", R"({"counts":{"keyframes":4},"duplicates":{"count":0}})");
+  write_text(run / "report" / "report.html", "<html></html>");
+  write_text(run / "stages.json", R"({"detect":{"seconds":1.25},"fuse":{"seconds":0.5}})");
+  const RunResult r = run_objmap({"summary", run.string(), "--out", (tmp / "sum").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(tmp / "sum" / "summary.json");
+  const json doc = json::parse(in);
+  const json& rec = doc["recordings"][0];
+  EXPECT_EQ(rec["status"], "ok");
+  EXPECT_EQ(rec["objects_per_class"], json::parse(R"({"chair":1})"));
+  EXPECT_EQ(rec["stages"], json::parse(R"([{"stage":"detect","seconds":1.25,"max_rss_mb":null},
+                                           {"stage":"fuse","seconds":0.5,"max_rss_mb":null}])"));
+  EXPECT_TRUE(rec["max_rss_mb"].is_null());
+}
+
 TEST(SummaryCli, AFolderThatIsNotARunIsExitTwoNamingIt) {
   TempDir tmp;
   fs::create_directories(tmp / "empty");
