@@ -14,13 +14,14 @@ if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found; expected clang and its fuzzer runtime (scripts/install-deps.sh --fuzz)" >&2
   exit 2
 fi
-read -r -a targets <<<"${FUZZ_TARGETS:-$(sed -n 's/^objmap_fuzz_target(\([a-z_]*\).*/\1/p' fuzz/CMakeLists.txt | tr '\n' ' ')}"
+read -r -a targets <<<"${FUZZ_TARGETS:-$(sed -n 's/^ *objmap_fuzz_target(\([a-z_]*\).*/\1/p' fuzz/CMakeLists.txt | tr '\n' ' ')}"
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=None "-DCMAKE_CXX_FLAGS=-O1 -g" \
     -DOBJMAP_FUZZ=ON -DOBJMAP_BUILD_TESTS=OFF -DOBJMAP_BUILD_BENCHMARKS=OFF >/dev/null
 fi
 start=$(date +%s)
 if ! cmake --build "$build" -j"${JOBS:-2}" --target "${targets[@]/#/fuzz_}" fuzz_make_seeds \
+    $(grep -q '^OBJMAP_HAVE_ROSBAG:INTERNAL=1' "$build/CMakeCache.txt" && echo fuzz_make_bag_seeds) \
     >"$build/build.log" 2>&1; then
   tail -30 "$build/build.log" >&2
   exit 1
@@ -28,6 +29,8 @@ fi
 # The image seeds made with objmap's PNG encoder and libjpeg (fuzz/make_seeds.cpp): seeds of the
 # image targets without the real data.
 "$build/bin/fuzz_make_seeds" "$build/made_seeds" >/dev/null
+# The rosbag target's seeds: tiny bags written with rosbag_storage (fuzz/make_bag_seeds.cpp).
+if [ -x "$build/bin/fuzz_make_bag_seeds" ]; then "$build/bin/fuzz_make_bag_seeds" "$build/made_seeds"; fi
 echo "fuzz: built ${#targets[@]} targets in $(($(date +%s) - start)) s; ${seconds} s each"
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}

@@ -15,6 +15,7 @@ packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev
           libpng-dev libjpeg-dev
+          librosbag-storage-dev libsensor-msgs-dev libtf2-msgs-dev
           snakemake time)
 bench_required=(python3)
 bench_optional=(python3-open3d)

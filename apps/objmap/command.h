@@ -28,10 +28,13 @@ void check_naming_flags(const std::function<void()>& check,
 inline constexpr const char* kDatasetHelp =
     "recording folder in any layout: TUM RGB-D (rgb.txt, depth.txt), 7-Scenes / 3DMatch, ScanNet "
     "(SensReader export), Replica (NICE-SLAM), Open3D reconstruction system, or any posed capture "
-    "described by an objmap_layout.json (docs/formats.md)";
+    "described by an objmap_layout.json, or a ROS 1 .bag (RealSense recordings) (docs/formats.md)";
 inline constexpr const char* kLayoutHelp =
     "auto (detected from the folder's contents), tum, 7scenes, scannet, replica, open3d, generic, "
-    "or the path of an objmap_layout.json";
+    "rosbag, or the path of an objmap_layout.json";
+inline constexpr const char* kTopicsHelp =
+    "rosbag: the colour and the depth image topic, COLOR,DEPTH (default: chosen from the bag: one "
+    "colour and one depth stream, an aligned depth first, infrared never)";
 
 }  // namespace objmap::app
 

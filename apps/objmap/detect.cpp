@@ -28,6 +28,7 @@ namespace fs = std::filesystem;
 struct DetectCommand {
   std::string dataset;
   std::string layout = "auto";
+  std::string topics;
   std::string out;
   std::string model;
   std::string config;
@@ -65,12 +66,18 @@ std::vector<segmentation::DetectFrame> frames_to_detect(const DetectCommand& cmd
           "'" + cmd.frames + "'; expected all or keyframes");
   // A TUM folder: every frame rgb.txt lists; other layouts: their frames as fuse reads them.
   const bool listing = io::is_tum_listing(cmd.dataset, cmd.layout);
+  io::DatasetOptions options;
+  options.layout = cmd.layout;
+  options.topics = cmd.topics;
   std::vector<segmentation::DetectFrame> frames;
   if (listing) {
     frames = segmentation::list_rgb_frames(cmd.dataset);
   } else {
-    for (const io::FramePair& f : io::read_dataset(cmd.dataset, {cmd.layout}).frames)
-      frames.push_back({f.rgb_timestamp, f.rgb_file});
+    const auto dataset =
+        std::make_shared<const io::Dataset>(io::read_dataset(cmd.dataset, options));
+    for (const io::FramePair& f : dataset->frames)
+      frames.push_back({f.rgb_timestamp, f.rgb_file,
+                        [dataset, f] { return io::read_frame_rgb(*dataset, f, 0, 0); }});
   }
   if (cmd.frames == "all") {
     require(cmd.trajectory.empty(), "--trajectory",
@@ -79,14 +86,17 @@ std::vector<segmentation::DetectFrame> frames_to_detect(const DetectCommand& cmd
   }
   require(!cmd.trajectory.empty(), "--trajectory",
           "missing; --frames keyframes needs the trajectory that fuse will be given");
-  const io::Dataset dataset = io::read_dataset(cmd.dataset, {cmd.layout});
-  pipeline::KeyframeOptions options;
-  options.min_keyframes = 3;  // fuse's default: the views an object needs
+  const auto dataset = std::make_shared<const io::Dataset>(io::read_dataset(cmd.dataset, options));
+  pipeline::KeyframeOptions keyframes;
+  keyframes.min_keyframes = 3;  // fuse's default: the views an object needs
   const pipeline::KeyframeSelection selection =
-      pipeline::select_keyframes(dataset, io::read_trajectory(cmd.trajectory), options);
+      pipeline::select_keyframes(*dataset, io::read_trajectory(cmd.trajectory), keyframes);
   std::vector<segmentation::DetectFrame> kept;
-  for (const auto& keyframe : selection.keyframes)
-    kept.push_back({keyframe.timestamp, dataset.frames[keyframe.frame].rgb_file});
+  for (const auto& keyframe : selection.keyframes) {
+    const io::FramePair& f = dataset->frames[keyframe.frame];
+    kept.push_back({keyframe.timestamp, f.rgb_file,
+                    [dataset, f] { return io::read_frame_rgb(*dataset, f, 0, 0); }});
+  }
   return kept;
 }
 
@@ -111,8 +121,9 @@ void run_detect(DetectCommand& cmd) {
   } else if (!cmd.classes.empty()) {
     o.classes = split_classes(cmd.classes);
   }
-  require(fs::is_directory(cmd.dataset), cmd.dataset,
-          "no such folder; expected a recording folder (TUM rgb.txt, or another layout)");
+  require(fs::is_directory(cmd.dataset) || io::is_rosbag_file(cmd.dataset), cmd.dataset,
+          "no such folder; expected a recording folder (TUM rgb.txt, or another layout) or a ROS "
+          "1 .bag");
   require(cmd.threads >= 0 && cmd.threads <= 64, "--threads",
           "must be in [0, 64] (0: the cores), got " + std::to_string(cmd.threads));
   if (cmd.threads > 0) cv::setNumThreads(cmd.threads);
@@ -187,6 +198,7 @@ void setup_detect(CLI::App& app) {
                 std::string(kDatasetHelp) + "; a TUM folder may hold rgb.txt and rgb/ alone")
       ->required();
   c->add_option("--layout", cmd->layout, kLayoutHelp)->capture_default_str();
+  c->add_option("--topics", cmd->topics, kTopicsHelp);
   c->add_option("--model", cmd->model,
                 "model weights: Darknet .weights, TensorFlow Mask R-CNN .pb, or an Ultralytics "
                 "YOLOv5-seg / YOLOv8-seg export .onnx (the whole network in one file)")

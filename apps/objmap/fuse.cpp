@@ -84,6 +84,7 @@ void setup_fuse(CLI::App& app) {
       "OUT/run.json (the two dense maps not with --dense-map false).");
   cmd->add_option("--dataset", options->dataset, kDatasetHelp)->required();
   cmd->add_option("--layout", options->layout, kLayoutHelp)->capture_default_str();
+  cmd->add_option("--topics", options->topics, kTopicsHelp);
   cmd->add_option(
       "--trajectory", options->trajectory,
       "trajectory, TUM format (ORB-SLAM2 KeyFrameTrajectory.txt / CameraTrajectory.txt, "

@@ -38,6 +38,7 @@ using nlohmann::json;
 struct RunCommand {
   std::string dataset;
   std::string layout = "auto";
+  std::string topics;
   std::string model;
   std::string out;
   std::string trajectory;  // empty: the recording's own poses
@@ -96,6 +97,7 @@ std::string fingerprint(const std::string& path) {
 std::vector<Stage> plan(const RunCommand& c) {
   const fs::path run(c.out);
   std::vector<std::string> recording = {"--dataset", c.dataset, "--layout", c.layout};
+  if (!c.topics.empty()) recording.insert(recording.end(), {"--topics", c.topics});
   auto with = [](std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
     return a;
@@ -246,6 +248,7 @@ void setup_run(CLI::App& app) {
       "`yolo export model=yolov8n-seg.pt format=onnx` (Ultralytics), or see docs/cli.md.");
   c->add_option("--dataset", cmd->dataset, kDatasetHelp)->required();
   c->add_option("--layout", cmd->layout, kLayoutHelp)->capture_default_str();
+  c->add_option("--topics", cmd->topics, kTopicsHelp);
   c->add_option("--model", cmd->model,
                 "detector: an Ultralytics YOLOv5-seg / YOLOv8-seg .onnx export (masks), a "
                 "Darknet .weights or a TF Mask R-CNN .pb (as objmap detect)")

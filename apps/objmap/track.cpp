@@ -28,6 +28,7 @@ namespace fs = std::filesystem;
 struct TrackCommand {
   std::string dataset;
   std::string layout = "auto";
+  std::string topics;
   std::string segmentation;
   std::string out;
   std::string seg_format = "auto";
@@ -61,19 +62,20 @@ void run_track(TrackCommand& cmd) {
                                                 {"--trajectory", cmd.trajectory},
                                                 {"--camera", cmd.camera}});
   io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
-  require(fs::is_directory(cmd.dataset), cmd.dataset,
-          "no such folder; expected a recording folder (TUM rgb.txt, or another layout)");
+  require(fs::is_directory(cmd.dataset) || io::is_rosbag_file(cmd.dataset), cmd.dataset,
+          "no such folder; expected a recording folder (TUM rgb.txt, or another layout) or a ROS "
+          "1 .bag");
   segmentation::ReadOptions read;
   read.format = cmd.seg_format;
   const segmentation::Segmentation input = segmentation::read_segmentation(cmd.segmentation, read);
   // A TUM folder gives every frame rgb.txt lists (it may hold rgb.txt alone); other layouts
   // their frames as fuse reads them.
+  const bool listing = io::is_tum_listing(cmd.dataset, cmd.layout);
   std::optional<io::Dataset> dataset;
-  if (!io::is_tum_listing(cmd.dataset, cmd.layout) || !cmd.trajectory.empty())
-    dataset = io::read_dataset(cmd.dataset, {cmd.layout});
-  const track::FrameImages images = io::is_tum_listing(cmd.dataset, cmd.layout)
-                                        ? track::find_frame_images(cmd.dataset, input)
-                                        : track::find_frame_images(*dataset, input);
+  if (!listing || !cmd.trajectory.empty())
+    dataset = io::read_dataset(cmd.dataset, {cmd.layout, 0.02, 30.0, cmd.topics});
+  const track::FrameImages images = listing ? track::find_frame_images(cmd.dataset, input)
+                                            : track::find_frame_images(*dataset, input);
   // Appearance needs the rgb images; a stream of boxes without images is tracked on motion alone.
   o.tracker.use_appearance = !cmd.no_appearance && images.has_images;
 
@@ -90,7 +92,11 @@ void run_track(TrackCommand& cmd) {
 
   std::unique_ptr<ProgressBar> bar;
   const track::TrackResult result = track::track_segmentation(
-      input, o, [&](std::size_t i) { return io::read_rgb(images.files[i], 0, 0); },
+      input, o,
+      [&](std::size_t i) {
+        return listing ? io::read_rgb(images.files[i], 0, 0)
+                       : io::read_frame_rgb(*dataset, dataset->frames[images.rows[i]], 0, 0);
+      },
       [&](std::size_t done, std::size_t total) {
         if (!bar) bar = std::make_unique<ProgressBar>("track", total);
         bar->update(done);
@@ -154,6 +160,7 @@ void setup_track(CLI::App& app) {
        std::string(kDatasetHelp) + "; a TUM folder may hold rgb.txt alone (appearance then off)")
       ->required();
   c->add_option("--layout", cmd->layout, kLayoutHelp)->capture_default_str();
+  c->add_option("--topics", cmd->topics, kTopicsHelp);
   c->add_option("--segmentation", cmd->segmentation,
                 "segmentation folder (any supported format; input track ids are ignored)")
       ->required();

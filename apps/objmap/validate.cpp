@@ -72,6 +72,7 @@ void setup_validate(CLI::App& app) {
       "instances per class). Exit 2 with one line at the first thing that is wrong.");
   cmd->add_option("--dataset", options->dataset, kDatasetHelp)->required();
   cmd->add_option("--layout", options->layout, kLayoutHelp)->capture_default_str();
+  cmd->add_option("--topics", options->topics, kTopicsHelp);
   cmd->add_option("--trajectory", options->trajectory,
                   "trajectory in TUM format (t tx ty tz qx qy qz qw, world_from_cam)");
   cmd->add_option("--segmentation", options->segmentation,

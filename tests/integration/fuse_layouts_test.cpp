@@ -10,6 +10,9 @@
 #include "objmap/io/dataset.h"
 #include "objmap/io/image.h"
 #include "objmap/io/trajectory.h"
+#if OBJMAP_TEST_BAGS
+#include "support/bag_writer.h"
+#endif
 
 namespace objmap::test {
 namespace {
@@ -100,6 +103,72 @@ TEST(FuseLayouts, SevenScenesFromItsOwnPosesEqualsItsTumConversion) {
   ASSERT_GE(objects7["objects"].size(), 2u) << "the kitchen's table, chairs or cup";
   EXPECT_TRUE(same_json(objects7["objects"], objects_tum["objects"], "objects", 1e-9));
 }
+
+#if OBJMAP_TEST_BAGS
+// fr1_desk_9 recorded as the TUM benchmark's own bags are (rgb8 colour, 32FC1 depth in metres,
+// camera_info), in `compression`.
+void write_tum_bag(const fs::path& desk, const fs::path& file, const std::string& compression) {
+  const io::Dataset tum = io::read_dataset(desk);
+  const Camera camera = camera_preset("fr1");
+  BagWriter bag(file, compression);
+  for (const io::FramePair& f : tum.frames) {
+    bag.camera_info("/camera/rgb/camera_info", f.rgb_timestamp, camera,
+                    "/openni_rgb_optical_frame");
+    bag.image("/camera/rgb/image_color", f.rgb_timestamp, io::read_rgb(f.rgb_file, 0, 0), "rgb8");
+    cv::Mat metres;
+    io::read_depth(f.depth_file, 0, 0).convertTo(metres, CV_32F, 1.0 / 5000.0);
+    bag.image("/camera/depth/image", f.depth_timestamp, metres, "32FC1");
+  }
+}
+
+TEST(FuseLayouts, ATumBagInEitherCompressionGivesTheObjectsOfItsFolder) {
+  OBJMAP_DATA_OR_SKIP(desk, "tum/fr1_desk_9");
+  TempDir tmp;
+  const std::string gt = (desk / "groundtruth.txt").string();
+  const std::string boxes = (desk / "detections_yolofastest").string();
+  const RunResult folder =
+      run_objmap({"fuse", "--dataset", desk.string(), "--trajectory", gt, "--segmentation", boxes,
+                  "--camera", "fr1", "--out", (tmp / "folder").string()});
+  ASSERT_EQ(folder.exit_code, 0) << folder.err;
+  const nlohmann::json expected = read_json(tmp / "folder" / "objects.json");
+  ASSERT_GE(expected["objects"].size(), 1u) << folder.out;
+  for (const std::string compression : {"bz2", "lz4"}) {
+    const fs::path bag = tmp / ("desk_" + compression + ".bag");
+    write_tum_bag(desk, bag, compression);
+    const fs::path out = tmp / ("run_" + compression);
+    const RunResult r = run_objmap({"fuse", "--dataset", bag.string(), "--trajectory", gt,
+                                    "--segmentation", boxes, "--out", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json run = read_json(out / "run.json");
+    EXPECT_EQ(run["inputs"]["dataset"]["layout"], "rosbag");
+    EXPECT_EQ(run["inputs"]["dataset"]["topics"], "/camera/rgb/image_color,/camera/depth/image");
+    EXPECT_TRUE(same_json(read_json(out / "objects.json")["objects"], expected["objects"],
+                          compression, 1e-9));
+  }
+}
+
+TEST(ObjmapRun, ABagGoesThroughDetectTrackFuseAndReport) {
+  OBJMAP_DATA_OR_SKIP(desk, "tum/fr1_desk_9");
+  OBJMAP_DATA_OR_SKIP(model, kYoloSeg);
+  TempDir tmp;
+  write_tum_bag(desk, tmp / "desk.bag", "lz4");
+  const RunResult r = run_objmap(
+      {"run", "--dataset", (tmp / "desk.bag").string(), "--model", model.string(), "--trajectory",
+       (desk / "groundtruth.txt").string(), "--out", (tmp / "run").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  // Every frame was read from the bag by detect and track, and fuse read the bag.
+  int frame_files = 0;
+  for (const auto& e : fs::directory_iterator(tmp / "run" / "track"))
+    frame_files += e.path().filename().string().rfind("1305031", 0) == 0;
+  EXPECT_EQ(frame_files, 9);
+  EXPECT_EQ(read_json(tmp / "run" / "map" / "run.json")["inputs"]["dataset"]["layout"], "rosbag");
+  const nlohmann::json objects = read_json(tmp / "run" / "map" / "objects.json");
+  bool monitor = false;
+  for (const auto& o : objects["objects"]) monitor |= o["class"] == "tv monitor";
+  EXPECT_TRUE(monitor) << r.out;
+  EXPECT_TRUE(fs::exists(tmp / "run" / "report" / "report.html"));
+}
+#endif
 
 TEST(FuseLayouts, ARecordingWithoutPosesNeedsATrajectory) {
   OBJMAP_DATA_OR_SKIP(desk, "tum/fr1_desk_9");

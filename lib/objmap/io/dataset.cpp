@@ -7,6 +7,7 @@
 #include "objmap/core/error.h"
 #include "objmap/io/json_file.h"
 #include "objmap/io/layout_common.h"
+#include "objmap/io/rosbag.h"
 #include "objmap/io/text_lines.h"
 #include "objmap/io/tum_dataset.h"
 
@@ -219,8 +220,17 @@ Dataset read_replica(const fs::path& dir, const DatasetOptions& options) {
 
 }  // namespace
 
+// The error for a path that is neither a recording folder nor a bag.
+void require_folder(const fs::path& dir) {
+  if (!is_dir(dir))
+    throw InputError(dir.string(), is_file(dir) ? "is a file and not a ROS 1 bag; expected a "
+                                                  "recording folder or a .bag"
+                                                : "folder not found");
+}
+
 std::string detect_layout(const fs::path& dir) {
-  if (!is_dir(dir)) throw InputError(dir.string(), "folder not found");
+  if (is_rosbag_file(dir)) return "rosbag";
+  require_folder(dir);
   if (is_file(dir / "objmap_layout.json")) return "generic";
   if (is_file(dir / "rgb.txt") && is_file(dir / "depth.txt")) return "tum";
   if (!seven_scenes_folders(dir).empty()) return "7scenes";
@@ -229,11 +239,13 @@ std::string detect_layout(const fs::path& dir) {
     return "scannet";
   if (is_dir(dir / "results") && is_file(dir / "traj.txt")) return "replica";
   if (is_dir(dir / "color") && is_dir(dir / "depth") && open3d_log(dir)) return "open3d";
-  throw InputError(dir.string(),
-                   "no known dataset layout; looked for objmap_layout.json (generic), rgb.txt + "
-                   "depth.txt (tum), frame-XXXXXX.color.png (7scenes, also in seq-NN/), color/ "
-                   "depth/ pose/ intrinsic/ (scannet), results/ + traj.txt (replica), color/ "
-                   "depth/ + a .log trajectory (open3d); --layout names one");
+  throw InputError(
+      dir.string(),
+      "no known dataset layout; looked for objmap_layout.json (generic), rgb.txt + "
+      "depth.txt (tum), frame-XXXXXX.color.png (7scenes, also in seq-NN/), color/ "
+      "depth/ pose/ intrinsic/ (scannet), results/ + traj.txt (replica), color/ "
+      "depth/ + a .log trajectory (open3d), or give a ROS 1 .bag file (rosbag); --layout names "
+      "one");
 }
 
 bool is_tum_listing(const fs::path& dir, const std::string& layout) {
@@ -243,7 +255,9 @@ bool is_tum_listing(const fs::path& dir, const std::string& layout) {
 
 Dataset read_dataset(const fs::path& dir, const DatasetOptions& options) {
   options.check();
-  if (!is_dir(dir)) throw InputError(dir.string(), "folder not found");
+  if (options.layout == "rosbag" || (options.layout == "auto" && is_rosbag_file(dir)))
+    return read_rosbag(dir, options);
+  require_folder(dir);
   if (fs::path(options.layout).extension() == ".json")
     return layout::read_generic(dir, options.layout, options);
   const std::string name = options.layout == "auto" ? detect_layout(dir) : options.layout;

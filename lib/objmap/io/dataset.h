@@ -2,6 +2,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,7 +20,19 @@ namespace objmap::io {
 struct FramePair {
   double rgb_timestamp = 0;
   double depth_timestamp = 0;
+  // The image files; for frames inside a container file (a ROS bag) names of the form
+  // `<bag>:<topic>@<stamp>`, for messages only.
   std::filesystem::path rgb_file, depth_file;
+  std::size_t source_index = 0;  // the frame's index in Dataset::source, where there is one
+};
+
+// The frames of a recording kept inside one container file (the rosbag layout), decoded on
+// request by their FramePair::source_index. Safe to call from several threads.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual cv::Mat color(std::size_t index) const = 0;  // CV_8UC3, BGR
+  virtual cv::Mat depth(std::size_t index) const = 0;  // CV_16UC1 in Dataset::depth_factor units
 };
 
 struct Dataset {
@@ -49,6 +62,9 @@ struct Dataset {
     Pose color_from_depth = Pose::Identity();
   };
   std::optional<DepthCamera> depth_camera;
+  std::string topics;  // rosbag: the "COLOR,DEPTH" image topics read
+  // Where the frames are not image files (rosbag): what reads them. Null for image files.
+  std::shared_ptr<const FrameSource> source;
 };
 
 // The layouts read_dataset knows, in the order detect_layout tries them.
@@ -59,14 +75,19 @@ struct DatasetOptions {
                                 // or a path to an objmap_layout.json (the generic layout)
   double max_diff_s = 0.02;     // tum: rgb and depth stamps pair when closer than this
   double fps = 30.0;            // layouts without timestamps: frame i is at i / fps seconds
+  std::string topics;           // rosbag: "COLOR,DEPTH" image topics; empty = chosen from the bag
   void check() const;           // throws InputError naming the bad field
 };
 
-// The layout of `dir` from its contents (tum: rgb.txt + depth.txt; 7scenes: frame-*.color.*;
-// scannet: color/ depth/ pose/ intrinsic/; replica: results/frame*.jpg + traj.txt; open3d: color/ +
-// depth/ + a .log trajectory; generic: objmap_layout.json). Throws InputError naming what was
-// looked for when none matches.
+// The layout of `dir` from its contents (rosbag: a file that starts as a ROS 1 bag does; tum:
+// rgb.txt + depth.txt; 7scenes: frame-*.color.*; scannet: color/ depth/ pose/ intrinsic/; replica:
+// results/frame*.jpg + traj.txt; open3d: color/ + depth/ + a .log trajectory; generic:
+// objmap_layout.json). Throws InputError naming what was looked for when none matches.
 std::string detect_layout(const std::filesystem::path& dir);
+
+// True when `file` is a regular file that starts as a ROS 1 bag ("#ROSBAG V2.0"): the rosbag
+// layout, which is a file where the others are folders.
+bool is_rosbag_file(const std::filesystem::path& file);
 
 // True when `dir` is read as the tum layout (options.layout auto or tum, and rgb.txt is there):
 // detect and track then take every frame rgb.txt lists, with or without a depth image.
@@ -75,6 +96,10 @@ bool is_tum_listing(const std::filesystem::path& dir, const std::string& layout)
 // Reads the recording in `dir` in options.layout (detected when "auto"). Throws InputError naming
 // the file, line or field for anything that does not follow the layout.
 Dataset read_dataset(const std::filesystem::path& dir, const DatasetOptions& options = {});
+
+// The colour image of `frame` as CV_8UC3 BGR, from its file or the dataset's source; width/height
+// > 0 are required sizes (0 = any). Throws InputError as read_rgb does.
+cv::Mat read_frame_rgb(const Dataset& dataset, const FramePair& frame, int width, int height);
 
 // The depth image of `frame` in the colour camera `color_camera` (its size, its depth_factor): raw
 // CV_16UC1 values, 0 = no depth. The layout's invalid value becomes 0; depth from another camera

@@ -48,17 +48,38 @@ cv::Mat register_depth(const cv::Mat& depth, const Dataset::DepthCamera& from, c
   return out;
 }
 
+// The frame's depth as stored: its file, or the dataset's source, of the given size.
+cv::Mat stored_depth(const Dataset& dataset, const FramePair& frame, int width, int height) {
+  if (!dataset.source) return read_depth(frame.depth_file, width, height);
+  cv::Mat depth = dataset.source->depth(frame.source_index);
+  require(depth.cols == width && depth.rows == height, frame.depth_file.string(),
+          "depth image of " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+              "; expected " + std::to_string(width) + "x" + std::to_string(height) +
+              " (the camera's size)");
+  return depth;
+}
+
 }  // namespace
+
+cv::Mat read_frame_rgb(const Dataset& dataset, const FramePair& frame, int width, int height) {
+  if (!dataset.source) return read_rgb(frame.rgb_file, width, height);
+  cv::Mat rgb = dataset.source->color(frame.source_index);
+  require(width <= 0 || (rgb.cols == width && rgb.rows == height), frame.rgb_file.string(),
+          "colour image of " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
+              "; expected " + std::to_string(width) + "x" + std::to_string(height) +
+              " (the camera's size)");
+  return rgb;
+}
 
 cv::Mat read_frame_depth(const Dataset& dataset, const FramePair& frame,
                          const Camera& color_camera) {
   if (dataset.depth_camera) {
     const Camera& dc = dataset.depth_camera->camera;
-    cv::Mat depth = read_depth(frame.depth_file, dc.width, dc.height);
+    cv::Mat depth = stored_depth(dataset, frame, dc.width, dc.height);
     if (dataset.depth_invalid != 0) depth.setTo(0, depth == dataset.depth_invalid);
     return register_depth(depth, *dataset.depth_camera, color_camera);
   }
-  cv::Mat depth = read_depth(frame.depth_file, color_camera.width, color_camera.height);
+  cv::Mat depth = stored_depth(dataset, frame, color_camera.width, color_camera.height);
   if (dataset.depth_invalid != 0) depth.setTo(0, depth == dataset.depth_invalid);
   return depth;
 }

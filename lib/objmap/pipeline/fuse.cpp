@@ -684,7 +684,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   FrameWork work;
 
   // 1. The images (checked: size, type).
-  const cv::Mat bgr = io::read_rgb(frame.rgb_file, camera.width, camera.height);
+  const cv::Mat bgr = io::read_frame_rgb(dataset, frame, camera.width, camera.height);
   const cv::Mat depth = io::read_frame_depth(dataset, frame, camera);
   if (dense && options.dense_prune.every_keyframes > 0) work.depth = depth;
 
@@ -888,7 +888,8 @@ FuseInputs load_inputs(const FuseOptions& options, FuseResult& result) {
   FuseInputs in;
   // 1. Inputs: the TUM folder, the camera, the trajectory, the segmentation.
   auto t0 = Clock::now();
-  in.dataset = io::read_dataset(options.dataset, {options.layout, options.max_diff_s});
+  in.dataset =
+      io::read_dataset(options.dataset, {options.layout, options.max_diff_s, 30.0, options.topics});
   const io::Dataset& dataset = in.dataset;
   result.frames = dataset.frames.size();
   result.layout = dataset.layout;
@@ -1212,6 +1213,7 @@ void write_objects_json(const fs::path& dir, const ordered_json& objects_json,
 ordered_json inputs_json(const FuseOptions& options, const FuseInputs& inputs,
                          const FuseResult& result) {
   ordered_json dataset = {{"path", options.dataset.string()}, {"layout", result.layout}};
+  if (!inputs.dataset.topics.empty()) dataset["topics"] = inputs.dataset.topics;
   if (result.layout == "tum") {
     dataset["rgb.txt"] = file_checksum(options.dataset / "rgb.txt");
     dataset["depth.txt"] = file_checksum(options.dataset / "depth.txt");

@@ -33,6 +33,7 @@ struct FuseOptions {
   // Inputs and output.
   std::filesystem::path dataset;         // recording folder in any layout (io/dataset.h)
   std::string layout = "auto";           // its layout: auto (detected), a name or a layout JSON
+  std::string topics;                    // rosbag: "COLOR,DEPTH" image topics (empty: chosen)
   std::filesystem::path trajectory;      // TUM trajectory, world_from_cam; empty: the dataset's own
                                          // poses (written to OUT/dataset_trajectory.txt)
   std::filesystem::path segmentation;    // segmentation folder, any supported format

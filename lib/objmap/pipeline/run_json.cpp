@@ -51,6 +51,10 @@ io::Dataset dataset(const json& run, const fs::path& file) {
   io::DatasetOptions options;
   options.layout = input_layout(run, file);
   options.max_diff_s = field<json>(run, "options", file, "").value("max_diff_s", 0.02);
+  const json inputs = field<json>(run, "inputs", file, "");
+  const json recording = field<json>(inputs, "dataset", file, "inputs");
+  if (recording.contains("topics"))
+    options.topics = field<std::string>(recording, "topics", file, "inputs.dataset");
   return io::read_dataset(input_path(run, file, "dataset"), options);
 }
 

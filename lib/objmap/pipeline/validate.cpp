@@ -76,7 +76,8 @@ DatasetSummary validate_dataset(const ValidateOptions& options, const Progress& 
     s.recorded_from = io::recorded_from_header(options.dataset / "rgb.txt");
     s.frames_span = {stamps.front(), stamps.back()};
   } else {
-    dataset = io::read_dataset(options.dataset, {options.layout, options.max_diff_s});
+    dataset = io::read_dataset(options.dataset,
+                               {options.layout, options.max_diff_s, 30.0, options.topics});
     s.layout = dataset.layout;
     s.dataset_poses = dataset.poses.size();
     s.lost_poses = dataset.lost_poses;
@@ -102,7 +103,7 @@ DatasetSummary validate_dataset(const ValidateOptions& options, const Progress& 
       rgb_only ? 0 : (options.check_all_images ? dataset.frames.size() : 1);
   for (std::size_t i = 0; i < to_check; ++i) {
     const auto& f = dataset.frames[i];
-    io::read_rgb(f.rgb_file, s.camera.width, s.camera.height);
+    io::read_frame_rgb(dataset, f, s.camera.width, s.camera.height);
     io::read_frame_depth(dataset, f, s.camera);
     ++s.images_checked;
     if (progress) progress(i + 1, to_check);

@@ -14,6 +14,7 @@ namespace objmap::pipeline {
 struct ValidateOptions {
   std::filesystem::path dataset;       // recording folder in any layout (io/dataset.h)
   std::string layout = "auto";         // its layout: auto (detected), a name or a layout JSON
+  std::string topics;                  // rosbag: "COLOR,DEPTH" image topics (empty: chosen)
   std::filesystem::path trajectory;    // optional: TUM trajectory (world_from_cam)
   std::filesystem::path segmentation;  // optional: segmentation folder (any supported format)
   std::string camera;                  // empty: camera.json in the folder, else a preset by name

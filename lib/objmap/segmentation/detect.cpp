@@ -679,7 +679,7 @@ std::vector<DetectFrame> list_rgb_frames(const fs::path& dataset) {
     const double t = in.number(0, "timestamp");
     require(frames.empty() || t > frames.back().timestamp, in.where(),
             "timestamp not after the previous one; expected increasing timestamps");
-    frames.push_back({t, dataset / in.field(1)});
+    frames.push_back({t, dataset / in.field(1), {}});
   }
   require(!frames.empty(), list.string(), "no image listed; expected lines 'timestamp filename'");
   return frames;
@@ -706,7 +706,7 @@ DetectResult detect_frames(Detector& detector, const std::vector<DetectFrame>& f
   result.segmentation.source = where;
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const DetectFrame& frame = frames[i];
-    const cv::Mat image = io::read_rgb(frame.rgb_file, 0, 0);
+    const cv::Mat image = frame.read ? frame.read() : io::read_rgb(frame.rgb_file, 0, 0);
     FrameSegmentation out;
     out.timestamp = frame.timestamp;
     out.source = frame.rgb_file.string();

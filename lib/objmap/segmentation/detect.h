@@ -128,6 +128,9 @@ std::vector<Instance> decode_outputs(const ModelInfo& model, const DetectOptions
 struct DetectFrame {
   double timestamp = 0;
   std::filesystem::path rgb_file;
+  // Reads the frame's colour image (CV_8UC3 BGR) where it is not an image file (a frame of a ROS
+  // bag); empty: rgb_file is read.
+  std::function<cv::Mat()> read;
 };
 
 // The frames of a TUM folder: every row of `dataset`/rgb.txt (strict `timestamp filename` lines,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -231,32 +232,33 @@ LengthStats length_stats(const std::vector<TrackSummary>& tracks) {
 namespace {
 
 // The image of each segmentation frame among `rows` (timestamp, image), sorted by timestamp.
+// has_images: whether the images are there (else none is matched).
 FrameImages match_frame_images(const std::vector<std::pair<double, fs::path>>& rows,
                                const segmentation::Segmentation& segmentation, double max_diff_s,
-                               const std::string& list) {
+                               const std::string& list, bool has_images) {
   FrameImages out;
   out.listed = rows.size();
-  // The images are there when the first listed one is; the folder is then a full recording.
-  out.has_images = !rows.empty() && fs::exists(rows.front().second);
+  out.has_images = has_images && !rows.empty();
   if (!out.has_images) return out;
   for (const auto& frame : segmentation.frames) {
     const auto it = std::lower_bound(
         rows.begin(), rows.end(), frame.timestamp,
         [](const std::pair<double, fs::path>& row, double t) { return row.first < t; });
-    const fs::path* best = nullptr;
+    std::optional<std::size_t> best;
     double best_diff = max_diff_s;
     for (auto c = it == rows.begin() ? it : it - 1; c != rows.end() && c <= it; ++c) {
       const double diff = std::abs(c->first - frame.timestamp);
       if (diff <= best_diff) {
         best_diff = diff;
-        best = &c->second;
+        best = static_cast<std::size_t>(c - rows.begin());
       }
     }
-    require(best != nullptr, frame.source.empty() ? segmentation.source : frame.source,
+    require(best.has_value(), frame.source.empty() ? segmentation.source : frame.source,
             "no rgb image of " + list +
                 " at this frame's timestamp; expected the "
                 "segmentation's frames to be rgb frames of the dataset (or use --no-appearance)");
-    out.files.push_back(*best);
+    out.files.push_back(rows[*best].second);
+    out.rows.push_back(*best);
   }
   return out;
 }
@@ -279,15 +281,19 @@ FrameImages find_frame_images(const fs::path& dataset,
     rows.emplace_back(t, dataset / in.field(1));
   }
   require(!rows.empty(), list.string(), "no image listed; expected lines 'timestamp filename'");
-  return match_frame_images(rows, segmentation, max_diff_s, list.string());
+  // The images are there when the first listed one is; the folder is then a full recording.
+  return match_frame_images(rows, segmentation, max_diff_s, list.string(),
+                            fs::exists(rows.front().second));
 }
 
 FrameImages find_frame_images(const io::Dataset& dataset,
                               const segmentation::Segmentation& segmentation, double max_diff_s) {
   std::vector<std::pair<double, fs::path>> rows;
   for (const io::FramePair& f : dataset.frames) rows.emplace_back(f.rgb_timestamp, f.rgb_file);
+  const bool has_images =
+      dataset.source != nullptr || (!rows.empty() && fs::exists(rows.front().second));
   return match_frame_images(rows, segmentation, max_diff_s,
-                            dataset.root.string() + " (" + dataset.layout + " layout)");
+                            dataset.root.string() + " (" + dataset.layout + " layout)", has_images);
 }
 
 }  // namespace objmap::track

@@ -90,7 +90,8 @@ LengthStats length_stats(const std::vector<TrackSummary>& tracks);
 struct FrameImages {
   bool has_images = false;
   std::vector<std::filesystem::path> files;  // one per segmentation frame, when has_images
-  std::size_t listed = 0;                    // rows of rgb.txt
+  std::vector<std::size_t> rows;  // its row of rgb.txt / frame of the dataset, when has_images
+  std::size_t listed = 0;         // rows of rgb.txt
 };
 
 // Reads `dataset`/rgb.txt (strict: `timestamp filename` lines, increasing stamps) and finds the
