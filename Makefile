@@ -7,7 +7,7 @@ OBJMAP := $(BUILD)/bin/objmap
 
 FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build test demo bench bench-memory ablation fuzz sanitize format clean
+.PHONY: all deps configure build test test-slurm demo bench bench-memory ablation fuzz sanitize format clean
 
 all: build
 
@@ -24,6 +24,14 @@ build: deps configure
 
 test: deps build
 	cd $(BUILD) && OBJMAP_DATA=$(DATA) ctest --output-on-failure -j$(JOBS)
+
+# make test-slurm: the workflow (scripts/workflow/Snakefile) on three synthetic recordings through a real
+# single-node Slurm that the script starts as root in a temporary folder and stops at the end
+# (scripts/test_slurm.sh, about 2 minutes; not part of make test). docs/workflow.md.
+test-slurm: configure
+	@bash scripts/install-deps.sh --slurm
+	cmake --build $(BUILD) -j$(JOBS) --target objmap_app
+	@bash scripts/test_slurm.sh $(OBJMAP)
 
 # The demo needs only the objmap binary: it is built first, without the tests and benchmarks.
 demo: deps configure

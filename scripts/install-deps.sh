@@ -8,22 +8,27 @@
 #   scripts/install-deps.sh --fuzz    also what `make fuzz` uses: clang with its libFuzzer and
 #                                     sanitizer runtimes (Debian 12: libclang-rt-14-dev) and
 #                                     llvm-symbolizer (llvm) for readable reports
+#   scripts/install-deps.sh --slurm   also what `make test-slurm` uses: a single-node Slurm
+#                                     (slurm-wlm: slurmctld + slurmd) and munge
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev
           libpng-dev libjpeg-dev
           librosbag-storage-dev libsensor-msgs-dev libtf2-msgs-dev
-          chromium nodejs)  # the report's 3D view test (headless Chromium over the DevTools protocol)
+          chromium nodejs  # the report's 3D view test (headless Chromium over the DevTools protocol)
+          snakemake time)  # the dataset workflow (scripts/workflow) and its test
 bench_required=(python3)
 bench_optional=(python3-open3d)
 fuzz_required=(clang libclang-rt-14-dev llvm)
+slurm_required=(slurm-wlm munge)
 bench=0
 for arg in "$@"; do
   case "$arg" in
     --bench) bench=1 ;;
     --fuzz) packages+=("${fuzz_required[@]}") ;;
-    *) echo "install-deps: unknown option $arg (expected --bench or --fuzz)" >&2; exit 2 ;;
+    --slurm) packages+=("${slurm_required[@]}") ;;
+    *) echo "install-deps: unknown option $arg (expected --bench, --fuzz or --slurm)" >&2; exit 2 ;;
   esac
 done
 [ $bench -eq 1 ] && packages+=("${bench_required[@]}")

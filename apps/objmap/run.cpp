@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -26,6 +25,7 @@
 #include "objmap/core/version.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/json_file.h"
+#include "objmap/io/run_summary.h"
 
 extern char** environ;
 
@@ -144,15 +144,6 @@ std::string stage_key(const Stage& stage, const RunCommand& c, const std::string
   return hex(fnv1a(text));
 }
 
-// The last line of a log that says something.
-std::string last_line(const fs::path& log) {
-  std::ifstream in(log);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  return last;
-}
-
 // Runs this objmap binary with `args`, its output into `log`; returns the exit code.
 int spawn_objmap(const std::vector<std::string>& args, const fs::path& log) {
   std::vector<std::string> argv_text = {"objmap"};
@@ -232,7 +223,7 @@ void run_run(const RunCommand& c) {
       record.erase(stage.name);
       io::write_file_atomic(stages_file, record.dump(2) + "\n");
       const std::string why =
-          last_line(log) + " (exit " + std::to_string(code) + "; " + log.string() + ")";
+          io::last_line(log) + " (exit " + std::to_string(code) + "; " + log.string() + ")";
       if (code == 2) throw InputError("objmap run: stage " + stage.name, why);
       throw std::runtime_error("objmap run: stage " + stage.name + ": " + why);
     }

@@ -150,6 +150,7 @@ const OutputKind kSegmentationFolder{
     "segmentation (<timestamp>.json files)", {"tracks.json"}, true};
 const OutputKind kReportFolder{"objmap report", {"report.html"}, false};
 const OutputKind kPipelineFolder{"objmap run", {"stages.json"}, false};
+const OutputKind kSummaryFolder{"objmap summary", {"summary.json"}, false};
 
 namespace {
 

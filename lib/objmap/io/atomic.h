@@ -75,6 +75,7 @@ extern const OutputKind kSyntheticSequence;   // synth: synth.json
 extern const OutputKind kSegmentationFolder;  // detect, track: <timestamp>.json, tracks.json
 extern const OutputKind kReportFolder;        // report: report.html
 extern const OutputKind kPipelineFolder;      // run: stages.json
+extern const OutputKind kSummaryFolder;       // summary: summary.json
 
 // Throws InputError(out, ...) when `out` exists and is not a folder, or is a folder that is neither
 // empty nor an earlier output of `kind` (the message names what it holds). Commands call it before
