@@ -39,6 +39,8 @@ void TsdfOptions::check() const {
           "must be >= 0");
   positive(reference_depth_m, "reference_depth_m");
   require(std::isfinite(min_weight) && min_weight >= 0.0, "min_weight", "must be >= 0");
+  require(std::isfinite(carving_depth_m) && carving_depth_m >= 0.0, "carving_depth_m",
+          "must be >= 0 (0: to the box's side)");
   require(min_component_share >= 0.0 && min_component_share < 1.0, "min_component_share",
           "must be in [0, 1)");
 }
@@ -153,7 +155,9 @@ void fuse_ray(const Vec3& origin, const Ray& ray, const Aabb& box, const TsdfOpt
   const double depth = diff.norm();
   if (depth < 1e-6) return;
   const Vec3 dir = diff / depth;
-  double t_in = options.space_carving ? 0.0 : depth - v.trunc_m, t_out = depth + v.trunc_m;
+  double t_in = depth - v.trunc_m, t_out = depth + v.trunc_m;
+  if (options.space_carving)
+    t_in = options.carving_depth_m > 0.0 ? std::max(0.0, t_in - options.carving_depth_m) : 0.0;
   if (!clip_to_box(origin, dir, box, t_in, t_out)) return;
   const double sigma_ref = depth_sigma(options.reference_depth_m), sigma = depth_sigma(depth);
   const float w = static_cast<float>((sigma_ref * sigma_ref) / (sigma * sigma));

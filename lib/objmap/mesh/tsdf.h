@@ -33,6 +33,7 @@ struct TsdfOptions {
   // Space carving: the free space along each ray in front of the band (inside the model's box) is
   // fused as "empty", so that bleed and flying pixels that other views see through are carved.
   bool space_carving = true;
+  double carving_depth_m = 0.0;  // carve this far in front of the band; 0: to the box's side
   // A ray's weight is (sigma(reference_depth_m) / sigma(z))^2 with the structured-light noise
   // sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 m (Nguyen et al. 2012); z the depth along the ray.
   double reference_depth_m = 1.0;
