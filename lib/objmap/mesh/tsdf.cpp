@@ -35,6 +35,8 @@ void TsdfOptions::check() const {
   positive(max_voxel_m, "max_voxel_m");
   require(max_voxel_m >= min_voxel_m, "max_voxel_m", "must be >= min_voxel_m");
   positive(truncation_voxels, "truncation_voxels");
+  require(std::isfinite(min_voxel_pixels) && min_voxel_pixels >= 0.0, "min_voxel_pixels",
+          "must be >= 0");
   require(std::isfinite(min_truncation_m) && min_truncation_m >= 0.0, "min_truncation_m",
           "must be >= 0");
   positive(reference_depth_m, "reference_depth_m");
@@ -87,10 +89,25 @@ PointCloud voxel_means(const PointCloud& points, double voxel_m) {
   return out;
 }
 
-double model_voxel_m(const Vec3& box_size, const TsdfOptions& options) {
+double model_voxel_m(const Vec3& box_size, const TsdfOptions& options, double pixel_footprint_m) {
   if (options.voxel_m > 0.0) return options.voxel_m;
   const double v = options.voxel_fraction * box_size.maxCoeff();
-  return std::clamp(v, options.min_voxel_m, options.max_voxel_m);
+  return std::max(std::clamp(v, options.min_voxel_m, options.max_voxel_m),
+                  options.min_voxel_pixels * pixel_footprint_m);
+}
+
+double pixel_footprint_m(const std::vector<DepthView>& views, double focal_px) {
+  std::vector<double> range;
+  for (const DepthView& v : views) {
+    if (!v.points) continue;
+    const std::size_t step = std::max<std::size_t>(1, v.points->size() / 64);
+    for (std::size_t i = 0; i < v.points->size(); i += step)
+      range.push_back((v.points->points[i].cast<double>() - v.camera_in_world).norm());
+  }
+  if (range.empty() || !(focal_px > 0.0)) return 0.0;
+  std::nth_element(range.begin(), range.begin() + static_cast<std::ptrdiff_t>(range.size() / 2),
+                   range.end());
+  return range[range.size() / 2] / focal_px;
 }
 
 namespace {

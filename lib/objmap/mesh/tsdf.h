@@ -24,9 +24,12 @@ struct TsdfOptions {
   // The voxel: `voxel_m` when > 0, else voxel_fraction × the object's largest box side, clamped
   // to [min_voxel_m, max_voxel_m] (docs/mesh.md measures the choices).
   double voxel_m = 0.0;
-  double voxel_fraction = 0.02;    // 1/50 of the extent (Khronos: 2%)
-  double min_voxel_m = 0.004;      // 4 mm: below it depth noise, not the voxel, limits the surface
-  double max_voxel_m = 0.02;       // 2 cm
+  double voxel_fraction = 0.02;  // 1/50 of the extent (Khronos: 2%)
+  double min_voxel_m = 0.004;    // 4 mm: below it depth noise, not the voxel, limits the surface
+  double max_voxel_m = 0.02;     // 2 cm
+  // ... and at least this many pixels' footprint at the object's median depth: every view must put
+  // a ray into most voxels of the surface it sees, or the model has holes between the rays.
+  double min_voxel_pixels = 1.5;
   double truncation_voxels = 3.0;  // the band ±truncation around each measured depth, in voxels
   double min_truncation_m =
       0.01;  // ... and at least this (depth noise of a structured-light camera)
@@ -62,8 +65,15 @@ struct ModelResult {
                            // averaged per voxel first)
 };
 
-// The voxel size of a model whose box has sides `box_size` (metres) under `options`.
-double model_voxel_m(const Vec3& box_size, const TsdfOptions& options);
+// The voxel size of a model whose box has sides `box_size` (metres) under `options`; with
+// `pixel_footprint_m` (a pixel's size at the views' median depth, > 0) at least min_voxel_pixels of
+// it (a fixed voxel_m is taken as it is).
+double model_voxel_m(const Vec3& box_size, const TsdfOptions& options,
+                     double pixel_footprint_m = 0.0);
+
+// A pixel's footprint at the median distance of the views' points from their cameras, for a camera
+// of focal length `focal_px` pixels.
+double pixel_footprint_m(const std::vector<DepthView>& views, double focal_px);
 
 // One view's points averaged per voxel of `voxel_m` (mean position and colour), in voxel-key
 // order: the rays a model fuses from the view (one per voxel and view; a surface 1 m away holds

@@ -1479,7 +1479,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   if (object_views) {
     t0 = Clock::now();
     result.object_meshes =
-        mesh_objects(result.objects, *object_views, objects, options.mesh, result.threads);
+        mesh_objects(result.objects, *object_views, objects, options.mesh,
+                     0.5 * (result.camera.fx + result.camera.fy), result.threads);
     result.times.push_back({"object meshes", seconds_since(t0)});
   }
   if (scene_model) {

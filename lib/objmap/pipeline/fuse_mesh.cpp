@@ -42,15 +42,16 @@ std::vector<mesh::DepthView> ObjectViews::views_of(int id, const fusion::ObjectM
 
 std::vector<ObjectMesh> mesh_objects(const std::vector<fusion::ObjectRecord>& records,
                                      const ObjectViews& views, const fusion::ObjectMap& objects,
-                                     const MeshOptions& options, int threads) {
+                                     const MeshOptions& options, double focal_px, int threads) {
   std::vector<ObjectMesh> out(records.size());
   parallel_for(records.size(), threads, [&](std::size_t i) {
     const fusion::ObjectRecord& r = records[i];
     Aabb box = r.aabb;
     box.min -= Vec3::Constant(options.box_margin_m);
     box.max += Vec3::Constant(options.box_margin_m);
-    const double voxel = mesh::model_voxel_m(r.aabb.max - r.aabb.min, options.tsdf);
     const std::vector<mesh::DepthView> object_views = views.views_of(r.id, objects);
+    const double voxel = mesh::model_voxel_m(r.aabb.max - r.aabb.min, options.tsdf,
+                                             mesh::pixel_footprint_m(object_views, focal_px));
     out[i].id = r.id;
     out[i].views = object_views.size();
     out[i].model = mesh::fuse_model(object_views, box, voxel, options.tsdf);

@@ -53,10 +53,11 @@ struct ObjectMesh {
 };
 
 // The models of `records` (confirmed objects), each in its box grown by box_margin_m at the voxel
-// its size asks for, on `threads` threads; one result per record, in their order.
+// its size and the pixels' footprint (a camera of focal length `focal_px`) ask for, on `threads`
+// threads; one result per record, in their order.
 std::vector<ObjectMesh> mesh_objects(const std::vector<fusion::ObjectRecord>& records,
                                      const ObjectViews& views, const fusion::ObjectMap& objects,
-                                     const MeshOptions& options, int threads);
+                                     const MeshOptions& options, double focal_px, int threads);
 
 // The box of a whole scene's model: space itself (nothing is clipped).
 Aabb unbounded_box();
