@@ -46,7 +46,8 @@ bool near_edge(const sim::SceneObject& object, const Vec3& p, double margin) {
       for (int a = 0; a < 3; ++a) faces += std::abs(std::abs(q[a]) - h[a]) < margin;
       if (faces >= 2) return true;
     } else if (part.shape == sim::Shape::kCylinder) {
-      if (std::abs(q.head<2>().norm() - h.x()) < margin && std::abs(std::abs(q.z()) - h.z()) < margin)
+      if (std::abs(q.head<2>().norm() - h.x()) < margin &&
+          std::abs(std::abs(q.z()) - h.z()) < margin)
         return true;
     }
   }

@@ -47,44 +47,64 @@ void TsdfOptions::check() const {
           "must be in [0, 1)");
 }
 
+namespace {
+
+// floor() without the library call (the hot loops of voxel_means and fuse_ray).
+inline std::int64_t fast_floor(double x) {
+  const auto i = static_cast<std::int64_t>(x);
+  return i - (x < static_cast<double>(i));
+}
+
+}  // namespace
+
 PointCloud voxel_means(const PointCloud& points, double voxel_m) {
-  struct Key {
-    std::int64_t key;
-    std::uint32_t index;
+  // An open-addressing table of the voxels met (twice as many slots as points, a power of two);
+  // voxels are numbered in the order they are first met.
+  struct Sum {
+    Vec3 point = Vec3::Zero(), rgb = Vec3::Zero();
+    std::uint32_t count = 0;
   };
-  std::vector<Key> keys(points.size());
-  auto cell = [&](float x) {
-    return static_cast<std::int64_t>(std::floor(x / voxel_m)) + (std::int64_t{1} << 20);
-  };
+  std::size_t slots = 16;
+  while (slots < 2 * points.size()) slots *= 2;
+  std::vector<std::int64_t> slot_key(slots, -1);
+  std::vector<std::uint32_t> slot_sum(slots);
+  std::vector<Sum> sums;
+  const bool colour = points.has_colors();
+  const double inverse = 1.0 / voxel_m;
+  auto cell = [&](float x) { return fast_floor(x * inverse) + (std::int64_t{1} << 20); };
+  std::int64_t last_key = -1;
+  std::uint32_t last = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec3f& p = points.points[i];
-    keys[i] = {(cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z()),
-               static_cast<std::uint32_t>(i)};
-  }
-  std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-    return a.key < b.key || (a.key == b.key && a.index < b.index);
-  });
-  PointCloud out;
-  const bool colour = points.has_colors();
-  for (std::size_t b = 0; b < keys.size();) {
-    std::size_t e = b;
-    Vec3 sum = Vec3::Zero(), rgb = Vec3::Zero();
-    for (; e < keys.size() && keys[e].key == keys[b].key; ++e) {
-      sum += points.points[keys[e].index].cast<double>();
-      if (colour) {
-        const Rgb& c = points.colors[keys[e].index];
-        rgb += Vec3(c.r, c.g, c.b);
+    const std::int64_t key = (cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z());
+    if (key != last_key) {  // neighbouring pixels mostly share a voxel: one probe per run
+      std::size_t s =
+          static_cast<std::size_t>(static_cast<std::uint64_t>(key) * 0x9e3779b97f4a7c15ULL >> 17) &
+          (slots - 1);
+      while (slot_key[s] != -1 && slot_key[s] != key) s = (s + 1) & (slots - 1);
+      if (slot_key[s] == -1) {
+        slot_key[s] = key;
+        slot_sum[s] = static_cast<std::uint32_t>(sums.size());
+        sums.emplace_back();
       }
+      last = slot_sum[s];
+      last_key = key;
     }
-    const double n = static_cast<double>(e - b);
-    out.points.push_back((sum / n).cast<float>());
+    Sum& sum = sums[last];
+    sum.point += p.cast<double>();
+    if (colour) sum.rgb += Vec3(points.colors[i].r, points.colors[i].g, points.colors[i].b);
+    ++sum.count;
+  }
+  PointCloud out;
+  out.points.reserve(sums.size());
+  for (const Sum& sum : sums) {
+    out.points.push_back((sum.point / sum.count).cast<float>());
     if (colour) {
-      const Vec3 c = rgb / n;
+      const Vec3 c = sum.rgb / sum.count;
       out.colors.push_back(Rgb{static_cast<std::uint8_t>(std::lround(c.x())),
                                static_cast<std::uint8_t>(std::lround(c.y())),
                                static_cast<std::uint8_t>(std::lround(c.z()))});
     }
-    b = e;
   }
   return out;
 }
@@ -179,12 +199,13 @@ void fuse_ray(const Vec3& origin, const Ray& ray, const Aabb& box, const TsdfOpt
   const double sigma_ref = depth_sigma(options.reference_depth_m), sigma = depth_sigma(depth);
   const float w = static_cast<float>((sigma_ref * sigma_ref) / (sigma * sigma));
   const double band_start = depth - v.trunc_m;
+  const double inverse_voxel = 1.0 / v.voxel_m;
   Coord last(std::numeric_limits<int>::min());
   for (double t = t_in; t <= t_out;) {
     const Vec3 x = origin + t * dir;
-    const Coord c(static_cast<int>(std::lround(x.x() / v.voxel_m)),
-                  static_cast<int>(std::lround(x.y() / v.voxel_m)),
-                  static_cast<int>(std::lround(x.z() / v.voxel_m)));
+    const Vec3 g = x * inverse_voxel + Vec3::Constant(0.5);  // the nearest voxel centre
+    const Coord c(static_cast<int>(fast_floor(g.x())), static_cast<int>(fast_floor(g.y())),
+                  static_cast<int>(fast_floor(g.z())));
     t += t < band_start ? v.voxel_m : 0.5 * v.voxel_m;  // carving in voxel steps, the band finer
     if (c == last) continue;
     last = c;

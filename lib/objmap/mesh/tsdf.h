@@ -75,9 +75,9 @@ double model_voxel_m(const Vec3& box_size, const TsdfOptions& options,
 // of focal length `focal_px` pixels.
 double pixel_footprint_m(const std::vector<DepthView>& views, double focal_px);
 
-// One view's points averaged per voxel of `voxel_m` (mean position and colour), in voxel-key
-// order: the rays a model fuses from the view (one per voxel and view; a surface 1 m away holds
-// ~20 pixels per 4 mm voxel, all telling the same).
+// One view's points averaged per voxel of `voxel_m` (mean position and colour), in the order the
+// voxels are first met: the rays a model fuses from the view (one per voxel and view; a surface 1 m
+// away holds ~20 pixels per 4 mm voxel, all telling the same).
 PointCloud voxel_means(const PointCloud& points, double voxel_m);
 
 // A TSDF restricted to a box (nothing outside it is stored) at one voxel size, fused view by view

@@ -549,6 +549,7 @@ class FrameVoxelsPool {
 struct FrameWork {
   std::vector<fusion::Observation> observations;
   PointCloud scene_points;  // the scene model's rays (voxel means), with --mesh scene|all
+  std::vector<PointCloud> model_points;  // per observation, its object model's (--mesh objects)
   cv::Mat depth;  // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
@@ -773,6 +774,8 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;
     obs.world_from_cam = keyframe.world_from_cam;
+    if (order && mesh::parse_mesh_selection(options.mesh.select, "mesh.select").objects)
+      work.model_points.push_back(model_points(obs, options.mesh));
     work.observations.push_back(std::move(obs));
   }
   return work;
@@ -1150,7 +1153,9 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
           continue;
         }
         ++result.observations;
-        if (object_views) object_views->add(added[k].object_id, work.observations[k]);
+        if (object_views)
+          object_views->add(added[k].object_id, keyframes[done].world_from_cam.translation(),
+                            std::move(work.model_points[k]));
       }
       if (scene) scene->add({keyframes[done].world_from_cam.translation(), &work.scene_points});
       if (progress) progress(done + 1, keyframes.size());
@@ -1421,7 +1426,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   fusion::ObjectMap objects(object_options);
   const mesh::MeshSelection meshes = mesh::parse_mesh_selection(options.mesh.select, "mesh.select");
   std::optional<ObjectViews> object_views;
-  if (meshes.objects) object_views.emplace(options.mesh);
+  if (meshes.objects) object_views.emplace();
   std::optional<mesh::TsdfModel> scene_model;
   if (meshes.scene)
     scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,

@@ -22,15 +22,13 @@ void MeshOptions::check() const {
           "must be >= 0 m");
 }
 
-void ObjectViews::add(int object_id, const fusion::Observation& obs) {
-  if (!obs.world_from_cam) return;
-  View v;
-  v.object_id = object_id;
-  v.camera_in_world = obs.world_from_cam->translation();
-  const double finest =
-      options_.tsdf.voxel_m > 0 ? options_.tsdf.voxel_m : options_.tsdf.min_voxel_m;
-  v.points = mesh::voxel_means(obs.points_in_world, 0.5 * finest);
-  views_.push_back(std::move(v));
+PointCloud model_points(const fusion::Observation& obs, const MeshOptions& options) {
+  const double finest = options.tsdf.voxel_m > 0 ? options.tsdf.voxel_m : options.tsdf.min_voxel_m;
+  return mesh::voxel_means(obs.points_in_world, finest);
+}
+
+void ObjectViews::add(int object_id, const Vec3& camera_in_world, PointCloud&& points) {
+  views_.push_back({object_id, camera_in_world, std::move(points)});
 }
 
 std::vector<mesh::DepthView> ObjectViews::views_of(int id, const fusion::ObjectMap& objects) const {

@@ -21,14 +21,18 @@ struct MeshOptions {
   void check() const;              // throws InputError naming the bad field (mesh.*)
 };
 
+// An observation's masked points as an object's model keeps them: voxel means at the finest model
+// voxel (min_voxel_m, or voxel_m when fixed), so that memory follows the objects' surfaces, not
+// their pixels. Made by fuse's workers, in parallel.
+PointCloud model_points(const fusion::Observation& obs, const MeshOptions& options);
+
 // The masked points of each observation that joined an object, kept from the fuse for the objects'
-// models (copied as voxel means at the finest model voxel, so that memory follows the objects'
-// surfaces, not their pixels).
+// models.
 class ObjectViews {
  public:
-  explicit ObjectViews(const MeshOptions& options) : options_(options) {}
-  // The observation `obs` joined object `object_id` (as it was then; merges are resolved later).
-  void add(int object_id, const fusion::Observation& obs);
+  // An observation seen from `camera_in_world` joined object `object_id` (as it was then; merges
+  // are resolved later); `points` from model_points().
+  void add(int object_id, const Vec3& camera_in_world, PointCloud&& points);
   std::size_t views() const { return views_.size(); }
 
   // Views of object `id` after the merge pass: those of every object that resolves to it, in the
@@ -41,7 +45,6 @@ class ObjectViews {
     Vec3 camera_in_world;
     PointCloud points;
   };
-  MeshOptions options_;
   std::vector<View> views_;
 };
 
