@@ -12,7 +12,7 @@ set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev
-          libpng-dev libjpeg-dev)
+          libpng-dev libjpeg-dev libopenvdb-dev libtbb-dev)
 bench_required=(python3)
 bench_optional=(python3-open3d)
 fuzz_required=(clang libclang-rt-14-dev llvm)

@@ -139,6 +139,18 @@ TEST(FuseMesh, Open3dReadsTheMeshes) {
                                             std::to_string(ours.triangles.size()) + " 1 1\n");
 }
 
+TEST(FuseMesh, NoMeshesByDefault) {
+  OBJMAP_DATA_OR_SKIP(data, "ycbv_0000_10f");
+  TempDir dir;
+  const auto r = run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
+                             (data / "groundtruth.txt").string(), "--segmentation",
+                             (data / "masks").string(), "--out", (dir / "run").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(read_json(dir / "run" / "objects.json")["objects"][0].contains("mesh"));
+  EXPECT_FALSE(fs::exists(dir / "run" / "map_mesh.ply"));
+  EXPECT_EQ(read_json(dir / "run" / "run.json")["options"]["mesh"]["select"], "none");
+}
+
 TEST(FuseMesh, BadMeshSelectionIsExitTwoNamingTheOption) {
   TempDir dir;
   const auto r = run_objmap({"fuse", "--dataset", (dir / "none").string(), "--segmentation",
@@ -153,9 +165,10 @@ TEST(FuseMesh, BadMeshSelectionIsExitTwoNamingTheOption) {
 TEST(FuseMesh, YcbMeshesAreCloserAndMoreCompleteThanTheClouds) {
   OBJMAP_DATA_OR_SKIP(data, "ycbv_0000_10f");
   TempDir dir;
-  auto r = run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
-                       (data / "groundtruth.txt").string(), "--segmentation",
-                       (data / "masks").string(), "--out", (dir / "run").string()});
+  auto r =
+      run_objmap({"fuse", "--dataset", data.string(), "--trajectory",
+                  (data / "groundtruth.txt").string(), "--segmentation", (data / "masks").string(),
+                  "--out", (dir / "run").string(), "--mesh", "objects"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = run_objmap({"eval", "surface", "--run", (dir / "run").string(), "--models",
                   (data / "models").string(), "--poses", (data / "objects_pose.txt").string(),

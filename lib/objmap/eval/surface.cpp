@@ -88,7 +88,7 @@ SurfaceSamples sample_mesh(const TriangleMesh& mesh, double spacing_m) {
 }
 
 struct MeshDistance::Impl {
-  const TriangleMesh& mesh;
+  TriangleMesh mesh;  // a copy: the distance may outlive the mesh it was made of
   std::vector<float> centroids;
   std::unique_ptr<KdIndex> tree;
   explicit Impl(const TriangleMesh& m) : mesh(m) {}

@@ -33,7 +33,7 @@ struct SurfaceSamples {
 };
 SurfaceSamples sample_mesh(const TriangleMesh& mesh, double spacing_m);
 
-// The exact distance from a point to a mesh's surface (nearest triangle).
+// The exact distance from a point to a mesh's surface (nearest triangle); keeps a copy of the mesh.
 class MeshDistance {
  public:
   explicit MeshDistance(const TriangleMesh& mesh);

@@ -396,22 +396,42 @@ void read_faces(PlyReader& r, const PlyHeader& h, TriangleMesh& mesh) {
 
 }  // namespace
 
-PointCloud read_ply(const fs::path& path) {
-  PlyReader r;
+namespace {
+
+// Steps 1-4 of both readers: the header, then the vertices (points, colours, and `normals` when
+// given and the file has them); the reader is left at the elements after `vertex`.
+PointCloud read_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool mesh,
+                         std::vector<Vec3f>* normals) {
   r.where = path.string();
   r.f.open(path, std::ios::binary);
   if (!r.f) throw InputError(r.where, "cannot open for reading");
-  PlyHeader h = read_header(r);
+  h = read_header(r);
   locate_properties(r.where, h);
+  if (mesh && h.faces > 0 && !h.face_list)
+    throw InputError(r.where, "element face has no vertex_indices list; expected a mesh");
+  if (mesh && h.face_other_props > 0)
+    throw InputError(r.where, "element face has properties besides vertex_indices; not supported");
   check_count(r, h);
   PointCloud cloud;
   cloud.points.resize(h.vertices);
   if (h.colour()) cloud.colors.resize(h.vertices);
-  if (h.format == "binary_little_endian")
-    read_binary_body(r, h, cloud);
+  if (normals && h.normals())
+    normals->resize(h.vertices);
   else
-    read_ascii_body(r, h, cloud);
+    normals = nullptr;
+  if (h.format == "binary_little_endian")
+    read_binary_body(r, h, cloud, normals);
+  else
+    read_ascii_body(r, h, cloud, normals);
   return cloud;
+}
+
+}  // namespace
+
+PointCloud read_ply(const fs::path& path) {
+  PlyReader r;
+  PlyHeader h;
+  return read_vertices(r, h, path, false, nullptr);
 }
 
 void write_mesh_ply(const fs::path& path, const TriangleMesh& mesh,
@@ -457,26 +477,9 @@ void write_mesh_ply(const fs::path& path, const TriangleMesh& mesh,
 
 TriangleMesh read_mesh_ply(const fs::path& path) {
   PlyReader r;
-  r.where = path.string();
-  r.f.open(path, std::ios::binary);
-  if (!r.f) throw InputError(r.where, "cannot open for reading");
-  PlyHeader h = read_header(r);
-  locate_properties(r.where, h);
-  if (h.faces > 0 && !h.face_list)
-    throw InputError(r.where, "element face has no vertex_indices list; expected a mesh");
-  if (h.face_other_props > 0)
-    throw InputError(r.where, "element face has properties besides vertex_indices; not supported");
-  check_count(r, h);
-  PointCloud cloud;
-  cloud.points.resize(h.vertices);
-  if (h.colour()) cloud.colors.resize(h.vertices);
+  PlyHeader h;
   TriangleMesh mesh;
-  if (h.normals()) mesh.normals.resize(h.vertices);
-  std::vector<Vec3f>* normals = h.normals() ? &mesh.normals : nullptr;
-  if (h.format == "binary_little_endian")
-    read_binary_body(r, h, cloud, normals);
-  else
-    read_ascii_body(r, h, cloud, normals);
+  PointCloud cloud = read_vertices(r, h, path, true, &mesh.normals);
   mesh.vertices = std::move(cloud.points);
   mesh.colors = std::move(cloud.colors);
   read_faces(r, h, mesh);

@@ -32,6 +32,7 @@ void TsdfOptions::check() const {
   require(std::isfinite(voxel_m) && voxel_m >= 0.0, "voxel_m", "must be >= 0 (0: from the size)");
   positive(voxel_fraction, "voxel_fraction");
   positive(min_voxel_m, "min_voxel_m");
+  require(min_voxel_m <= 0.5, "min_voxel_m", "must be <= 0.5 m");
   positive(max_voxel_m, "max_voxel_m");
   require(max_voxel_m >= min_voxel_m, "max_voxel_m", "must be >= min_voxel_m");
   positive(truncation_voxels, "truncation_voxels");

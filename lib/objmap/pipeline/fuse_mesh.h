@@ -13,12 +13,14 @@
 namespace objmap::pipeline {
 
 struct MeshOptions {
-  std::string select = "objects";  // none|objects|scene|all (mesh::parse_mesh_selection)
-  mesh::TsdfOptions tsdf;          // the objects' models: voxel from the size, carving, weights
-  double box_margin_m = 0.02;      // an object's model is its box (AABB) grown by this
-  double scene_voxel_m = 0.02;     // the scene model's voxel
-  double scene_carving_m = 0.3;    // the scene carves this far in front of each ray's band
-  void check() const;              // throws InputError naming the bad field (mesh.*)
+  // none|objects|scene|all (mesh::parse_mesh_selection); off by default: the objects' meshes add
+  // ~20% CPU to a fuse of fr1_rpy_every4 (docs/mesh.md, "Cost"), more than the 15% a default may.
+  std::string select = "none";
+  mesh::TsdfOptions tsdf;        // the objects' models: voxel from the size, carving, weights
+  double box_margin_m = 0.02;    // an object's model is its box (AABB) grown by this
+  double scene_voxel_m = 0.02;   // the scene model's voxel
+  double scene_carving_m = 0.3;  // the scene carves this far in front of each ray's band
+  void check() const;            // throws InputError naming the bad field (mesh.*)
 };
 
 // An observation's masked points as an object's model keeps them: voxel means at the finest model
