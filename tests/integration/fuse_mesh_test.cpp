@@ -117,6 +117,31 @@ TEST(FuseMesh, MeshesAreNamedInObjectsJsonAndTheSceneMeshIsWritten) {
   EXPECT_EQ(read_json(run / "run.json").at("options").at("mesh").at("select"), "all");
 }
 
+TEST(FuseMesh, MeshesAreTheSameForAnyThreadCount) {
+  RunResult why;
+  const fs::path scene = cached_output(
+      "mesh-noise-free-scene",
+      {"synth", "--out", "{OUT}", "--noise-free", "--frames", "30", "--scale", "0.5"}, &why);
+  ASSERT_TRUE(fs::exists(scene)) << why.err;
+  TempDir dir;
+  for (const char* threads : {"1", "2"}) {
+    const auto r = run_objmap({"fuse", "--dataset", scene.string(), "--trajectory",
+                               (scene / "groundtruth.txt").string(), "--segmentation",
+                               (scene / "segmentation").string(), "--out", (dir / threads).string(),
+                               "--mesh", "all", "--threads", threads});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  std::size_t compared = 0;
+  for (const auto& e : fs::directory_iterator(dir / "1" / "objects")) {
+    const std::string name = e.path().filename().string();
+    if (name.find("_mesh.ply") == std::string::npos) continue;
+    EXPECT_EQ(read_text(e.path()), read_text(dir / "2" / "objects" / name)) << name;
+    ++compared;
+  }
+  EXPECT_GE(compared, 8u);
+  EXPECT_EQ(read_text(dir / "1" / "map_mesh.ply"), read_text(dir / "2" / "map_mesh.ply"));
+}
+
 TEST(FuseMesh, Open3dReadsTheMeshes) {
   const fs::path run = noise_free_mesh_run();
   ASSERT_TRUE(fs::exists(run / "objects.json"));
