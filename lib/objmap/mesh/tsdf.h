@@ -40,9 +40,10 @@ struct TsdfOptions {
   // A ray's weight is (sigma(reference_depth_m) / sigma(z))^2 with the structured-light noise
   // sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 m (Nguyen et al. 2012); z the depth along the ray.
   double reference_depth_m = 1.0;
-  // Marching cubes keeps a vertex only where both voxels of its edge carry at least this weight
-  // (in units of one reference-depth ray): no surface against unobserved space.
-  double min_weight = 0.5;
+  // Marching cubes keeps a vertex only where every voxel of its cell carries at least this weight
+  // (in units of one ray at reference_depth_m): no surface against unobserved space. 0.005 is one
+  // ray at 4 m, the farthest depth fused: observed at all (0.5 dropped the far half of a room).
+  double min_weight = 0.005;
   // Triangles in connected pieces smaller than this share of the mesh's triangles are dropped
   // (floaters of a single view).
   double min_component_share = 0.02;

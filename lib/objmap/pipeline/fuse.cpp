@@ -292,7 +292,7 @@ std::vector<ConfigField> mesh_fields(FuseOptions& o) {
        "fuse the free space in front of each ray's band as empty (carves bleed and flying pixels)",
        &m.tsdf.space_carving},
       {"mesh.min_weight", "--mesh-min-weight",
-       "a surface only where its voxels carry this weight (1 = one ray at 1 m)",
+       "a surface only where its voxels carry this weight (1 = one ray at 1 m; 0.005: at 4 m)",
        &m.tsdf.min_weight},
       {"mesh.scene_voxel_m", "--scene-mesh-voxel", "the scene model's voxel, m", &m.scene_voxel_m},
   };
