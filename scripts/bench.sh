@@ -272,6 +272,16 @@ if [ "${BENCH_MEMORY:-1}" != 0 ]; then
     2>"$out/memory.log" && cat "$out/memory.txt" >&2 || tail -n 3 "$out/memory.log" >&2
 fi
 
+# 2d. Meshes (scripts/bench_mesh.sh): fuse --mesh none|objects|all on fr1_rpy_every4 and
+#     ycbv_0000_10f, Open3D's ScalableTSDFVolume on the same runs, eval surface on ycbv; Markdown in
+#     $out/mesh.md (docs/mesh.md, "Cost" and "Accuracy", is written by hand from it). BENCH_MESH=0
+#     skips it (~2 minutes).
+if [ "${BENCH_MESH:-1}" != 0 ] && [ -d "$data" ]; then
+  step "meshes: objmap fuse --mesh and Open3D (scripts/bench_mesh.sh)"
+  bash "$(dirname "$0")/bench_mesh.sh" "$objmap" "$data" "$out/mesh" >"$out/mesh.md" \
+    2>"$out/mesh.log" && cat "$out/mesh.md" >&2 || tail -n 3 "$out/mesh.log" >&2
+fi
+
 if [ "${BENCH_PROGRAMS:-0}" = 1 ]; then
   for b in "$bindir"/bench_*; do
     [ -x "$b" ] || continue

@@ -14,7 +14,7 @@ set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libdeflate-dev
-          libpng-dev libjpeg-dev
+          libpng-dev libjpeg-dev libopenvdb-dev libtbb-dev
           librosbag-storage-dev libsensor-msgs-dev libtf2-msgs-dev
           chromium nodejs  # the report's 3D view test (headless Chromium over the DevTools protocol)
           snakemake time)  # the dataset workflow (scripts/workflow) and its test

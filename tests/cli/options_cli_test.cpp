@@ -50,8 +50,8 @@ TEST(CommandsCli, AnUnknownCommandIsNamed) {
       << top.err;
   const RunResult eval = run_objmap({"eval", "atee"});
   EXPECT_EQ(eval.exit_code, 2);
-  EXPECT_NE(eval.err.find(
-                "unknown command 'atee'; expected one of ate, rpe, objects, scene, tracks, masks"),
+  EXPECT_NE(eval.err.find("unknown command 'atee'; expected one of ate, rpe, objects, scene, "
+                          "surface, tracks, masks"),
             std::string::npos)
       << eval.err;
   EXPECT_EQ(std::count(eval.err.begin(), eval.err.end(), '\n'), 1) << eval.err;

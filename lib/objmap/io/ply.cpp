@@ -163,9 +163,41 @@ struct PlyHeader {
   std::vector<Property> props;
   std::vector<std::size_t> offset;
   std::size_t stride = 0;
-  int ix = -1, iy = -1, iz = -1, ir = -1, ig = -1, ib = -1;
+  int ix = -1, iy = -1, iz = -1, ir = -1, ig = -1, ib = -1, inx = -1, iny = -1, inz = -1;
   bool colour() const { return ir >= 0 && ig >= 0 && ib >= 0; }
+  bool normals() const { return inx >= 0 && iny >= 0 && inz >= 0; }
+  // The `face` element right after `vertex` (meshes): its count and its one list property, or
+  // face_props other than that list (not read).
+  std::size_t faces = 0;
+  bool face_list = false;
+  int face_other_props = 0;
+  Property face_count, face_index;
 };
+
+// A property line of the `face` element after its type word: the vertex index list is kept.
+void read_face_property(std::istringstream& ls, const std::string& type, const std::string& at,
+                        PlyHeader& h) {
+  if (type != "list") {
+    ++h.face_other_props;
+    return;
+  }
+  std::string count_type, index_type, name;
+  ls >> count_type >> index_type >> name;
+  count_type = normalise_type(count_type);
+  index_type = normalise_type(index_type);
+  const int count_size = type_size(count_type), index_size = type_size(index_type);
+  if (count_size == 0 || index_size == 0 || count_type == "float" || count_type == "double" ||
+      index_type == "float" || index_type == "double")
+    throw InputError(at, "bad face list '" + count_type + " " + index_type +
+                             "'; expected integer count and index types");
+  if (name != "vertex_indices" && name != "vertex_index") {
+    ++h.face_other_props;
+    return;
+  }
+  h.face_list = true;
+  h.face_count = {count_type, "count", count_size, kind_of(count_type)};
+  h.face_index = {index_type, name, index_size, kind_of(index_type)};
+}
 
 // Step 1: the header lines up to end_header.
 PlyHeader read_header(PlyReader& r) {
@@ -173,6 +205,7 @@ PlyHeader read_header(PlyReader& r) {
     throw InputError(r.where + ":1", "not a PLY file; expected 'ply'");
   PlyHeader h;
   bool in_vertex = false, seen_vertex = false, vertex_first = true;
+  std::string element;
   while (true) {
     if (!r.next_line()) throw InputError(r.where, "header has no 'end_header'");
     std::istringstream ls(r.line);
@@ -192,6 +225,8 @@ PlyHeader read_header(PlyReader& r) {
       ls >> name >> count;
       if (!ls) throw InputError(at, "bad element line; expected 'element <name> <count>'");
       in_vertex = name == "vertex";
+      element = name;
+      if (name == "face" && seen_vertex) h.faces = count;
       if (in_vertex) {
         seen_vertex = true;
         h.vertices = count;
@@ -201,6 +236,10 @@ PlyHeader read_header(PlyReader& r) {
     } else if (word == "property") {
       std::string type, name;
       ls >> type;
+      if (element == "face" && seen_vertex) {
+        read_face_property(ls, type, at, h);
+        continue;
+      }
       if (!in_vertex) continue;
       if (type == "list") throw InputError(at, "list property in 'vertex' is not supported");
       ls >> name;
@@ -232,6 +271,9 @@ void locate_properties(const std::string& where, PlyHeader& h) {
     if (n == "red" || n == "r") h.ir = k;
     if (n == "green" || n == "g") h.ig = k;
     if (n == "blue" || n == "b") h.ib = k;
+    if (n == "nx") h.inx = k;
+    if (n == "ny") h.iny = k;
+    if (n == "nz") h.inz = k;
   }
   if (h.ix < 0 || h.iy < 0 || h.iz < 0)
     throw InputError(where, "vertex has no x, y and z properties");
@@ -258,7 +300,8 @@ void check_count(PlyReader& r, const PlyHeader& h) {
 std::uint8_t to_byte(double v) { return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v); }
 
 // Step 4, binary: the rows in one read.
-void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
+void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud,
+                      std::vector<Vec3f>* normals = nullptr) {
   std::vector<char> body(h.vertices * h.stride);
   r.f.read(body.data(), static_cast<std::streamsize>(body.size()));
   if (static_cast<std::size_t>(r.f.gcount()) != body.size())
@@ -272,11 +315,15 @@ void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
                             static_cast<float>(value(h.iz)));
     if (h.colour())
       cloud.colors[i] = Rgb{to_byte(value(h.ir)), to_byte(value(h.ig)), to_byte(value(h.ib))};
+    if (normals)
+      (*normals)[i] = Vec3f(static_cast<float>(value(h.inx)), static_cast<float>(value(h.iny)),
+                            static_cast<float>(value(h.inz)));
   }
 }
 
 // Step 4, ascii: a line per vertex.
-void read_ascii_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
+void read_ascii_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud,
+                     std::vector<Vec3f>* normals = nullptr) {
   std::vector<double> v(h.props.size());
   for (std::size_t i = 0; i < h.vertices; ++i) {
     if (!r.next_line())
@@ -290,27 +337,153 @@ void read_ascii_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud) {
     cloud.points[i] = Vec3f(static_cast<float>(v[h.ix]), static_cast<float>(v[h.iy]),
                             static_cast<float>(v[h.iz]));
     if (h.colour()) cloud.colors[i] = Rgb{to_byte(v[h.ir]), to_byte(v[h.ig]), to_byte(v[h.ib])};
+    if (normals)
+      (*normals)[i] = Vec3f(static_cast<float>(v[h.inx]), static_cast<float>(v[h.iny]),
+                            static_cast<float>(v[h.inz]));
   }
+}
+
+// One face's vertex indices as a fan of triangles, each index checked against the vertex count.
+void add_face(const std::vector<std::int64_t>& index, const PlyHeader& h, const std::string& where,
+              std::size_t face, TriangleMesh& mesh) {
+  for (std::int64_t i : index)
+    if (i < 0 || static_cast<std::size_t>(i) >= h.vertices)
+      throw InputError(where, "face " + std::to_string(face) + " names vertex " +
+                                  std::to_string(i) + " of " + std::to_string(h.vertices) +
+                                  "; expected indices of the vertex element");
+  for (std::size_t k = 2; k < index.size(); ++k)
+    mesh.triangles.push_back({static_cast<std::uint32_t>(index[0]),
+                              static_cast<std::uint32_t>(index[k - 1]),
+                              static_cast<std::uint32_t>(index[k])});
+}
+
+// Step 5 of a mesh: the faces, binary (count, then the indices) or a line each.
+void read_faces(PlyReader& r, const PlyHeader& h, TriangleMesh& mesh) {
+  const bool binary = h.format == "binary_little_endian";
+  std::vector<std::int64_t> index;
+  std::vector<char> bytes(8);
+  for (std::size_t f = 0; f < h.faces; ++f) {
+    std::int64_t n = 0;
+    if (binary) {
+      r.f.read(bytes.data(), h.face_count.size);
+      n = static_cast<std::int64_t>(read_binary(bytes.data(), h.face_count));
+      if (n < 0 || n > 1000) n = -1;
+      if (n > 0) {
+        bytes.resize(std::max<std::size_t>(8, static_cast<std::size_t>(n * h.face_index.size)));
+        r.f.read(bytes.data(), n * h.face_index.size);
+      }
+      if (!r.f || n < 0)
+        throw InputError(r.where, "file ends or breaks in face " + std::to_string(f) + " of " +
+                                      std::to_string(h.faces) + " (truncated)");
+      index.resize(static_cast<std::size_t>(n));
+      for (std::int64_t k = 0; k < n; ++k)
+        index[k] = static_cast<std::int64_t>(
+            read_binary(bytes.data() + k * h.face_index.size, h.face_index));
+    } else {
+      if (!r.next_line())
+        throw InputError(r.where, "file ends after " + std::to_string(f) + " of " +
+                                      std::to_string(h.faces) + " faces (truncated)");
+      std::istringstream ls(r.line);
+      ls >> n;
+      index.resize(n > 0 && n <= 1000 ? static_cast<std::size_t>(n) : 0);
+      for (auto& i : index) ls >> i;
+      if (!ls || n < 0 || n > 1000)
+        throw InputError(r.where + ":" + std::to_string(r.line_no), "bad face line");
+    }
+    add_face(index, h, r.where, f, mesh);
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Steps 1-4 of both readers: the header, then the vertices (points, colours, and `normals` when
+// given and the file has them); the reader is left at the elements after `vertex`.
+PointCloud read_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool mesh,
+                         std::vector<Vec3f>* normals) {
+  r.where = path.string();
+  r.f.open(path, std::ios::binary);
+  if (!r.f) throw InputError(r.where, "cannot open for reading");
+  h = read_header(r);
+  locate_properties(r.where, h);
+  if (mesh && h.faces > 0 && !h.face_list)
+    throw InputError(r.where, "element face has no vertex_indices list; expected a mesh");
+  if (mesh && h.face_other_props > 0)
+    throw InputError(r.where, "element face has properties besides vertex_indices; not supported");
+  check_count(r, h);
+  PointCloud cloud;
+  cloud.points.resize(h.vertices);
+  if (h.colour()) cloud.colors.resize(h.vertices);
+  if (normals && h.normals())
+    normals->resize(h.vertices);
+  else
+    normals = nullptr;
+  if (h.format == "binary_little_endian")
+    read_binary_body(r, h, cloud, normals);
+  else
+    read_ascii_body(r, h, cloud, normals);
+  return cloud;
 }
 
 }  // namespace
 
 PointCloud read_ply(const fs::path& path) {
   PlyReader r;
-  r.where = path.string();
-  r.f.open(path, std::ios::binary);
-  if (!r.f) throw InputError(r.where, "cannot open for reading");
-  PlyHeader h = read_header(r);
-  locate_properties(r.where, h);
-  check_count(r, h);
-  PointCloud cloud;
-  cloud.points.resize(h.vertices);
-  if (h.colour()) cloud.colors.resize(h.vertices);
-  if (h.format == "binary_little_endian")
-    read_binary_body(r, h, cloud);
-  else
-    read_ascii_body(r, h, cloud);
-  return cloud;
+  PlyHeader h;
+  return read_vertices(r, h, path, false, nullptr);
+}
+
+void write_mesh_ply(const fs::path& path, const TriangleMesh& mesh,
+                    const PlyWriteOptions& options) {
+  const bool normals = mesh.has_normals(), colour = mesh.has_colors();
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\n";
+  if (!options.comment.empty()) header << "comment " << options.comment << "\n";
+  header << "element vertex " << mesh.vertices.size() << "\n"
+         << "property float x\nproperty float y\nproperty float z\n";
+  if (normals) header << "property float nx\nproperty float ny\nproperty float nz\n";
+  if (colour) header << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  header << "element face " << mesh.triangles.size() << "\n"
+         << "property list uchar int vertex_indices\nend_header\n";
+  std::string body = header.str();
+  body.reserve(body.size() + mesh.vertices.size() * (12 + (normals ? 12 : 0) + (colour ? 3 : 0)) +
+               mesh.triangles.size() * 13);
+  auto put32 = [&](std::uint32_t bits) {
+    for (int b = 0; b < 4; ++b) body.push_back(static_cast<char>((bits >> (8 * b)) & 0xff));
+  };
+  auto put_vec = [&](const Vec3f& v) {
+    for (int a = 0; a < 3; ++a) {
+      std::uint32_t bits;
+      std::memcpy(&bits, &v[a], 4);
+      put32(bits);
+    }
+  };
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    put_vec(mesh.vertices[i]);
+    if (normals) put_vec(mesh.normals[i]);
+    if (colour) {
+      body.push_back(static_cast<char>(mesh.colors[i].r));
+      body.push_back(static_cast<char>(mesh.colors[i].g));
+      body.push_back(static_cast<char>(mesh.colors[i].b));
+    }
+  }
+  for (const auto& t : mesh.triangles) {
+    body.push_back(3);
+    for (std::uint32_t i : t) put32(i);
+  }
+  write_file_atomic(path, body);
+}
+
+TriangleMesh read_mesh_ply(const fs::path& path) {
+  PlyReader r;
+  PlyHeader h;
+  TriangleMesh mesh;
+  PointCloud cloud = read_vertices(r, h, path, true, &mesh.normals);
+  mesh.vertices = std::move(cloud.points);
+  mesh.colors = std::move(cloud.colors);
+  read_faces(r, h, mesh);
+  return mesh;
 }
 
 }  // namespace objmap::io

@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <string>
 
+#include "objmap/core/mesh.h"
 #include "objmap/core/types.h"
 
 // PLY point clouds (map_dense.ply, map_semantic.ply, objects/<id>_<class>.ply).
@@ -26,5 +27,18 @@ void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
 // after `vertex` are ignored. Throws InputError "<path>: <what>" for anything else (big-endian,
 // missing x/y/z, a list property in vertex, a truncated file, ...).
 PointCloud read_ply(const std::filesystem::path& path);
+
+// Writes a triangle mesh as binary little-endian PLY (objects/<id>_<class>_mesh.ply, map_mesh.ply):
+// `element vertex` with float x, y, z, then float nx, ny, nz and uchar red, green, blue when the
+// mesh has them, and `element face` with `property list uchar int vertex_indices` — read by
+// MeshLab, CloudCompare, Blender and Open3D. Atomic like write_ply.
+void write_mesh_ply(const std::filesystem::path& path, const TriangleMesh& mesh,
+                    const PlyWriteOptions& options = {});
+
+// Reads a PLY mesh, binary little-endian or ASCII: the vertices as read_ply reads them (with nx,
+// ny, nz when present) and the `face` element's vertex_indices (any integer list types; polygons
+// become triangle fans). Throws InputError "<path>: <what>" for a face that names a vertex the file
+// does not have, a truncated file, and what read_ply refuses.
+TriangleMesh read_mesh_ply(const std::filesystem::path& path);
 
 }  // namespace objmap::io

@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
 
 #include "objmap/core/error.h"
@@ -265,6 +267,37 @@ std::vector<ConfigField> scene_fields(FuseOptions& o) {
   };
 }
 
+// The objects' and the scene's meshes (pipeline/fuse_mesh.h, docs/mesh.md).
+std::vector<ConfigField> mesh_fields(FuseOptions& o) {
+  auto& m = o.mesh;
+  return {
+      {"mesh.select", "--mesh",
+       "none|objects|scene|all: a TSDF mesh of each object (objects/<id>_<class>_mesh.ply) and/or "
+       "of the scene (map_mesh.ply)",
+       &m.select},
+      {"mesh.voxel_m", "--mesh-voxel",
+       "object models' voxel, m; 0: from the object's size (--mesh-voxel-fraction)",
+       &m.tsdf.voxel_m},
+      {"mesh.voxel_fraction", "--mesh-voxel-fraction",
+       "object models' voxel as this share of the box's largest side, within [min, max]",
+       &m.tsdf.voxel_fraction},
+      {"mesh.min_voxel_m", "--mesh-min-voxel", "smallest object model voxel, m",
+       &m.tsdf.min_voxel_m},
+      {"mesh.max_voxel_m", "--mesh-max-voxel", "largest object model voxel, m",
+       &m.tsdf.max_voxel_m},
+      {"mesh.truncation_voxels", "--mesh-truncation",
+       "signed distances are truncated at this many voxels (and at least 1 cm)",
+       &m.tsdf.truncation_voxels},
+      {"mesh.space_carving", "--mesh-carving",
+       "fuse the free space in front of each ray's band as empty (carves bleed and flying pixels)",
+       &m.tsdf.space_carving},
+      {"mesh.min_weight", "--mesh-min-weight",
+       "a surface only where its voxels carry this weight (1 = one ray at 1 m; 0.005: at 4 m)",
+       &m.tsdf.min_weight},
+      {"mesh.scene_voxel_m", "--scene-mesh-voxel", "the scene model's voxel, m", &m.scene_voxel_m},
+  };
+}
+
 }  // namespace
 
 std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
@@ -276,7 +309,7 @@ std::vector<ConfigField> fuse_config_fields(FuseOptions& o) {
        "given as well overrides the paper's value",
        &o.method}};
   for (auto part : {inputs_fields, segmentation_fields, association_fields, merging_fields,
-                    scoring_fields, filters_and_masks_fields, scene_fields}) {
+                    scoring_fields, filters_and_masks_fields, scene_fields, mesh_fields}) {
     std::vector<ConfigField> more = part(o);
     fields.insert(fields.end(), more.begin(), more.end());
   }
@@ -352,6 +385,7 @@ void FuseOptions::check() const {
   check_part([&] { scene.surfaces.check(); }, "SurfaceOptions", "scene.surfaces");
   check_part([&] { scene.relations.check(); }, "RelationOptions", "scene.relations",
              {{"near_radius_m", "scene.near_radius_m"}});
+  mesh.check();
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
 }
@@ -514,6 +548,8 @@ class FrameVoxelsPool {
 // What a worker hands back for one keyframe (its dense voxels are already in the dense map).
 struct FrameWork {
   std::vector<fusion::Observation> observations;
+  PointCloud scene_points;  // the scene model's rays (voxel means), with --mesh scene|all
+  std::vector<PointCloud> model_points;  // per observation, its object model's (--mesh objects)
   cv::Mat depth;  // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
@@ -701,6 +737,13 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     pool->give_back(std::move(frame_voxels));
   }
 
+  // 2b. The scene model's rays: every valid pixel, averaged per scene-model voxel (in a fuse,
+  //     which passes `order`; not for re-made observations).
+  if (order && mesh::parse_mesh_selection(options.mesh.select, "mesh.select").scene)
+    work.scene_points =
+        mesh::voxel_means(geometry::backproject(rays, dense_frame, dense_options).points_in_world,
+                          options.mesh.scene_voxel_m);
+
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
   if (!seg) return work;
   // 3a. Each instance's mask and its bounds.
@@ -731,6 +774,8 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;
     obs.world_from_cam = keyframe.world_from_cam;
+    if (order && mesh::parse_mesh_selection(options.mesh.select, "mesh.select").objects)
+      work.model_points.push_back(model_points(obs, options.mesh));
     work.observations.push_back(std::move(obs));
   }
   return work;
@@ -1033,9 +1078,11 @@ void add_counts(const FrameWork& work, FuseResult& result) {
 // order, so the maps do not depend on the thread count. Without `dense`, the observations only.
 // After every options.dense_prune.every_keyframes keyframes the dense map's noise is pruned, the
 // next keyframes held back from the map meanwhile: always between the same two keyframes.
+// The observations that joined objects go to `views` and each keyframe's depth to `scene`, when
+// given, for the meshes.
 void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
                     const FuseInputs& inputs, fusion::VoxelMap* dense, fusion::ObjectMap& objects,
-                    FuseResult& result) {
+                    ObjectViews* object_views, mesh::TsdfModel* scene, FuseResult& result) {
   const Camera& camera = result.camera;
   const auto& keyframes = result.keyframes.keyframes;
   const geometry::RayTable rays = geometry::make_ray_table(camera, result.threads);
@@ -1100,12 +1147,18 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
       }
       add_counts(work, result);
       // The keyframe's observations are associated together, best match first.
-      for (const auto& added : objects.add_frame(work.observations)) {
-        if (added.object_id >= 0)
-          ++result.observations;
-        else
+      const std::vector<fusion::AddResult> added = objects.add_frame(work.observations);
+      for (std::size_t k = 0; k < added.size(); ++k) {
+        if (added[k].object_id < 0) {
           ++result.instances_empty;
+          continue;
+        }
+        ++result.observations;
+        if (object_views)
+          object_views->add(added[k].object_id, keyframes[done].world_from_cam.translation(),
+                            std::move(work.model_points[k]));
       }
+      if (scene) scene->add({keyframes[done].world_from_cam.translation(), &work.scene_points});
       if (progress) progress(done + 1, keyframes.size());
     }
   } catch (...) {
@@ -1182,12 +1235,27 @@ ordered_json write_maps(const FuseOptions& options, const fs::path& dir,
   objects_only = PointCloud();
   io::create_output_folders(dir / "objects");
   ordered_json objects_json = ordered_json::array();
-  for (const auto& r : result.objects) {
-    const std::string name =
-        "objects/" + std::to_string(r.id) + "_" + file_safe(r.class_name) + ".ply";
-    io::write_ply(dir / name, r.cloud, ply);
-    objects_json.push_back(object_json(r, name));
+  for (std::size_t i = 0; i < result.objects.size(); ++i) {
+    const fusion::ObjectRecord& r = result.objects[i];
+    const std::string stem = "objects/" + std::to_string(r.id) + "_" + file_safe(r.class_name);
+    io::write_ply(dir / (stem + ".ply"), r.cloud, ply);
+    objects_json.push_back(object_json(r, stem + ".ply"));
+    if (i < result.object_meshes.size()) {
+      const ObjectMesh& m = result.object_meshes[i];
+      ordered_json mesh_json = {{"file", nullptr},
+                                {"vertices", m.model.mesh.vertices.size()},
+                                {"triangles", m.model.mesh.triangles.size()},
+                                {"voxel_m", m.model.voxel_m},
+                                {"views", m.views}};
+      if (!m.model.mesh.empty()) {
+        mesh_json["file"] = stem + "_mesh.ply";
+        io::write_mesh_ply(dir / (stem + "_mesh.ply"), m.model.mesh, ply);
+      }
+      objects_json.back()["mesh"] = mesh_json;
+    }
   }
+  if (!result.scene_mesh.mesh.empty())
+    io::write_mesh_ply(dir / "map_mesh.ply", result.scene_mesh.mesh, ply);
   if (options.dense_map) {
     dense_write_future.get();
     semantic_future.get();
@@ -1244,27 +1312,39 @@ ordered_json inputs_json(const FuseOptions& options, const FuseInputs& inputs,
           {"camera_reason", result.camera_reason}};
 }
 
+std::size_t mesh_triangles(const std::vector<ObjectMesh>& meshes) {
+  std::size_t n = 0;
+  for (const ObjectMesh& m : meshes) n += m.model.mesh.triangles.size();
+  return n;
+}
+
 // run.json "counts": per stage.
 ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
-  return {{"frames", result.frames},
-          {"frames_with_pose", result.keyframes.frames_with_pose},
-          {"keyframe_mode", result.keyframes.mode},
-          {"keyframe_mode_reason", result.keyframes.reason},
-          {"keyframes", result.keyframes.keyframes.size()},
-          {"keyframes_with_segmentation", inputs.with_seg},
-          {"instances", result.instances_seen},
-          {"instances_below_min_score", result.instances_skipped_score},
-          {"instances_mask_from_box", result.instances_from_box},
-          {"instances_mask_refined", result.instances_refined},
-          {"instances_duplicate", result.instances_duplicate},
-          {"mask_pixels_removed", result.mask_pixels_removed},
-          {"instances_depth_gated", result.instances_depth_gated},
-          {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
-          {"instances_without_points", result.instances_empty},
-          {"observations", result.observations},
-          {"objects_before_confirmation", result.objects_total},
-          {"objects_confirmed", result.objects.size()},
-          {"merges", result.merges.size()}};
+  return {
+      {"frames", result.frames},
+      {"frames_with_pose", result.keyframes.frames_with_pose},
+      {"keyframe_mode", result.keyframes.mode},
+      {"keyframe_mode_reason", result.keyframes.reason},
+      {"keyframes", result.keyframes.keyframes.size()},
+      {"keyframes_with_segmentation", inputs.with_seg},
+      {"instances", result.instances_seen},
+      {"instances_below_min_score", result.instances_skipped_score},
+      {"instances_mask_from_box", result.instances_from_box},
+      {"instances_mask_refined", result.instances_refined},
+      {"instances_duplicate", result.instances_duplicate},
+      {"mask_pixels_removed", result.mask_pixels_removed},
+      {"instances_depth_gated", result.instances_depth_gated},
+      {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
+      {"instances_without_points", result.instances_empty},
+      {"observations", result.observations},
+      {"objects_before_confirmation", result.objects_total},
+      {"objects_confirmed", result.objects.size()},
+      {"merges", result.merges.size()},
+      {"object_meshes", std::count_if(result.object_meshes.begin(), result.object_meshes.end(),
+                                      [](const ObjectMesh& m) { return !m.model.mesh.empty(); })},
+      {"object_mesh_triangles", mesh_triangles(result.object_meshes)},
+      {"scene_mesh_vertices", result.scene_mesh.mesh.vertices.size()},
+      {"scene_mesh_triangles", result.scene_mesh.mesh.triangles.size()}};
 }
 
 // run.json "points": Table 6, the point counts and their reductions. The paper's Table 6 figure
@@ -1346,7 +1426,16 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const fusion::ObjectMapOptions object_options =
       object_map_options(options, result.keyframes.still_camera);
   fusion::ObjectMap objects(object_options);
-  fuse_keyframes(options, progress, inputs, options.dense_map ? &dense : nullptr, objects, result);
+  const mesh::MeshSelection meshes = mesh::parse_mesh_selection(options.mesh.select, "mesh.select");
+  std::optional<ObjectViews> object_views;
+  if (meshes.objects) object_views.emplace();
+  std::optional<mesh::TsdfModel> scene_model;
+  if (meshes.scene)
+    scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,
+                        scene_tsdf_options(options.mesh));
+  fuse_keyframes(options, progress, inputs, options.dense_map ? &dense : nullptr, objects,
+                 object_views ? &*object_views : nullptr, scene_model ? &*scene_model : nullptr,
+                 result);
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
 
   // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
@@ -1391,6 +1480,23 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   relate_to_scene(result.objects, options.scene, record_options(options, result.threads),
                   result.scene);
   result.times.push_back({"boxes upright and relations", result.scene.seconds_relations});
+
+  // 4d. The meshes: each object's TSDF model from the observations that joined it (merged objects
+  //     union theirs), in its box; the scene's model, fused keyframe by keyframe, meshed.
+  if (object_views) {
+    t0 = Clock::now();
+    result.object_meshes =
+        mesh_objects(result.objects, *object_views, objects, options.mesh,
+                     0.5 * (result.camera.fx + result.camera.fy), result.threads);
+    result.times.push_back({"object meshes", seconds_since(t0)});
+  }
+  if (scene_model) {
+    t0 = Clock::now();
+    result.scene_mesh = scene_model->mesh();
+    scene_model.reset();
+    result.times.push_back(
+        {"scene mesh (and its fusion's share after the keyframes)", seconds_since(t0)});
+  }
 
   // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.
   t0 = Clock::now();

@@ -11,6 +11,7 @@
 #include "objmap/fusion/object_map.h"
 #include "objmap/geometry/backproject.h"
 #include "objmap/pipeline/config.h"
+#include "objmap/pipeline/fuse_mesh.h"
 #include "objmap/pipeline/keyframes.h"
 #include "objmap/scene/scene.h"
 #include "objmap/segmentation/box_mask.h"
@@ -22,7 +23,7 @@
 // the ObjectMap associates (eq 22) with an object or starts one; a final merge pass repairs ID
 // switches; each confirmed object's cloud is outlier-filtered (eq 18). Written atomically to one
 // run folder: objects.json, objects/<id>_<class>.ply, map_dense.ply, map_semantic.ply,
-// map_objects.ply, run.json.
+// map_objects.ply, run.json; with --mesh, objects/<id>_<class>_mesh.ply and map_mesh.ply.
 namespace objmap::pipeline {
 
 struct FuseOptions {
@@ -66,6 +67,7 @@ struct FuseOptions {
   bool position_is_centroid = false;    // objects.json `position`: the centroid (eq 16, paper)
   fusion::DuplicateOptions duplicates;  // suspected duplicates in run.json: touching = 2 cm
   scene::SceneOptions scene;            // up direction, support surfaces, relations
+  MeshOptions mesh;                     // objects' and scene meshes (pipeline/fuse_mesh.h)
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
   void check() const;  // throws InputError naming the bad field
 };
@@ -98,6 +100,8 @@ struct FuseResult {
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
+  std::vector<ObjectMesh> object_meshes;      // one per object of `objects` with --mesh objects|all
+  mesh::ModelResult scene_mesh;               // with --mesh scene|all
   scene::SceneGraph scene;                    // up, surfaces, each object's relations
   // Table 6: points.
   std::uint64_t dense_points_raw = 0;      // back-projected points of all keyframes
