@@ -12,7 +12,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace objmap;
   const auto parts = fuzz::split(data, size, 8);
   const auto run = fuzz::fresh_dir() / "run";
-  const char* const names[] = {"map/objects.json",    "map/run.json",    "stages.json",
+  const char* const names[] = {"map/objects.json",    "map/run.json",         "stages.json",
                                "benchmarks/fuse.tsv", "benchmarks/fuse.time", "eval/ate.json",
                                "eval/objects.json",   "logs/fuse.log"};
   for (std::size_t i = 0; i < 8; ++i)

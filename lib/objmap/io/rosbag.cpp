@@ -393,6 +393,18 @@ std::optional<Pose> transform_from_realsense(const rosbag::Bag& bag, const Strea
   return pose_of(*color_from_ref) * pose_of(*depth_from_ref).inverse();
 }
 
+// A raw image's size, row step and data agree: at most 16384 x 16384, `bytes` per pixel.
+void require_pixels(const sensor_msgs::Image& msg, std::size_t bytes, const char* what,
+                    const std::string& where) {
+  require(
+      msg.width > 0 && msg.height > 0 && msg.width <= 16384 && msg.height <= 16384 &&
+          msg.step >= msg.width * bytes && msg.data.size() >= std::size_t{msg.step} * msg.height,
+      where,
+      std::string(what) + " of " + std::to_string(msg.width) + "x" + std::to_string(msg.height) +
+          " with step " + std::to_string(msg.step) + " and " + std::to_string(msg.data.size()) +
+          " bytes; expected step >= width x " + std::to_string(bytes) + " and step x height bytes");
+}
+
 // The colour image of a message: CV_8UC3 BGR.
 cv::Mat decode_color(const rosbag::MessageInstance& m, const Stream& s, const std::string& where) {
   if (s.compressed) {
@@ -418,17 +430,10 @@ cv::Mat decode_color(const rosbag::MessageInstance& m, const Stream& s, const st
   const auto msg = m.instantiate<sensor_msgs::Image>();
   require(msg != nullptr, where, "not a sensor_msgs/Image");
   const std::string e = lower(msg->encoding);
-  const int channels = e == "mono8" ? 1 : (e == "rgba8" || e == "bgra8") ? 4 : 3;
+  const std::size_t channels = e == "mono8" ? 1 : (e == "rgba8" || e == "bgra8") ? 4 : 3;
   require(is_color_encoding(msg->encoding, false), where,
           "encoding '" + msg->encoding + "'; expected rgb8, bgr8, rgba8, bgra8 or mono8");
-  require(msg->width > 0 && msg->height > 0 && msg->width <= 16384 && msg->height <= 16384 &&
-              msg->step >= msg->width * channels &&
-              msg->data.size() >= std::size_t{msg->step} * msg->height,
-          where,
-          "image of " + std::to_string(msg->width) + "x" + std::to_string(msg->height) +
-              " with step " + std::to_string(msg->step) + " and " +
-              std::to_string(msg->data.size()) + " bytes; expected step >= width x " +
-              std::to_string(channels) + " and step x height bytes");
+  require_pixels(*msg, channels, "image", where);
   const bool rgb = e == "rgb8" || e == "rgba8";
   cv::Mat bgr(static_cast<int>(msg->height), static_cast<int>(msg->width), CV_8UC3);
   for (int v = 0; v < bgr.rows; ++v) {
@@ -479,14 +484,7 @@ cv::Mat decode_depth(const rosbag::MessageInstance& m, const Stream& s, const st
   require(is_depth_encoding(msg->encoding, false), where,
           "encoding '" + msg->encoding + "'; expected 16UC1, mono16 or 32FC1");
   const std::size_t bytes = e == "32fc1" ? 4 : 2;
-  require(msg->width > 0 && msg->height > 0 && msg->width <= 16384 && msg->height <= 16384 &&
-              msg->step >= msg->width * bytes &&
-              msg->data.size() >= std::size_t{msg->step} * msg->height,
-          where,
-          "depth image of " + std::to_string(msg->width) + "x" + std::to_string(msg->height) +
-              " with step " + std::to_string(msg->step) + " and " +
-              std::to_string(msg->data.size()) + " bytes; expected step >= width x " +
-              std::to_string(bytes) + " and step x height bytes");
+  require_pixels(*msg, bytes, "depth image", where);
   cv::Mat depth(static_cast<int>(msg->height), static_cast<int>(msg->width), CV_16UC1);
   for (int v = 0; v < depth.rows; ++v) {
     const std::uint8_t* row = msg->data.data() + std::size_t{msg->step} * v;
