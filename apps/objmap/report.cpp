@@ -555,6 +555,37 @@ std::vector<PointCloud> add_thumbnails(const ReportOptions& options, const RunFi
   return clouds;
 }
 
+// The objects' meshes (objects.json "mesh.file", written by fuse --mesh objects|all) for the 3D
+// view, inside the run folder; at most kViewMeshTriangles in all, so that the page stays light
+// (the points are drawn for the others, and the page says so).
+constexpr std::size_t kViewMeshTriangles = 300000;
+std::vector<TriangleMesh> object_meshes(const ReportOptions& options, const RunFiles& files,
+                                        report::PageContent& page) {
+  std::vector<TriangleMesh> meshes(files.objects.size());
+  std::size_t triangles = 0, left_out = 0;
+  for (std::size_t i = 0; i < files.objects.size(); ++i) {
+    const json& record = files.objects_doc["objects"][i];
+    if (!record.contains("mesh") || !record["mesh"].is_object() ||
+        !record["mesh"].contains("file") || !record["mesh"]["file"].is_string())
+      continue;
+    const std::string where = "objects[" + std::to_string(i) + "].mesh.file";
+    TriangleMesh mesh =
+        io::read_mesh_ply(io::path_in_run(options.run, record["mesh"]["file"].get<std::string>(),
+                                          options.run / "objects.json", where));
+    if (triangles + mesh.triangles.size() > kViewMeshTriangles) {
+      ++left_out;
+      continue;
+    }
+    triangles += mesh.triangles.size();
+    meshes[i] = std::move(mesh);
+  }
+  if (left_out > 0)
+    page.notes.push_back("3D view: " + std::to_string(left_out) +
+                         " object(s) drawn as points: their meshes would pass " +
+                         std::to_string(kViewMeshTriangles) + " triangles in all");
+  return meshes;
+}
+
 // Step 7: the 3D view: the map, the objects' points and boxes, the surfaces, the camera path and
 // the answers of `objmap query` to every phrase of the map's classes.
 void add_view3d(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
@@ -567,6 +598,7 @@ void add_view3d(const ReportOptions& options, const RunFiles& files, const Traje
                            ? record["view_count"].get<int>()
                            : 0);
   in.clouds = std::move(clouds);
+  in.meshes = object_meshes(options, files, page);
   in.map = report::thin_points(map, options.view_points);
   in.map_points_total = map.size();
   if (const auto voxel_m = run_voxel_m(files.run, "map")) in.map_point_size_m = *voxel_m;

@@ -100,6 +100,11 @@ report::View3dContent view3d_content(View3dInputs in) {
     v.score = o.score;
     if (i < in.clouds.size())
       for (const Vec3f& p : in.clouds[i].points) v.points.push_back(gf * p);
+    if (i < in.meshes.size() && !in.meshes[i].empty()) {
+      for (const Vec3f& p : in.meshes[i].vertices) v.mesh_vertices.push_back(gf * p);
+      for (const auto& t : in.meshes[i].triangles)
+        for (const std::uint32_t k : t) v.mesh_triangles.push_back(static_cast<int>(k));
+    }
     if (in.scene) v.relations = relation_lines(*in.scene, o.id);
     c.objects.push_back(std::move(v));
   }

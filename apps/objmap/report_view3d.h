@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "objmap/core/mesh.h"
 #include "objmap/core/types.h"
 #include "objmap/io/objects_json.h"
 #include "objmap/io/scene_json.h"
@@ -16,8 +17,9 @@ struct View3dInputs {
   const std::vector<io::MappedObject>* objects = nullptr;  // objects.json, world frame
   std::vector<int> views;                                  // per object: view_count (0: none)
   std::vector<PointCloud> clouds;                          // per object: its PLY, world frame
-  PointCloud map;                                          // already in the gravity frame
-  std::size_t map_points_total = 0;                        // before thinning
+  std::vector<TriangleMesh> meshes;  // per object: its mesh (world frame), empty where none
+  PointCloud map;                    // already in the gravity frame
+  std::size_t map_points_total = 0;  // before thinning
   double map_point_size_m = 0.01;
   std::vector<Vec3> camera_path;                      // world frame
   std::optional<io::SceneDescription> scene;          // none: a run without the scene fields

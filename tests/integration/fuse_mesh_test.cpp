@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 
 #include "fuse_helpers.h"
@@ -115,6 +116,34 @@ TEST(FuseMesh, MeshesAreNamedInObjectsJsonAndTheSceneMeshIsWritten) {
   // The room: the floor and the table top at least (a few square metres).
   EXPECT_GT(room.area(), 2.0);
   EXPECT_EQ(read_json(run / "run.json").at("options").at("mesh").at("select"), "all");
+}
+
+TEST(FuseMesh, TheReportsThreeDViewDrawsEachObjectsMesh) {
+  const fs::path run = noise_free_mesh_run();
+  TempDir dir;
+  const auto r = run_objmap({"report", "--run", run.string(), "--out", (dir / "r").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(dir / "r" / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(in)), {});
+  const std::string open = "<script type=\"application/json\" id=\"view3d-data\">";
+  const std::size_t at = html.find(open);
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t begin = at + open.size();
+  const nlohmann::json view =
+      nlohmann::json::parse(html.substr(begin, html.find("</script>", begin) - begin));
+  const nlohmann::json doc = read_json(run / "objects.json");
+  ASSERT_EQ(view["objects"].size(), doc["objects"].size());
+  std::size_t meshes = 0;
+  for (std::size_t i = 0; i < doc["objects"].size(); ++i) {
+    const nlohmann::json& mesh = doc["objects"][i]["mesh"];
+    if (!mesh["file"].is_string()) continue;
+    ASSERT_TRUE(view["objects"][i].contains("mesh")) << i;
+    EXPECT_EQ(view["objects"][i]["mesh"]["triangles"].size(),
+              3 * mesh["triangles"].get<std::size_t>())
+        << i;
+    ++meshes;
+  }
+  EXPECT_GE(meshes, 10u);
 }
 
 TEST(FuseMesh, MeshesAreTheSameForAnyThreadCount) {
