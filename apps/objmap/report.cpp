@@ -503,11 +503,12 @@ PointCloud add_top_view(const ReportOptions& options, const RunFiles& files, con
   return map;
 }
 
-// One object of the page: its thumbnail and the point counts before the filters (objects.json).
+// One object of the page: its thumbnail (its shaded mesh where fuse wrote one, else its points)
+// and the point counts before the filters (objects.json).
 report::PageObject page_object(const ReportOptions& options, std::size_t index,
                                const io::MappedObject& o, const json& record,
                                const report::ThumbnailOptions& thumb_options,
-                               PointCloud* cloud_out) {
+                               const TriangleMesh& mesh, PointCloud* cloud_out) {
   report::PageObject p;
   p.object = o;
   if (record.contains("points") && record["points"].is_object()) {
@@ -522,7 +523,10 @@ report::PageObject page_object(const ReportOptions& options, std::size_t index,
       options.run / "objects.json", "objects[" + std::to_string(index) + "].ply");
   const PointCloud cloud = io::read_ply(ply);
   const std::string label = std::to_string(o.id) + " " + o.class_name;
-  const cv::Mat thumb = report::render_thumbnail(cloud, label, thumb_options);
+  const cv::Mat thumb = mesh.empty()
+                            ? report::render_thumbnail(cloud, label, thumb_options)
+                            : report::render_mesh_thumbnail(mesh, fusion::class_color(o.class_name),
+                                                            label, thumb_options);
   // Named as its PLY (fuse's "<id>_<class>"), every character but letters, digits, '-' and '_'
   // made '_': the name goes into report.md's links as it is.
   std::string name = ply.stem().string();
@@ -534,8 +538,12 @@ report::PageObject page_object(const ReportOptions& options, std::size_t index,
   p.thumbnail.height_px = thumb.rows;
   const Vec3 size_cm = 200.0 * o.obb.half_extent;
   char text[256];
-  std::snprintf(text, sizeof text, "%s: %zu points, %d observations, %.0f×%.0f×%.0f cm",
-                label.c_str(), cloud.size(), o.observations, size_cm.x(), size_cm.y(), size_cm.z());
+  std::snprintf(text, sizeof text, "%s: %zu points%s, %d observations, %.0f×%.0f×%.0f cm",
+                label.c_str(), cloud.size(),
+                mesh.empty()
+                    ? ""
+                    : (" (mesh: " + std::to_string(mesh.triangles.size()) + " triangles)").c_str(),
+                o.observations, size_cm.x(), size_cm.y(), size_cm.z());
   p.thumbnail.caption = text;
   *cloud_out = cloud;
   return p;
@@ -543,7 +551,8 @@ report::PageObject page_object(const ReportOptions& options, std::size_t index,
 
 // Step 6: a thumbnail per object; returns each object's points (world frame).
 std::vector<PointCloud> add_thumbnails(const ReportOptions& options, const RunFiles& files,
-                                       int up_axis, report::PageContent& page) {
+                                       const std::vector<TriangleMesh>& meshes, int up_axis,
+                                       report::PageContent& page) {
   report::ThumbnailOptions thumb_options;
   thumb_options.size_px = options.thumbnail_px;
   thumb_options.up_axis = up_axis;
@@ -551,13 +560,14 @@ std::vector<PointCloud> add_thumbnails(const ReportOptions& options, const RunFi
   std::vector<PointCloud> clouds(files.objects.size());
   for (std::size_t i = 0; i < files.objects.size(); ++i)
     page.objects.push_back(page_object(options, i, files.objects[i],
-                                       files.objects_doc["objects"][i], thumb_options, &clouds[i]));
+                                       files.objects_doc["objects"][i], thumb_options, meshes[i],
+                                       &clouds[i]));
   return clouds;
 }
 
-// The objects' meshes (objects.json "mesh.file", written by fuse --mesh objects|all) for the 3D
-// view, inside the run folder; at most kViewMeshTriangles in all, so that the page stays light
-// (the points are drawn for the others, and the page says so).
+// The objects' meshes (objects.json "mesh.file", written by fuse --mesh objects|all) for the
+// thumbnails and the 3D view, inside the run folder; at most kViewMeshTriangles in all, so that the
+// page stays light (the points are drawn for the others, and the page says so).
 constexpr std::size_t kViewMeshTriangles = 300000;
 std::vector<TriangleMesh> object_meshes(const ReportOptions& options, const RunFiles& files,
                                         report::PageContent& page) {
@@ -580,9 +590,10 @@ std::vector<TriangleMesh> object_meshes(const ReportOptions& options, const RunF
     meshes[i] = std::move(mesh);
   }
   if (left_out > 0)
-    page.notes.push_back("3D view: " + std::to_string(left_out) +
-                         " object(s) drawn as points: their meshes would pass " +
-                         std::to_string(kViewMeshTriangles) + " triangles in all");
+    page.notes.push_back(
+        "3D view: " + std::to_string(left_out) +
+        " object(s) drawn as points in the 3D view and thumbnails: their meshes would pass " +
+        std::to_string(kViewMeshTriangles) + " triangles in all");
   return meshes;
 }
 
@@ -590,7 +601,8 @@ std::vector<TriangleMesh> object_meshes(const ReportOptions& options, const RunF
 // the answers of `objmap query` to every phrase of the map's classes.
 void add_view3d(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
                 const std::optional<Eigen::Matrix3d>& gravity, const PointCloud& map,
-                std::vector<PointCloud> clouds, report::PageContent& page) {
+                std::vector<PointCloud> clouds, const std::vector<TriangleMesh>& meshes,
+                report::PageContent& page) {
   View3dInputs in;
   in.objects = &files.objects;
   for (const json& record : files.objects_doc["objects"])
@@ -598,7 +610,7 @@ void add_view3d(const ReportOptions& options, const RunFiles& files, const Traje
                            ? record["view_count"].get<int>()
                            : 0);
   in.clouds = std::move(clouds);
-  in.meshes = object_meshes(options, files, page);
+  in.meshes = meshes;
   in.map = report::thin_points(map, options.view_points);
   in.map_points_total = map.size();
   if (const auto voxel_m = run_voxel_m(files.run, "map")) in.map_point_size_m = *voxel_m;
@@ -662,9 +674,10 @@ void run_report(const ReportOptions& options) {
   const PointCloud map = add_top_view(options, files, trajectories, up_axis, gravity, page);
   add_scene_graph(options, page);
   // 6. A thumbnail per object.
-  std::vector<PointCloud> clouds = add_thumbnails(options, files, up_axis, page);
+  const std::vector<TriangleMesh> meshes = object_meshes(options, files, page);
+  std::vector<PointCloud> clouds = add_thumbnails(options, files, meshes, up_axis, page);
   // 7. The 3D view (the map and the objects in the gravity frame).
-  add_view3d(options, files, trajectories, gravity, map, std::move(clouds), page);
+  add_view3d(options, files, trajectories, gravity, map, std::move(clouds), meshes, page);
   // 8. The files: the page, the summary and every picture beside them.
   const fs::path out = write_report(options, page);
   print_report_summary(page, out);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <opencv2/core.hpp>
 
 #include "objmap/core/error.h"
@@ -61,6 +63,48 @@ TEST(Thumbnail, ObliqueViewShowsBothLayersAndTheLabel) {
   for (int v = 2; v < 18; ++v)
     for (int u = 2; u < 60; ++u) dark += cv::norm(image.at<cv::Vec3b>(v, u)) < 150;
   EXPECT_GT(dark, 20);
+}
+
+// A closed axis-aligned box of 12 triangles, 20 x 20 x 10 cm, its base on z = 0.
+TriangleMesh box_mesh() {
+  TriangleMesh m;
+  for (int k = 0; k < 8; ++k)
+    m.vertices.push_back(Vec3f(k & 1 ? 0.1f : -0.1f, k & 2 ? 0.1f : -0.1f, k & 4 ? 0.1f : 0.0f));
+  const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1},
+                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  for (const auto& f : faces) {
+    m.triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]),
+                           static_cast<std::uint32_t>(f[2])});
+    m.triangles.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[2]),
+                           static_cast<std::uint32_t>(f[3])});
+  }
+  return m;
+}
+
+TEST(Thumbnail, MeshIsFilledAndItsFacesShadedApart) {
+  ThumbnailOptions options;
+  options.clip_percent = 0;
+  const cv::Mat image = render_mesh_thumbnail(box_mesh(), Rgb{40, 200, 60}, "1 box", options);
+  // Filled: no white pixel on the row through the box's middle between its outline.
+  int coloured = 0, white = 0;
+  for (int u = 20; u < 140; ++u) {
+    const cv::Vec3b p = image.at<cv::Vec3b>(95, u);
+    (p == cv::Vec3b(255, 255, 255) ? white : coloured)++;
+  }
+  EXPECT_GT(coloured, 90);
+  // Every coloured pixel is the class colour shaded (green dominant); the top and a side face
+  // differ in brightness.
+  std::set<int> greens;
+  for (int v = 20; v < 150; ++v)
+    for (int u = 6; u < 154; ++u) {
+      const cv::Vec3b p = image.at<cv::Vec3b>(v, u);
+      if (p == cv::Vec3b(255, 255, 255) || p == cv::Vec3b(210, 210, 210)) continue;
+      if (p[1] > p[0] && p[1] > p[2]) greens.insert(p[1] / 8);
+    }
+  EXPECT_GE(greens.size(), 2u) << "at least two shades: the faces are told apart";
+  // An empty mesh: a blank labelled image.
+  const cv::Mat blank = render_mesh_thumbnail(TriangleMesh{}, Rgb{1, 2, 3}, "", options);
+  EXPECT_EQ(cv::countNonZero(blank.reshape(1) != 255), 0);
 }
 
 TEST(Thumbnail, EmptyCloudIsBlankAndBadOptionsAreNamed) {

@@ -2,6 +2,7 @@
 #include <opencv2/core/mat.hpp>
 #include <string>
 
+#include "objmap/core/mesh.h"
 #include "objmap/core/types.h"
 
 // A small picture of one object (RUN/objects/<id>_<class>.ply): its points seen orthographically
@@ -27,5 +28,10 @@ struct ThumbnailOptions {
 // image.
 cv::Mat render_thumbnail(const PointCloud& cloud, const std::string& label,
                          const ThumbnailOptions& options = {});
+
+// The same view of a triangle mesh, every triangle filled in `color` shaded by its facing to a
+// light over the viewer's shoulder (z-buffered); an empty mesh gives a blank labelled image.
+cv::Mat render_mesh_thumbnail(const TriangleMesh& mesh, Rgb color, const std::string& label,
+                              const ThumbnailOptions& options = {});
 
 }  // namespace objmap::report
