@@ -198,7 +198,8 @@ TEST(Scene, UnknownPresetIsAnInputError) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), "--preset");
     EXPECT_NE(std::string(e.what()).find("garden"), std::string::npos);
-    EXPECT_NE(std::string(e.what()).find("tabletop, office or edge"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("tabletop, office, edge or walkthrough"),
+              std::string::npos);
   }
 }
 

@@ -58,9 +58,11 @@ TEST(TrackCli, MissingDatasetFolderIsExit2) {
   const auto r = run_objmap({"track", "--dataset", (tmp / "nope").string(), "--segmentation",
                              (tmp / "seg").string(), "--out", (tmp / "out").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err,
-            "objmap: error: " + (tmp / "nope").string() +
-                ": no such folder; expected a recording folder (TUM rgb.txt, or another layout)\n");
+  EXPECT_EQ(
+      r.err,
+      "objmap: error: " + (tmp / "nope").string() +
+          ": no such folder; expected a recording folder (TUM rgb.txt, or another layout) or a "
+          "ROS 1 .bag\n");
   EXPECT_FALSE(test::fs::exists(tmp / "out"));
 }
 
