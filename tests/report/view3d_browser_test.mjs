@@ -122,7 +122,7 @@ class Cdp {
 }
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-async function until(what, predicate, timeoutMs = 15000) {
+async function until(what, predicate, timeoutMs = 45000) {
   const start = Date.now();
   for (;;) {
     const v = await predicate();
