@@ -294,6 +294,19 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
   }
   e = error_of([&] { read_dataset(tmp / "cut.bag"); });
   EXPECT_NE(e.find("cut.bag: "), std::string::npos) << e;
+  // A record that claims 2.3 GB (rosbag_storage would allocate it): refused before it is read.
+  {
+    std::ifstream in(tmp / "short.bag", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const unsigned char huge[4] = {0x00, 0x00, 0x00, 0x8a};
+    bytes.replace(13, 4, reinterpret_cast<const char*>(huge), 4);
+    std::ofstream(tmp / "huge.bag", std::ios::binary) << bytes;
+  }
+  e = error_of([&] { read_dataset(tmp / "huge.bag"); });
+  EXPECT_NE(e.find("huge.bag: damaged ROS bag: the record at byte 13 claims a header of 2315255808 "
+                   "bytes; expected a complete bag"),
+            std::string::npos)
+      << e;
   // Not a bag at all, named as one.
   std::ofstream(tmp / "text.bag") << "hello\n";
   DatasetOptions as_bag;

@@ -505,6 +505,61 @@ cv::Mat decode_depth(const rosbag::MessageInstance& m, const Stream& s, const st
   return depth;
 }
 
+// The bag's top-level records (ROS bag 2.0: <header_len><header><data_len><data> from byte 13 to
+// the end) checked before rosbag_storage reads them: it allocates whatever a length field says, so
+// a damaged or hostile file would claim gigabytes. Each header and data must lie inside the file
+// (headers at most 16 MiB) and a chunk's uncompressed size be at most 1 GiB.
+std::uint32_t little_u32(const unsigned char* p) {
+  return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
+         std::uint32_t{p[3]} << 24;
+}
+
+// The value of the field `name` of a record header (fields: <len><name>=<value>), if it has one.
+std::optional<std::string> header_field(const std::string& header, const std::string& name) {
+  for (std::size_t at = 0; at + 4 <= header.size();) {
+    const std::uint32_t len = little_u32(reinterpret_cast<const unsigned char*>(&header[at]));
+    if (len > header.size() - at - 4) break;
+    const std::string field = header.substr(at + 4, len);
+    if (field.size() > name.size() && field.compare(0, name.size() + 1, name + "=") == 0)
+      return field.substr(name.size() + 1);
+    at += 4 + std::size_t{len};
+  }
+  return std::nullopt;
+}
+
+void check_records(const fs::path& file) {
+  const std::string where = file.string();
+  std::ifstream in(file, std::ios::binary);
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(file, ec);
+  std::uint64_t at = 13;
+  while (at < size) {
+    unsigned char len[4];
+    auto fail = [&](const std::string& what) {
+      throw InputError(where, "damaged ROS bag: the record at byte " + std::to_string(at) + " " +
+                                  what + "; expected a complete bag (rosbag reindex repairs one)");
+    };
+    if (size - at < 4 ||
+        !in.seekg(static_cast<std::streamoff>(at)).read(reinterpret_cast<char*>(len), 4))
+      fail("is cut short");
+    const std::uint32_t header_len = little_u32(len);
+    if (header_len > (16u << 20) || header_len > size - at - 4)
+      fail("claims a header of " + std::to_string(header_len) + " bytes");
+    std::string header(header_len, '\0');
+    if (!in.read(header.data(), header_len) || !in.read(reinterpret_cast<char*>(len), 4))
+      fail("is cut short");
+    const std::uint32_t data_len = little_u32(len);
+    if (data_len > size - at - 8 - header_len)
+      fail("claims " + std::to_string(data_len) + " bytes of data beyond the end of the file");
+    const auto op = header_field(header, "op");
+    const auto uncompressed = header_field(header, "size");
+    if (op && *op == std::string(1, '\x05') && uncompressed && uncompressed->size() == 4 &&
+        little_u32(reinterpret_cast<const unsigned char*>(uncompressed->data())) > (1u << 30))
+      fail("is a chunk of more than 1 GiB uncompressed");
+    at += 8 + std::uint64_t{header_len} + data_len;
+  }
+}
+
 class BagSource : public FrameSource {
  public:
   BagSource(std::string name, std::unique_ptr<rosbag::Bag> bag, Stream color, Stream depth)
@@ -592,6 +647,7 @@ void read_cameras(const rosbag::Bag& bag, const Stream& color, const Stream& dep
 
 Dataset read_bag(const fs::path& file, const DatasetOptions& options) {
   const std::string where = file.string();
+  check_records(file);
   auto bag = std::make_unique<rosbag::Bag>(file.string(), rosbag::bagmode::Read);
   const std::map<std::string, Stream> streams = image_streams(*bag);
   auto [color, depth] = chosen_streams(streams, options.topics, where);
