@@ -648,7 +648,10 @@ void read_cameras(const rosbag::Bag& bag, const Stream& color, const Stream& dep
 Dataset read_bag(const fs::path& file, const DatasetOptions& options) {
   const std::string where = file.string();
   check_records(file);
-  auto bag = std::make_unique<rosbag::Bag>(file.string(), rosbag::bagmode::Read);
+  // Opened after construction: when open() throws on a damaged file, ~Bag (close) still frees
+  // what it had read; a Bag whose constructor throws leaks its connections (make fuzz, LSan).
+  auto bag = std::make_unique<rosbag::Bag>();
+  bag->open(file.string(), rosbag::bagmode::Read);
   const std::map<std::string, Stream> streams = image_streams(*bag);
   auto [color, depth] = chosen_streams(streams, options.topics, where);
   Dataset d;
