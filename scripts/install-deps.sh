@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian packages objmap needs, only those that are missing. Idempotent and quiet when
 # everything is present. Run as root (or with sudo available).
-#   scripts/install-deps.sh           build and test dependencies
-#   scripts/install-deps.sh --bench   also what `make bench` uses: python3 (the table script) and
-#                                     python3-open3d (the Open3D baseline, optional: when it cannot be
-#                                     installed the bench says n/a for it and goes on)
+#   scripts/install-deps.sh           build and test dependencies, and python3-open3d (optional:
+#                                     the test that Open3D reads objmap's meshes and make bench's
+#                                     Open3D baseline; when it cannot be installed the test skips and
+#                                     the bench says n/a for it)
+#   scripts/install-deps.sh --bench   also what `make bench` uses: python3 (the table script)
 #   scripts/install-deps.sh --fuzz    also what `make fuzz` uses: clang with its libFuzzer and
 #                                     sanitizer runtimes (Debian 12: libclang-rt-14-dev) and
 #                                     llvm-symbolizer (llvm) for readable reports
@@ -39,11 +40,9 @@ for p in "${packages[@]}"; do
   is_installed "$p" || missing+=("$p")
 done
 optional=()
-if [ $bench -eq 1 ]; then
-  for p in "${bench_optional[@]}"; do
-    is_installed "$p" || optional+=("$p")
-  done
-fi
+for p in "${bench_optional[@]}"; do
+  is_installed "$p" || optional+=("$p")
+done
 [ ${#missing[@]} -eq 0 ] && [ ${#optional[@]} -eq 0 ] && exit 0
 sudo_cmd=()
 [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
@@ -56,9 +55,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 if [ ${#optional[@]} -gt 0 ]; then
-  echo "install-deps: installing ${optional[*]} (optional, for make bench)" >&2
+  echo "install-deps: installing ${optional[*]} (optional: the Open3D mesh test, make bench)" >&2
   { [ $updated -eq 1 ] || "${sudo_cmd[@]}" apt-get update -qq; } &&
     "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${optional[@]}" >/dev/null ||
-    echo "install-deps: could not install ${optional[*]}; make bench will say n/a for Open3D" >&2
+    echo "install-deps: could not install ${optional[*]}; the Open3D mesh test skips and make" \
+      "bench says n/a for Open3D" >&2
 fi
 exit 0
