@@ -25,11 +25,12 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
         kf.keyframes.size(), options.objects.min_observations);
   std::printf(
       "instances   %zu (format %s; %zu masks from boxes, %zu given masks refined (-%llu pixels), "
-      "%zu depth-gated (-%llu pixels), %zu duplicates dropped, %zu without usable points)\n",
+      "%zu depth-gated (-%llu pixels), %zu duplicates dropped, %zu without usable points, %zu on "
+      "another of their class)\n",
       r.instances_seen, r.seg_format.c_str(), r.instances_from_box, r.instances_refined,
       static_cast<unsigned long long>(r.mask_pixels_removed), r.instances_depth_gated,
       static_cast<unsigned long long>(r.depth_gate_pixels_removed), r.instances_duplicate,
-      r.instances_empty);
+      r.instances_empty, r.instances_bleed);
   // A run that cannot have objects says why, rather than leaving an empty table to puzzle over.
   if (r.instances_seen == 0)
     std::printf(
@@ -38,8 +39,12 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
   else if (r.instances_skipped_score == r.instances_seen)
     std::printf("            all %zu below --min-score %g: no objects, the dense map only\n",
                 r.instances_seen, options.min_instance_score);
-  std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass)\n", r.objects.size(),
+  std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass", r.objects.size(),
               r.objects_total, r.merges.size());
+  if (r.objects_below_share > 0)
+    std::printf("; %zu seen in too few of the keyframes that had them in view",
+                r.objects_below_share);
+  std::printf(")\n");
   if (!r.duplicates.pairs.empty())
     std::printf("            suspected duplicates: %zu (run.json \"duplicates\", objmap report)\n",
                 r.duplicates.pairs.size());

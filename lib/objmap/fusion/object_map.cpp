@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <set>
 #include <string>
@@ -55,8 +56,25 @@ void ObjectMapOptions::check() const {
           "ObjectMapOptions.merge_threshold",
           "must be in [0, w_id + w_d + w_m = " + std::to_string(p_max) + "), got " +
               std::to_string(merge_threshold) + " (P of eq 22 is at most that sum)");
+  require(
+      std::isfinite(fragment_min_inside) && fragment_min_inside > 0.0 && fragment_min_inside <= 1.0,
+      "ObjectMapOptions.fragment_min_inside",
+      "must be in (0, 1], got " + std::to_string(fragment_min_inside));
+  require(std::isfinite(fragment_min_view_ratio) && fragment_min_view_ratio >= 1.0,
+          "ObjectMapOptions.fragment_min_view_ratio",
+          "must be >= 1, got " + std::to_string(fragment_min_view_ratio));
+  require(std::isfinite(bleed_min_inside) && bleed_min_inside > 0.0 && bleed_min_inside <= 1.0,
+          "ObjectMapOptions.bleed_min_inside",
+          "must be in (0, 1], got " + std::to_string(bleed_min_inside));
+  require(std::isfinite(bleed_min_ratio) && bleed_min_ratio >= 1.0,
+          "ObjectMapOptions.bleed_min_ratio",
+          "must be >= 1, got " + std::to_string(bleed_min_ratio));
   require(min_observations >= 1, "ObjectMapOptions.min_observations",
           "must be >= 1, got " + std::to_string(min_observations));
+  require(
+      std::isfinite(min_detected_share) && min_detected_share >= 0.0 && min_detected_share <= 1.0,
+      "ObjectMapOptions.min_detected_share",
+      "must be in [0, 1], got " + std::to_string(min_detected_share));
   require(min_points >= 1, "ObjectMapOptions.min_points",
           "must be >= 1, got " + std::to_string(min_points));
   require(std::isfinite(confusion_min_containment) && confusion_min_containment > 0.0 &&
@@ -90,8 +108,11 @@ void set_paper_rules(ObjectMapOptions& o) {
   o.best_first = false;
   o.final_merge = false;
   o.merge_class_confusions = false;
+  o.merge_fragments_in_box = false;
+  o.drop_bleed = false;
   o.confirmation = Confirmation::kIdKeyframes;
   o.min_observations = 3;
+  o.min_detected_share = 0.0;
   o.keep_points = true;
 }
 
@@ -196,6 +217,7 @@ struct ObjectMap::Object {
   // observations that had it (saturating at 255), 0 for a neighbour only.
   geometry::VoxelHashTable<std::uint8_t> near;
   std::vector<double> frames;  // timestamps of its observations, ascending, unique
+  int frames_in_view = -1;     // judge_visibility(): keyframes in view or detected; -1: not judged
   bool has_frame(double t) const { return std::binary_search(frames.begin(), frames.end(), t); }
   void add_frame(double t) {
     auto it = std::lower_bound(frames.begin(), frames.end(), t);
@@ -361,6 +383,38 @@ std::vector<AddResult> ObjectMap::add_frame_in_turn(const std::vector<Observatio
   return results;
 }
 
+std::vector<bool> ObjectMap::bleed(const std::vector<Observation>& observations,
+                                   const std::vector<std::unique_ptr<Prepared>>& prep,
+                                   const std::vector<bool>& open) const {
+  const std::size_t n = observations.size();
+  std::vector<bool> dropped(n, false);
+  const auto& offsets = geometry::neighbourhood_offsets();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!open[i]) continue;
+    const VoxelMap& a = prep[i]->voxels;
+    const std::string cls = segmentation::canonical_class(observations[i].class_name);
+    for (std::size_t j = 0; j < n && !dropped[i]; ++j) {
+      if (j == i || !open[j]) continue;
+      const VoxelMap& b = prep[j]->voxels;
+      if (static_cast<double>(b.size()) < options_.bleed_min_ratio * static_cast<double>(a.size()))
+        continue;
+      if (segmentation::canonical_class(observations[j].class_name) != cls) continue;
+      std::size_t on = 0;
+      a.for_each([&](VoxelKey key, const VoxelData&) {
+        for (VoxelKey off : offsets)
+          if (b.contains(key + off)) {
+            ++on;
+            return;
+          }
+      });
+      dropped[i] =
+          static_cast<double>(on) >=
+          options_.bleed_min_inside * static_cast<double>(std::max<std::size_t>(1, a.size()));
+    }
+  }
+  return dropped;
+}
+
 std::vector<AddResult> ObjectMap::add_frame(const std::vector<Observation>& observations) {
   if (!options_.best_first) return add_frame_in_turn(observations);
   const std::size_t n = observations.size();
@@ -370,6 +424,14 @@ std::vector<AddResult> ObjectMap::add_frame(const std::vector<Observation>& obse
   for (std::size_t i = 0; i < n; ++i) {
     prep[i] = std::make_unique<Prepared>(options_.voxel_m);
     open[i] = prepare(observations[i], *prep[i]);
+  }
+  if (options_.drop_bleed) {
+    const std::vector<bool> dropped = bleed(observations, prep, open);
+    for (std::size_t i = 0; i < n; ++i)
+      if (dropped[i]) {
+        open[i] = false;
+        results[i].bleed = true;
+      }
   }
   // Every candidate pair with P > K, scored once: a fused object takes no more observation of
   // this frame (one_observation_per_frame) or is scored again.
@@ -692,6 +754,7 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
     });
   }
   if (options_.merge_class_confusions) merge_class_confusions(made);
+  if (options_.merge_fragments_in_box) merge_fragments_in_box(made);
   return made;
 }
 
@@ -780,11 +843,129 @@ int ObjectMap::confirmation_count(const Object& object) const {
              : count_views(object.provenance, options_);
 }
 
+bool ObjectMap::confirmed(const Object& object) const {
+  if (confirmation_count(object) < options_.min_observations) return false;
+  if (options_.min_detected_share <= 0.0 || object.frames_in_view <= 0) return true;
+  const double share =
+      static_cast<double>(object.frames.size()) / static_cast<double>(object.frames_in_view);
+  return share >= options_.min_detected_share;
+}
+
 std::size_t ObjectMap::confirmed_count() const {
   std::size_t n = 0;
-  for (const auto& o : objects_)
-    n += o->alive && confirmation_count(*o) >= options_.min_observations;
+  for (const auto& o : objects_) n += o->alive && confirmed(*o);
   return n;
+}
+
+std::vector<Vec3> ObjectMap::surface_points(const Object& o, double share) const {
+  const double need = std::min(255.0, std::max(1.0, share * o.observations));
+  std::vector<Vec3> surface;
+  for (int pass = 0; pass < 2 && surface.empty(); ++pass)
+    for (const auto& [key, v] : o.voxels.sorted_voxels()) {
+      const std::uint8_t* hits = o.near.find(key);
+      if (pass == 1 || (hits && *hits >= need)) surface.push_back(o.voxels.mean_position(key, *v));
+    }
+  return surface;
+}
+
+void ObjectMap::merge_fragments_in_box(std::vector<MergeLink>& made) {
+  const double grow = options_.voxel_m;
+  while (true) {
+    // Each live object's views, canonical class, surface and its oriented box, once per round.
+    struct Live {
+      Object* object;
+      int views;
+      std::string cls;
+      std::vector<Vec3> surface;
+      Obb box;
+    };
+    std::vector<Live> live;
+    for (const auto& o : objects_) {
+      if (!o->alive) continue;
+      Live l{o.get(), count_views(o->provenance, options_),
+             segmentation::canonical_class(voted_class(*o)), surface_points(*o, 0.1), Obb{}};
+      PointCloud cloud;
+      for (const Vec3& p : l.surface) cloud.points.push_back(p.cast<float>());
+      l.box = geometry::compute_obb(cloud);
+      live.push_back(std::move(l));
+    }
+    const Live* best_small = nullptr;
+    const Live* best_large = nullptr;
+    double best_inside = 0.0;
+    for (const Live& a : live)
+      for (const Live& b : live) {
+        if (&a == &b || a.cls != b.cls) continue;
+        if (b.views < options_.fragment_min_view_ratio * a.views) continue;
+        const int t = 1;
+        if (((a.object->hi.array() + t) < b.object->lo.array()).any() ||
+            ((b.object->hi.array() + t) < a.object->lo.array()).any())
+          continue;
+        std::vector<double> shared;
+        std::set_intersection(a.object->frames.begin(), a.object->frames.end(),
+                              b.object->frames.begin(), b.object->frames.end(),
+                              std::back_inserter(shared));
+        if (shared.size() > options_.merge_max_shared_frames * a.object->frames.size()) continue;
+        std::size_t inside = 0;
+        for (const Vec3& p : a.surface) {
+          const Vec3 local = b.box.rotation.transpose() * (p - b.box.center);
+          inside += (local.array().abs() <= b.box.half_extent.array() + grow).all();
+        }
+        const double share = static_cast<double>(inside) /
+                             static_cast<double>(std::max<std::size_t>(1, a.surface.size()));
+        if (share < options_.fragment_min_inside) continue;
+        if (!best_small || share > best_inside) {
+          best_small = &a;
+          best_large = &b;
+          best_inside = share;
+        }
+      }
+    if (!best_small) return;
+    MergeLink link{best_large->object->id,
+                   best_small->object->id,
+                   0.0,
+                   (best_small->object->centroid - best_large->object->centroid).norm(),
+                   best_inside,
+                   0.0,
+                   false,
+                   true};
+    absorb(*best_large->object, *best_small->object, link);
+    made.push_back(link);
+  }
+}
+
+std::size_t ObjectMap::below_share_count() const {
+  std::size_t n = 0;
+  for (const auto& o : objects_)
+    n += o->alive && confirmation_count(*o) >= options_.min_observations && !confirmed(*o);
+  return n;
+}
+
+void ObjectMap::judge_visibility(const ViewLog& log, const VisibilityOptions& options) {
+  options.check();
+  for (const auto& op : objects_) {
+    Object& o = *op;
+    if (!o.alive) continue;
+    // The sample: evenly spaced among the voxels of its surface (seen in >= 10% of its
+    // observations; all of them when none is), in key order.
+    const std::vector<Vec3> surface = surface_points(o, 0.1);
+    std::vector<Vec3> sample;
+    const std::size_t n = std::min<std::size_t>(surface.size(), options.sample_points);
+    for (std::size_t i = 0; i < n; ++i) sample.push_back(surface[i * surface.size() / n]);
+    // The range: the farthest camera that detected it (no limit when one had no pose).
+    double farthest = 0.0;
+    bool every_pose = true;
+    for (const ObservationLink& link : o.provenance) {
+      if (!link.world_from_cam) every_pose = false;
+      if (link.world_from_cam)
+        farthest = std::max(farthest, (link.world_from_cam->translation() - o.centroid).norm());
+    }
+    const std::vector<double> in_view = log.frames_in_view(
+        sample, o.centroid, every_pose ? farthest * options.range_factor : 0.0, options);
+    std::vector<double> either;
+    std::set_union(in_view.begin(), in_view.end(), o.frames.begin(), o.frames.end(),
+                   std::back_inserter(either));
+    o.frames_in_view = static_cast<int>(either.size());
+  }
 }
 
 int ObjectMap::resolve(int object_id) const {
@@ -858,8 +1039,8 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     const Object& o = *op;
     if (!o.alive) continue;
     const int views = count_views(o.provenance, options_);
-    const bool confirmed = confirmation_count(o) >= options_.min_observations;
-    if (options.confirmed_only && !confirmed) continue;
+    const bool is_confirmed = confirmed(o);
+    if (options.confirmed_only && !is_confirmed) continue;
     ObjectRecord r;
     r.id = o.id;
     r.class_name = voted_class(o);
@@ -867,7 +1048,9 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const
     r.mean_score = o.observations > 0 ? o.score_sum / o.observations : 0.0;
     r.observations = o.observations;
     r.views = views;
-    r.confirmed = confirmed;
+    r.confirmed = is_confirmed;
+    r.frames_detected = static_cast<int>(o.frames.size());
+    r.frames_in_view = o.frames_in_view;
     r.first_seen = o.first_seen;
     r.last_seen = o.last_seen;
     r.track_ids.assign(o.track_ids.begin(), o.track_ids.end());

@@ -9,6 +9,7 @@
 
 #include "objmap/core/types.h"
 #include "objmap/filters/outlier.h"
+#include "objmap/fusion/visibility.h"
 #include "objmap/fusion/voxel_map.h"
 
 // The object map (paper §3.2-3.3): each instance observation (its back-projected points) is
@@ -128,7 +129,17 @@ struct ObjectMapOptions {
   double confusion_min_view_ratio = 2.0;   // the larger has at least this many times the views
   double confusion_min_support = 0.1;  // the larger's voxels that count: in >= this share of its
                                        // observations (its surface, not a bleed of a few views)
-  int min_observations = 3;            // an object is confirmed once it has this many views (below)
+  // Fragments (after the class confusions): an object whose surface lies inside the oriented box
+  // of a larger object of its voted class (the PCA box of the larger's surface voxels, grown by
+  // one voxel), seen with several times fewer views and in few of the same keyframes
+  // (merge_max_shared_frames), is a part of it that its views did not share voxels with: the far
+  // side of a chair's back seen over a table on a walk round it, its top above the table's edge.
+  // Two objects of one class seen apart in the same frames stay two (the shared frames), and so
+  // do objects side by side (their surfaces lie outside each other's box).
+  bool merge_fragments_in_box = true;
+  double fragment_min_inside = 0.8;      // share of the smaller's surface voxels inside the box
+  double fragment_min_view_ratio = 2.0;  // the larger has at least this many times the views
+  int min_observations = 3;  // an object is confirmed once it has this many views (below)
   // Confirmation counts views, not observations, so that more frames of the same scene do not
   // confirm more objects: an observation is a new view of its object when its camera moved at
   // least view_min_translation_m or turned at least view_min_rotation_deg since the object's last
@@ -138,7 +149,22 @@ struct ObjectMapOptions {
   // view (the paper's count).
   double view_min_translation_m = 0.05;
   double view_min_rotation_deg = 5.0;
+  // Confirmation by the detected share (fusion/visibility.h), on top of min_observations: after
+  // judge_visibility(), an object is confirmed only when it was detected in at least this share of
+  // the keyframes that had its place in view (or detected it). A false positive or a fragment
+  // seen in a few of the hundreds of keyframes that saw its place drops out, however dense the
+  // frames; a count of views grows with them. 0: no such rule (the paper).
+  double min_detected_share = 0.05;
   int min_points = 10;  // observations with fewer points (after depth checks) are ignored
+  // Bleed: in one keyframe, an instance whose voxels lie (bleed_min_inside of them, within one
+  // voxel) on those of another instance of its class with bleed_min_ratio times its voxels is that
+  // instance's surface again — a far chair's mask that bled onto the near chair in front of it,
+  // its own pixels beyond the depth range — and is ignored: with one observation per object and
+  // frame it could only start a fragment. Two objects side by side share their boundary only; a
+  // mask over two objects is not a few percent of the other's.
+  bool drop_bleed = true;
+  double bleed_min_inside = 0.8;
+  double bleed_min_ratio = 5.0;
   bool require_same_class = false;  // only match observations to objects of the voted class
   // The paper's method (`objmap fuse --method paper`, docs/fusion.md "The paper's method") needs
   // these; the defaults are objmap's.
@@ -186,6 +212,7 @@ struct MergeLink {
   int absorbed = -1;
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
   bool class_confusion = false;  // joined by the class-confusion rule (overlap = containment)
+  bool fragment = false;  // joined by the fragment rule (overlap = share inside the larger's box)
 };
 
 // The rule of the merge pass that keeps two objects apart: the first that refuses, in the pass's
@@ -239,8 +266,11 @@ struct ObjectRecord {
   std::size_t points_filtered = 0;  // after the outlier filter (eq 18): the cloud
   double outlier_threshold = 0.0;   // t of eq 18 for this object
   int observations = 0;
-  int views = 0;           // observations from distinct viewpoints (above)
-  bool confirmed = false;  // min_observations views (or ID keyframes, ObjectMapOptions)
+  int views = 0;            // observations from distinct viewpoints (above)
+  bool confirmed = false;   // min_observations views (or ID keyframes, ObjectMapOptions) and the
+                            // detected share
+  int frames_detected = 0;  // keyframes with an observation of it
+  int frames_in_view = -1;  // keyframes that had its place in view or detected it; -1: not judged
   double first_seen = 0.0, last_seen = 0.0;  // timestamps
   std::vector<int> track_ids;                // ascending
   std::vector<ObservationLink> provenance;   // by timestamp, then insertion order
@@ -285,8 +315,9 @@ PointCloud voxel_nearest_centre(const PointCloud& cloud, double voxel_m,
 
 // What add_frame() did with an observation.
 struct AddResult {
-  int object_id = -1;  // -1: ignored (fewer than min_points points)
+  int object_id = -1;  // -1: ignored (fewer than min_points points, or bleed)
   bool created = false;
+  bool bleed = false;  // ignored as another instance's surface (ObjectMapOptions::drop_bleed)
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
 };
 
@@ -319,8 +350,16 @@ class ObjectMap {
   // Live objects (not absorbed by a merge), ascending id.
   std::size_t size() const;
   std::size_t confirmed_count() const;
+  // Live objects with enough views that the detected share leaves out (judge_visibility()).
+  std::size_t below_share_count() const;
   // The id an object id ended up in after merges (itself when never absorbed; -1 if unknown).
   int resolve(int object_id) const;
+
+  // For every live object, the keyframes of `log` that had its place in view (fusion/visibility.h;
+  // its sample: evenly spaced voxels seen in >= 10% of its observations; its range: the farthest
+  // camera of its observations), so that confirmation can ask for min_detected_share. Call after
+  // merge_pass(); objects made or merged later are not judged (the share rule passes them).
+  void judge_visibility(const ViewLog& log, const VisibilityOptions& options);
 
   // The object records, ascending id, each with its filtered cloud.
   std::vector<ObjectRecord> records(const RecordOptions& options = {}) const;
@@ -354,10 +393,16 @@ class ObjectMap {
   // `threshold` or the object is not a candidate.
   bool candidate(const Observation& obs, const Prepared& prep, const Object& object,
                  double threshold, Scores& s) const;
+  // add_frame(): the observations that are bleed onto another of the frame (drop_bleed).
+  std::vector<bool> bleed(const std::vector<Observation>& observations,
+                          const std::vector<std::unique_ptr<Prepared>>& prep,
+                          const std::vector<bool>& open) const;
   // add_frame() with best_first false: each observation in turn takes its best object.
   std::vector<AddResult> add_frame_in_turn(const std::vector<Observation>& observations);
   // What confirms `object`: its views or its ID's keyframes (ObjectMapOptions::confirmation).
   int confirmation_count(const Object& object) const;
+  // Confirmed: confirmation_count >= min_observations and, when judged, the detected share.
+  bool confirmed(const Object& object) const;
   // records(): the object's filtered cloud in `r` (points_voxel, points_filtered, cloud, t).
   void filter_record(const Object& object, const RecordOptions& options, ObjectRecord& r) const;
   // add_frame(): fuses the observation into `target` (nullptr: a new object).
@@ -368,6 +413,11 @@ class ObjectMap {
   double supported_share(const Object& a, const Object& b) const;
   // The class-confusion merges (ObjectMapOptions::merge_class_confusions), appended to `made`.
   void merge_class_confusions(std::vector<MergeLink>& made);
+  // The fragment merges (ObjectMapOptions::merge_fragments_in_box), appended to `made`.
+  void merge_fragments_in_box(std::vector<MergeLink>& made);
+  // The mean positions of the voxels of `object` seen in >= `share` of its observations (all of
+  // them when none is), in key order.
+  std::vector<Vec3> surface_points(const Object& object, double share) const;
 
   ObjectMapOptions options_;
   std::vector<std::unique_ptr<Object>>

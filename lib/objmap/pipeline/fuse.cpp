@@ -188,6 +188,17 @@ std::vector<ConfigField> scoring_fields(FuseOptions& o) {
        "what --min-observations counts: views, or id_keyframes (the paper: the keyframes in which "
        "the object's track ID was seen)",
        &o.confirmation},
+      {"objects.min_detected_share", "--min-detected-share",
+       "an object is confirmed only when detected in at least this share of the keyframes that "
+       "had its place in view, not occluded (0: no such rule; the paper)",
+       &m.min_detected_share},
+      {"visibility.min_visible_fraction", "--visible-fraction",
+       "a keyframe has an object in view when this share of its sampled points is in the image "
+       "and not occluded",
+       &o.visibility.min_visible_fraction},
+      {"visibility.range_factor", "--view-range-factor",
+       "... and the camera within this times the farthest distance it was detected from",
+       &o.visibility.range_factor},
       {"objects.view_min_translation_m", "--view-translation",
        "an observation is a new view of its object after this much camera motion, m (or the "
        "rotation below; 0 and 0: every observation is a view)",
@@ -372,6 +383,7 @@ void FuseOptions::check() const {
   check_part([&] { mask_refine.check(); }, "MaskRefineOptions", "mask_refine");
   check_part([&] { depth_gate.check(); }, "DepthGateOptions", "depth_gate");
   check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
+  check_part([&] { visibility.check(); }, "VisibilityOptions", "visibility");
   fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
   fusion::parse_distance_score(distance_score, "objects.distance_score");
   fusion::parse_confirmation(confirmation, "objects.confirmation");
@@ -550,7 +562,8 @@ struct FrameWork {
   std::vector<fusion::Observation> observations;
   PointCloud scene_points;  // the scene model's rays (voxel means), with --mesh scene|all
   std::vector<PointCloud> model_points;  // per observation, its object model's (--mesh objects)
-  cv::Mat depth;  // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
+  cv::Mat depth;       // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
+  cv::Mat view_depth;  // its thinned copy for the view log (fusion/visibility.h)
   std::uint64_t dense_points = 0;
   std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
   std::size_t duplicates = 0, depth_gated = 0;
@@ -723,6 +736,8 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   const cv::Mat bgr = io::read_frame_rgb(dataset, frame, camera.width, camera.height);
   const cv::Mat depth = io::read_frame_depth(dataset, frame, camera);
   if (dense && options.dense_prune.every_keyframes > 0) work.depth = depth;
+  if (order && options.objects.min_detected_share > 0.0)
+    work.view_depth = fusion::ViewLog(camera).thin(depth);
 
   // 2. Dense map: every valid pixel (eqs 11-15) with its colour.
   geometry::BackprojectOptions dense_options = options.depth;
@@ -849,6 +864,9 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
                                                                : ordered_json(nullptr)}};
   o["observation_count"] = r.observations;
   o["view_count"] = r.views;
+  o["frames_detected"] = r.frames_detected;
+  o["frames_in_view"] =
+      r.frames_in_view >= 0 ? ordered_json(r.frames_in_view) : ordered_json(nullptr);
   o["first_seen"] = r.first_seen;
   o["last_seen"] = r.last_seen;
   o["track_ids"] = r.track_ids;
@@ -879,7 +897,9 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
                       {"distance_m", mlink.distance_m},
                       {"overlap", mlink.overlap},
                       {"p", mlink.score_p},
-                      {"rule", mlink.class_confusion ? "class confusion" : "same class"}});
+                      {"rule", mlink.fragment          ? "fragment in box"
+                               : mlink.class_confusion ? "class confusion"
+                                                       : "same class"}});
   o["merged"] = merges;
   return o;
 }
@@ -1079,10 +1099,11 @@ void add_counts(const FrameWork& work, FuseResult& result) {
 // After every options.dense_prune.every_keyframes keyframes the dense map's noise is pruned, the
 // next keyframes held back from the map meanwhile: always between the same two keyframes.
 // The observations that joined objects go to `views` and each keyframe's depth to `scene`, when
-// given, for the meshes.
+// given, for the meshes; each keyframe's thinned depth to `view_log`, when given.
 void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
                     const FuseInputs& inputs, fusion::VoxelMap* dense, fusion::ObjectMap& objects,
-                    ObjectViews* object_views, mesh::TsdfModel* scene, FuseResult& result) {
+                    ObjectViews* object_views, mesh::TsdfModel* scene, fusion::ViewLog* view_log,
+                    FuseResult& result) {
   const Camera& camera = result.camera;
   const auto& keyframes = result.keyframes.keyframes;
   const geometry::RayTable rays = geometry::make_ray_table(camera, result.threads);
@@ -1146,11 +1167,14 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
         }
       }
       add_counts(work, result);
+      if (view_log && !work.view_depth.empty())
+        view_log->add(keyframes[done].timestamp, std::move(work.view_depth),
+                      keyframes[done].world_from_cam);
       // The keyframe's observations are associated together, best match first.
       const std::vector<fusion::AddResult> added = objects.add_frame(work.observations);
       for (std::size_t k = 0; k < added.size(); ++k) {
         if (added[k].object_id < 0) {
-          ++result.instances_empty;
+          ++(added[k].bleed ? result.instances_bleed : result.instances_empty);
           continue;
         }
         ++result.observations;
@@ -1183,11 +1207,16 @@ fusion::RecordOptions record_options(const FuseOptions& options, int threads) {
   return r;
 }
 
-// Step 4: the final merge pass (ID-switch repair), then each confirmed object's filtered record.
+// Step 4: the final merge pass (ID-switch repair), where each object was in view (with
+// `view_log`), then each confirmed object's filtered record.
 void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& objects,
-                              FuseResult& result) {
+                              const fusion::ViewLog* view_log, FuseResult& result) {
   result.merges = objects.merge_pass();
   result.objects_total = objects.size();
+  if (view_log) {
+    objects.judge_visibility(*view_log, options.visibility);
+    result.objects_below_share = objects.below_share_count();
+  }
   result.objects = objects.records(record_options(options, result.threads));
   for (const auto& r : result.objects) {
     result.object_points_raw += r.points_raw;
@@ -1336,8 +1365,10 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"instances_depth_gated", result.instances_depth_gated},
       {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
       {"instances_without_points", result.instances_empty},
+      {"instances_bleed", result.instances_bleed},
       {"observations", result.observations},
       {"objects_before_confirmation", result.objects_total},
+      {"objects_below_detected_share", result.objects_below_share},
       {"objects_confirmed", result.objects.size()},
       {"merges", result.merges.size()},
       {"object_meshes", std::count_if(result.object_meshes.begin(), result.object_meshes.end(),
@@ -1433,9 +1464,11 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   if (meshes.scene)
     scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,
                         scene_tsdf_options(options.mesh));
+  std::optional<fusion::ViewLog> view_log;
+  if (object_options.min_detected_share > 0.0) view_log.emplace(result.camera);
   fuse_keyframes(options, progress, inputs, options.dense_map ? &dense : nullptr, objects,
                  object_views ? &*object_views : nullptr, scene_model ? &*scene_model : nullptr,
-                 result);
+                 view_log ? &*view_log : nullptr, result);
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
 
   // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
@@ -1459,7 +1492,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
   t0 = Clock::now();
-  merge_and_filter_objects(options, objects, result);
+  merge_and_filter_objects(options, objects, view_log ? &*view_log : nullptr, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
   // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge

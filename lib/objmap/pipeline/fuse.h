@@ -58,16 +58,17 @@ struct FuseOptions {
   std::string overlap_measure = "containment";  // M of eq 21: containment (default) or iou (paper)
   std::string distance_score = "linear";  // f(D) of eq 22: linear (default) or gate (paper, eq 17)
   std::string confirmation = "views";     // views (default) or id_keyframes (paper)
-  double min_voxel_support = 0.1;       // an object keeps voxels seen in >= 10% of its observations
-  fusion::ObjectMapOptions objects;     // association (eq 22), confirmation, merge pass
-  bool outlier_filter = true;           // eq 18 on each object's cloud
-  filters::OutlierOptions outlier;      // K = 20, k = 1.0
-  bool outlier_on_points = false;       // eq 18 before the voxel filter, on the points (paper)
-  bool voxel_nearest_centre = false;    // the voxel filter keeps the point nearest the centre
-  bool position_is_centroid = false;    // objects.json `position`: the centroid (eq 16, paper)
-  fusion::DuplicateOptions duplicates;  // suspected duplicates in run.json: touching = 2 cm
-  scene::SceneOptions scene;            // up direction, support surfaces, relations
-  MeshOptions mesh;                     // objects' and scene meshes (pipeline/fuse_mesh.h)
+  double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
+  fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
+  fusion::VisibilityOptions visibility;  // where an object was in view (the detected share)
+  bool outlier_filter = true;            // eq 18 on each object's cloud
+  filters::OutlierOptions outlier;       // K = 20, k = 1.0
+  bool outlier_on_points = false;        // eq 18 before the voxel filter, on the points (paper)
+  bool voxel_nearest_centre = false;     // the voxel filter keeps the point nearest the centre
+  bool position_is_centroid = false;     // objects.json `position`: the centroid (eq 16, paper)
+  fusion::DuplicateOptions duplicates;   // suspected duplicates in run.json: touching = 2 cm
+  scene::SceneOptions scene;             // up direction, support surfaces, relations
+  MeshOptions mesh;                      // objects' and scene meshes (pipeline/fuse_mesh.h)
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
   void check() const;  // throws InputError naming the bad field
 };
@@ -97,6 +98,8 @@ struct FuseResult {
   std::size_t instances_empty = 0;  // no usable pixels (box mask empty, no depth, too few points)
   std::size_t observations = 0;     // added to the object map
   std::size_t objects_total = 0;    // objects before the confirmation rule
+  std::size_t instances_bleed = 0;  // another instance's surface in the frame (drop_bleed)
+  std::size_t objects_below_share = 0;  // with enough views, left out by the detected share
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
