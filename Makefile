@@ -62,7 +62,7 @@ ablation: deps configure
 	@ABLATION_COMMAND="make ablation$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
 	  bash scripts/ablation.sh $(OBJMAP) $(DATA)
 
-# make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of fuzz/ (every reader of
+# make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of tests/fuzz/ (every reader of
 # outside data) for FUZZ_SECONDS under libFuzzer + ASan + UBSan, built with clang in build-fuzz/
 # (scripts/fuzz.sh; 22 targets: ~23 minutes at the default). docs/testing.md.
 fuzz:

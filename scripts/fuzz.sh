@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# make fuzz: builds the fuzz targets of fuzz/ with clang, libFuzzer, ASan and UBSan in build-fuzz/
+# make fuzz: builds the fuzz targets of tests/fuzz/ with clang, libFuzzer, ASan and UBSan in build-fuzz/
 # and runs each for FUZZ_SECONDS (default 60) seconds on a corpus seeded from the real data
-# (fuzz/seeds.txt), fuzz/seeds/<target>/ and the images fuzz_make_seeds makes, where they exist. A finding (a crash, a sanitizer report, an exception other than
+# (tests/fuzz/seeds.txt), tests/fuzz/seeds/<target>/ and the images fuzz_make_seeds makes, where they exist. A finding (a crash, a sanitizer report, an exception other than
 # InputError, an InputError of several lines, an input taking > 10 s or > 2 GB) stops that target:
 # the input is saved in build-fuzz/findings/<target>/, and the script exits 1 after the others.
 #   scripts/fuzz.sh [DATA]   env: FUZZ_SECONDS, FUZZ_TARGETS="png ply" (default: all), JOBS
@@ -14,7 +14,7 @@ if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found; expected clang and its fuzzer runtime (scripts/install-deps.sh --fuzz)" >&2
   exit 2
 fi
-read -r -a targets <<<"${FUZZ_TARGETS:-$(sed -n 's/^ *objmap_fuzz_target(\([a-z_]*\).*/\1/p' fuzz/CMakeLists.txt | tr '\n' ' ')}"
+read -r -a targets <<<"${FUZZ_TARGETS:-$(sed -n 's/^ *objmap_fuzz_target(\([a-z_]*\).*/\1/p' tests/fuzz/CMakeLists.txt | tr '\n' ' ')}"
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=None "-DCMAKE_CXX_FLAGS=-O1 -g" \
     -DOBJMAP_FUZZ=ON -DOBJMAP_BUILD_TESTS=OFF -DOBJMAP_BUILD_BENCHMARKS=OFF >/dev/null
@@ -26,10 +26,10 @@ if ! cmake --build "$build" -j"${JOBS:-2}" --target "${targets[@]/#/fuzz_}" fuzz
   tail -30 "$build/build.log" >&2
   exit 1
 fi
-# The image seeds made with objmap's PNG encoder and libjpeg (fuzz/make_seeds.cpp): seeds of the
+# The image seeds made with objmap's PNG encoder and libjpeg (tests/fuzz/make_seeds.cpp): seeds of the
 # image targets without the real data.
 "$build/bin/fuzz_make_seeds" "$build/made_seeds" >/dev/null
-# The rosbag target's seeds: tiny bags written with rosbag_storage (fuzz/make_bag_seeds.cpp).
+# The rosbag target's seeds: tiny bags written with rosbag_storage (tests/fuzz/make_bag_seeds.cpp).
 if [ -x "$build/bin/fuzz_make_bag_seeds" ]; then "$build/bin/fuzz_make_bag_seeds" "$build/made_seeds"; fi
 echo "fuzz: built ${#targets[@]} targets in $(($(date +%s) - start)) s; ${seconds} s each"
 
@@ -39,13 +39,13 @@ failed=()
 for t in "${targets[@]}"; do
   corpus=$build/corpus/$t findings=$build/findings/$t log=$build/logs/$t.log
   mkdir -p "$corpus" "$findings" "$(dirname "$log")"
-  for f in $(awk -v t="$t" '$1 == t { for (i = 2; i <= NF; i++) print $i }' fuzz/seeds.txt); do
+  for f in $(awk -v t="$t" '$1 == t { for (i = 2; i <= NF; i++) print $i }' tests/fuzz/seeds.txt); do
     if [ -f "$data/$f" ]; then cp "$data/$f" "$corpus/data_$(echo "$f" | tr / _)"; else
       echo "fuzz: $t: seed $data/$f missing (set OBJMAP_DATA)" >&2
     fi
   done
-  hand_made=()  # tiny text seeds of fuzz/seeds/<target>/ and made images, when the target has some
-  [ -d "fuzz/seeds/$t" ] && hand_made+=("fuzz/seeds/$t")
+  hand_made=()  # tiny text seeds of tests/fuzz/seeds/<target>/ and made images, when the target has some
+  [ -d "tests/fuzz/seeds/$t" ] && hand_made+=("tests/fuzz/seeds/$t")
   [ -d "$build/made_seeds/$t" ] && hand_made+=("$build/made_seeds/$t")
   if "$build/bin/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "${hand_made[@]}" >"$log" 2>&1; then

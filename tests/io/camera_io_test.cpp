@@ -116,7 +116,7 @@ TEST(ReadCameraFile, YamlMissingOrBadField) {
 
 // A top level that is no mapping: OpenCV's FileStorage reads the file, then asserts isMap() when a
 // key is looked up (a cv::Exception that was "internal error", exit 1; found by fuzz_camera_yaml,
-// fuzz/seeds/camera_yaml/finding_top_level_sequence.yaml).
+// tests/fuzz/seeds/camera_yaml/finding_top_level_sequence.yaml).
 TEST(ReadCameraFile, AYamlWhoseTopLevelIsNoMappingIsAnInputErrorNamingTheFile) {
   TempDir dir;
   std::string where;

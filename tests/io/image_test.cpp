@@ -74,9 +74,9 @@ TEST(ReadImage, WrongSize) {
 }
 
 TEST(ReadImage, AJpegOfTheWrongSizeIsRefusedBeforeDecoding) {
-  // Seen with fuzz/fuzz_jpeg (8 runs/s): a JPEG of a few dozen bytes whose header claims a huge
-  // image was decoded in full (up to 2^30 pixels, gigabytes) before its size was compared with the
-  // camera's. Its header is read first now, as a PNG's is: 60000x60000 names the size, where
+  // Seen with tests/fuzz/fuzz_jpeg (8 runs/s): a JPEG of a few dozen bytes whose header claims a
+  // huge image was decoded in full (up to 2^30 pixels, gigabytes) before its size was compared with
+  // the camera's. Its header is read first now, as a PNG's is: 60000x60000 names the size, where
   // decoding would have refused the pixel count.
   TempDir dir;
   std::vector<unsigned char> bytes;

@@ -13,15 +13,9 @@ namespace {
 using test_masks::add;
 using test_masks::camera;
 using test_masks::count;
+using test_masks::fill;
+using test_masks::flat;
 using test_masks::mask_of;
-
-// Depth image: `far_m` everywhere.
-cv::Mat flat(double far_m) {
-  return cv::Mat(480, 640, CV_16UC1, cv::Scalar(static_cast<int>(far_m * 5000.0)));
-}
-void fill(cv::Mat& depth, const cv::Rect& r, double z_m) {
-  depth(r).setTo(cv::Scalar(static_cast<int>(z_m * 5000.0)));
-}
 
 TEST(MaskRefine, SpillOntoTheBackgroundIsRemoved) {
   // An object at 1 m in front of a wall at 2 m; its mask spills 2 px over the outline.

@@ -36,6 +36,14 @@ inline Mask mask_of(const cv::Rect& r) {
   return m;
 }
 
+// A depth image of the camera's size at `z_m` everywhere, and `r` of it set to `z_m`.
+inline cv::Mat flat(double z_m) {
+  return cv::Mat(480, 640, CV_16UC1, cv::Scalar(static_cast<int>(z_m * 5000.0)));
+}
+inline void fill(cv::Mat& depth, const cv::Rect& r, double z_m) {
+  depth(r).setTo(cv::Scalar(static_cast<int>(z_m * 5000.0)));
+}
+
 inline std::size_t count(const Mask& m) {
   std::size_t n = 0;
   for (auto b : m.data) n += b != 0;

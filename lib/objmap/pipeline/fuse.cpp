@@ -28,7 +28,7 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/fuse_scene.h"
-#include "objmap/segmentation/coco_classes.h"
+#include "objmap/segmentation/instance_masks.h"
 #include "objmap/segmentation/read.h"
 
 namespace objmap::pipeline {
@@ -565,161 +565,24 @@ struct FrameWork {
   cv::Mat depth;       // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   cv::Mat view_depth;  // its thinned copy for the view log (fusion/visibility.h)
   std::uint64_t dense_points = 0;
-  std::size_t instances = 0, skipped_score = 0, from_box = 0, empty = 0, refined = 0;
-  std::size_t duplicates = 0, depth_gated = 0;
-  std::uint64_t mask_pixels_removed = 0, depth_gate_pixels_removed = 0;
+  segmentation::InstanceMaskCounts masks;  // what the mask cleaning did to the instances
+  std::size_t without_points = 0;          // kept instances with too few points in depth range
 };
 
-// Non-zero pixels of `mask` inside `bounds`.
-std::size_t mask_pixels(const segmentation::Mask& mask, const cv::Rect& bounds) {
-  std::size_t n = 0;
-  for (int v = bounds.y; v < bounds.y + bounds.height; ++v) {
-    const std::uint8_t* row = mask.data.data() + static_cast<std::size_t>(v) * mask.width;
-    for (int u = bounds.x; u < bounds.x + bounds.width; ++u) n += row[u] != 0;
-  }
-  return n;
-}
-
-// One instance of a keyframe with its mask: given (refined, depth-gated) or made from its box.
-constexpr std::size_t kUnknown = ~std::size_t{0};
-struct InstanceMask {
-  const segmentation::Instance* instance = nullptr;
-  segmentation::Mask owned;  // a mask made from the box, or a refined / gated given mask
-  const segmentation::Mask* mask = nullptr;
-  cv::Rect bounds;
-  std::string cls;                // canonical class (for the duplicate rule)
-  std::size_t pixels = kUnknown;  // of the mask, counted when the duplicate rule needs it
-};
-
-// Takes a clean-up's mask (refine_mask, gate_mask_depth) when it removed pixels, and counts the
-// instance and the pixels.
-template <typename CleanUp>
-void adopt(CleanUp&& r, InstanceMask& m, std::size_t& instances, std::uint64_t& pixels) {
-  if (r.removed_pixels == 0) return;
-  ++instances;
-  pixels += r.removed_pixels;
-  m.owned = std::move(r.mask);
-  m.mask = &m.owned;
-  m.bounds = r.bounds;
-}
-
-// The mask of a given-mask instance after refine_mask (the parts across a depth edge from the
-// rest go, mask_refine.h) and the depth gate (pixels whose depth disagrees with the rest of the
-// observation go, depth_gate.h), each counted in `work`.
-void clean_given_mask(const FuseOptions& options, const Camera& camera, const cv::Mat& depth,
-                      InstanceMask& m, FrameWork& work) {
-  if (options.mask_refine.enabled) {
-    segmentation::MaskRefineOptions refine = options.mask_refine;
-    refine.min_depth_m = options.depth.min_depth_m;
-    refine.max_depth_m = options.depth.max_depth_m;
-    adopt(segmentation::refine_mask(*m.mask, m.bounds, depth, camera, refine), m, work.refined,
-          work.mask_pixels_removed);
-  }
-  if (options.depth_gate.enabled && !m.bounds.empty()) {
-    segmentation::DepthGateOptions gate = options.depth_gate;
-    gate.min_depth_m = options.depth.min_depth_m;
-    gate.max_depth_m = options.depth.max_depth_m;
-    adopt(segmentation::gate_mask_depth(*m.mask, m.bounds, depth, camera, gate), m,
-          work.depth_gated, work.depth_gate_pixels_removed);
-  }
-}
-
-// Step 3a of a keyframe: each instance's mask (given, or from the box and the depth) and its
-// bounds, in the segmentation's order; instances below the score or without a mask are counted.
-std::vector<InstanceMask> instance_masks(const FuseOptions& options, const Camera& camera,
-                                         const cv::Mat& depth,
-                                         const segmentation::FrameSegmentation& seg,
-                                         FrameWork& work) {
-  std::vector<InstanceMask> made;
-  made.reserve(seg.instances.size());
-  for (const auto& instance : seg.instances) {
-    ++work.instances;
-    if (instance.score < options.min_instance_score) {
-      ++work.skipped_score;
-      continue;
-    }
-    InstanceMask m;
-    m.instance = &instance;
-    if (!instance.mask) {
-      ++work.from_box;
-      auto box = segmentation::mask_from_box(instance.bbox, depth, camera, options.box_mask);
-      if (box.status != segmentation::BoxMaskStatus::kOk) {
-        ++work.empty;
-        continue;
-      }
-      m.owned = std::move(box.mask);
-      m.mask = &m.owned;
-      m.bounds = box.bounds;  // what mask_bounds() finds, known without a scan of the image
-      m.pixels = box.pixels;
-    } else {
-      m.mask = &*instance.mask;
-      m.bounds = geometry::mask_bounds(*m.mask);
-      clean_given_mask(options, camera, depth, m, work);
-    }
-    if (m.bounds.empty()) {
-      ++work.empty;
-      continue;
-    }
-    m.cls = segmentation::canonical_class(instance.class_name);
-    const bool owned = m.mask == &m.owned;
-    made.push_back(std::move(m));  // no reallocation (reserved): only `owned` moves
-    if (owned) made.back().mask = &made.back().owned;
-  }
-  return made;
-}
-
-// Step 3b: duplicates. A detector that boxes one object twice (the keyboard, and the keyboard with
-// the desk around it) gives two instances of one class; one object takes one instance of a
-// keyframe, so the second would keep an object of its own. Two instances of one class are one
-// object when the smaller box lies mostly inside the larger and the smaller mask mostly inside the
-// larger mask (both shares >= duplicate_overlap); the higher score (then the one listed first) is
-// kept. Returns one flag per instance: kept.
-std::vector<bool> drop_duplicates(const FuseOptions& options, std::vector<InstanceMask>& made,
-                                  FrameWork& work) {
-  std::vector<bool> keep(made.size(), true);
-  if (options.duplicate_overlap >= 1.0) return keep;
-  const auto shared_pixels = [](const InstanceMask& a, const InstanceMask& b) {
-    const cv::Rect both = a.bounds & b.bounds;
-    std::size_t n = 0;
-    for (int v = both.y; v < both.y + both.height; ++v) {
-      const std::size_t row = static_cast<std::size_t>(v) * a.mask->width;
-      for (int u = both.x; u < both.x + both.width; ++u)
-        n += a.mask->data[row + u] != 0 && b.mask->data[row + u] != 0;
-    }
-    return n;
-  };
-  const auto box_share = [](const segmentation::Box& a, const segmentation::Box& b) {
-    const double w = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
-    const double h = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
-    const double smaller = std::min(a.w * a.h, b.w * b.h);
-    return w > 0 && h > 0 && smaller > 0 ? w * h / smaller : 0.0;
-  };
-  const auto pixels = [&](InstanceMask& m) {
-    if (m.pixels == kUnknown) m.pixels = mask_pixels(*m.mask, m.bounds);
-    return m.pixels;
-  };
-  std::vector<std::size_t> order(made.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return made[a].instance->score > made[b].instance->score;
-  });
-  std::vector<std::size_t> kept;
-  for (std::size_t i : order) {
-    for (std::size_t k : kept) {
-      if (made[k].cls != made[i].cls) continue;
-      if (box_share(made[i].instance->bbox, made[k].instance->bbox) < options.duplicate_overlap)
-        continue;
-      const std::size_t smaller = std::min(pixels(made[i]), pixels(made[k]));
-      if (smaller > 0 && static_cast<double>(shared_pixels(made[i], made[k])) >=
-                             options.duplicate_overlap * static_cast<double>(smaller)) {
-        keep[i] = false;
-        ++work.duplicates;
-        break;
-      }
-    }
-    if (keep[i]) kept.push_back(i);
-  }
-  return keep;
+// The mask cleaning's options (segmentation/instance_masks.h) from the fuse's: the given masks'
+// clean-ups take the fuse's depth range.
+segmentation::InstanceMaskOptions instance_mask_options(const FuseOptions& options) {
+  segmentation::InstanceMaskOptions o;
+  o.min_score = options.min_instance_score;
+  o.duplicate_overlap = options.duplicate_overlap;
+  o.box = options.box_mask;
+  o.refine = options.mask_refine;
+  o.refine.min_depth_m = options.depth.min_depth_m;
+  o.refine.max_depth_m = options.depth.max_depth_m;
+  o.gate = options.depth_gate;
+  o.gate.min_depth_m = options.depth.min_depth_m;
+  o.gate.max_depth_m = options.depth.max_depth_m;
+  return o;
 }
 
 // Back-projects one keyframe: the dense points summed by voxel (frame_voxels.h, so that voxels are
@@ -761,23 +624,21 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
 
   // 3. Instances: the mask (given, or from the box and the depth), its pixels in the world.
   if (!seg) return work;
-  // 3a. Each instance's mask and its bounds.
-  std::vector<InstanceMask> made = instance_masks(options, camera, depth, *seg, work);
-  // 3b. One instance per object and keyframe: a second box of the same object is dropped.
-  const std::vector<bool> keep = drop_duplicates(options, made, work);
-  // 3c. The kept instances' pixels in the world, in the segmentation's order.
-  for (std::size_t i = 0; i < made.size(); ++i) {
-    if (!keep[i]) continue;
-    const InstanceMask& m = made[i];
-    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, m.mask,
+  // 3a. Each instance's cleaned mask and its bounds; one instance per object and keyframe (a
+  //     second box of the same object is dropped).
+  const std::vector<segmentation::InstanceMask> masks = segmentation::clean_instance_masks(
+      *seg, depth, camera, instance_mask_options(options), work.masks);
+  // 3b. The kept instances' pixels in the world, in the segmentation's order.
+  for (const segmentation::InstanceMask& m : masks) {
+    const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, &m.mask(),
                                               m.bounds);
     if (instance_frame.roi.empty()) {
-      ++work.empty;
+      ++work.without_points;
       continue;
     }
     auto points = geometry::backproject(rays, instance_frame, options.depth);
     if (points.points_in_world.size() < static_cast<std::size_t>(options.objects.min_points)) {
-      ++work.empty;
+      ++work.without_points;
       continue;
     }
     fusion::Observation obs;
@@ -1082,15 +943,16 @@ fusion::ObjectMapOptions object_map_options(const FuseOptions& options, bool sti
 // A keyframe's counts into the run's.
 void add_counts(const FrameWork& work, FuseResult& result) {
   result.dense_points_raw += work.dense_points;
-  result.instances_seen += work.instances;
-  result.instances_skipped_score += work.skipped_score;
-  result.instances_from_box += work.from_box;
-  result.instances_refined += work.refined;
-  result.instances_duplicate += work.duplicates;
-  result.mask_pixels_removed += work.mask_pixels_removed;
-  result.instances_depth_gated += work.depth_gated;
-  result.depth_gate_pixels_removed += work.depth_gate_pixels_removed;
-  result.instances_empty += work.empty;
+  const segmentation::InstanceMaskCounts& m = work.masks;
+  result.instances_seen += m.instances;
+  result.instances_skipped_score += m.below_score;
+  result.instances_from_box += m.from_box;
+  result.instances_refined += m.refined;
+  result.instances_duplicate += m.duplicates;
+  result.mask_pixels_removed += m.refine_pixels_removed;
+  result.instances_depth_gated += m.depth_gated;
+  result.depth_gate_pixels_removed += m.gate_pixels_removed;
+  result.instances_empty += m.empty + work.without_points;
 }
 
 // Step 3: back-project and fuse, keyframe by keyframe. Workers decode and back-project ahead (one

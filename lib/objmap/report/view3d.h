@@ -74,7 +74,7 @@ std::string view3d_json(const View3dContent& content, const View3dOptions& optio
 // the scripts (three.js, the data, the viewer).
 std::string view3d_html(const View3dContent& content, const View3dOptions& options);
 
-// The embedded scripts (generated at build time by cmake/embed_view3d.cmake).
+// The embedded scripts (generated at build time by scripts/cmake/embed_view3d.cmake).
 std::string_view three_js();   // three.js as one expression: `const THREE=(()=>{...})();`
 std::string_view view3d_js();  // lib/objmap/report/view3d.js
 

@@ -4,7 +4,7 @@
 // Not part of the CMake build (it needs the PCL components registration and features, which the
 // project does not configure yet). After `make build`, from the repo root, as one command line:
 //   g++ -O2 -std=c++17 -Ilib -I/usr/include/pcl-1.13 -I/usr/include/eigen3
-//     benchmarks/compare_pcl_icp.cpp build/lib/objmap/pose/libobjmap_pose.a
+//     tests/benchmarks/compare_pcl_icp.cpp build/lib/objmap/pose/libobjmap_pose.a
 //     build/lib/objmap/libobjmap_core.a -lpcl_registration -lpcl_features -lpcl_search
 //     -lpcl_kdtree -lpcl_common -o /tmp/compare_pcl_icp && /tmp/compare_pcl_icp
 #include <pcl/features/normal_3d.h>

@@ -3,8 +3,8 @@
 // compared flag by flag, and the wall time per call (best of 10) of each, objmap's on 1 and 2
 // threads. Not part of the CMake build (PCL is not a dependency of objmap). After `make build`,
 // from the repo root, as one command line:
-//   g++ -O2 -std=c++17 -Ilib -Ibenchmarks -I/usr/include/pcl-1.13 -I/usr/include/eigen3
-//     benchmarks/compare_pcl_sor.cpp build/lib/objmap/filters/libobjmap_filters.a
+//   g++ -O2 -std=c++17 -Ilib -Itests/benchmarks -I/usr/include/pcl-1.13 -I/usr/include/eigen3
+//     tests/benchmarks/compare_pcl_sor.cpp build/lib/objmap/filters/libobjmap_filters.a
 //     build/lib/objmap/libobjmap_core.a -lpcl_filters -lpcl_search -lpcl_kdtree -lpcl_common
 //     -llz4 -lpthread -o /tmp/compare_pcl_sor && /tmp/compare_pcl_sor
 #include <pcl/filters/statistical_outlier_removal.h>
