@@ -77,7 +77,8 @@ class Labeller {
   void add(HeldFrame&& held, const Tracker& tracker) {
     std::vector<int> confirmed;  // internal ids confirmed in this frame
     for (const Association& a : held.associations) {
-      result_.tracks_started = std::max(result_.tracks_started, std::size_t(a.track_id));
+      result_.tracks_started =
+          std::max(result_.tracks_started, static_cast<std::size_t>(a.track_id));
       if (a.confirmed && !output_id_.count(a.track_id)) confirmed.push_back(a.track_id);
     }
     std::sort(confirmed.begin(), confirmed.end());
