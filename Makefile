@@ -49,8 +49,9 @@ bench: deps build
 	  bash scripts/bench.sh $(OBJMAP) $(DATA)
 
 # make bench-memory: peak memory and dense-map voxels of objmap fuse on a synthetic scene circled
-# for 300 and 1200 frames, with and without the dense map's pruning (scripts/bench_memory.sh; about
-# 8 minutes on 2 cores the first time, the scenes are kept in out/bench_memory/).
+# for 300 and 1200 frames, with and without the dense map's pruning, then the peak memory of objmap
+# track on the synthetic walk-through at 300 and 954 frames (scripts/bench_memory.sh; about 8
+# minutes on 2 cores the first time, the scenes are kept in out/bench_memory/).
 bench-memory: build
 	@bash scripts/bench_memory.sh $(OBJMAP) out/bench_memory
 

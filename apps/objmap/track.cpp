@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "command.h"
 #include "objmap/core/error.h"
@@ -41,81 +42,16 @@ struct TrackCommand {
   track::Position3dOptions position;
 };
 
-void run_track(TrackCommand& cmd) {
-  track::TrackOptions& o = cmd.options;
-  o.tracker.same_class_only = cmd.same_class;
-  o.label_tentative_history = !cmd.online_output;
-  check_naming_flags([&] { o.check(); },
-                     {{"TrackerOptions.gate_3d_m", "--gate-3d-m"},
-                      {"TrackerOptions.gate_3d_speed_mps", "--gate-3d-speed"},
-                      {"TrackerOptions.gate_3d_history", "--gate-3d-history"},
-                      {"TrackerOptions.max_age", "--max-age"},
-                      {"TrackerOptions.n_init", "--n-init"},
-                      {"TrackerOptions.max_cosine_distance", "--max-cosine-distance"},
-                      {"TrackerOptions.lambda", "--lambda"},
-                      {"TrackerOptions.max_iou_distance", "--max-iou-distance"},
-                      {"TrackerOptions.min_score", "--min-score"},
-                      {"KalmanOptions.std_weight_position", "--std-position"},
-                      {"KalmanOptions.std_weight_velocity", "--std-velocity"}});
-  io::require_not_an_input({"--out", cmd.out}, {{"--dataset", cmd.dataset},
-                                                {"--segmentation", cmd.segmentation},
-                                                {"--trajectory", cmd.trajectory},
-                                                {"--camera", cmd.camera}});
-  io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
-  require(fs::is_directory(cmd.dataset) || io::is_rosbag_file(cmd.dataset), cmd.dataset,
-          "no such folder; expected a recording folder (TUM rgb.txt, or another layout) or a ROS "
-          "1 .bag");
-  segmentation::ReadOptions read;
-  read.format = cmd.seg_format;
-  const segmentation::Segmentation input = segmentation::read_segmentation(cmd.segmentation, read);
-  // A TUM folder gives every frame rgb.txt lists (it may hold rgb.txt alone); other layouts
-  // their frames as fuse reads them.
-  const bool listing = io::is_tum_listing(cmd.dataset, cmd.layout);
-  std::optional<io::Dataset> dataset;
-  if (!listing || !cmd.trajectory.empty())
-    dataset = io::read_dataset(cmd.dataset, {cmd.layout, 0.02, 30.0, cmd.topics});
-  const track::FrameImages images = listing ? track::find_frame_images(cmd.dataset, input)
-                                            : track::find_frame_images(*dataset, input);
-  // Appearance needs the rgb images; a stream of boxes without images is tracked on motion alone.
-  o.tracker.use_appearance = !cmd.no_appearance && images.has_images;
-
-  // The 3D gate: the instances' robust centroids from the depth images and the trajectory.
-  o.tracker.use_gate_3d = !cmd.trajectory.empty();
-  track::FramePositionsFn positions;
-  std::string camera_reason;
-  if (o.tracker.use_gate_3d) {
-    const io::CameraChoice choice = io::choose_camera(*dataset, cmd.camera);
-    camera_reason = choice.reason;
-    const Trajectory trajectory = io::read_trajectory(cmd.trajectory);
-    positions = track::depth_positions(*dataset, input, trajectory, choice.camera, cmd.position);
-  }
-
-  std::unique_ptr<ProgressBar> bar;
-  const track::TrackResult result = track::track_segmentation(
-      input, o,
-      [&](std::size_t i) {
-        return listing ? io::read_rgb(images.files[i], 0, 0)
-                       : io::read_frame_rgb(*dataset, dataset->frames[images.rows[i]], 0, 0);
-      },
-      [&](std::size_t done, std::size_t total) {
-        if (!bar) bar = std::make_unique<ProgressBar>("track", total);
-        bar->update(done);
-      },
-      positions);
-  if (bar) bar->finish();
-
-  io::StagingDir staging(cmd.out, io::kSegmentationFolder);
-  segmentation::write_segmentation(staging.path(), result.tracked);
-  io::write_file_atomic(staging.path() / "tracks.json", track::tracks_json(result));
-  staging.commit();
-
+// What track did: the tracker's inputs and the tracks, on stdout.
+void print_track_summary(const TrackCommand& cmd, const std::string& format,
+                         const track::TrackResult& result, const std::string& camera_reason) {
+  const track::TrackOptions& o = cmd.options;
   const track::LengthStats len = track::length_stats(result.tracks);
   std::map<std::string, int> per_class;
   for (const auto& t : result.tracks) ++per_class[t.class_name];
-  std::printf("wrote         %s (%zu frame files, tracks.json)\n", cmd.out.c_str(),
-              result.tracked.frames.size());
+  std::printf("wrote         %s (%zu frame files, tracks.json)\n", cmd.out.c_str(), result.frames);
   std::printf("input         %s: format %s, %zu frames, %zu instances\n", cmd.segmentation.c_str(),
-              input.format.c_str(), result.frames, result.instances);
+              format.c_str(), result.frames, result.instances);
   std::printf("appearance    %s\n", result.used_appearance ? "colour histograms of the rgb images"
                                     : cmd.no_appearance
                                         ? "off (--no-appearance): motion and IoU only"
@@ -145,6 +81,84 @@ void run_track(TrackCommand& cmd) {
     std::printf("length        mean %.1f, median %zu, min %zu, max %zu frames\n", len.mean,
                 len.median, len.min, len.max);
   for (const auto& [name, n] : per_class) std::printf("  %-20s %d tracks\n", name.c_str(), n);
+}
+
+void run_track(TrackCommand& cmd) {
+  track::TrackOptions& o = cmd.options;
+  o.tracker.same_class_only = cmd.same_class;
+  o.label_tentative_history = !cmd.online_output;
+  check_naming_flags([&] { o.check(); },
+                     {{"TrackerOptions.gate_3d_m", "--gate-3d-m"},
+                      {"TrackerOptions.gate_3d_speed_mps", "--gate-3d-speed"},
+                      {"TrackerOptions.gate_3d_history", "--gate-3d-history"},
+                      {"TrackerOptions.max_age", "--max-age"},
+                      {"TrackerOptions.n_init", "--n-init"},
+                      {"TrackerOptions.max_cosine_distance", "--max-cosine-distance"},
+                      {"TrackerOptions.lambda", "--lambda"},
+                      {"TrackerOptions.max_iou_distance", "--max-iou-distance"},
+                      {"TrackerOptions.min_score", "--min-score"},
+                      {"KalmanOptions.std_weight_position", "--std-position"},
+                      {"KalmanOptions.std_weight_velocity", "--std-velocity"}});
+  io::require_not_an_input({"--out", cmd.out}, {{"--dataset", cmd.dataset},
+                                                {"--segmentation", cmd.segmentation},
+                                                {"--trajectory", cmd.trajectory},
+                                                {"--camera", cmd.camera}});
+  io::require_replaceable(cmd.out, io::kSegmentationFolder);  // before the work, not after it
+  require(fs::is_directory(cmd.dataset) || io::is_rosbag_file(cmd.dataset), cmd.dataset,
+          "no such folder; expected a recording folder (TUM rgb.txt, or another layout) or a ROS "
+          "1 .bag");
+  segmentation::ReadOptions read;
+  read.format = cmd.seg_format;
+  // The frames are read, tracked and written one at a time (a window of n_init frames in memory).
+  const segmentation::FrameReader input(cmd.segmentation, read);
+  std::vector<double> timestamps;
+  for (const segmentation::FrameEntry& e : input.frames()) timestamps.push_back(e.timestamp);
+  // A TUM folder gives every frame rgb.txt lists (it may hold rgb.txt alone); other layouts
+  // their frames as fuse reads them.
+  const bool listing = io::is_tum_listing(cmd.dataset, cmd.layout);
+  std::optional<io::Dataset> dataset;
+  if (!listing || !cmd.trajectory.empty())
+    dataset = io::read_dataset(cmd.dataset, {cmd.layout, 0.02, 30.0, cmd.topics});
+  const track::FrameImages images = listing ? track::find_frame_images(cmd.dataset, input.frames())
+                                            : track::find_frame_images(*dataset, input.frames());
+  // Appearance needs the rgb images; a stream of boxes without images is tracked on motion alone.
+  o.tracker.use_appearance = !cmd.no_appearance && images.has_images;
+
+  // The 3D gate: the instances' robust centroids from the depth images and the trajectory.
+  o.tracker.use_gate_3d = !cmd.trajectory.empty();
+  track::FramePositionsFn positions;
+  std::string camera_reason;
+  if (o.tracker.use_gate_3d) {
+    const io::CameraChoice choice = io::choose_camera(*dataset, cmd.camera);
+    camera_reason = choice.reason;
+    const Trajectory trajectory = io::read_trajectory(cmd.trajectory);
+    positions =
+        track::depth_positions(*dataset, timestamps, trajectory, choice.camera, cmd.position);
+  }
+
+  io::StagingDir staging(cmd.out, io::kSegmentationFolder);
+  segmentation::require_distinct_frame_names(staging.path(), timestamps);
+  std::unique_ptr<ProgressBar> bar;
+  const track::TrackResult result = track::track_stream(
+      {cmd.segmentation, input.size(), [&](std::size_t i) { return input.read(i); }},
+      [&](std::size_t, segmentation::FrameSegmentation&& frame) {
+        segmentation::write_frame_json(
+            staging.path() / segmentation::frame_file_name(frame.timestamp), frame);
+      },
+      o,
+      [&](std::size_t i) {
+        return listing ? io::read_rgb(images.files[i], 0, 0)
+                       : io::read_frame_rgb(*dataset, dataset->frames[images.rows[i]], 0, 0);
+      },
+      [&](std::size_t done, std::size_t total) {
+        if (!bar) bar = std::make_unique<ProgressBar>("track", total);
+        bar->update(done);
+      },
+      positions);
+  if (bar) bar->finish();
+  io::write_file_atomic(staging.path() / "tracks.json", track::tracks_json(result));
+  staging.commit();
+  print_track_summary(cmd, input.format(), result, camera_reason);
 }
 
 void setup_track(CLI::App& app) {

@@ -187,6 +187,31 @@ TEST(ReadReal, YcbvPngWithClassesTxt) {
 
 // ---- malformed copies and synthetic folders ----------------------------------------------------
 
+// FrameReader lists the frames and tells the format up front, and reads a frame only when asked:
+// a malformed later frame is an error of that frame's read, not of the listing.
+TEST(FrameReader, ReadsOneFrameWhenAsked) {
+  TempDir tmp;
+  write_text(tmp / "2.5.json",
+             "{\"instances\":[{\"class\":\"cup\",\"score\":0.5,\"bbox\":[1,2,3,4]}]}\n");
+  write_text(tmp / "1.0.json", "{\"instances\":[]}\n");
+  write_text(tmp / "3.0.json", "{\"instances\":[{\"class\":");
+  const FrameReader reader(tmp.path());
+  EXPECT_EQ(reader.format(), "json");
+  ASSERT_EQ(reader.size(), 3u);
+  EXPECT_EQ(reader.frames()[0].timestamp, 1.0);
+  EXPECT_EQ(reader.frames()[1].timestamp, 2.5);
+  EXPECT_EQ(reader.frames()[2].path, tmp / "3.0.json");
+  const FrameSegmentation second = reader.read(1);
+  EXPECT_EQ(second.timestamp, 2.5);
+  ASSERT_EQ(second.instances.size(), 1u);
+  EXPECT_EQ(second.instances[0].class_name, "cup");
+  EXPECT_EQ(second.instances[0].bbox.w, 3.0);
+  EXPECT_TRUE(reader.read(0).instances.empty());
+  EXPECT_ERROR_HAS(reader.read(2), (tmp / "3.0.json").string() + ":1: malformed JSON");
+  EXPECT_ERROR_HAS(read_segmentation(tmp.path()),
+                   (tmp / "3.0.json").string() + ":1: malformed JSON");
+}
+
 TEST(ReadBoxes, TextInNumberField) {
   TempDir tmp;
   write_text(tmp / "1.0.txt",

@@ -66,7 +66,9 @@ TEST(TrackCli, MissingDatasetFolderIsExit2) {
   EXPECT_FALSE(test::fs::exists(tmp / "out"));
 }
 
-// A stream whose every frame is empty: nothing to track.
+// A stream whose every frame is empty: nothing to track. The frames are streamed, so this is known
+// after the pass over them (the progress lines come first); the error is the last line and no
+// output is left.
 TEST(TrackCli, EmptyDetectionStreamIsExit2) {
   test::TempDir tmp;
   test::write_text(tmp / "data" / "rgb.txt",
@@ -76,9 +78,38 @@ TEST(TrackCli, EmptyDetectionStreamIsExit2) {
   const auto r = run_objmap({"track", "--dataset", (tmp / "data").string(), "--segmentation",
                              (tmp / "seg").string(), "--out", (tmp / "out").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err, "objmap: error: " + (tmp / "seg").string() +
-                       ": no instance in any of the 2 frames; expected detections to track\n");
+  const std::string line = "objmap: error: " + (tmp / "seg").string() +
+                           ": no instance in any of the 2 frames; expected detections to track\n";
+  ASSERT_GE(r.err.size(), line.size()) << r.err;
+  EXPECT_EQ(r.err.substr(r.err.size() - line.size()), line);
+  EXPECT_EQ(r.err.find("objmap: error:"), r.err.size() - line.size()) << r.err;
   EXPECT_FALSE(test::fs::exists(tmp / "out"));
+}
+
+// The frames are read as they are tracked: a malformed frame after good ones is exit 2 naming its
+// file and line, and leaves no output (the frames before it went to the temporary folder only).
+TEST(TrackCli, MalformedLaterFrameLeavesNoOutput) {
+  test::TempDir tmp;
+  std::string listing;
+  for (int f = 1; f <= 8; ++f) {
+    const std::string stamp = std::to_string(f) + ".000000";
+    listing += stamp + " rgb/" + stamp + ".png\n";
+    test::write_text(tmp / "seg" / (stamp + ".json"),
+                     f == 7 ? "{\"instances\":[{\"class\":\"cup\",,}]}\n"
+                            : "{\"instances\":[{\"class\":\"cup\",\"score\":0.9,\"bbox\":[" +
+                                  std::to_string(10 + f) + ",20,30,40]}]}\n");
+  }
+  test::write_text(tmp / "data" / "rgb.txt", listing);
+  const auto r = run_objmap({"track", "--dataset", (tmp / "data").string(), "--segmentation",
+                             (tmp / "seg").string(), "--out", (tmp / "out").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  const std::string line =
+      "objmap: error: " + (tmp / "seg" / "7.000000.json").string() + ":1: malformed JSON at column";
+  EXPECT_NE(r.err.find(line), std::string::npos) << r.err;
+  EXPECT_FALSE(test::fs::exists(tmp / "out"));
+  for (const auto& entry : test::fs::directory_iterator(tmp.path()))
+    EXPECT_TRUE(entry.path().filename() == "data" || entry.path().filename() == "seg")
+        << entry.path();  // no temporary folder left either
 }
 
 // A segmentation frame of a dataset with images must have its rgb image (for the appearance).

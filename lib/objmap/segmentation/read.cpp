@@ -346,14 +346,6 @@ Instance read_instance(const json& item, const std::string& where, const ReadOpt
 
 }  // namespace
 
-std::vector<FrameSegmentation> read_json_frames(const FolderScan& scan,
-                                                const ReadOptions& options) {
-  std::vector<FrameSegmentation> frames;
-  frames.reserve(scan.json.size());
-  for (const auto& entry : scan.json) frames.push_back(read_frame_json(entry.path, options));
-  return frames;
-}
-
 }  // namespace detail
 
 FrameSegmentation read_frame_json(const fs::path& file, const ReadOptions& options) {
@@ -401,39 +393,47 @@ std::string detect_format(const fs::path& dir) {
                                      detail::kAccepted);
 }
 
-Segmentation read_segmentation(const fs::path& dir, const ReadOptions& options) {
+FrameReader::FrameReader(const fs::path& dir, const ReadOptions& options)
+    : dir_(dir), options_(options) {
   options.check();
-  Segmentation segmentation;
-  segmentation.source = dir.string();
-  segmentation.format = options.format == "auto" ? detect_format(dir) : options.format;
+  format_ = options.format == "auto" ? detect_format(dir) : options.format;
   const detail::FolderScan scan = detail::scan_folder(dir);
-  const std::string& format = segmentation.format;
-  std::size_t found = 0;
   std::string expected;
-  if (format == "json") {
-    found = scan.json.size(), expected = "<timestamp>.json files";
-  } else if (format == "png") {
-    found = scan.png.size(), expected = "<timestamp>.png label images";
-  } else if (format == "txt-paper") {
-    found = scan.folders.size(), expected = "<timestamp>/ folders of <class>/<track_id>.txt";
+  if (format_ == "json") {
+    frames_ = scan.json, expected = "<timestamp>.json files";
+  } else if (format_ == "png") {
+    frames_ = scan.png, expected = "<timestamp>.png label images";
+  } else if (format_ == "txt-paper") {
+    frames_ = scan.folders, expected = "<timestamp>/ folders of <class>/<track_id>.txt";
   } else {
-    found = scan.txt.size(), expected = "<timestamp>.txt box files";
+    frames_ = scan.txt, expected = "<timestamp>.txt box files";
   }
-  if (found == 0) {
-    throw InputError(dir.string(), "no frame for format " + format + ": " +
+  if (frames_.empty()) {
+    throw InputError(dir.string(), "no frame for format " + format_ + ": " +
                                        (scan.entries == 0 ? std::string("empty folder")
                                                           : detail::describe(scan)) +
                                        "; expected " + expected);
   }
-  if (format == "json") {
-    segmentation.frames = detail::read_json_frames(scan, options);
-  } else if (format == "png") {
-    segmentation.frames = detail::read_png_frames(dir, scan, options);
-  } else if (format == "txt-paper") {
-    segmentation.frames = detail::read_paper_frames(scan, options);
-  } else {
-    segmentation.frames = detail::read_box_frames(scan, format, options);
-  }
+  if (format_ == "png" && fs::is_regular_file(dir / "classes.txt"))
+    png_classes_ = detail::read_classes_txt(dir / "classes.txt");
+}
+
+FrameSegmentation FrameReader::read(std::size_t index) const {
+  const FrameEntry& entry = frames_.at(index);
+  if (format_ == "json") return read_frame_json(entry.path, options_);
+  if (format_ == "png")
+    return detail::read_png_frame(entry, dir_ / "classes.txt", png_classes_, options_);
+  if (format_ == "txt-paper") return detail::read_paper_frame(entry, options_);
+  return detail::read_box_frame(entry, format_, options_);
+}
+
+Segmentation read_segmentation(const fs::path& dir, const ReadOptions& options) {
+  const FrameReader reader(dir, options);
+  Segmentation segmentation;
+  segmentation.source = dir.string();
+  segmentation.format = reader.format();
+  segmentation.frames.reserve(reader.size());
+  for (std::size_t i = 0; i < reader.size(); ++i) segmentation.frames.push_back(reader.read(i));
   return segmentation;
 }
 

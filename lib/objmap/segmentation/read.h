@@ -1,6 +1,10 @@
 #pragma once
+#include <cstddef>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "objmap/segmentation/types.h"
 
@@ -35,8 +39,39 @@ struct ReadOptions {
 // found and what is accepted).
 std::string detect_format(const std::filesystem::path& dir);
 
-// Reads the whole folder. Throws InputError naming the file (and line or field) and what was
-// expected.
+// One frame of a segmentation folder before it is read: its timestamp and its file or folder.
+struct FrameEntry {
+  double timestamp = 0.0;
+  std::filesystem::path path;
+};
+
+// A segmentation folder read one frame at a time, so that a long recording need not be in memory
+// at once (objmap track streams its frames through it).
+class FrameReader {
+ public:
+  // Lists `dir` and finds its format (options.format, or detect_format when "auto"). Throws
+  // InputError for bad options, a missing or empty folder, a format it cannot tell, no frame of the
+  // format, and (png) a bad classes.txt.
+  explicit FrameReader(const std::filesystem::path& dir, const ReadOptions& options = {});
+
+  const std::string& format() const { return format_; }
+  const std::filesystem::path& dir() const { return dir_; }
+  const std::vector<FrameEntry>& frames() const { return frames_; }  // sorted by timestamp
+  std::size_t size() const { return frames_.size(); }
+  // Reads frame `index` (in any order; the files are read again on each call). Throws InputError
+  // naming the file (and line or field) and what was expected.
+  FrameSegmentation read(std::size_t index) const;
+
+ private:
+  std::filesystem::path dir_;
+  ReadOptions options_;
+  std::string format_;
+  std::vector<FrameEntry> frames_;
+  std::optional<std::map<int, std::string>> png_classes_;  // png: the folder's classes.txt
+};
+
+// Reads the whole folder (FrameReader, every frame). Throws InputError naming the file (and line
+// or field) and what was expected.
 Segmentation read_segmentation(const std::filesystem::path& dir, const ReadOptions& options = {});
 
 // One canonical JSON frame file (<timestamp>.json); the timestamp is taken from the file name.

@@ -2,7 +2,9 @@
 // Internal to objmap_segmentation: helpers shared by the readers of read.cpp, read_png.cpp and
 // read_txt.cpp. Not installed API.
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,12 +14,6 @@
 namespace objmap::segmentation::detail {
 
 namespace fs = std::filesystem;
-
-// One frame's file or folder.
-struct FrameEntry {
-  double timestamp = 0.0;
-  fs::path path;
-};
 
 // What a segmentation folder holds, by kind; each list sorted by timestamp.
 struct FolderScan {
@@ -53,14 +49,16 @@ std::string read_file_text(const fs::path& file);
 // Parses a JSON file; throws InputError("<file>:<line>", "malformed JSON at column C: ...").
 nlohmann::json parse_json_file(const fs::path& file);
 
-// The readers, one per format; each returns the frames in timestamp order.
-std::vector<FrameSegmentation> read_json_frames(const FolderScan& scan, const ReadOptions& options);
-std::vector<FrameSegmentation> read_png_frames(const fs::path& dir, const FolderScan& scan,
-                                               const ReadOptions& options);
-std::vector<FrameSegmentation> read_paper_frames(const FolderScan& scan,
-                                                 const ReadOptions& options);
-std::vector<FrameSegmentation> read_box_frames(const FolderScan& scan, const std::string& format,
-                                               const ReadOptions& options);
+// The readers of one frame, one per format (canonical JSON: read_frame_json of read.h).
+// `classes`: the folder's classes.txt (png without a sidecar), when it has one.
+FrameSegmentation read_png_frame(const FrameEntry& entry, const fs::path& classes_file,
+                                 const std::optional<std::map<int, std::string>>& classes,
+                                 const ReadOptions& options);
+FrameSegmentation read_paper_frame(const FrameEntry& entry, const ReadOptions& options);
+FrameSegmentation read_box_frame(const FrameEntry& entry, const std::string& format,
+                                 const ReadOptions& options);
+// classes.txt of a png folder: "<value> <class name>" lines.
+std::map<int, std::string> read_classes_txt(const fs::path& file);
 // "boxes-named" | "boxes-coco" | "boxes-xywh" from the first data line of the box files.
 std::string detect_box_layout(const FolderScan& scan);
 

@@ -15,16 +15,6 @@
 
 namespace objmap::segmentation::detail {
 
-namespace {
-
-using nlohmann::json;
-
-struct SidecarEntry {
-  std::string class_name;
-  double score = 1.0;
-  std::optional<int> track_id;
-};
-
 // classes.txt: "# comment" lines, then "<value> <class name>" per line.
 std::map<int, std::string> read_classes_txt(const fs::path& file) {
   std::map<int, std::string> classes;
@@ -44,6 +34,16 @@ std::map<int, std::string> read_classes_txt(const fs::path& file) {
   }
   return classes;
 }
+
+namespace {
+
+using nlohmann::json;
+
+struct SidecarEntry {
+  std::string class_name;
+  double score = 1.0;
+  std::optional<int> track_id;
+};
 
 std::map<int, SidecarEntry> read_sidecar(const fs::path& file) {
   const json root = parse_json_file(file);
@@ -128,81 +128,73 @@ std::map<int, Mask> split_labels(const cv::Mat& labels) {
 
 }  // namespace
 
-std::vector<FrameSegmentation> read_png_frames(const fs::path& dir, const FolderScan& scan,
-                                               const ReadOptions& options) {
-  const fs::path classes_file = dir / "classes.txt";
-  std::map<int, std::string> classes;
-  const bool have_classes = fs::is_regular_file(classes_file);
-  if (have_classes) classes = read_classes_txt(classes_file);
-  const std::string default_class = canonical_class(options.default_class);
-
-  std::vector<FrameSegmentation> frames;
-  for (const auto& entry : scan.png) {
-    const std::string where = entry.path.string();
-    FrameSegmentation frame;
-    frame.timestamp = entry.timestamp;
-    frame.source = where;
-    const cv::Mat labels = io::read_image(entry.path, /*allow_jpeg=*/false);
-    if (labels.channels() != 1 || (labels.depth() != CV_8U && labels.depth() != CV_16U)) {
-      throw InputError(where, std::to_string(labels.channels()) + " channel(s) of " +
-                                  (labels.depth() == CV_8U    ? std::string("8")
-                                   : labels.depth() == CV_16U ? std::string("16")
-                                                              : std::string("other")) +
-                                  "-bit; expected a single-channel 8- or 16-bit label image");
-    }
-    check_mask_size(labels.cols, labels.rows, options, where);
-    std::map<int, Mask> masks = split_labels(labels);
-
-    const fs::path sidecar_file =
-        entry.path.parent_path() / (entry.path.stem().string() + ".instances.json");
-    if (fs::is_regular_file(sidecar_file)) {
-      const std::map<int, SidecarEntry> sidecar = read_sidecar(sidecar_file);
-      for (const auto& [value, mask] : masks) {
-        if (!sidecar.count(value)) {
-          throw InputError(sidecar_file.string(),
-                           "no entry for label value " + std::to_string(value) + " of " +
-                               entry.path.filename().string() + "; expected one entry per value");
-        }
-      }
-      for (const auto& [value, info] : sidecar) {
-        if (!masks.count(value)) {
-          throw InputError(
-              sidecar_file.string(),
-              "id " + std::to_string(value) + " has no pixel in " + entry.path.filename().string() +
-                  " (values present: " + list_values(masks) + "); expected ids of the label image");
-        }
-        Instance instance;
-        instance.class_name = info.class_name;
-        instance.score = info.score;
-        instance.track_id = info.track_id;
-        instance.mask = std::move(masks[value]);
-        instance.bbox = mask_bounding_box(*instance.mask);
-        frame.instances.push_back(std::move(instance));
-      }
-    } else {
-      for (auto& [value, mask] : masks) {
-        Instance instance;
-        if (have_classes) {
-          const auto it = classes.find(value);
-          if (it == classes.end()) {
-            throw InputError(where, "label value " + std::to_string(value) + " is not in " +
-                                        classes_file.string() +
-                                        "; expected every value of the image to have a class");
-          }
-          instance.class_name = it->second;
-        } else {
-          instance.class_name = default_class;
-        }
-        instance.score = 1.0;
-        instance.track_id = value;  // folder-wide value = instance id across frames
-        instance.mask = std::move(mask);
-        instance.bbox = mask_bounding_box(*instance.mask);
-        frame.instances.push_back(std::move(instance));
-      }
-    }
-    frames.push_back(std::move(frame));
+FrameSegmentation read_png_frame(const FrameEntry& entry, const fs::path& classes_file,
+                                 const std::optional<std::map<int, std::string>>& classes,
+                                 const ReadOptions& options) {
+  const std::string where = entry.path.string();
+  FrameSegmentation frame;
+  frame.timestamp = entry.timestamp;
+  frame.source = where;
+  const cv::Mat labels = io::read_image(entry.path, /*allow_jpeg=*/false);
+  if (labels.channels() != 1 || (labels.depth() != CV_8U && labels.depth() != CV_16U)) {
+    throw InputError(where, std::to_string(labels.channels()) + " channel(s) of " +
+                                (labels.depth() == CV_8U    ? std::string("8")
+                                 : labels.depth() == CV_16U ? std::string("16")
+                                                            : std::string("other")) +
+                                "-bit; expected a single-channel 8- or 16-bit label image");
   }
-  return frames;
+  check_mask_size(labels.cols, labels.rows, options, where);
+  std::map<int, Mask> masks = split_labels(labels);
+
+  const fs::path sidecar_file =
+      entry.path.parent_path() / (entry.path.stem().string() + ".instances.json");
+  if (fs::is_regular_file(sidecar_file)) {
+    const std::map<int, SidecarEntry> sidecar = read_sidecar(sidecar_file);
+    for (const auto& [value, mask] : masks) {
+      if (!sidecar.count(value)) {
+        throw InputError(sidecar_file.string(),
+                         "no entry for label value " + std::to_string(value) + " of " +
+                             entry.path.filename().string() + "; expected one entry per value");
+      }
+    }
+    for (const auto& [value, info] : sidecar) {
+      if (!masks.count(value)) {
+        throw InputError(
+            sidecar_file.string(),
+            "id " + std::to_string(value) + " has no pixel in " + entry.path.filename().string() +
+                " (values present: " + list_values(masks) + "); expected ids of the label image");
+      }
+      Instance instance;
+      instance.class_name = info.class_name;
+      instance.score = info.score;
+      instance.track_id = info.track_id;
+      instance.mask = std::move(masks[value]);
+      instance.bbox = mask_bounding_box(*instance.mask);
+      frame.instances.push_back(std::move(instance));
+    }
+    return frame;
+  }
+  const std::string default_class = canonical_class(options.default_class);
+  for (auto& [value, mask] : masks) {
+    Instance instance;
+    if (classes) {
+      const auto it = classes->find(value);
+      if (it == classes->end()) {
+        throw InputError(where, "label value " + std::to_string(value) + " is not in " +
+                                    classes_file.string() +
+                                    "; expected every value of the image to have a class");
+      }
+      instance.class_name = it->second;
+    } else {
+      instance.class_name = default_class;
+    }
+    instance.score = 1.0;
+    instance.track_id = value;  // folder-wide value = instance id across frames
+    instance.mask = std::move(mask);
+    instance.bbox = mask_bounding_box(*instance.mask);
+    frame.instances.push_back(std::move(instance));
+  }
+  return frame;
 }
 
 }  // namespace objmap::segmentation::detail

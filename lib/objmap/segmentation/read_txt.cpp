@@ -49,72 +49,67 @@ std::vector<fs::path> sorted_entries(const fs::path& dir) {
 
 // ---- the paper's pixel lists -----------------------------------------------------------------
 
-std::vector<FrameSegmentation> read_paper_frames(const FolderScan& scan,
-                                                 const ReadOptions& options) {
+FrameSegmentation read_paper_frame(const FrameEntry& entry, const ReadOptions& options) {
   // The pixel lists carry no image size: the image size of the options, else TUM's 640 x 480.
   const int width = options.image_width > 0 ? options.image_width : 640;
   const int height = options.image_height > 0 ? options.image_height : 480;
-  std::vector<FrameSegmentation> frames;
-  for (const auto& entry : scan.folders) {
-    FrameSegmentation frame;
-    frame.timestamp = entry.timestamp;
-    frame.source = entry.path.string();
-    for (const fs::path& class_dir : sorted_entries(entry.path)) {
-      if (!fs::is_directory(class_dir)) {
-        throw InputError(class_dir.string(),
-                         "not a folder; expected <timestamp>/<class>/<track_id>.txt");
-      }
-      const std::string class_name = canonical_class(class_dir.filename().string());
-      // Track files in numeric order of their ids.
-      std::vector<std::pair<std::int64_t, fs::path>> tracks;
-      for (const fs::path& file : sorted_entries(class_dir)) {
-        std::int64_t id = -1;
-        try {
-          if (file.extension() == ".txt" && fs::is_regular_file(file)) {
-            id = io::parse_int(file.stem().string(), "", "");
-          }
-        } catch (const InputError&) {
-        }
-        if (id < 0 || id > 2147483647) {
-          throw InputError(file.string(),
-                           "not a track file; expected <track_id>.txt with an "
-                           "integer track id >= 0");
-        }
-        tracks.emplace_back(id, file);
-      }
-      std::sort(tracks.begin(), tracks.end());
-      for (const auto& [id, file] : tracks) {
-        Instance instance;
-        instance.class_name = class_name;
-        instance.score = 1.0;
-        instance.track_id = static_cast<int>(id);
-        Mask mask;
-        mask.width = width;
-        mask.height = height;
-        mask.data.assign(static_cast<std::size_t>(width) * height, 0);
-        io::LineReader in(file);
-        while (in.next()) {
-          in.expect_fields(2, "u v");
-          const std::int64_t u = in.integer(0, "u"), v = in.integer(1, "v");
-          if (u < 0 || u >= width || v < 0 || v >= height) {
-            throw InputError(in.where(), "pixel (" + std::to_string(u) + ", " + std::to_string(v) +
-                                             ") outside the " + std::to_string(width) + "x" +
-                                             std::to_string(height) +
-                                             " image; expected 0 <= u < width, 0 <= v < height");
-          }
-          mask.data[static_cast<std::size_t>(v) * width + u] = 1;
-        }
-        if (in.data_lines() == 0) {
-          throw InputError(file.string(), "no pixel; expected one \"u v\" pixel per line");
-        }
-        instance.bbox = mask_bounding_box(mask);
-        instance.mask = std::move(mask);
-        frame.instances.push_back(std::move(instance));
-      }
+  FrameSegmentation frame;
+  frame.timestamp = entry.timestamp;
+  frame.source = entry.path.string();
+  for (const fs::path& class_dir : sorted_entries(entry.path)) {
+    if (!fs::is_directory(class_dir)) {
+      throw InputError(class_dir.string(),
+                       "not a folder; expected <timestamp>/<class>/<track_id>.txt");
     }
-    frames.push_back(std::move(frame));
+    const std::string class_name = canonical_class(class_dir.filename().string());
+    // Track files in numeric order of their ids.
+    std::vector<std::pair<std::int64_t, fs::path>> tracks;
+    for (const fs::path& file : sorted_entries(class_dir)) {
+      std::int64_t id = -1;
+      try {
+        if (file.extension() == ".txt" && fs::is_regular_file(file)) {
+          id = io::parse_int(file.stem().string(), "", "");
+        }
+      } catch (const InputError&) {
+      }
+      if (id < 0 || id > 2147483647) {
+        throw InputError(file.string(),
+                         "not a track file; expected <track_id>.txt with an "
+                         "integer track id >= 0");
+      }
+      tracks.emplace_back(id, file);
+    }
+    std::sort(tracks.begin(), tracks.end());
+    for (const auto& [id, file] : tracks) {
+      Instance instance;
+      instance.class_name = class_name;
+      instance.score = 1.0;
+      instance.track_id = static_cast<int>(id);
+      Mask mask;
+      mask.width = width;
+      mask.height = height;
+      mask.data.assign(static_cast<std::size_t>(width) * height, 0);
+      io::LineReader in(file);
+      while (in.next()) {
+        in.expect_fields(2, "u v");
+        const std::int64_t u = in.integer(0, "u"), v = in.integer(1, "v");
+        if (u < 0 || u >= width || v < 0 || v >= height) {
+          throw InputError(in.where(), "pixel (" + std::to_string(u) + ", " + std::to_string(v) +
+                                           ") outside the " + std::to_string(width) + "x" +
+                                           std::to_string(height) +
+                                           " image; expected 0 <= u < width, 0 <= v < height");
+        }
+        mask.data[static_cast<std::size_t>(v) * width + u] = 1;
+      }
+      if (in.data_lines() == 0) {
+        throw InputError(file.string(), "no pixel; expected one \"u v\" pixel per line");
+      }
+      instance.bbox = mask_bounding_box(mask);
+      instance.mask = std::move(mask);
+      frame.instances.push_back(std::move(instance));
+    }
   }
-  return frames;
+  return frame;
 }
 
 // ---- box files -------------------------------------------------------------------------------
@@ -138,57 +133,52 @@ std::string detect_box_layout(const FolderScan& scan) {
                        "(choose one with --seg-format, config segmentation.format)");
 }
 
-std::vector<FrameSegmentation> read_box_frames(const FolderScan& scan, const std::string& format,
-                                               const ReadOptions& options) {
+FrameSegmentation read_box_frame(const FrameEntry& entry, const std::string& format,
+                                 const ReadOptions& options) {
   const std::string default_class = canonical_class(options.default_class);
   const auto& names = coco80_names();
-  std::vector<FrameSegmentation> frames;
-  frames.reserve(scan.txt.size());
-  for (const auto& entry : scan.txt) {
-    FrameSegmentation frame;
-    frame.timestamp = entry.timestamp;
-    frame.source = entry.path.string();
-    io::LineReader in(entry.path);
-    while (in.next()) {
-      Instance instance;
-      Box box;
-      if (format == "boxes-named") {  // class_id class_name score x1 y1 x2 y2
-        in.expect_fields(7, kNamedLayout);
-        const int id = coco_id(in, 0, "class_id");
-        instance.class_name = canonical_class(in.field(1));
-        if (instance.class_name != names[id]) {
-          throw InputError(in.where(), "class_name '" + in.field(1) + "' does not match class_id " +
-                                           std::to_string(id) + "; expected '" + names[id] + "'");
-        }
-        instance.score = in.number(2, "score");
-        const double x1 = in.number(3, "x1"), y1 = in.number(4, "y1");
-        const double x2 = in.number(5, "x2"), y2 = in.number(6, "y2");
-        if (x2 < x1 || y2 < y1) {
-          throw InputError(in.where(), "corners (" + format_number(x1) + ", " + format_number(y1) +
-                                           ") (" + format_number(x2) + ", " + format_number(y2) +
-                                           "); expected x1 <= x2 and y1 <= y2");
-        }
-        box = Box{x1, y1, x2 - x1, y2 - y1};
-      } else if (format == "boxes-coco") {  // coco80_id x y w h score; (x, y) = top-left corner
-        in.expect_fields(6, kCocoLayout);
-        instance.class_name = names[coco_id(in, 0, "coco80_id")];
-        box = Box{in.number(1, "x"), in.number(2, "y"), in.number(3, "w"), in.number(4, "h")};
-        instance.score = in.number(5, "score");
-      } else if (format == "boxes-xywh") {  // x y w h score; (x, y) = top-left corner
-        in.expect_fields(5, kXywhLayout);
-        instance.class_name = default_class;
-        box = Box{in.number(0, "x"), in.number(1, "y"), in.number(2, "w"), in.number(3, "h")};
-        instance.score = in.number(4, "score");
-      } else {
-        throw InputError("ReadOptions.format", "'" + format + "' is not a box format");
+  FrameSegmentation frame;
+  frame.timestamp = entry.timestamp;
+  frame.source = entry.path.string();
+  io::LineReader in(entry.path);
+  while (in.next()) {
+    Instance instance;
+    Box box;
+    if (format == "boxes-named") {  // class_id class_name score x1 y1 x2 y2
+      in.expect_fields(7, kNamedLayout);
+      const int id = coco_id(in, 0, "class_id");
+      instance.class_name = canonical_class(in.field(1));
+      if (instance.class_name != names[id]) {
+        throw InputError(in.where(), "class_name '" + in.field(1) + "' does not match class_id " +
+                                         std::to_string(id) + "; expected '" + names[id] + "'");
       }
-      check_score(instance.score, in.where());
-      instance.bbox = check_box(box, options, in.where());
-      frame.instances.push_back(std::move(instance));
+      instance.score = in.number(2, "score");
+      const double x1 = in.number(3, "x1"), y1 = in.number(4, "y1");
+      const double x2 = in.number(5, "x2"), y2 = in.number(6, "y2");
+      if (x2 < x1 || y2 < y1) {
+        throw InputError(in.where(), "corners (" + format_number(x1) + ", " + format_number(y1) +
+                                         ") (" + format_number(x2) + ", " + format_number(y2) +
+                                         "); expected x1 <= x2 and y1 <= y2");
+      }
+      box = Box{x1, y1, x2 - x1, y2 - y1};
+    } else if (format == "boxes-coco") {  // coco80_id x y w h score; (x, y) = top-left corner
+      in.expect_fields(6, kCocoLayout);
+      instance.class_name = names[coco_id(in, 0, "coco80_id")];
+      box = Box{in.number(1, "x"), in.number(2, "y"), in.number(3, "w"), in.number(4, "h")};
+      instance.score = in.number(5, "score");
+    } else if (format == "boxes-xywh") {  // x y w h score; (x, y) = top-left corner
+      in.expect_fields(5, kXywhLayout);
+      instance.class_name = default_class;
+      box = Box{in.number(0, "x"), in.number(1, "y"), in.number(2, "w"), in.number(3, "h")};
+      instance.score = in.number(4, "score");
+    } else {
+      throw InputError("ReadOptions.format", "'" + format + "' is not a box format");
     }
-    frames.push_back(std::move(frame));
+    check_score(instance.score, in.where());
+    instance.bbox = check_box(box, options, in.where());
+    frame.instances.push_back(std::move(instance));
   }
-  return frames;
+  return frame;
 }
 
 }  // namespace objmap::segmentation::detail

@@ -40,16 +40,23 @@ void write_frame_json(const std::filesystem::path& file, const FrameSegmentation
   io::write_file_atomic(file, frame_json(frame));
 }
 
-void write_segmentation(const std::filesystem::path& dir, const Segmentation& segmentation) {
+void require_distinct_frame_names(const std::filesystem::path& dir,
+                                  const std::vector<double>& timestamps) {
   std::set<std::string> names;
-  for (const FrameSegmentation& frame : segmentation.frames) {
-    const std::string name = frame_file_name(frame.timestamp);
+  for (const double timestamp : timestamps) {
+    const std::string name = frame_file_name(timestamp);
     if (!names.insert(name).second) {
       throw InputError((dir / name).string(),
                        "two frames have this file name; expected timestamps that differ at 6 "
                        "decimals");
     }
   }
+}
+
+void write_segmentation(const std::filesystem::path& dir, const Segmentation& segmentation) {
+  std::vector<double> timestamps;
+  for (const FrameSegmentation& frame : segmentation.frames) timestamps.push_back(frame.timestamp);
+  require_distinct_frame_names(dir, timestamps);
   io::create_output_folders(dir);
   for (const FrameSegmentation& frame : segmentation.frames) {
     write_frame_json(dir / frame_file_name(frame.timestamp), frame);

@@ -1,6 +1,7 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "objmap/segmentation/types.h"
 
@@ -15,6 +16,11 @@ std::string frame_json(const FrameSegmentation& frame);
 
 // Writes one frame file atomically (temporary file + rename). Throws InputError when it cannot.
 void write_frame_json(const std::filesystem::path& file, const FrameSegmentation& frame);
+
+// Throws InputError((dir / name), ...) when two of `timestamps` get the same file name
+// (frame_file_name), before anything is written.
+void require_distinct_frame_names(const std::filesystem::path& dir,
+                                  const std::vector<double>& timestamps);
 
 // Writes one <timestamp>.json per frame into `dir` (created if needed). Throws InputError when two
 // frames get the same file name.

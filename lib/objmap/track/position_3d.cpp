@@ -80,8 +80,7 @@ InstancePosition instance_position(const segmentation::Instance& instance, const
   return out;
 }
 
-FramePositionsFn depth_positions(const io::Dataset& dataset,
-                                 const segmentation::Segmentation& segmentation,
+FramePositionsFn depth_positions(const io::Dataset& dataset, const std::vector<double>& timestamps,
                                  const Trajectory& trajectory, const Camera& camera,
                                  const Position3dOptions& options) {
   options.check();
@@ -97,23 +96,24 @@ FramePositionsFn depth_positions(const io::Dataset& dataset,
     std::optional<Pose> world_from_cam;
   };
   auto inputs = std::make_shared<std::vector<FrameInput>>();
-  for (const auto& frame : segmentation.frames) {
+  for (const double timestamp : timestamps) {
     FrameInput in;
     const auto it =
-        std::lower_bound(tum.frames.begin(), tum.frames.end(), frame.timestamp,
+        std::lower_bound(tum.frames.begin(), tum.frames.end(), timestamp,
                          [](const io::FramePair& p, double t) { return p.rgb_timestamp < t; });
     for (auto c = it == tum.frames.begin() ? it : it - 1; c != tum.frames.end() && c <= it; ++c)
-      if (std::abs(c->rgb_timestamp - frame.timestamp) <= 1e-4) in.frame = &*c;
-    in.world_from_cam = io::lookup_pose(trajectory, frame.timestamp, lookup);
+      if (std::abs(c->rgb_timestamp - timestamp) <= 1e-4) in.frame = &*c;
+    in.world_from_cam = io::lookup_pose(trajectory, timestamp, lookup);
     inputs->push_back(std::move(in));
   }
   auto rays = std::make_shared<geometry::RayTable>(geometry::make_ray_table(camera));
-  return [inputs, rays, camera, options, &segmentation, &dataset](std::size_t index) {
+  return [inputs, rays, camera, options, &dataset](std::size_t index,
+                                                   const segmentation::FrameSegmentation& frame) {
     FramePositions out;
     const FrameInput& in = inputs->at(index);
     if (!in.frame || !in.world_from_cam) return out;
     out.has_pose = true;
-    const auto& instances = segmentation.frames.at(index).instances;
+    const auto& instances = frame.instances;
     if (instances.empty()) return out;
     const cv::Mat depth = io::read_frame_depth(dataset, *in.frame, camera);
     for (const auto& instance : instances)

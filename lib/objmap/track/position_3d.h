@@ -58,17 +58,18 @@ struct FramePositions {
   std::vector<InstancePosition> instances;  // one per instance of the frame, when has_pose
 };
 
-// Positions of frame `index` of a segmentation (called once per frame, in order).
-using FramePositionsFn = std::function<FramePositions(std::size_t index)>;
+// Positions of the instances of `frame`, frame `index` of a segmentation (called once per frame,
+// in order).
+using FramePositionsFn =
+    std::function<FramePositions(std::size_t index, const segmentation::FrameSegmentation& frame)>;
 
-// Positions for the frames of `segmentation` from a recording (its frames as fuse reads them) and a
-// trajectory (world_from_cam, looked up at each frame's timestamp): the returned function reads the
-// frame's depth image and computes instance_position for each instance. A frame whose timestamp is
-// not an rgb frame of the dataset (within 1e-4 s) or that has no pose gets has_pose = false.
-// `segmentation` and `dataset` must outlive the returned function. Throws InputError for bad
+// Positions for the segmentation frames at `timestamps` (sorted) from a recording (its frames as
+// fuse reads them) and a trajectory (world_from_cam, looked up at each frame's timestamp): the
+// returned function reads the frame's depth image and computes instance_position for each instance.
+// A frame whose timestamp is not an rgb frame of the dataset (within 1e-4 s) or that has no pose
+// gets has_pose = false. `dataset` must outlive the returned function. Throws InputError for bad
 // options; the function throws for an unreadable depth image.
-FramePositionsFn depth_positions(const io::Dataset& dataset,
-                                 const segmentation::Segmentation& segmentation,
+FramePositionsFn depth_positions(const io::Dataset& dataset, const std::vector<double>& timestamps,
                                  const Trajectory& trajectory, const Camera& camera,
                                  const Position3dOptions& options);
 

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -56,90 +58,115 @@ void add_positions(const FramePositions& p, std::vector<Detection>& detections,
   }
 }
 
-// Online DeepSORT over the frames in time order: each frame's associations.
-std::vector<std::vector<Association>> run_tracker(
-    const segmentation::Segmentation& input, const TrackOptions& options, const FrameImage& image,
-    const TrackProgress& progress, const FramePositionsFn& positions, TrackResult& result) {
-  const bool appearance = options.tracker.use_appearance;
-  Tracker tracker(options.tracker);
-  std::vector<std::vector<Association>> associations(input.frames.size());
-  for (std::size_t f = 0; f < input.frames.size(); ++f) {
-    const auto& frame = input.frames[f];
-    cv::Mat bgr;
-    if (appearance && !frame.instances.empty()) bgr = image(f);
-    std::vector<Detection> detections = detections_of(frame, bgr, appearance, options);
-    if (options.tracker.use_gate_3d) add_positions(positions(f), detections, result);
-    associations[f] = tracker.step(detections, frame.timestamp);
-    if (progress) progress(f + 1, input.frames.size());
-  }
-  return associations;
-}
+// A tracked frame not yet written: a detection of a tentative track waits for the track's fate.
+struct HeldFrame {
+  std::size_t index = 0;
+  segmentation::FrameSegmentation frame;
+  std::vector<Association> associations;  // one per instance
+};
 
-// Output ids: the confirmed tracks numbered 1, 2, ... in order of confirmation (internal id ->
-// output id); `started`: the tracks started (the largest internal id).
-std::map<int, int> output_ids(const std::vector<std::vector<Association>>& associations,
-                              int& started) {
-  std::map<int, std::pair<std::size_t, int>> confirmed_at;  // internal id -> (frame, internal id)
-  started = 0;
-  for (std::size_t f = 0; f < associations.size(); ++f)
-    for (const Association& a : associations[f]) {
-      if (a.track_id == 0) continue;
-      started = std::max(started, a.track_id);
-      if (a.confirmed && !confirmed_at.count(a.track_id))
-        confirmed_at[a.track_id] = {f, a.track_id};
+// Output ids (the confirmed tracks numbered 1, 2, ... in order of confirmation), the instances'
+// labels and the per-track summaries, frame by frame; a frame is written once its labels are final.
+class Labeller {
+ public:
+  Labeller(const TrackOptions& options, const TrackedFrameFn& output, TrackResult& result)
+      : options_(options), output_(output), result_(result) {}
+
+  // Frame `held` after the tracker's step: numbers the tracks it confirmed, then writes the held
+  // frames, oldest first, while their labels are final.
+  void add(HeldFrame&& held, const Tracker& tracker) {
+    std::vector<int> confirmed;  // internal ids confirmed in this frame
+    for (const Association& a : held.associations) {
+      result_.tracks_started =
+          std::max(result_.tracks_started, static_cast<std::size_t>(a.track_id));
+      if (a.confirmed && !output_id_.count(a.track_id)) confirmed.push_back(a.track_id);
     }
-  std::vector<std::pair<std::size_t, int>> order;
-  for (const auto& [id, at] : confirmed_at) order.push_back(at);
-  std::sort(order.begin(), order.end());
-  std::map<int, int> output_id;
-  for (std::size_t i = 0; i < order.size(); ++i)
-    output_id[order[i].second] = static_cast<int>(i) + 1;
-  return output_id;
-}
+    std::sort(confirmed.begin(), confirmed.end());
+    for (const int id : confirmed) {
+      const int output_id = static_cast<int>(output_id_.size()) + 1;
+      output_id_[id] = output_id;
+      result_.tracks.emplace_back();
+      votes_.emplace_back();
+    }
+    held_.push_back(std::move(held));
+    std::set<int> tentative;  // live tracks that may still be confirmed
+    for (const Track& t : tracker.tracks())
+      if (t.track_state == TrackState::kTentative) tentative.insert(t.id);
+    while (!held_.empty() && is_final(held_.front(), tentative)) write_front();
+  }
 
-// Track ids into result.tracked's instances, and each track's frames and class votes.
-std::vector<std::map<std::string, int>> label_instances(
-    const std::vector<std::vector<Association>>& associations, const std::map<int, int>& output_id,
-    const TrackOptions& options, TrackResult& result) {
-  std::vector<std::map<std::string, int>> votes(result.tracks.size());
-  for (std::size_t f = 0; f < associations.size(); ++f) {
-    auto& frame = result.tracked.frames[f];
+  // Writes the frames still held: their tentative tracks are never confirmed now.
+  void finish() {
+    while (!held_.empty()) write_front();
+  }
+
+  // A track's class is the majority vote of its instances (ties: the first name).
+  void name_tracks() {
+    for (std::size_t i = 0; i < result_.tracks.size(); ++i) {
+      int best = -1;
+      for (const auto& [name, n] : votes_[i])
+        if (n > best) {
+          best = n;
+          result_.tracks[i].class_name = name;
+        }
+    }
+  }
+
+ private:
+  // Whether every instance's label is known: untracked, of a numbered track, or of a tentative
+  // track that is gone (or whose tentative detections are not labelled anyway).
+  bool is_final(const HeldFrame& held, const std::set<int>& tentative) const {
+    if (!options_.label_tentative_history) return true;
+    for (const Association& a : held.associations)
+      if (a.track_id != 0 && !output_id_.count(a.track_id) && tentative.count(a.track_id))
+        return false;
+    return true;
+  }
+
+  // Track ids into the oldest held frame's instances, and its tracks' frames and class votes; then
+  // the frame goes to the output.
+  void write_front() {
+    HeldFrame& held = held_.front();
+    segmentation::FrameSegmentation& frame = held.frame;
     for (std::size_t i = 0; i < frame.instances.size(); ++i) {
       auto& inst = frame.instances[i];
       inst.track_id.reset();
-      const Association& a = associations[f][i];
-      const auto it = output_id.find(a.track_id);
-      if (it == output_id.end() || (!a.confirmed && !options.label_tentative_history)) continue;
+      const Association& a = held.associations[i];
+      const auto it = output_id_.find(a.track_id);
+      if (it == output_id_.end() || (!a.confirmed && !options_.label_tentative_history)) continue;
       inst.track_id = it->second;
-      ++result.instances_tracked;
-      TrackSummary& s = result.tracks[it->second - 1];
+      ++result_.instances_tracked;
+      TrackSummary& s = result_.tracks[it->second - 1];
       if (s.length == 0) {
         s.id = it->second;
-        s.first_frame = f;
+        s.first_frame = held.index;
         s.first_timestamp = frame.timestamp;
       }
-      s.last_frame = f;
+      s.last_frame = held.index;
       s.last_timestamp = frame.timestamp;
       ++s.length;
-      ++votes[it->second - 1][inst.class_name];
+      ++votes_[it->second - 1][inst.class_name];
     }
+    output_(held.index, std::move(frame));
+    held_.pop_front();
   }
-  return votes;
-}
+
+  const TrackOptions& options_;
+  const TrackedFrameFn& output_;
+  TrackResult& result_;
+  std::map<int, int> output_id_;                   // internal id -> output id
+  std::vector<std::map<std::string, int>> votes_;  // class votes per output id - 1
+  std::deque<HeldFrame> held_;                     // tracked, not yet written, oldest first
+};
 
 }  // namespace
 
-TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
-                               const FrameImage& image, const TrackProgress& progress,
-                               const FramePositionsFn& positions) {
+TrackResult track_stream(const FrameStream& input, const TrackedFrameFn& output,
+                         const TrackOptions& options, const FrameImage& image,
+                         const TrackProgress& progress, const FramePositionsFn& positions) {
   options.check();
   const std::string where = input.source.empty() ? "segmentation" : input.source;
-  require(!input.frames.empty(), where, "no frame; expected at least one frame of detections");
-  std::size_t instances = 0;
-  for (const auto& f : input.frames) instances += f.instances.size();
-  require(instances > 0, where,
-          "no instance in any of the " + std::to_string(input.frames.size()) +
-              " frames; expected detections to track");
+  require(input.size > 0, where, "no frame; expected at least one frame of detections");
   const bool appearance = options.tracker.use_appearance;
   require(!appearance || static_cast<bool>(image), "track_segmentation",
           "appearance is on but no image source was given; expected rgb images or "
@@ -149,34 +176,53 @@ TrackResult track_segmentation(const segmentation::Segmentation& input, const Tr
           "the 3D gate is on but no position source was given; expected depth and a trajectory "
           "or use_gate_3d = false");
   TrackResult result;
-
-  // 1. Online DeepSORT over the frames in time order.
-  const std::vector<std::vector<Association>> associations =
-      run_tracker(input, options, image, progress, positions, result);
-
-  // 2. Output ids: the confirmed tracks numbered 1, 2, ... in order of confirmation.
-  int started = 0;
-  const std::map<int, int> output_id = output_ids(associations, started);
-
-  // 3. Track ids into the instances, and the per-track summary; a track's class is the majority
-  //    vote of its instances.
-  result.tracked = input;
-  result.frames = input.frames.size();
-  result.instances = instances;
-  result.tracks_started = static_cast<std::size_t>(started);
+  result.frames = input.size;
   result.used_appearance = appearance;
   result.used_gate_3d = gate_3d;
-  result.tracks.resize(output_id.size());
-  const std::vector<std::map<std::string, int>> votes =
-      label_instances(associations, output_id, options, result);
-  for (std::size_t i = 0; i < result.tracks.size(); ++i) {
-    int best = -1;
-    for (const auto& [name, n] : votes[i])
-      if (n > best) {
-        best = n;
-        result.tracks[i].class_name = name;
-      }
+  Tracker tracker(options.tracker);
+  Labeller labeller(options, output, result);
+
+  // 1. Online DeepSORT over the frames in time order; each frame is written with its track ids as
+  //    soon as they are final (the confirmed tracks numbered 1, 2, ... in order of confirmation).
+  for (std::size_t f = 0; f < input.size; ++f) {
+    HeldFrame held{f, input.read(f), {}};
+    const segmentation::FrameSegmentation& frame = held.frame;
+    result.instances += frame.instances.size();
+    cv::Mat bgr;
+    if (appearance && !frame.instances.empty()) bgr = image(f);
+    std::vector<Detection> detections = detections_of(frame, bgr, appearance, options);
+    if (gate_3d) add_positions(positions(f, frame), detections, result);
+    held.associations = tracker.step(detections, frame.timestamp);
+    labeller.add(std::move(held), tracker);
+    if (progress) progress(f + 1, input.size);
   }
+  labeller.finish();
+  require(result.instances > 0, where,
+          "no instance in any of the " + std::to_string(input.size) +
+              " frames; expected detections to track");
+
+  // 2. A track's class is the majority vote of its instances.
+  labeller.name_tracks();
+  return result;
+}
+
+TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
+                               const FrameImage& image, const TrackProgress& progress,
+                               const FramePositionsFn& positions) {
+  FrameStream stream;
+  stream.source = input.source;
+  stream.size = input.frames.size();
+  stream.read = [&input](std::size_t i) { return input.frames[i]; };
+  segmentation::Segmentation tracked;
+  tracked.format = input.format;
+  tracked.source = input.source;
+  TrackResult result = track_stream(
+      stream,
+      [&tracked](std::size_t, segmentation::FrameSegmentation&& frame) {
+        tracked.frames.push_back(std::move(frame));
+      },
+      options, image, progress, positions);
+  result.tracked = std::move(tracked);
   return result;
 }
 
@@ -234,13 +280,13 @@ namespace {
 // The image of each segmentation frame among `rows` (timestamp, image), sorted by timestamp.
 // has_images: whether the images are there (else none is matched).
 FrameImages match_frame_images(const std::vector<std::pair<double, fs::path>>& rows,
-                               const segmentation::Segmentation& segmentation, double max_diff_s,
-                               const std::string& list, bool has_images) {
+                               const std::vector<segmentation::FrameEntry>& frames,
+                               double max_diff_s, const std::string& list, bool has_images) {
   FrameImages out;
   out.listed = rows.size();
   out.has_images = has_images && !rows.empty();
   if (!out.has_images) return out;
-  for (const auto& frame : segmentation.frames) {
+  for (const auto& frame : frames) {
     const auto it = std::lower_bound(
         rows.begin(), rows.end(), frame.timestamp,
         [](const std::pair<double, fs::path>& row, double t) { return row.first < t; });
@@ -253,7 +299,7 @@ FrameImages match_frame_images(const std::vector<std::pair<double, fs::path>>& r
         best = static_cast<std::size_t>(c - rows.begin());
       }
     }
-    require(best.has_value(), frame.source.empty() ? segmentation.source : frame.source,
+    require(best.has_value(), frame.path.string(),
             "no rgb image of " + list +
                 " at this frame's timestamp; expected the "
                 "segmentation's frames to be rgb frames of the dataset (or use --no-appearance)");
@@ -266,7 +312,8 @@ FrameImages match_frame_images(const std::vector<std::pair<double, fs::path>>& r
 }  // namespace
 
 FrameImages find_frame_images(const fs::path& dataset,
-                              const segmentation::Segmentation& segmentation, double max_diff_s) {
+                              const std::vector<segmentation::FrameEntry>& frames,
+                              double max_diff_s) {
   require(fs::is_directory(dataset), dataset.string(),
           "no such folder; expected a TUM RGB-D folder with rgb.txt");
   const fs::path list = dataset / "rgb.txt";
@@ -282,17 +329,18 @@ FrameImages find_frame_images(const fs::path& dataset,
   }
   require(!rows.empty(), list.string(), "no image listed; expected lines 'timestamp filename'");
   // The images are there when the first listed one is; the folder is then a full recording.
-  return match_frame_images(rows, segmentation, max_diff_s, list.string(),
+  return match_frame_images(rows, frames, max_diff_s, list.string(),
                             fs::exists(rows.front().second));
 }
 
 FrameImages find_frame_images(const io::Dataset& dataset,
-                              const segmentation::Segmentation& segmentation, double max_diff_s) {
+                              const std::vector<segmentation::FrameEntry>& frames,
+                              double max_diff_s) {
   std::vector<std::pair<double, fs::path>> rows;
   for (const io::FramePair& f : dataset.frames) rows.emplace_back(f.rgb_timestamp, f.rgb_file);
   const bool has_images =
       dataset.source != nullptr || (!rows.empty() && fs::exists(rows.front().second));
-  return match_frame_images(rows, segmentation, max_diff_s,
+  return match_frame_images(rows, frames, max_diff_s,
                             dataset.root.string() + " (" + dataset.layout + " layout)", has_images);
 }
 

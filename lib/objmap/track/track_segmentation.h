@@ -8,12 +8,14 @@
 #include <opencv2/core/mat.hpp>
 
 #include "objmap/io/dataset.h"
+#include "objmap/segmentation/read.h"
 #include "objmap/segmentation/types.h"
 #include "objmap/track/position_3d.h"
 #include "objmap/track/tracker.h"
 
-// Offline tracking of a whole segmentation (`objmap track`): the frames in time order through the
-// DeepSORT tracker, then track ids written into the instances.
+// Offline tracking of a segmentation (`objmap track`): the frames in time order through the
+// DeepSORT tracker, each written out with its track ids once they are final (a window of frames,
+// not the whole recording, in memory).
 namespace objmap::track {
 
 struct TrackOptions {
@@ -35,8 +37,10 @@ struct TrackSummary {
 };
 
 struct TrackResult {
-  segmentation::Segmentation tracked;  // the input with track_id set (or cleared) per instance
-  std::vector<TrackSummary> tracks;    // confirmed tracks, by id
+  // The input with track_id set (or cleared) per instance (track_segmentation; track_stream hands
+  // the frames to its output instead).
+  segmentation::Segmentation tracked;
+  std::vector<TrackSummary> tracks;  // confirmed tracks, by id
   std::size_t frames = 0;
   std::size_t instances = 0;          // all instances
   std::size_t instances_tracked = 0;  // instances given a track id
@@ -58,10 +62,32 @@ struct TrackResult {
 using FrameImage = std::function<cv::Mat(std::size_t index)>;
 using TrackProgress = std::function<void(std::size_t done, std::size_t total)>;
 
-// Tracks the instances of `input` (frames sorted by timestamp; each frame is one time step, its
-// timestamp the tracker's time). `positions` gives the instances' 3D positions, required when
-// options.tracker.use_gate_3d (see depth_positions). Throws InputError when the segmentation has
-// no frame or no instance at all, and for bad options.
+// The frames of a segmentation, read one at a time (a segmentation::FrameReader on a folder).
+struct FrameStream {
+  std::string source;    // the folder, for messages
+  std::size_t size = 0;  // frames, sorted by timestamp
+  // Frame `index`; called once per frame, in order 0, 1, ..., size - 1.
+  std::function<segmentation::FrameSegmentation(std::size_t index)> read;
+};
+
+// Receives frame `index` with its track ids (set or cleared per instance), in order, as soon as
+// they are final. A detection of a tentative track waits until the track is confirmed or deleted
+// (a tentative track is deleted at its first miss: at most n_init - 1 frames later), so at most
+// n_init frames are held at once, whatever the length of the recording.
+using TrackedFrameFn =
+    std::function<void(std::size_t index, segmentation::FrameSegmentation&& frame)>;
+
+// Tracks the frames of `input` as they are read, one time step per frame (its timestamp the
+// tracker's time), and hands each tracked frame to `output`; result.tracked stays empty.
+// `positions` gives the instances' 3D positions, required when options.tracker.use_gate_3d (see
+// depth_positions). Throws InputError when the segmentation has no frame or (after the last frame)
+// no instance at all, for bad options, and whatever input.read throws.
+TrackResult track_stream(const FrameStream& input, const TrackedFrameFn& output,
+                         const TrackOptions& options, const FrameImage& image = {},
+                         const TrackProgress& progress = {},
+                         const FramePositionsFn& positions = {});
+
+// track_stream over a segmentation in memory; result.tracked holds the tracked frames.
 TrackResult track_segmentation(const segmentation::Segmentation& input, const TrackOptions& options,
                                const FrameImage& image = {}, const TrackProgress& progress = {},
                                const FramePositionsFn& positions = {});
@@ -95,15 +121,15 @@ struct FrameImages {
 };
 
 // Reads `dataset`/rgb.txt (strict: `timestamp filename` lines, increasing stamps) and finds the
-// image of each frame of `segmentation` (the rgb stamp within max_diff_s). Throws InputError for a
-// missing folder or rgb.txt, a bad line, or (when the images exist) a segmentation frame without
-// an rgb image.
+// image of each segmentation frame of `frames` (segmentation::FrameReader::frames(); the rgb stamp
+// within max_diff_s). Throws InputError for a missing folder or rgb.txt, a bad line, or (when the
+// images exist) a segmentation frame without an rgb image (naming the frame's file).
 FrameImages find_frame_images(const std::filesystem::path& dataset,
-                              const segmentation::Segmentation& segmentation,
+                              const std::vector<segmentation::FrameEntry>& frames,
                               double max_diff_s = 1e-4);
 // The same over the frames of a recording read in any layout (io/dataset.h).
 FrameImages find_frame_images(const io::Dataset& dataset,
-                              const segmentation::Segmentation& segmentation,
+                              const std::vector<segmentation::FrameEntry>& frames,
                               double max_diff_s = 1e-4);
 
 }  // namespace objmap::track
