@@ -1,0 +1,50 @@
+// objmap synth --preset walkthrough -> objmap fuse: a room walked round twice (636 frames, three
+// tables, twelve chairs, six of them packed round a dining table), the detector's noise plus a new
+// track ID for every object seen again after 30 frames away. Every true object must be found
+// exactly once, with the default keyframes and with every frame (docs/fusion.md, "Walk-throughs").
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+
+#include "fuse_helpers.h"
+
+namespace objmap::test {
+namespace {
+
+class FuseWalkthrough : public ::testing::TestWithParam<int> {};
+
+TEST_P(FuseWalkthrough, EveryObjectOnceWithTheDefaultKeyframesAndWithEveryFrame) {
+  const std::string seed = std::to_string(GetParam());
+  RunResult why;
+  const fs::path scene = cached_output("walk636-seed" + seed + "-scene",
+                                       {"synth", "--out", "{OUT}", "--preset", "walkthrough",
+                                        "--frames", "636", "--scale", "0.5", "--seed", seed},
+                                       &why);
+  ASSERT_TRUE(fs::exists(scene)) << why.err;
+  const auto gt = read_gt_objects(scene / "objects_gt.json");
+  std::map<std::string, int> gt_classes;
+  for (const auto& g : gt) ++gt_classes[g.cls];
+  ASSERT_EQ(gt_classes["chair"], 12);
+  for (const std::string keyframes : {"auto", "all"}) {
+    SCOPED_TRACE("--keyframes " + keyframes);
+    const fs::path run = cached_output(
+        "walk636-seed" + seed + "-fuse-" + keyframes,
+        {"fuse", "--dataset", scene.string(), "--trajectory", (scene / "groundtruth.txt").string(),
+         "--segmentation", (scene / "segmentation").string(), "--keyframes", keyframes,
+         "--dense-map", "false", "--out", "{OUT}"},
+        &why);
+    ASSERT_TRUE(fs::exists(run)) << why.err;
+    const auto fused = read_fused_objects(run / "objects.json");
+    std::map<std::string, int> fused_classes;
+    for (const auto& f : fused) ++fused_classes[f.cls];
+    EXPECT_EQ(fused_classes, gt_classes);
+    // Each true object has its own map object of its class (greedy one-to-one within 0.3 m).
+    EXPECT_EQ(match_objects(gt, fused, 0.3, /*same_class=*/true).size(), gt.size());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, FuseWalkthrough, ::testing::Values(1, 2, 3));
+
+}  // namespace
+}  // namespace objmap::test
