@@ -42,8 +42,8 @@ void print_summary(const pipeline::FuseOptions& options, const pipeline::FuseRes
   std::printf("objects     %zu confirmed of %zu (%zu merged by the final pass", r.objects.size(),
               r.objects_total, r.merges.size());
   if (r.objects_below_share > 0)
-    std::printf("; %zu seen in too few of the keyframes that had them in view",
-                r.objects_below_share);
+    std::printf("; %zu detected in under %.0f%% of the keyframes that had them in view",
+                r.objects_below_share, 100.0 * r.detected_share_bar);
   std::printf(")\n");
   if (!r.duplicates.pairs.empty())
     std::printf("            suspected duplicates: %zu (run.json \"duplicates\", objmap report)\n",

@@ -845,10 +845,10 @@ int ObjectMap::confirmation_count(const Object& object) const {
 
 bool ObjectMap::confirmed(const Object& object) const {
   if (confirmation_count(object) < options_.min_observations) return false;
-  if (options_.min_detected_share <= 0.0 || object.frames_in_view <= 0) return true;
+  if (share_bar_ <= 0.0 || object.frames_in_view <= 0) return true;
   const double share =
       static_cast<double>(object.frames.size()) / static_cast<double>(object.frames_in_view);
-  return share >= options_.min_detected_share;
+  return share >= share_bar_;
 }
 
 std::size_t ObjectMap::confirmed_count() const {
@@ -965,6 +965,18 @@ void ObjectMap::judge_visibility(const ViewLog& log, const VisibilityOptions& op
     std::set_union(in_view.begin(), in_view.end(), o.frames.begin(), o.frames.end(),
                    std::back_inserter(either));
     o.frames_in_view = static_cast<int>(either.size());
+  }
+  // The bar: the higher of the floor and a share of the median among the objects with enough
+  // views (the detector's recall on this recording).
+  std::vector<double> shares;
+  for (const auto& op : objects_)
+    if (op->alive && op->frames_in_view > 0 && confirmation_count(*op) >= options_.min_observations)
+      shares.push_back(static_cast<double>(op->frames.size()) / op->frames_in_view);
+  share_bar_ = options_.min_detected_share;
+  if (!shares.empty() && options_.min_detected_share > 0.0) {
+    std::nth_element(shares.begin(), shares.begin() + shares.size() / 2, shares.end());
+    share_bar_ =
+        std::max(share_bar_, options_.detected_share_of_median * shares[shares.size() / 2]);
   }
 }
 

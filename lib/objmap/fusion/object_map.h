@@ -154,7 +154,12 @@ struct ObjectMapOptions {
   // the keyframes that had its place in view (or detected it). A false positive or a fragment
   // seen in a few of the hundreds of keyframes that saw its place drops out, however dense the
   // frames; a count of views grows with them. 0: no such rule (the paper).
+  // The bar is the higher of min_detected_share and detected_share_of_median × the median share
+  // of the objects with enough views: a detector's recall differs by recording (about nine in
+  // ten on the synthetic walk-through, one in eight for small objects in fr1_rpy's boxes), and a
+  // false positive is what this detector found far less often than it finds objects here.
   double min_detected_share = 0.05;
+  double detected_share_of_median = 0.25;
   int min_points = 10;  // observations with fewer points (after depth checks) are ignored
   // Bleed: in one keyframe, an instance whose voxels lie (bleed_min_inside of them, within one
   // voxel) on those of another instance of its class with bleed_min_ratio times its voxels is that
@@ -352,6 +357,8 @@ class ObjectMap {
   std::size_t confirmed_count() const;
   // Live objects with enough views that the detected share leaves out (judge_visibility()).
   std::size_t below_share_count() const;
+  // The detected share an object needs after judge_visibility() (0 before, or with the rule off).
+  double detected_share_bar() const { return share_bar_; }
   // The id an object id ended up in after merges (itself when never absorbed; -1 if unknown).
   int resolve(int object_id) const;
 
@@ -420,6 +427,7 @@ class ObjectMap {
   std::vector<Vec3> surface_points(const Object& object, double share) const;
 
   ObjectMapOptions options_;
+  double share_bar_ = 0.0;  // judge_visibility(): the detected share an object needs
   std::vector<std::unique_ptr<Object>>
       objects_;  // index = id; absorbed objects stay (alive = false)
 };

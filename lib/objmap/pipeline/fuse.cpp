@@ -192,6 +192,10 @@ std::vector<ConfigField> scoring_fields(FuseOptions& o) {
        "an object is confirmed only when detected in at least this share of the keyframes that "
        "had its place in view, not occluded (0: no such rule; the paper)",
        &m.min_detected_share},
+      {"objects.detected_share_of_median", "--detected-share-of-median",
+       "... and at least this times the median share of the objects with enough views (the "
+       "detector's recall on this recording)",
+       &m.detected_share_of_median},
       {"visibility.min_visible_fraction", "--visible-fraction",
        "a keyframe has an object in view when this share of its sampled points is in the image "
        "and not occluded",
@@ -1078,6 +1082,7 @@ void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& obj
   if (view_log) {
     objects.judge_visibility(*view_log, options.visibility);
     result.objects_below_share = objects.below_share_count();
+    result.detected_share_bar = objects.detected_share_bar();
   }
   result.objects = objects.records(record_options(options, result.threads));
   for (const auto& r : result.objects) {
@@ -1290,6 +1295,9 @@ void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseI
   run["inputs"] = inputs_json(options, inputs, result);
   run["options"] = ordered_json::parse(config_to_json(fuse_config_fields(echo)));
   run["counts"] = counts_json(inputs, result);
+  if (result.detected_share_bar > 0.0)
+    run["confirmation"] = {{"detected_share_bar", result.detected_share_bar},
+                           {"objects_below", result.objects_below_share}};
   run["points"] = points_json(result, maps);
   run["duplicates"] = duplicates_json(result.duplicates, options.duplicates, object_options);
   run["scene"] = scene_run_json(result.scene);
