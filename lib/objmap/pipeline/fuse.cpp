@@ -151,6 +151,14 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        "after the merge pass, an object lying almost all on an object of another class with "
        "several times its views joins it (the detector's other name for it)",
        &m.merge_class_confusions},
+      {"objects.merge_fragments_in_box", "--merge-fragments",
+       "after them, an object inside the oriented box of a larger object of its class, with "
+       "several times fewer views and few shared keyframes, joins it (its far side, its top)",
+       &m.merge_fragments_in_box},
+      {"objects.drop_bleed", "--drop-bleed",
+       "an instance lying on another of its class in the same keyframe, a fifth of its size or "
+       "less, is ignored (a mask that bled onto the object in front)",
+       &m.drop_bleed},
       {"objects.confusion_min_containment", "--confusion-containment",
        "class confusion: share of the smaller object's voxels on the larger's",
        &m.confusion_min_containment},
