@@ -870,31 +870,34 @@ std::vector<Vec3> ObjectMap::surface_points(const Object& o, double share) const
 
 void ObjectMap::merge_fragments_in_box(std::vector<MergeLink>& made) {
   const double grow = options_.voxel_m;
+  // Each live object's views, canonical class, surface and the oriented box of it; after a merge
+  // only the grown object's entry is made again.
+  struct Live {
+    Object* object;
+    int views;
+    std::string cls;
+    std::vector<Vec3> surface;
+    Obb box;
+  };
+  const auto make_live = [&](Object* o) {
+    Live l{o, count_views(o->provenance, options_), segmentation::canonical_class(voted_class(*o)),
+           surface_points(*o, 0.1), Obb{}};
+    PointCloud cloud;
+    for (const Vec3& p : l.surface) cloud.points.push_back(p.cast<float>());
+    l.box = geometry::compute_obb(cloud);
+    return l;
+  };
+  std::vector<Live> live;
+  for (const auto& o : objects_)
+    if (o->alive) live.push_back(make_live(o.get()));
   while (true) {
-    // Each live object's views, canonical class, surface and its oriented box, once per round.
-    struct Live {
-      Object* object;
-      int views;
-      std::string cls;
-      std::vector<Vec3> surface;
-      Obb box;
-    };
-    std::vector<Live> live;
-    for (const auto& o : objects_) {
-      if (!o->alive) continue;
-      Live l{o.get(), count_views(o->provenance, options_),
-             segmentation::canonical_class(voted_class(*o)), surface_points(*o, 0.1), Obb{}};
-      PointCloud cloud;
-      for (const Vec3& p : l.surface) cloud.points.push_back(p.cast<float>());
-      l.box = geometry::compute_obb(cloud);
-      live.push_back(std::move(l));
-    }
-    const Live* best_small = nullptr;
-    const Live* best_large = nullptr;
-    double best_inside = 0.0;
-    for (const Live& a : live)
-      for (const Live& b : live) {
-        if (&a == &b || a.cls != b.cls) continue;
+    std::size_t best_small = 0, best_large = 0;
+    double best_inside = -1.0;
+    for (std::size_t ia = 0; ia < live.size(); ++ia)
+      for (std::size_t ib = 0; ib < live.size(); ++ib) {
+        const Live& a = live[ia];
+        const Live& b = live[ib];
+        if (ia == ib || a.cls != b.cls) continue;
         if (b.views < options_.fragment_min_view_ratio * a.views) continue;
         const int t = 1;
         if (((a.object->hi.array() + t) < b.object->lo.array()).any() ||
@@ -912,24 +915,20 @@ void ObjectMap::merge_fragments_in_box(std::vector<MergeLink>& made) {
         }
         const double share = static_cast<double>(inside) /
                              static_cast<double>(std::max<std::size_t>(1, a.surface.size()));
-        if (share < options_.fragment_min_inside) continue;
-        if (!best_small || share > best_inside) {
-          best_small = &a;
-          best_large = &b;
-          best_inside = share;
-        }
+        if (share < options_.fragment_min_inside || share <= best_inside) continue;
+        best_small = ia;
+        best_large = ib;
+        best_inside = share;
       }
-    if (!best_small) return;
-    MergeLink link{best_large->object->id,
-                   best_small->object->id,
-                   0.0,
-                   (best_small->object->centroid - best_large->object->centroid).norm(),
-                   best_inside,
-                   0.0,
-                   false,
-                   true};
-    absorb(*best_large->object, *best_small->object, link);
+    if (best_inside < 0.0) return;
+    Object& large = *live[best_large].object;
+    Object& small = *live[best_small].object;
+    MergeLink link{large.id,    small.id, 0.0,   (small.centroid - large.centroid).norm(),
+                   best_inside, 0.0,      false, true};
+    absorb(large, small, link);
     made.push_back(link);
+    live[best_large] = make_live(&large);
+    live.erase(live.begin() + static_cast<std::ptrdiff_t>(best_small));
   }
 }
 
