@@ -66,6 +66,9 @@ void ObjectMapOptions::check() const {
   require(std::isfinite(bleed_min_inside) && bleed_min_inside > 0.0 && bleed_min_inside <= 1.0,
           "ObjectMapOptions.bleed_min_inside",
           "must be in (0, 1], got " + std::to_string(bleed_min_inside));
+  require(std::isfinite(span_min_share) && span_min_share > 0.0 && span_min_share <= 0.5,
+          "ObjectMapOptions.span_min_share",
+          "must be in (0, 0.5], got " + std::to_string(span_min_share));
   require(std::isfinite(bleed_min_ratio) && bleed_min_ratio >= 1.0,
           "ObjectMapOptions.bleed_min_ratio",
           "must be >= 1, got " + std::to_string(bleed_min_ratio));
@@ -110,6 +113,7 @@ void set_paper_rules(ObjectMapOptions& o) {
   o.merge_class_confusions = false;
   o.merge_fragments_in_box = false;
   o.drop_bleed = false;
+  o.drop_spanning = false;
   o.confirmation = Confirmation::kIdKeyframes;
   o.min_observations = 3;
   o.min_detected_share = 0.0;
@@ -383,6 +387,40 @@ std::vector<AddResult> ObjectMap::add_frame_in_turn(const std::vector<Observatio
   return results;
 }
 
+bool ObjectMap::spans_two(const Observation& obs, const Prepared& prep) const {
+  const std::string cls = segmentation::canonical_class(obs.class_name);
+  const double need = options_.span_min_share * static_cast<double>(prep.voxels.size());
+  std::vector<const Object*> on;  // the objects of its class it lies on
+  for (const auto& op : objects_) {
+    const Object& o = *op;
+    if (!o.alive) continue;
+    const int t = 1;
+    if (((prep.hi.array() + t) < o.lo.array()).any() ||
+        ((o.hi.array() + t) < prep.lo.array()).any())
+      continue;
+    if (segmentation::canonical_class(voted_class(o)) != cls) continue;
+    if (count_views(o.provenance, options_) < options_.min_observations) continue;
+    if (static_cast<double>(shared_voxels(prep.voxels, o)) < need) continue;
+    // Two objects apart (a fragment of one object lies on it, and the merge pass joins them):
+    // the smaller's voxels lie less than span_min_share on the larger; and seen as two in the
+    // same keyframes (two halves of one object seen by turns are one object, and this mask says
+    // so).
+    for (const Object* other : on) {
+      const Object& small = o.voxels.size() <= other->voxels.size() ? o : *other;
+      const Object& large = &small == &o ? *other : o;
+      std::vector<double> shared;
+      std::set_intersection(small.frames.begin(), small.frames.end(), large.frames.begin(),
+                            large.frames.end(), std::back_inserter(shared));
+      if (shared.size() <= options_.merge_max_shared_frames * small.frames.size()) continue;
+      if (static_cast<double>(shared_voxels(small.voxels, large)) <
+          options_.span_min_share * static_cast<double>(small.voxels.size()))
+        return true;
+    }
+    on.push_back(&o);
+  }
+  return false;
+}
+
 std::vector<bool> ObjectMap::bleed(const std::vector<Observation>& observations,
                                    const std::vector<std::unique_ptr<Prepared>>& prep,
                                    const std::vector<bool>& open) const {
@@ -433,6 +471,12 @@ std::vector<AddResult> ObjectMap::add_frame(const std::vector<Observation>& obse
         results[i].bleed = true;
       }
   }
+  if (options_.drop_spanning)
+    for (std::size_t i = 0; i < n; ++i)
+      if (open[i] && spans_two(observations[i], *prep[i])) {
+        open[i] = false;
+        results[i].spanning = true;
+      }
   // Every candidate pair with P > K, scored once: a fused object takes no more observation of
   // this frame (one_observation_per_frame) or is scored again.
   struct Pair {

@@ -170,6 +170,15 @@ struct ObjectMapOptions {
   bool drop_bleed = true;
   double bleed_min_inside = 0.8;
   double bleed_min_ratio = 5.0;
+  // Spanning: an instance of which at least span_min_share lies on each of two objects of its
+  // class, both confirmed by their views already, apart (the smaller less than span_min_share on
+  // the larger: not an object and its fragment) and seen as two in the same keyframes (more than
+  // merge_max_shared_frames of the smaller's: not two halves of one object seen by turns), is one
+  // mask over two objects side by side
+  // (chairs packed round a table whose masks touch): fused into either it would give that object
+  // the other's voxels and, in the merge pass, the other object itself. It is ignored.
+  bool drop_spanning = true;
+  double span_min_share = 0.25;
   bool require_same_class = false;  // only match observations to objects of the voted class
   // The paper's method (`objmap fuse --method paper`, docs/fusion.md "The paper's method") needs
   // these; the defaults are objmap's.
@@ -322,7 +331,8 @@ PointCloud voxel_nearest_centre(const PointCloud& cloud, double voxel_m,
 struct AddResult {
   int object_id = -1;  // -1: ignored (fewer than min_points points, or bleed)
   bool created = false;
-  bool bleed = false;  // ignored as another instance's surface (ObjectMapOptions::drop_bleed)
+  bool bleed = false;     // ignored as another instance's surface (ObjectMapOptions::drop_bleed)
+  bool spanning = false;  // ignored as a mask over two objects (ObjectMapOptions::drop_spanning)
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
 };
 
@@ -404,6 +414,8 @@ class ObjectMap {
   std::vector<bool> bleed(const std::vector<Observation>& observations,
                           const std::vector<std::unique_ptr<Prepared>>& prep,
                           const std::vector<bool>& open) const;
+  // add_frame(): does the observation lie on two confirmed objects of its class (drop_spanning)?
+  bool spans_two(const Observation& obs, const Prepared& prep) const;
   // add_frame() with best_first false: each observation in turn takes its best object.
   std::vector<AddResult> add_frame_in_turn(const std::vector<Observation>& observations);
   // What confirms `object`: its views or its ID's keyframes (ObjectMapOptions::confirmation).

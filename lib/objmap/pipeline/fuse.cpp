@@ -155,6 +155,10 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        "after them, an object inside the oriented box of a larger object of its class, with "
        "several times fewer views and few shared keyframes, joins it (its far side, its top)",
        &m.merge_fragments_in_box},
+      {"objects.drop_spanning", "--drop-spanning",
+       "an instance of which a quarter or more lies on each of two confirmed objects of its class "
+       "is ignored (one mask over two objects side by side)",
+       &m.drop_spanning},
       {"objects.drop_bleed", "--drop-bleed",
        "an instance lying on another of its class in the same keyframe, a fifth of its size or "
        "less, is ignored (a mask that bled onto the object in front)",
@@ -1048,7 +1052,9 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
       const std::vector<fusion::AddResult> added = objects.add_frame(work.observations);
       for (std::size_t k = 0; k < added.size(); ++k) {
         if (added[k].object_id < 0) {
-          ++(added[k].bleed ? result.instances_bleed : result.instances_empty);
+          ++(added[k].bleed      ? result.instances_bleed
+             : added[k].spanning ? result.instances_spanning
+                                 : result.instances_empty);
           continue;
         }
         ++result.observations;
@@ -1241,6 +1247,7 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"depth_gate_pixels_removed", result.depth_gate_pixels_removed},
       {"instances_without_points", result.instances_empty},
       {"instances_bleed", result.instances_bleed},
+      {"instances_spanning", result.instances_spanning},
       {"observations", result.observations},
       {"objects_before_confirmation", result.objects_total},
       {"objects_below_detected_share", result.objects_below_share},

@@ -98,7 +98,8 @@ struct FuseResult {
   std::size_t instances_empty = 0;  // no usable pixels (box mask empty, no depth, too few points)
   std::size_t observations = 0;     // added to the object map
   std::size_t objects_total = 0;    // objects before the confirmation rule
-  std::size_t instances_bleed = 0;  // another instance's surface in the frame (drop_bleed)
+  std::size_t instances_spanning = 0;  // one mask over two objects of its class (drop_spanning)
+  std::size_t instances_bleed = 0;     // another instance's surface in the frame (drop_bleed)
   std::size_t objects_below_share = 0;
   double detected_share_bar = 0.0;  // the detected share an object needed (0: the rule off)  //
                                     // with enough views, left out by the detected share
