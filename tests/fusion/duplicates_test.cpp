@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "fusion_test_util.h"
 #include "objmap/core/error.h"
 
 namespace objmap::fusion {
@@ -34,13 +35,7 @@ PointCloud keep_if(const PointCloud& cloud, double min_x) {
 }
 
 Observation seen(double t, int track_id, const std::string& cls, PointCloud points) {
-  Observation o;
-  o.timestamp = t;
-  o.track_id = track_id;
-  o.class_name = cls;
-  o.score = 0.8;
-  o.points_in_world = std::move(points);
-  return o;
+  return test::instance(t, track_id, cls, std::move(points));
 }
 
 std::vector<ObjectRecord> records_of(ObjectMap& map) {

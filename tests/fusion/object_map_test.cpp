@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <random>
 
+#include "fusion_test_util.h"
 #include "objmap/core/error.h"
 #include "objmap/fusion/palette.h"
 
@@ -16,32 +17,11 @@ AddResult add_one(ObjectMap& map, const Observation& observation) {
   return map.add_frame({observation}).front();
 }
 
-// Surface points of an axis-aligned box at 1 cm voxel centres: `center` must be a voxel centre
-// (x.xx5) and `half_cells` the half size in voxels, so the box is symmetric about `center`.
-// `faces`: bit 0 = -x, 1 = +x, 2 = -y, 3 = +y, 4 = -z, 5 = +z.
-PointCloud box(const Vec3& center, int half_cells, int faces = 63, Rgb colour = {200, 100, 50}) {
-  PointCloud c;
-  const int h = half_cells;
-  for (int i = -h; i <= h; ++i)
-    for (int j = -h; j <= h; ++j)
-      for (int k = -h; k <= h; ++k) {
-        const bool on = ((faces & 1) && i == -h) || ((faces & 2) && i == h) ||
-                        ((faces & 4) && j == -h) || ((faces & 8) && j == h) ||
-                        ((faces & 16) && k == -h) || ((faces & 32) && k == h);
-        if (on) c.push_back((center + 0.01 * Vec3(i, j, k)).cast<float>(), colour);
-      }
-  return c;
-}
+using test::box;
 
 Observation obs(double t, std::optional<int> id, const std::string& cls, double score,
                 PointCloud points) {
-  Observation o;
-  o.timestamp = t;
-  o.track_id = id;
-  o.class_name = cls;
-  o.score = score;
-  o.points_in_world = std::move(points);
-  return o;
+  return test::instance(t, id, cls, std::move(points), score);
 }
 
 RecordOptions no_outlier_filter() {

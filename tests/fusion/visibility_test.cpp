@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "fusion_test_util.h"
 #include "objmap/core/error.h"
 #include "objmap/fusion/object_map.h"
 
@@ -13,6 +14,9 @@
 // instances and fragments inside a larger object's box (fusion/object_map.h).
 namespace objmap::fusion {
 namespace {
+
+using test::box;
+using test::instance;
 
 // A 64×48 pinhole camera, 1 mm depth units.
 Camera small_camera() {
@@ -164,31 +168,6 @@ TEST(ObjectMap, ThePaperConfirmsByItsCountAlone) {
   share.min_detected_share = 0.2;
   ShareScene unjudged(share);
   EXPECT_EQ(unjudged.map.confirmed_count(), 3u);
-}
-
-// Surface points of an axis-aligned box of half size h cm at 1 cm voxel centres (`center` at
-// x.xx5); faces: bit 0 = -x, 1 = +x, 2 = -y, 3 = +y, 4 = -z, 5 = +z.
-PointCloud box(const Vec3& center, int h, int faces) {
-  PointCloud c;
-  for (int i = -h; i <= h; ++i)
-    for (int j = -h; j <= h; ++j)
-      for (int k = -h; k <= h; ++k) {
-        const bool on = ((faces & 1) && i == -h) || ((faces & 2) && i == h) ||
-                        ((faces & 4) && j == -h) || ((faces & 8) && j == h) ||
-                        ((faces & 16) && k == -h) || ((faces & 32) && k == h);
-        if (on) c.push_back((center + 0.01 * Vec3(i, j, k)).cast<float>(), Rgb{90, 90, 90});
-      }
-  return c;
-}
-
-Observation instance(double t, int track, const std::string& cls, PointCloud points) {
-  Observation o;
-  o.timestamp = t;
-  o.track_id = track;
-  o.class_name = cls;
-  o.score = 0.8;
-  o.points_in_world = std::move(points);
-  return o;
 }
 
 TEST(ObjectMap, AnInstanceOnAnotherOfItsClassInTheSameFrameIsBleedAndIgnored) {

@@ -25,7 +25,7 @@ void VisibilityOptions::check() const {
           "must be >= 1, got " + std::to_string(range_factor));
 }
 
-ViewLog::ViewLog(const Camera& camera) : camera_(camera), distorted_(camera.has_distortion()) {}
+ViewLog::ViewLog(const Camera& camera) : camera_(camera) {}
 
 cv::Mat ViewLog::thin(const cv::Mat& depth) const {
   require(depth.type() == CV_16UC1 && depth.cols == camera_.width && depth.rows == camera_.height,
@@ -57,15 +57,8 @@ std::size_t ViewLog::bytes() const {
 bool ViewLog::visible(const View& view, const Vec3& point, const VisibilityOptions& o) const {
   const Vec3 p = view.cam_from_world_r * point + view.cam_from_world_t;
   if (p.z() <= 0.05) return false;
-  double u, v;
-  if (distorted_) {
-    const Eigen::Vector2d px = camera_.project(p);
-    u = px.x();
-    v = px.y();
-  } else {
-    u = camera_.fx * p.x() / p.z() + camera_.cx;
-    v = camera_.fy * p.y() / p.z() + camera_.cy;
-  }
+  const Eigen::Vector2d px = camera_.project(p);
+  const double u = px.x(), v = px.y();
   if (!(u >= 0.0 && v >= 0.0 && u < camera_.width && v < camera_.height)) return false;
   // The nearest kept sample (pixels kStep·i).
   const int ui = std::min(view.depth.cols - 1, static_cast<int>(std::lround(u / kStep)));

@@ -60,7 +60,6 @@ class ViewLog {
   };
   bool visible(const View& view, const Vec3& point, const VisibilityOptions& options) const;
   Camera camera_;
-  bool distorted_ = false;
   std::vector<View> views_;
 };
 
