@@ -231,9 +231,11 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
   // Fused with groundtruth.txt as it is (z up): the desk is a table 0.7 m above the floor, with
   // the keyboards, the mice and the monitor on it. The monitor stands at the desk's back edge,
   // where it hides the desk: it is on it by a quarter of its footprint, not by its centre. The
-  // chairs are seen from above, their legs hidden (bottoms 0.47 and 0.69 m above the floor): they
-  // stand on nothing seen, neither on their seats nor on the floor far below them. Whatever is on
-  // the floor has its bottom near it, and nothing is on an object of its own class.
+  // chair is seen from above, its legs hidden (bottom 0.47 m above the floor): it stands on
+  // nothing seen, neither on its seat nor on the floor far below it. (A second "chair", its bottom
+  // 0.69 m up, was detected in 3 of the 74 keyframes that had its place in view: the detected
+  // share leaves it out.) Whatever is on the floor has its bottom near it, and nothing is on an
+  // object of its own class.
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
   RunResult why;
   const fs::path run = fuse_cached("fr1-rpy-groundtruth", data, data / "groundtruth.txt",
@@ -261,8 +263,8 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
   EXPECT_GE(on_table["keyboard"], 2);
   EXPECT_GE(on_table["mouse"], 3);
   EXPECT_GE(on_table["tv monitor"], 1);
-  EXPECT_EQ(count["chair"], 2);
-  EXPECT_EQ(on_floor["chair"], 0) << "the chairs' bottoms are 0.47 and 0.69 m above the floor";
+  EXPECT_EQ(count["chair"], 1);
+  EXPECT_EQ(on_floor["chair"], 0) << "the chair's bottom is 0.47 m above the floor";
   EXPECT_EQ(doc["surfaces"][0]["label"], "floor") << "the largest surface is the floor";
 }
 
