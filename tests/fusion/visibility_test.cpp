@@ -32,7 +32,7 @@ cv::Mat wall(double z_m) {
 }
 
 // A camera at (x, 0, 0) looking along +z (the world's axes).
-Pose camera_at(double x) {
+Pose camera_on_x(double x) {
   Pose p = Pose::Identity();
   p.translation() = Vec3(x, 0.0, 0.0);
   return p;
@@ -41,8 +41,8 @@ Pose camera_at(double x) {
 TEST(ViewLog, APlaceIsInViewInTheImageInFrontOfOrOnTheSurfaceNotBehindIt) {
   const Camera camera = small_camera();
   ViewLog log(camera);
-  log.add(1.0, log.thin(wall(2.0)), camera_at(0.0));
-  log.add(2.0, log.thin(wall(0.0)), camera_at(0.0));  // no depth: says nothing
+  log.add(1.0, log.thin(wall(2.0)), camera_on_x(0.0));
+  log.add(2.0, log.thin(wall(0.0)), camera_on_x(0.0));  // no depth: says nothing
   VisibilityOptions o;
   const auto in_view = [&](const Vec3& p, double max_distance = 0.0) {
     return log.frames_in_view({p}, p, max_distance, o);
@@ -66,7 +66,7 @@ TEST(ViewLog, BadInputsAreNamed) {
   const Camera camera = small_camera();
   ViewLog log(camera);
   EXPECT_THROW(log.thin(cv::Mat(10, 10, CV_16UC1)), InputError);
-  EXPECT_THROW(log.add(0.0, cv::Mat(12, 16, CV_8UC1), camera_at(0.0)), InputError);
+  EXPECT_THROW(log.add(0.0, cv::Mat(12, 16, CV_8UC1), camera_on_x(0.0)), InputError);
   VisibilityOptions o;
   o.min_visible_fraction = 0.0;
   try {
@@ -113,7 +113,7 @@ struct ShareScene {
   ViewLog log{small_camera()};
   explicit ShareScene(const ObjectMapOptions& options) : map(options) {
     for (int f = 0; f < 20; ++f) {
-      const Pose cam = camera_at(0.1 * f);
+      const Pose cam = camera_on_x(0.1 * f);
       const double t = f;
       std::vector<Observation> frame{seen(t, 1, "cup", patch(1.0, 0.0, 2.0), cam)};
       if (f < 3) frame.push_back(seen(t, 2, "cup", patch(0.8, 0.2, 2.0), cam));
@@ -168,7 +168,7 @@ TEST(ObjectMap, ThePaperConfirmsByItsCountAlone) {
 
 // Surface points of an axis-aligned box of half size h cm at 1 cm voxel centres (`center` at
 // x.xx5); faces: bit 0 = -x, 1 = +x, 2 = -y, 3 = +y, 4 = -z, 5 = +z.
-PointCloud box(const Vec3& center, int h, int faces) {
+PointCloud faces_box(const Vec3& center, int h, int faces) {
   PointCloud c;
   for (int i = -h; i <= h; ++i)
     for (int j = -h; j <= h; ++j)
@@ -193,10 +193,10 @@ Observation instance(double t, int track, const std::string& cls, PointCloud poi
 
 TEST(ObjectMap, AnInstanceOnAnotherOfItsClassInTheSameFrameIsBleedAndIgnored) {
   const Vec3 c(0.505, 0.105, 1.005);
-  const PointCloud chair = box(c, 10, 63);         // 2402 points
-  const PointCloud top = box(c, 10, 32);           // its top face: 441 points
-  const PointCloud top_side = box(c, 10, 32 | 1);  // and a side: 861 points, over a third
-  PointCloud corner;                               // 25 points of its top face
+  const PointCloud chair = faces_box(c, 10, 63);         // 2402 points
+  const PointCloud top = faces_box(c, 10, 32);           // its top face: 441 points
+  const PointCloud top_side = faces_box(c, 10, 32 | 1);  // and a side: 861 points, over a third
+  PointCloud corner;                                     // 25 points of its top face
   for (std::size_t i = 0; i < 25; ++i) corner.push_back(top.points[i], top.colors[i]);
   ObjectMap map;
   auto results = map.add_frame({instance(0, 1, "chair", chair), instance(0, 2, "chair", corner)});
@@ -229,13 +229,13 @@ TEST(ObjectMap, AFragmentInsideTheBoxOfALargerObjectOfItsClassJoinsIt) {
   const auto run = [&](const ObjectMapOptions& options, const Vec3& back_at, bool together) {
     ObjectMap map(options);
     for (int f = 0; f < 10; ++f) {
-      std::vector<Observation> frame{instance(f, 1, "chair", box(c, 10, front))};
-      if (together && f < 4) frame.push_back(instance(f, 7, "chair", box(back_at, 10, back)));
+      std::vector<Observation> frame{instance(f, 1, "chair", faces_box(c, 10, front))};
+      if (together && f < 4) frame.push_back(instance(f, 7, "chair", faces_box(back_at, 10, back)));
       map.add_frame(frame);
     }
     if (!together)
       for (int f = 10; f < 14; ++f)
-        map.add_frame({instance(f, 5 + f, "chair", box(back_at, 10, back))});
+        map.add_frame({instance(f, 5 + f, "chair", faces_box(back_at, 10, back))});
     const auto merges = map.merge_pass();
     return std::make_pair(map.records(RecordOptions{}), merges);
   };
@@ -261,10 +261,10 @@ TEST(ObjectMap, OneMaskOverTwoObjectsOfItsClassSeenApartIsIgnored) {
   const auto run = [&](const ObjectMapOptions& options, std::vector<AddResult>* spanning) {
     ObjectMap map(options);
     for (int f = 0; f < 5; ++f)
-      map.add_frame(
-          {instance(f, 1, "chair", box(a, 10, 63)), instance(f, 2, "chair", box(b, 10, 63))});
-    PointCloud both = box(a, 10, 63);
-    const PointCloud other = box(b, 10, 63);
+      map.add_frame({instance(f, 1, "chair", faces_box(a, 10, 63)),
+                     instance(f, 2, "chair", faces_box(b, 10, 63))});
+    PointCloud both = faces_box(a, 10, 63);
+    const PointCloud other = faces_box(b, 10, 63);
     for (std::size_t i = 0; i < other.size(); ++i) both.push_back(other.points[i], other.colors[i]);
     for (int f = 5; f < 8; ++f) {
       const auto r = map.add_frame({instance(f, 9, "chair", both)});
