@@ -19,10 +19,12 @@ $(BUILD)/CMakeCache.txt:
 
 configure: $(BUILD)/CMakeCache.txt
 
+# build: everything, the benchmark programs too; test: what ctest runs (`all`: not the benchmarks).
 build: deps configure
-	cmake --build $(BUILD) -j$(JOBS)
+	cmake --build $(BUILD) -j$(JOBS) --target all benchmarks
 
-test: deps build
+test: deps configure
+	cmake --build $(BUILD) -j$(JOBS)
 	cd $(BUILD) && OBJMAP_DATA=$(DATA) ctest --output-on-failure -j$(JOBS)
 
 # make test-slurm: the workflow (scripts/workflow/Snakefile) on three synthetic recordings through a real

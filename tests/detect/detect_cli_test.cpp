@@ -15,7 +15,7 @@ namespace {
 using test::run_objmap;
 using test::fs::path;
 
-const char* const kModels = "../models/yolo-fastest-1.1_coco";
+const char* const kCliModels = "../models/yolo-fastest-1.1_coco";
 
 std::size_t line_count(const std::string& text) {
   return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
@@ -34,7 +34,7 @@ TEST(DetectCli, KeyframesOnlyAndThreads) {
   // --frames keyframes: only the frames fuse will take with this trajectory (motion keeps 3 of
   // fr1_desk_9's 9); the same files as the whole run for those frames, for any thread count.
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
-  OBJMAP_DATA_OR_SKIP(models, kModels);
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
   test::TempDir tmp;
   const std::string model = (models / "yolo-fastest-1.1-xl.weights").string();
   const std::string gt = (data / "groundtruth.txt").string();
@@ -69,7 +69,7 @@ TEST(DetectCli, KeyframesOnlyAndThreads) {
 
 TEST(DetectCli, WholeFolderValidatesAndRerunsIdentically) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
-  OBJMAP_DATA_OR_SKIP(models, kModels);
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
   test::TempDir tmp;
   const std::vector<std::string> args = {"detect",
                                          "--dataset",
@@ -118,7 +118,7 @@ TEST(DetectCli, WholeFolderValidatesAndRerunsIdentically) {
 // fr1_desk_9 the map has the monitor and the keyboard (measured: exactly these 2 objects).
 TEST(DetectCli, DetectTrackFuseEndToEnd) {
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
-  OBJMAP_DATA_OR_SKIP(models, kModels);
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
   test::TempDir tmp;
   const auto d = run_objmap({"detect", "--dataset", data.string(), "--model",
                              (models / "yolo-fastest-1.1-xl.weights").string(), "--classes",
@@ -166,7 +166,7 @@ TEST(DetectCli, MissingModelIsExit2) {
 }
 
 TEST(DetectCli, UnreadableWeightsIsExit2) {
-  OBJMAP_DATA_OR_SKIP(models, kModels);
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
   test::TempDir tmp;
   test::fs::copy_file(models / "yolo-fastest-1.1.cfg", tmp / "yolo.cfg");
   std::string garbage(4096, '\0');
@@ -215,7 +215,7 @@ TEST(DetectCli, TensorflowGraphOfAnotherKindIsExit2) {
 }
 
 TEST(DetectCli, NoDetectionAtAllIsExit2) {
-  OBJMAP_DATA_OR_SKIP(models, kModels);
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
   expect_exit2(
       {"--model", (models / "yolo-fastest-1.1-xl.weights").string(), "--score-threshold", "1.0"},
@@ -231,7 +231,7 @@ TEST(DetectCli, NoDetectionAtAllIsExit2) {
 }
 
 TEST(DetectCli, UnknownClassIsExit2) {
-  OBJMAP_DATA_OR_SKIP(models, kModels);
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
   expect_exit2(
       {"--model", (models / "yolo-fastest-1.1.weights").string(), "--classes", "chair,chiar"},
       "objmap: error: --classes: 'chiar' is not a class of the model", "80 names");

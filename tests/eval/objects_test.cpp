@@ -11,6 +11,7 @@
 #include <numeric>
 #include <random>
 
+#include "eval_test_util.h"
 #include "objmap/core/error.h"
 #include "objmap/io/trajectory.h"
 #include "support/schema_check.h"
@@ -27,9 +28,9 @@ using objmap::test::write_text;
 namespace fs = std::filesystem;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
+using test::kPi;
 
-bool has(const std::string& text, const std::string& what) {
+bool mentions(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
 }
 
@@ -241,27 +242,30 @@ TEST(ObjectsGt, ReadsJsonAndRejectsBadFiles) {
     }
     return "no error";
   };
-  EXPECT_TRUE(has(message("a.json", "{\"objects\": [}"), "a.json: malformed JSON"));
-  EXPECT_TRUE(has(message("b.json", R"({"objects":[{"id":1,"class":"cup","centroid":[1,2]}]})"),
-                  "b.json: objects[0].centroid: expected an array of 3 numbers"));
-  EXPECT_TRUE(has(message("c.json", R"({"objects":[{"id":1,"class":"cup","centroid":[1,2,3]}]})"),
-                  "missing field 'obb'"));
-  EXPECT_TRUE(has(message("d.txt", "# cuboid\n1 2 3 0.5 0.1 0.2\n"),
-                  "d.txt:2: 6 fields; expected 7: x y z yaw half_x half_y half_z"));
-  EXPECT_TRUE(has(message("e.txt", "1 2 3 0.5 0.1 0.2 abc\n"), "e.txt:1"));
-  EXPECT_TRUE(has(message("f.txt", "# nothing\n"), "f.txt: no cuboid"));
-  EXPECT_TRUE(has(message("g.txt", "1 2 3 0 0.1 -0.2 0.3\n"), "g.txt:1: negative half extent"));
+  EXPECT_TRUE(mentions(message("a.json", "{\"objects\": [}"), "a.json: malformed JSON"));
+  EXPECT_TRUE(
+      mentions(message("b.json", R"({"objects":[{"id":1,"class":"cup","centroid":[1,2]}]})"),
+               "b.json: objects[0].centroid: expected an array of 3 numbers"));
+  EXPECT_TRUE(
+      mentions(message("c.json", R"({"objects":[{"id":1,"class":"cup","centroid":[1,2,3]}]})"),
+               "missing field 'obb'"));
+  EXPECT_TRUE(mentions(message("d.txt", "# cuboid\n1 2 3 0.5 0.1 0.2\n"),
+                       "d.txt:2: 6 fields; expected 7: x y z yaw half_x half_y half_z"));
+  EXPECT_TRUE(mentions(message("e.txt", "1 2 3 0.5 0.1 0.2 abc\n"), "e.txt:1"));
+  EXPECT_TRUE(mentions(message("f.txt", "# nothing\n"), "f.txt: no cuboid"));
+  EXPECT_TRUE(
+      mentions(message("g.txt", "1 2 3 0 0.1 -0.2 0.3\n"), "g.txt:1: negative half extent"));
   // The id of a position line was a double cast to int (undefined for 1e300: UBSan
   // float-cast-overflow in the fuzz build, fuzz_objects_gt); it is an integer now.
-  EXPECT_TRUE(has(message("h.txt", "1e300 009_gelatin_box 1 2 3\n"),
-                  "h.txt:1: id is '1e300'; expected an integer"));
-  EXPECT_TRUE(
-      has(message("i.txt", "3000000000 mug 1 2 3\n"), "i.txt:1: id 3000000000; expected an int"));
+  EXPECT_TRUE(mentions(message("h.txt", "1e300 009_gelatin_box 1 2 3\n"),
+                       "h.txt:1: id is '1e300'; expected an integer"));
+  EXPECT_TRUE(mentions(message("i.txt", "3000000000 mug 1 2 3\n"),
+                       "i.txt:1: id 3000000000; expected an int"));
   try {
     read_objects_gt(tmp / "missing.json");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_TRUE(has(e.what(), "missing.json: cannot open")) << e.what();
+    EXPECT_TRUE(mentions(e.what(), "missing.json: cannot open")) << e.what();
   }
 }
 
@@ -600,9 +604,9 @@ TEST(AlignObjects, FewerThanThreeMatchesIsAnError) {
     align_by_objects(map, gt, 0.3);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_TRUE(has(e.what(), "--align objects")) << e.what();
-    EXPECT_TRUE(has(e.what(), "only 0 objects")) << e.what();
-    EXPECT_TRUE(has(e.what(), "expected at least 3")) << e.what();
+    EXPECT_TRUE(mentions(e.what(), "--align objects")) << e.what();
+    EXPECT_TRUE(mentions(e.what(), "only 0 objects")) << e.what();
+    EXPECT_TRUE(mentions(e.what(), "expected at least 3")) << e.what();
   }
 }
 
@@ -677,10 +681,10 @@ TEST(EvalObjectsCli, HandMadeFilesGiveTheExactNumbers) {
       run_objmap({"eval", "objects", "--map", (tmp / "est/objects.json").string(), "--reference",
                   (tmp / "gt/objects.json").string(), "--json", (tmp / "out.json").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(has(r.out, "Table 3")) << r.out;
-  EXPECT_TRUE(has(r.out, "overall")) << r.out;
-  EXPECT_TRUE(has(r.out, "25.0%")) << r.out;  // 3 mapped vs 4
-  EXPECT_TRUE(has(r.out, "75.0%")) << r.out;  // Table 6: 1 − 100/400
+  EXPECT_TRUE(mentions(r.out, "Table 3")) << r.out;
+  EXPECT_TRUE(mentions(r.out, "overall")) << r.out;
+  EXPECT_TRUE(mentions(r.out, "25.0%")) << r.out;  // 3 mapped vs 4
+  EXPECT_TRUE(mentions(r.out, "75.0%")) << r.out;  // Table 6: 1 − 100/400
   const auto json = nlohmann::json::parse(read_text(tmp / "out.json"));
   EXPECT_TRUE(
       objmap::test::validate_json(json, objmap::test::load_schema("eval_objects.schema.json"))
@@ -714,23 +718,23 @@ TEST(EvalObjectsCli, BadInputIsExitTwoWithOneLine) {
   auto r = run_objmap({"eval", "objects", "--map", map});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(one_line(r.err)) << r.err;
-  EXPECT_TRUE(has(r.err, "--gt-objects")) << r.err;
+  EXPECT_TRUE(mentions(r.err, "--gt-objects")) << r.err;
   r = run_objmap({"eval", "objects", "--map", (tmp / "missing.json").string(), "--reference", map});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "missing.json: cannot open")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "missing.json: cannot open")) << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--reference", (tmp / "bad.json").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "bad.json: malformed JSON")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "bad.json: malformed JSON")) << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--gt-objects", (tmp / "bad.json").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "bad.json: malformed JSON")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "bad.json: malformed JSON")) << r.err;
   r = run_objmap(
       {"eval", "objects", "--map", map, "--reference", map, "--run", (tmp / "norun").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "run.json: cannot open")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "run.json: cannot open")) << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--gate", "-1"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "gate")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "gate")) << r.err;
 }
 
 // objmap synth (20 frames) → fuse with the true and the drifting trajectory → eval objects, both
@@ -761,7 +765,7 @@ TEST(EvalObjectsCli, SynthFuseEvalEndToEnd) {
          with_gt ? (scene / "objects_gt.json").string() : (run_gt / "objects.json").string(),
          "--json", (tmp / "e.json").string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_TRUE(has(r.out, "Table 6")) << r.out;
+    EXPECT_TRUE(mentions(r.out, "Table 6")) << r.out;
     const auto json = nlohmann::json::parse(read_text(tmp / "e.json"));
     const auto problems = objmap::test::validate_json(json, schema);
     EXPECT_TRUE(problems.empty()) << problems.front();
@@ -886,7 +890,7 @@ TEST(EvalObjectsCli, AlignBringsAMovedMapBack) {
   };
   const auto [plain, plain_text] = eval(run / "objects.json", {});
   EXPECT_EQ(plain.at("alignment").at("method"), "none");
-  EXPECT_TRUE(has(plain_text, "alignment: none")) << plain_text;
+  EXPECT_TRUE(mentions(plain_text, "alignment: none")) << plain_text;
   const int matched = plain.at("centroid_error").back().at("matched").get<int>();
   ASSERT_GE(matched, 10);
   // Without --align, the moved map matches nothing.
@@ -903,7 +907,7 @@ TEST(EvalObjectsCli, AlignBringsAMovedMapBack) {
   EXPECT_EQ(a.at("method"), "trajectory");
   EXPECT_EQ(a.at("pairs"), 20);
   EXPECT_LT(a.at("rmse_m").get<double>(), 1e-9);
-  EXPECT_TRUE(has(text, "alignment: SE(3) from the trajectories")) << text;
+  EXPECT_TRUE(mentions(text, "alignment: SE(3) from the trajectories")) << text;
 
   // --align objects: the same map in either frame gives the same evaluation, with all pairs kept,
   // and the fitted transform cannot leave the matched pairs' RMS error worse than none.
@@ -916,7 +920,7 @@ TEST(EvalObjectsCli, AlignBringsAMovedMapBack) {
   EXPECT_EQ(objects_moved.at("centroid_error").back().at("matched").get<int>(), matched);
   EXPECT_LE(objects_moved.at("centroid_error").back().at("distance_m").at("rmse").get<double>(),
             plain.at("centroid_error").back().at("distance_m").at("rmse").get<double>() + 1e-9);
-  EXPECT_TRUE(has(objects_text, "alignment: SE(3) from the objects")) << objects_text;
+  EXPECT_TRUE(mentions(objects_text, "alignment: SE(3) from the objects")) << objects_text;
 }
 
 TEST(EvalObjectsCli, AlignFlagsAreChecked) {
@@ -929,22 +933,23 @@ TEST(EvalObjectsCli, AlignFlagsAreChecked) {
   auto r =
       run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "trajectory"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "--align trajectory") && has(r.err, "--gt-trajectory"))
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "--align trajectory") &&
+              mentions(r.err, "--gt-trajectory"))
       << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--trajectory", map});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "only with --align trajectory")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "only with --align trajectory")) << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "icp"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "--align")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "--align")) << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "objects"});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "--align objects: only 0 objects")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "--align objects: only 0 objects")) << r.err;
   r = run_objmap({"eval", "objects", "--map", map, "--reference", map, "--align", "trajectory",
                   "--gt-trajectory", (tmp / "none.txt").string(), "--trajectory",
                   (tmp / "none.txt").string()});
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(one_line(r.err) && has(r.err, "none.txt")) << r.err;
+  EXPECT_TRUE(one_line(r.err) && mentions(r.err, "none.txt")) << r.err;
 }
 
 }  // namespace

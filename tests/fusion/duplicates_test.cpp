@@ -9,7 +9,7 @@ namespace objmap::fusion {
 namespace {
 
 // One observation as a keyframe of its own.
-AddResult add_one(ObjectMap& map, const Observation& observation) {
+AddResult add_alone(ObjectMap& map, const Observation& observation) {
   return map.add_frame({observation}).front();
 }
 
@@ -45,15 +45,16 @@ std::vector<ObjectRecord> records_of(ObjectMap& map) {
   return map.records(options);
 }
 
-const Vec3 kCentre(0.305, 0.105, 0.905);
+const Vec3 kBoxCentre(0.305, 0.105, 0.905);
 const Eigen::Vector3i kHalf(10, 7, 5);  // a 20 × 14 × 10 cm box
 
 // One object detected twice in every keyframe (the whole and its +x half, two track ids): the
 // merge pass refuses to join two objects seen in the same keyframes, so two objects stay.
 void add_whole_and_half(ObjectMap& map) {
-  const PointCloud whole = brick(kCentre, kHalf);
+  const PointCloud whole = brick(kBoxCentre, kHalf);
   for (int f = 0; f < 4; ++f)
-    map.add_frame({seen(f, 1, "chair", whole), seen(f, 2, "chair", keep_if(whole, kCentre.x()))});
+    map.add_frame(
+        {seen(f, 1, "chair", whole), seen(f, 2, "chair", keep_if(whole, kBoxCentre.x()))});
 }
 
 TEST(Duplicates, FragmentSeenInTheSameKeyframesIsReportedWithThatReason) {
@@ -96,8 +97,8 @@ TEST(Duplicates, PartlyOverlappingObjectsBelowTheMergeContainmentAreReported) {
   options.match_threshold = 0.95;
   ObjectMap map(options);
   const Vec3 shift(0.15, 0.0, 0.0);
-  for (int f = 0; f < 4; ++f) add_one(map, seen(f, 7, "book", brick(kCentre, kHalf)));
-  for (int f = 4; f < 8; ++f) add_one(map, seen(f, 7, "book", brick(kCentre + shift, kHalf)));
+  for (int f = 0; f < 4; ++f) add_alone(map, seen(f, 7, "book", brick(kBoxCentre, kHalf)));
+  for (int f = 4; f < 8; ++f) add_alone(map, seen(f, 7, "book", brick(kBoxCentre + shift, kHalf)));
   const auto records = records_of(map);
   ASSERT_EQ(records.size(), 2u);
   const DuplicateReport report = find_duplicates(records, map);
@@ -127,8 +128,8 @@ TwoObjects two_objects(const std::string& class_a, const PointCloud& a, const st
                        const PointCloud& b) {
   TwoObjects t;
   for (int f = 0; f < 4; ++f) {
-    add_one(t.map, seen(f, 1, class_a, a));
-    add_one(t.map, seen(f, 2, class_b, b));
+    add_alone(t.map, seen(f, 1, class_a, a));
+    add_alone(t.map, seen(f, 2, class_b, b));
   }
   t.records = records_of(t.map);
   return t;
@@ -141,16 +142,17 @@ DuplicateReport report_on(const TwoObjects& t) {
 }
 
 TEST(Duplicates, SameClassFarApartIsNotReported) {
-  const PointCloud far = brick(kCentre + Vec3(1.0, 0.0, 0.0), kHalf);
-  const DuplicateReport report = report_on(two_objects("cup", brick(kCentre, kHalf), "cup", far));
+  const PointCloud far = brick(kBoxCentre + Vec3(1.0, 0.0, 0.0), kHalf);
+  const DuplicateReport report =
+      report_on(two_objects("cup", brick(kBoxCentre, kHalf), "cup", far));
   EXPECT_EQ(report.pairs_checked, 1u);
   EXPECT_TRUE(report.pairs.empty());
 }
 
 TEST(Duplicates, TouchingSurfacesWithoutBoxOverlapAreReported) {
   // Two boxes side by side, a 1 cm gap between their faces (the faces' points 1 cm apart).
-  const PointCloud next = brick(kCentre + Vec3(0.21, 0.0, 0.0), kHalf);
-  const TwoObjects t = two_objects("cup", brick(kCentre, kHalf), "cup", next);
+  const PointCloud next = brick(kBoxCentre + Vec3(0.21, 0.0, 0.0), kHalf);
+  const TwoObjects t = two_objects("cup", brick(kBoxCentre, kHalf), "cup", next);
   const DuplicateReport report = report_on(t);
   ASSERT_EQ(report.pairs.size(), 1u);
   EXPECT_EQ(report.pairs[0].obb_overlap, 0.0);
@@ -162,9 +164,9 @@ TEST(Duplicates, TouchingSurfacesWithoutBoxOverlapAreReported) {
 }
 
 TEST(Duplicates, DifferentClassesTouchingAreNotReported) {
-  const PointCloud mouse = brick(kCentre + Vec3(0.2, 0.0, 0.0), Eigen::Vector3i(3, 2, 1));
+  const PointCloud mouse = brick(kBoxCentre + Vec3(0.2, 0.0, 0.0), Eigen::Vector3i(3, 2, 1));
   const DuplicateReport report =
-      report_on(two_objects("keyboard", brick(kCentre, kHalf), "mouse", mouse));
+      report_on(two_objects("keyboard", brick(kBoxCentre, kHalf), "mouse", mouse));
   EXPECT_EQ(report.pairs_checked, 0u);
   EXPECT_TRUE(report.pairs.empty());
 }
@@ -173,11 +175,13 @@ TEST(Duplicates, VerdictAgreesWithTheMergePass) {
   // An ID switch the online step missed (track 1 sees one half, track 2 the other and later the
   // whole): the pass joins them; its verdict before the pass says so, with the same scores.
   ObjectMap map;
-  const PointCloud whole = brick(kCentre, kHalf);
-  for (int f = 0; f < 3; ++f) add_one(map, seen(f, 1, "tv", keep_if(whole, kCentre.x() + 0.051)));
-  for (int f = 3; f < 6; ++f) add_one(map, seen(f, 2, "tv", keep_if(whole, -1.0)));
+  const PointCloud whole = brick(kBoxCentre, kHalf);
+  for (int f = 0; f < 3; ++f)
+    add_alone(map, seen(f, 1, "tv", keep_if(whole, kBoxCentre.x() + 0.051)));
+  for (int f = 3; f < 6; ++f) add_alone(map, seen(f, 2, "tv", keep_if(whole, -1.0)));
   // A second tv far away, seen later: never joined, for its score.
-  for (int f = 6; f < 9; ++f) add_one(map, seen(f, 3, "tv", brick(kCentre + Vec3(2, 0, 0), kHalf)));
+  for (int f = 6; f < 9; ++f)
+    add_alone(map, seen(f, 3, "tv", brick(kBoxCentre + Vec3(2, 0, 0), kHalf)));
   ASSERT_EQ(map.size(), 3u);
   const MergeVerdict before = map.merge_verdict(1, 0);  // either order: the pass's (0, 1)
   EXPECT_EQ(before.a, 0);
@@ -206,12 +210,13 @@ TEST(Duplicates, VerdictAndMergePassAgreeOnAClutteredMap) {
   ObjectMapOptions options;
   options.match_threshold = 0.9;  // strict online matching leaves fragments for the pass
   ObjectMap map(options);
-  const PointCloud whole = brick(kCentre, kHalf);
+  const PointCloud whole = brick(kBoxCentre, kHalf);
   for (int f = 0; f < 12; ++f) {
     const Vec3 step(0.04 * (f % 4), 0.0, 0.0);
-    add_one(map,
-            seen(f, 1 + f / 3, "chair", keep_if(brick(kCentre + step, kHalf), kCentre.x() + 0.02)));
-    add_one(map, seen(f, 9, f % 2 ? "chair" : "book", brick(kCentre + Vec3(0.0, 0.3, 0.0), kHalf)));
+    add_alone(map, seen(f, 1 + f / 3, "chair",
+                        keep_if(brick(kBoxCentre + step, kHalf), kBoxCentre.x() + 0.02)));
+    add_alone(map,
+              seen(f, 9, f % 2 ? "chair" : "book", brick(kBoxCentre + Vec3(0.0, 0.3, 0.0), kHalf)));
   }
   RecordOptions all;
   all.confirmed_only = false;

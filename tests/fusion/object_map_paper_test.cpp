@@ -39,7 +39,7 @@ Observation obs(double t, std::optional<int> id, PointCloud points) {
   return o;
 }
 
-AddResult add_one(ObjectMap& map, const Observation& o) { return map.add_frame({o}).front(); }
+AddResult add_paper(ObjectMap& map, const Observation& o) { return map.add_frame({o}).front(); }
 
 std::set<VoxelKey> keys_of(const PointCloud& c) {
   std::set<VoxelKey> keys;
@@ -51,8 +51,8 @@ const Vec3 kCentre(0.305, 0.105, 0.905);
 
 TEST(ObjectMapPaper, TheSameIdAloneJoinsAnObjectHalfAMetreAway) {
   ObjectMap map(paper_options());
-  add_one(map, obs(0, 4, cube(kCentre, 3)));
-  const AddResult r = add_one(map, obs(1, 4, cube(kCentre + Vec3(0.5, 0, 0), 3)));
+  add_paper(map, obs(0, 4, cube(kCentre, 3)));
+  const AddResult r = add_paper(map, obs(1, 4, cube(kCentre + Vec3(0.5, 0, 0), 3)));
   EXPECT_FALSE(r.created);
   EXPECT_EQ(r.object_id, 0);
   EXPECT_DOUBLE_EQ(r.p_id, 1.0);
@@ -63,16 +63,16 @@ TEST(ObjectMapPaper, TheSameIdAloneJoinsAnObjectHalfAMetreAway) {
 
 TEST(ObjectMapPaper, ACentroidWithinTheGateAloneJoinsAnotherIdBeyondItNot) {
   ObjectMap map(paper_options());
-  add_one(map, obs(0, 1, cube(kCentre, 3)));
+  add_paper(map, obs(0, 1, cube(kCentre, 3)));
   // 9 cm away, another id, the cubes (7 cm) do not touch: only D < 0.1 m.
-  const AddResult near = add_one(map, obs(1, 2, cube(kCentre + Vec3(0.09, 0, 0), 3)));
+  const AddResult near = add_paper(map, obs(1, 2, cube(kCentre + Vec3(0.09, 0, 0), 3)));
   EXPECT_FALSE(near.created);
   EXPECT_DOUBLE_EQ(near.p_id, 0.0);
   EXPECT_DOUBLE_EQ(near.overlap, 0.0);
   EXPECT_DOUBLE_EQ(near.score_p, 0.5);
   // The object's centroid is now 4.5 cm from the first cube's: a cube 7 cm on the other side is
   // 11.5 cm from it, beyond the gate, and starts an object (objmap's linear f(D) = 0.43).
-  const AddResult far = add_one(map, obs(2, 3, cube(kCentre - Vec3(0.07, 0, 0), 3)));
+  const AddResult far = add_paper(map, obs(2, 3, cube(kCentre - Vec3(0.07, 0, 0), 3)));
   EXPECT_TRUE(far.created);
   EXPECT_EQ(map.size(), 2u);
 }
@@ -80,11 +80,11 @@ TEST(ObjectMapPaper, ACentroidWithinTheGateAloneJoinsAnotherIdBeyondItNot) {
 TEST(ObjectMapPaper, OverlapIsTheIouOfTheExactVoxelSets) {
   ObjectMap map(paper_options());
   const PointCloud whole = cube(kCentre, 10);  // 21 cm a side
-  add_one(map, obs(0, 1, whole));
+  add_paper(map, obs(0, 1, whole));
   // The same cube 1 cm over under another id: D = 1 cm joins; M is |A∩B| / |A∪B| of the exact
   // voxels (no 1-voxel tolerance), not |A∩B| / |A|.
   const PointCloud moved = cube(kCentre + Vec3(0.01, 0, 0), 10);
-  const AddResult r = add_one(map, obs(1, 2, moved));
+  const AddResult r = add_paper(map, obs(1, 2, moved));
   ASSERT_FALSE(r.created);
   const std::set<VoxelKey> a = keys_of(moved), b = keys_of(whole);
   std::size_t common = 0;
@@ -111,8 +111,8 @@ TEST(ObjectMapPaper, AnOverlapAboveEightTenthsAloneJoins) {
   };
   for (int half : {20, 3}) {
     ObjectMap map(options);
-    add_one(map, obs(0, 1, square(kCentre, half)));
-    const AddResult r = add_one(map, obs(1, 2, square(kCentre + Vec3(0.01, 0, 0), half)));
+    add_paper(map, obs(0, 1, square(kCentre, half)));
+    const AddResult r = add_paper(map, obs(1, 2, square(kCentre + Vec3(0.01, 0, 0), half)));
     if (half == 20) {
       EXPECT_FALSE(r.created);
       EXPECT_DOUBLE_EQ(r.p_id, 0.0);
@@ -128,9 +128,9 @@ TEST(ObjectMapPaper, ConfirmedOnceTheObjectsIdWasSeenInThreeKeyframes) {
   ObjectMap map(paper_options());
   // Four observations of one cube (each joins by D = 0): ids 1, 2, 1 — three observations, but
   // id 1 in two keyframes only.
-  add_one(map, obs(0, 1, cube(kCentre, 3)));
-  add_one(map, obs(1, 2, cube(kCentre, 3)));
-  add_one(map, obs(2, 1, cube(kCentre, 3)));
+  add_paper(map, obs(0, 1, cube(kCentre, 3)));
+  add_paper(map, obs(1, 2, cube(kCentre, 3)));
+  add_paper(map, obs(2, 1, cube(kCentre, 3)));
   EXPECT_EQ(map.confirmed_count(), 0u);
   RecordOptions all;
   all.confirmed_only = false;
@@ -141,10 +141,10 @@ TEST(ObjectMapPaper, ConfirmedOnceTheObjectsIdWasSeenInThreeKeyframes) {
   ObjectMapOptions views = paper_options();
   views.confirmation = Confirmation::kViews;
   ObjectMap by_views(views);
-  for (int t : {0, 1, 2}) add_one(by_views, obs(t, t == 1 ? 2 : 1, cube(kCentre, 3)));
+  for (int t : {0, 1, 2}) add_paper(by_views, obs(t, t == 1 ? 2 : 1, cube(kCentre, 3)));
   EXPECT_EQ(by_views.confirmed_count(), 1u);
   // The third keyframe of id 1 confirms it.
-  add_one(map, obs(3, 1, cube(kCentre, 3)));
+  add_paper(map, obs(3, 1, cube(kCentre, 3)));
   EXPECT_EQ(map.confirmed_count(), 1u);
 }
 
@@ -153,7 +153,7 @@ TEST(ObjectMapPaper, EachInstanceInTurnTakesItsBestObject) {
   // turn, the first takes the object and the second (no longer the same object's only view) joins
   // it too: no one-per-keyframe rule.
   ObjectMap map(paper_options());
-  add_one(map, obs(0, 1, cube(kCentre, 3)));
+  add_paper(map, obs(0, 1, cube(kCentre, 3)));
   const std::vector<AddResult> r =
       map.add_frame({obs(1, 1, cube(kCentre + Vec3(0.01, 0, 0), 3)), obs(1, 1, cube(kCentre, 3))});
   EXPECT_EQ(r[0].object_id, 0);
@@ -176,9 +176,9 @@ TEST(ObjectMapPaper, NoFinalMergePass) {
     if (d.minCoeff() < -9.5f) low.push_back(p, Rgb{1, 2, 3});
     if (d.maxCoeff() > 9.5f) high.push_back(p, Rgb{1, 2, 3});
   }
-  for (int f = 0; f < 3; ++f) add_one(map, obs(f, 1, low));
-  for (int f = 3; f < 6; ++f) add_one(map, obs(f, 2, high));
-  add_one(map, obs(6, 2, whole));
+  for (int f = 0; f < 3; ++f) add_paper(map, obs(f, 1, low));
+  for (int f = 3; f < 6; ++f) add_paper(map, obs(f, 2, high));
+  add_paper(map, obs(6, 2, whole));
   ASSERT_EQ(map.size(), 2u);
   EXPECT_TRUE(map.merge_pass().empty());
   EXPECT_EQ(map.size(), 2u);
@@ -194,7 +194,7 @@ TEST(ObjectMapPaper, OutlierFilterOnThePointsThenTheVoxelPointNearestTheCentre) 
     points.push_back(p + Vec3f(0.004f, 0, 0), Rgb{2, 2, 2});
   }
   points.push_back((kCentre + Vec3(1.0, 0, 0)).cast<float>(), Rgb{3, 3, 3});
-  for (int t = 0; t < 3; ++t) add_one(map, obs(t, 1, points));
+  for (int t = 0; t < 3; ++t) add_paper(map, obs(t, 1, points));
   RecordOptions paper;
   paper.min_voxel_support = 0.0;
   paper.outlier_on_points = true;
@@ -213,7 +213,7 @@ TEST(ObjectMapPaper, OutlierFilterOnThePointsThenTheVoxelPointNearestTheCentre) 
   ObjectMapOptions no_points = paper_options();
   no_points.keep_points = false;
   ObjectMap without(no_points);
-  add_one(without, obs(0, 1, points));
+  add_paper(without, obs(0, 1, points));
   RecordOptions all = paper;
   all.confirmed_only = false;
   EXPECT_THROW(without.records(all), InputError);

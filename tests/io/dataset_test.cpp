@@ -21,11 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::TempDir;
-
-void write_text(const fs::path& file, const std::string& text) {
-  fs::create_directories(file.parent_path());
-  std::ofstream(file) << text;
-}
+using test::write_text;
 
 std::string matrix_text(const Pose& pose) {
   std::string out;

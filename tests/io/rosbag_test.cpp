@@ -43,14 +43,7 @@ using test::BagWriter;
   return ::testing::AssertionFailure() << differing << " values differ";
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 // ROS stamps start after 0 (a zero stamp means "not set"): the clip's frames from 0 s are
 // recorded kOffset later.

@@ -4,6 +4,9 @@
 // (non-background pixels in a screenshot, none once every layer is off), a click on an object's
 // label opens its panel with its class and id, the search highlights exactly the objects that
 // `objmap query` returns for each phrase, and the page makes no network request.
+// On a loaded machine: Chromium's port is read from its stderr (or its complete DevToolsActivePort
+// file), listeners are attached before the events can fire, every wait polls the page's own state
+// (frames drawn, inputs handled) within a time limit, no fixed sleep; a failure names its step.
 //
 //   node --experimental-websocket view3d_browser_test.mjs OBJMAP [KEEP_DIR]
 // Exit 0: passed; 1: failed (each failure on stderr); 77: skipped (no chromium).
@@ -11,16 +14,20 @@
 // A screenshot of the page's 3D view as a person sees it (labels, toolbar), after SEARCH if given,
 // with the panel of the first label that nothing covers open; prints the load time and the time a
 // frame takes while zooming.
-import {spawn, spawnSync, execFileSync} from 'node:child_process';
+import {execFile, spawn, spawnSync} from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
+import {pathToFileURL} from 'node:url';
 import zlib from 'node:zlib';
 
 const objmap = process.argv[2];
 const keep = process.argv[3];
 const failures = [];
 const started = Date.now();
+// What the test is waiting for now: every wait is bounded and its failure (and the watchdog's)
+// names this step.
+let step = 'starting';
 function check(ok, what) {
   if (!ok) failures.push(what);
   console.log((ok ? 'ok    ' : 'FAIL  ') + what + ` (${((Date.now() - started) / 1000).toFixed(1)} s)`);
@@ -39,6 +46,15 @@ function run(args) {
   const r = spawnSync(objmap, args, {encoding: 'utf8'});
   if (r.status !== 0) throw new Error(`objmap ${args.join(' ')}: exit ${r.status}\n${r.stderr}`);
   return r.stdout;
+}
+
+// As run(), without blocking Node's event loop (Chromium is driven meanwhile).
+function runAsync(args) {
+  return new Promise((resolve, reject) => execFile(objmap, args, {encoding: 'utf8'},
+                                                   (error, stdout, stderr) => {
+    if (error) reject(new Error(`objmap ${args.join(' ')}: exit ${error.code}\n${stderr}`));
+    else resolve(stdout);
+  }));
 }
 
 // A PNG (8-bit RGB or RGBA, not interlaced) as {width, height, channels, pixels}.
@@ -85,12 +101,21 @@ function foregroundShare(png) {
   return n / (png.width * png.height);
 }
 
+// The DevTools protocol over one WebSocket. Every command is answered or fails: a timeout naming
+// the command, or the connection's end (chromium exited, the page crashed) failing all pending.
 class Cdp {
   constructor(url) {
     this.ws = new WebSocket(url);
     this.next = 1;
     this.waiting = new Map();
     this.listeners = [];
+    this.broken = null;  // why no answer can come any more
+    this.opened = new Promise((resolve, reject) => {
+      this.ws.onopen = resolve;
+      this.ws.onerror = () => reject(new Error('could not connect to ' + url));
+    });
+    this.opened.catch(() => {});  // awaited by the caller; a failure later is the onclose's
+    this.ws.onclose = () => this.fail('the DevTools connection closed');
     this.ws.onmessage = (m) => {
       const msg = JSON.parse(m.data);
       if (msg.id && this.waiting.has(msg.id)) {
@@ -98,20 +123,32 @@ class Cdp {
         this.waiting.delete(msg.id);
         msg.error ? reject(new Error(JSON.stringify(msg.error))) : resolve(msg.result);
       } else if (msg.method) {
+        if (msg.method === 'Inspector.targetCrashed') this.fail('the page crashed');
         for (const l of this.listeners) l(msg);
       }
     };
   }
-  open() {
-    return new Promise((resolve, reject) => {
-      this.ws.onopen = resolve;
-      this.ws.onerror = reject;
-    });
+  fail(why) {
+    if (this.broken) return;
+    this.broken = why;
+    for (const [, {method, reject}] of this.waiting) reject(new Error(`${method}: ${why}`));
+    this.waiting.clear();
   }
-  send(method, params = {}) {
+  send(method, params = {}, timeoutMs = 60000) {
+    if (this.broken) return Promise.reject(new Error(`${method}: ${this.broken}`));
     const id = this.next++;
-    this.ws.send(JSON.stringify({id, method, params}));
-    return new Promise((resolve, reject) => this.waiting.set(id, {resolve, reject}));
+    return new Promise((resolve, reject) => {
+      const timer = setTimeout(() => {
+        this.waiting.delete(id);
+        reject(new Error(`${method}: no answer in ${timeoutMs / 1000} s`));
+      }, timeoutMs);
+      const done = (f) => (v) => {
+        clearTimeout(timer);
+        f(v);
+      };
+      this.waiting.set(id, {method, resolve: done(resolve), reject: done(reject)});
+      this.ws.send(JSON.stringify({id, method, params}));
+    });
   }
   async evaluate(expression) {
     const r = await this.send('Runtime.evaluate', {expression, returnByValue: true,
@@ -122,14 +159,59 @@ class Cdp {
 }
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-async function until(what, predicate, timeoutMs = 45000) {
+// Polls `predicate` until it returns a truthy value (returned). `tolerate`: an exception is a "not
+// yet" (a page being replaced, a port not yet listening); otherwise it ends the wait.
+async function until(what, predicate, {timeoutMs = 60000, tolerate = false} = {}) {
   const start = Date.now();
+  let lastError = null;
   for (;;) {
-    const v = await predicate();
-    if (v) return v;
-    if (Date.now() - start > timeoutMs) throw new Error('timed out waiting for ' + what);
+    try {
+      const v = await predicate();
+      if (v) return v;
+    } catch (e) {
+      if (!tolerate) throw e;
+      lastError = e;
+    }
+    if (Date.now() - start > timeoutMs)
+      throw new Error(`timed out after ${timeoutMs / 1000} s waiting for ${what}` +
+                      (lastError ? ` (last error: ${lastError.message})` : ''));
     await sleep(50);
   }
+}
+
+const framesDrawn = (cdp) =>
+  cdp.evaluate(`Number(document.getElementById('view3d')?.dataset.frames || 0)`);
+
+// Resolves once the page has run two animation frames: a redraw asked for before (the view draws
+// in requestAnimationFrame) has been drawn.
+function settled(cdp) {
+  return cdp.evaluate(`new Promise((done) => requestAnimationFrame(() =>
+      requestAnimationFrame(() => done(true))))`);
+}
+
+// Input.dispatchMouseEvent events, then waits until the page has handled the last one (a counter
+// of its DOM event, kept by a capturing listener on window since the page loaded) and drawn after.
+const domEventOf = {mousePressed: 'pointerdown', mouseReleased: 'pointerup', mouseWheel: 'wheel'};
+async function dispatch(cdp, events) {
+  const type = domEventOf[events[events.length - 1].type];
+  const count = `(window.objmapTestSeen[${JSON.stringify(type)}] || 0)`;
+  const before = await cdp.evaluate(count);
+  for (const e of events) await cdp.send('Input.dispatchMouseEvent', e);
+  await until(`the page to handle the ${type}`, async () => (await cdp.evaluate(count)) > before);
+  await settled(cdp);
+}
+
+// A PNG screenshot (Page.captureScreenshot with `params`) once two captures in a row are alike:
+// the picture has settled (a single capture on a loaded machine once showed the map on a black
+// background instead of the view's own).
+async function settledScreenshot(cdp, params) {
+  let last = null;
+  return until('two screenshots alike', async () => {
+    const shot = await cdp.send('Page.captureScreenshot', {format: 'png', ...params});
+    const now = Buffer.from(shot.data, 'base64'), same = last !== null && now.equals(last);
+    last = now;
+    return same && now;
+  });
 }
 
 async function screenshotOfView(cdp) {
@@ -139,11 +221,10 @@ async function screenshotOfView(cdp) {
   const r = await cdp.evaluate(`(() => { const v = document.getElementById('view3d'), b =
       v.getBoundingClientRect(); return {x: b.x + scrollX + v.clientLeft, y: b.y + scrollY +
       v.clientTop, width: v.clientWidth, height: v.clientHeight}; })()`);  // inside the border
-  const shot = await cdp.send('Page.captureScreenshot', {format: 'png', captureBeyondViewport: true,
-                                                         clip: {...r, scale: 1}});
+  const png = await settledScreenshot(cdp, {captureBeyondViewport: true, clip: {...r, scale: 1}});
   await cdp.evaluate(`(() => { for (const s of ['.toolbar', '.labels', '.help', '.panel'])
       document.querySelector('#view3d ' + s).style.visibility = ''; })()`);
-  return Buffer.from(shot.data, 'base64');
+  return png;
 }
 
 // The share of pixels that differ by more than 24 between two screenshots of one size.
@@ -158,31 +239,33 @@ function changedShare(a, b) {
   return n / (a.width * a.height);
 }
 
-async function dragBy(cdp, from, dx, dy) {
-  await cdp.send('Input.dispatchMouseEvent', {type: 'mousePressed', x: from.x, y: from.y,
-                                              button: 'left', buttons: 1, clickCount: 1});
+function dragBy(cdp, from, dx, dy) {
+  const events = [{type: 'mousePressed', x: from.x, y: from.y, button: 'left', buttons: 1,
+                   clickCount: 1}];
   for (let k = 1; k <= 4; ++k)
-    await cdp.send('Input.dispatchMouseEvent', {type: 'mouseMoved', x: from.x + dx * k / 4,
-                                                y: from.y + dy * k / 4, button: 'left',
-                                                buttons: 1});
-  await cdp.send('Input.dispatchMouseEvent', {type: 'mouseReleased', x: from.x + dx,
-                                              y: from.y + dy, button: 'left', buttons: 0,
-                                              clickCount: 1});
-  await sleep(300);
+    events.push({type: 'mouseMoved', x: from.x + dx * k / 4, y: from.y + dy * k / 4,
+                 button: 'left', buttons: 1});
+  events.push({type: 'mouseReleased', x: from.x + dx, y: from.y + dy, button: 'left', buttons: 0,
+               clickCount: 1});
+  return dispatch(cdp, events);
 }
 
+// Turns the layers `on` on and the others off, and waits for a frame drawn after (the frame count
+// is read in the same script as the clicks, so a frame counted later shows them).
 async function setLayers(cdp, on) {
-  const frames = await cdp.evaluate(`Number(document.getElementById('view3d').dataset.frames)`);
-  await cdp.evaluate(`(() => { for (const i of document.querySelectorAll('#view3d input[data-layer]'))
-      { const want = ${JSON.stringify(on)}.includes(i.dataset.layer); if (i.checked !== want)
-        i.click(); } })()`);
-  await until('a redraw', async () =>
-    (await cdp.evaluate(`Number(document.getElementById('view3d').dataset.frames)`)) > frames);
+  const before = await cdp.evaluate(`(() => { let clicked = false; for (const i of document
+      .querySelectorAll('#view3d input[data-layer]')) { const want = ${JSON.stringify(on)}
+      .includes(i.dataset.layer); if (i.checked !== want) { i.click(); clicked = true; } }
+      return clicked ? Number(document.getElementById('view3d').dataset.frames) : -1; })()`);
+  if (before >= 0)
+    await until(`a frame with the layers [${on}]`, async () => (await framesDrawn(cdp)) > before);
 }
 
-// Chromium (headless, software WebGL) with `html` open and drawn: {cdp, errors, requests, close}.
-// errors: console errors and exceptions; requests: every URL fetched but the page and data:/blob:.
-async function openPage(chromium, html) {
+// Chromium (headless, software WebGL) started with a fresh profile: {browser, port, exited,
+// why(), close()}. The DevTools port is read from the line Chromium prints once it listens (or from
+// its DevToolsActivePort file, once both of its lines are written); port rejects when Chromium
+// exits first, with the end of its stderr.
+function startChromium(chromium) {
   const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'objmap-chromium-'));
   const browser = spawn(chromium, [
     '--headless=new', '--use-gl=swiftshader', '--enable-unsafe-swiftshader', '--no-sandbox',
@@ -190,8 +273,30 @@ async function openPage(chromium, html) {
     '--disable-crash-reporter',
     '--remote-debugging-port=0', '--user-data-dir=' + profile, '--window-size=1000,900',
     'about:blank'], {stdio: ['ignore', 'ignore', 'pipe'], detached: true});
-  const exited = new Promise((resolve) => browser.on('exit', resolve));
-  browser.stderr.on('data', () => {});
+  let stderr = '', exitCode;
+  const why = () =>
+    `chromium exited (${exitCode}): ` + stderr.trim().split('\n').slice(-5).join(' | ');
+  const exited = new Promise((resolve) => browser.on('exit', (code, signal) => {
+    exitCode = signal || code;
+    resolve();
+  }));
+  let poll;
+  const port = new Promise((resolve, reject) => {
+    browser.stderr.setEncoding('utf8');
+    browser.stderr.on('data', (d) => {
+      stderr = (stderr + d).slice(-20000);
+      const m = /DevTools listening on ws:\/\/[^:/]+:(\d+)\//.exec(stderr);
+      if (m) resolve(m[1]);
+    });
+    const portFile = path.join(profile, 'DevToolsActivePort');
+    poll = setInterval(() => {
+      const lines = fs.existsSync(portFile) ? fs.readFileSync(portFile, 'utf8').split('\n') : [];
+      if (lines.length >= 2 && /^\d+$/.test(lines[0]) && lines[1].startsWith('/devtools/'))
+        resolve(lines[0]);
+    }, 100);
+    exited.then(() => reject(new Error(why())));
+  });
+  port.then(() => clearInterval(poll), () => clearInterval(poll));  // the caller awaits port
   const killGroup = () => {
     try {
       process.kill(-browser.pid, 'SIGKILL');  // chromium and its children (its process group)
@@ -204,18 +309,39 @@ async function openPage(chromium, html) {
     await exited;
     fs.rmSync(profile, {recursive: true, force: true, maxRetries: 10, retryDelay: 100});
   };
+  return {browser, port, exited, why, close};
+}
+
+// Resolves `promise`, or rejects after timeoutMs naming `what`.
+function within(what, promise, timeoutMs = 60000) {
+  let timer;
+  const timeout = new Promise((_, reject) => {
+    timer = setTimeout(() => reject(new Error(`timed out after ${timeoutMs / 1000} s waiting ` +
+                                              `for ${what}`)), timeoutMs);
+  });
+  return Promise.race([promise, timeout]).finally(() => clearTimeout(timer));
+}
+
+// Chromium with `html` open and drawn: {cdp, errors, requests, close}. errors: console errors and
+// exceptions; requests: every URL fetched but the page and data:/blob:.
+async function openPage(chromium, html) {
+  step = 'starting chromium';
+  const browser = startChromium(chromium);
   try {
-    const portFile = path.join(profile, 'DevToolsActivePort');
-    const port = await until('DevToolsActivePort', () =>
-      fs.existsSync(portFile) && fs.readFileSync(portFile, 'utf8').split('\n')[0]);
-    const targets = await until('a page target', async () => {
+    step = "chromium's DevTools port";
+    const port = await within(step, browser.port);
+    step = "chromium's page target";
+    const target = await until(step, async () => {
       const list = await (await fetch(`http://127.0.0.1:${port}/json/list`)).json();
       return list.find((t) => t.type === 'page');
-    });
-    const cdp = new Cdp(targets.webSocketDebuggerUrl);
-    await cdp.open();
+    }, {tolerate: true});
+    step = 'the DevTools connection to the page';
+    const cdp = new Cdp(target.webSocketDebuggerUrl);
+    browser.exited.then(() => cdp.fail(browser.why()));
+    await within(step, cdp.opened);
+    // Listening before the domains are enabled and the page is opened: no event is missed.
     const errors = [], requests = [];
-    const pageUrl = 'file://' + path.resolve(html);
+    const pageUrl = pathToFileURL(path.resolve(html)).href;
     cdp.listeners.push((m) => {
       if (m.method === 'Runtime.consoleAPICalled' && (m.params.type === 'error' ||
                                                       m.params.type === 'assert'))
@@ -230,20 +356,29 @@ async function openPage(chromium, html) {
           requests.push(url);
       }
     });
-    for (const domain of ['Runtime', 'Network', 'Page', 'Log']) await cdp.send(domain + '.enable');
-    const loaded = new Promise((resolve) => cdp.listeners.push((m) => {
-      if (m.method === 'Page.loadEventFired') resolve();
-    }));
+    step = 'enabling the DevTools domains';
+    for (const domain of ['Inspector', 'Runtime', 'Network', 'Page', 'Log'])
+      await cdp.send(domain + '.enable');
+    // The inputs the page has handled, counted from its first script on (dispatch() waits on them).
+    await cdp.send('Page.addScriptToEvaluateOnNewDocument', {source: `window.objmapTestSeen = {};
+        for (const t of ['pointerdown', 'pointerup', 'wheel']) addEventListener(t, () =>
+          { objmapTestSeen[t] = (objmapTestSeen[t] || 0) + 1; }, true);`});
     const t0 = Date.now();
-    await cdp.send('Page.navigate', {url: pageUrl});
-    await loaded;
-    await until('the first frame', () =>
-      cdp.evaluate(`Number(document.getElementById('view3d')?.dataset.frames || 0) > 0`));
+    step = 'report.html to load';
+    const nav = await cdp.send('Page.navigate', {url: pageUrl});
+    if (nav.errorText) throw new Error(`opening ${pageUrl}: ${nav.errorText}`);
+    // Polled, not an event: the load event of about:blank or of this page may come before or
+    // after a listener would be attached; the page's own state says when it is ready.
+    step = "report.html loaded and its 3D view's first frame";
+    await until(step, () => cdp.evaluate(`location.href === ${JSON.stringify(pageUrl)} &&
+        document.readyState === 'complete' && !!window.objmapTestSeen &&
+        Number(document.getElementById('view3d')?.dataset.frames || 0) > 0`), {tolerate: true});
     console.log(`page loaded and drawn in ${Date.now() - t0} ms`);
     await cdp.evaluate(`document.getElementById('view3d').scrollIntoView()`);
-    return {cdp, errors, requests, close};
+    await settled(cdp);
+    return {cdp, errors, requests, close: browser.close};
   } catch (e) {
-    await close();
+    await browser.close();
     throw e;
   }
 }
@@ -256,9 +391,10 @@ function uncoveredLabel(cdp) {
       === l) return {id: Number(l.dataset.id), text: l.textContent, x, y}; } return null; })()`);
 }
 
-async function clickAt(cdp, x, y) {
-  for (const type of ['mousePressed', 'mouseReleased'])
-    await cdp.send('Input.dispatchMouseEvent', {type, x, y, button: 'left', clickCount: 1});
+function clickAt(cdp, x, y) {
+  return dispatch(cdp, ['mousePressed', 'mouseReleased'].map((type) => ({type, x, y,
+                                                                        button: 'left',
+                                                                        clickCount: 1})));
 }
 
 function searchFor(cdp, text) {  // the ids of the labels highlighted
@@ -283,13 +419,10 @@ async function shoot(chromium, html, out, text) {
     if (text) console.log(`search "${text}": ${JSON.stringify(await searchFor(page.cdp, text))}`);
     const label = await uncoveredLabel(page.cdp);
     if (label) await clickAt(page.cdp, label.x, label.y);
-    await sleep(300);
     const r = await page.cdp.evaluate(`(() => { const b = document.getElementById('view3d')
         .getBoundingClientRect(); return {x: b.x + scrollX, y: b.y + scrollY, width: b.width,
         height: b.height}; })()`);
-    const shot = await page.cdp.send('Page.captureScreenshot', {format: 'png', clip: {...r,
-                                                                scale: 1}});
-    fs.writeFileSync(out, Buffer.from(shot.data, 'base64'));
+    fs.writeFileSync(out, await settledScreenshot(page.cdp, {clip: {...r, scale: 1}}));
     console.log('errors ' + JSON.stringify(page.errors) + ', requests ' +
                 JSON.stringify(page.requests));
   } finally {
@@ -308,6 +441,7 @@ async function main() {
   const scene = path.join(dir, 'scene'), runDir = path.join(dir, 'run');
   fs.rmSync(scene, {recursive: true, force: true});
   fs.rmSync(runDir, {recursive: true, force: true});
+  step = 'the synthetic run (objmap synth, fuse, report)';
   run(['synth', '--out', scene, '--seed', '3', '--frames', '12']);
   run(['fuse', '--dataset', scene, '--trajectory', path.join(scene, 'groundtruth.txt'),
        '--segmentation', path.join(scene, 'segmentation'), '--out', runDir]);
@@ -315,10 +449,13 @@ async function main() {
   const html = path.join(runDir, 'report', 'report.html');
   const phrases = ['cup', 'cups on table', 'book on book', 'books on the table', 'chair on floor',
                    'cup near keyboard', 'mouse above floor', 'chair on table', 'tv on surface'];
-  const opening = openPage(chromium, html);  // chromium starts while objmap answers the queries
+  // Chromium starts while objmap answers the queries (without blocking the event loop, so that
+  // the page's waits and their time limits run meanwhile).
+  const opening = openPage(chromium, html);
+  opening.catch(() => {});  // awaited below
   const expected = {};
   for (const q of phrases)
-    expected[q] = JSON.parse(run(['query', '--run', runDir, q, '--json'])).matches
+    expected[q] = JSON.parse(await runAsync(['query', '--run', runDir, q, '--json'])).matches
                       .map((m) => m.id).sort((a, b) => a - b);
   check(Object.values(expected).some((ids) => ids.length > 1) &&
         Object.values(expected).some((ids) => ids.length === 0),
@@ -329,6 +466,7 @@ async function main() {
   try {
 
     // The canvas draws: all layers, the map alone, nothing.
+    step = 'screenshots with all layers, the map alone, none';
     const allPng = await screenshotOfView(cdp);
     if (keep) fs.writeFileSync(path.join(dir, 'view3d.png'), allPng);
     const all = decodePng(allPng);
@@ -344,14 +482,14 @@ async function main() {
     check(none < 0.002, 'with every layer off the view is background');
 
     // Orbit (drag) turns the picture; the wheel zooms in (more of the view covered).
+    step = 'orbit and zoom';
     const centre = await cdp.evaluate(`(() => { const b = document.querySelector('#view3d canvas')
         .getBoundingClientRect(); return {x: b.x + b.width / 2, y: b.y + b.height / 2}; })()`);
     await dragBy(cdp, centre, 160, 40);
     const turned = decodePng(await screenshotOfView(cdp));
     const changed = changedShare(all, turned);
-    await cdp.send('Input.dispatchMouseEvent', {type: 'mouseWheel', x: centre.x, y: centre.y,
-                                                deltaX: 0, deltaY: -500});
-    await sleep(300);
+    await dispatch(cdp, [{type: 'mouseWheel', x: centre.x, y: centre.y, deltaX: 0,
+                          deltaY: -500}]);
     const zoomed = foregroundShare(decodePng(await screenshotOfView(cdp)));
     console.log(`orbit changed ${changed.toFixed(3)} of the pixels; zoom: foreground ` +
                 `${foregroundShare(turned).toFixed(3)} -> ${zoomed.toFixed(3)}`);
@@ -359,6 +497,7 @@ async function main() {
     check(zoomed > foregroundShare(turned) * 1.2, 'the wheel zooms in (more of the view covered)');
 
     // A click on a label that nothing covers opens its object's panel.
+    step = "a label's panel";
     const label = await uncoveredLabel(cdp);
     check(label !== null, 'some object label is visible and uncovered');
     if (label) {
@@ -377,13 +516,14 @@ async function main() {
     }
 
     // The search highlights exactly what `objmap query` returns.
+    step = 'the search';
     for (const q of phrases) {
       const got = await searchFor(cdp, q);
       check(JSON.stringify(got) === JSON.stringify(expected[q]),
             `search "${q}": page ${JSON.stringify(got)}, objmap query ` +
             JSON.stringify(expected[q]));
     }
-    await sleep(200);
+    await settled(cdp);  // an error the last input caused has been reported before this answer
     check(page.errors.length === 0, 'no console error: ' + JSON.stringify(page.errors));
     check(page.requests.length === 0, 'no network request: ' + JSON.stringify(page.requests));
   } finally {
@@ -393,9 +533,10 @@ async function main() {
 }
 
 // A watchdog well inside ctest's 240 s: the run it builds takes ~10 s on a free machine, ~60 s
-// under make sanitize (ASan) or a loaded one; this bounds a hang, not the speed.
+// under make sanitize (ASan) or a loaded one; this bounds a hang, not the speed. Each wait has its
+// own limit (60 s) and names its step; this one names the step it stopped in.
 const timer = setTimeout(() => {
-  console.error('FAIL  timed out after 200 s');
+  console.error(`FAIL  timed out after 200 s; the step that did not finish: ${step}`);
   process.exit(1);
 }, 200000);
 const work = process.argv[2] === '--shoot' ?
@@ -408,6 +549,6 @@ work.then(() => {
   }
   process.exit(0);
 }, (e) => {
-  console.error('FAIL  ' + (e.stack || e));
+  console.error(`FAIL  at the step "${step}": ` + (e.stack || e));
   process.exit(1);
 });

@@ -20,14 +20,14 @@ constexpr double kFactor = 5000.0;
 
 std::uint16_t raw(double z_m) { return static_cast<std::uint16_t>(z_m * kFactor + 0.5); }
 
-cv::Mat flat(double z_m) { return cv::Mat(480, 640, CV_16UC1, cv::Scalar(raw(z_m))); }
+cv::Mat flat_at(double z_m) { return cv::Mat(480, 640, CV_16UC1, cv::Scalar(raw(z_m))); }
 
 TEST(DepthGate, BleedJoinedByARampIsRemovedWhereRefineKeepsIt) {
   // A can-sized object (60 × 80 px at 0.8 m: 9 × 12 cm) and a mask that bleeds 4 px over its top
   // edge onto a background that recedes smoothly (a table seen at a grazing angle, or the ramp of
   // mixed pixels a sensor draws along an occlusion edge): 1 cm deeper per row, so the bleed is
   // one smooth part with the object and refine_mask keeps it.
-  cv::Mat depth = flat(2.0);
+  cv::Mat depth = flat_at(2.0);
   const cv::Rect object(300, 200, 60, 80);
   depth(object).setTo(cv::Scalar(raw(0.8)));
   const cv::Rect bleed(300, 150, 60, 50);  // rows 150..199, the bleed
@@ -66,7 +66,7 @@ TEST(DepthGate, BleedJoinedByARampIsRemovedWhereRefineKeepsIt) {
 TEST(DepthGate, FarBleedAndAnOccluderInFrontGo) {
   // A box at 1.5 m (S = 29 cm); 3 % of its mask sees the floor 1 m behind, a hand-sized patch 1 m
   // in front.
-  cv::Mat depth = flat(1.5);
+  cv::Mat depth = flat_at(1.5);
   const cv::Rect mask_rect(100, 100, 100, 100);
   depth(cv::Rect(100, 197, 100, 3)).setTo(cv::Scalar(raw(2.5)));  // 300 px far
   depth(cv::Rect(100, 100, 10, 10)).setTo(cv::Scalar(raw(0.5)));  // 100 px in front
@@ -81,7 +81,7 @@ TEST(DepthGate, FarBleedAndAnOccluderInFrontGo) {
 TEST(DepthGate, ASlantedLargeObjectKeepsItsWholeDepthRange) {
   // A table top seen at a grazing angle: 400 × 150 px, depth 1.0 m at the bottom row to 2.0 m at
   // the top: S ≈ sqrt(400 · 150) / 525 × 1.5 m = 0.7 m > its 0.5 m half-range.
-  cv::Mat depth = flat(3.5);
+  cv::Mat depth = flat_at(3.5);
   const cv::Rect top(100, 200, 400, 150);
   for (int v = top.y; v < top.y + top.height; ++v)
     depth.row(v)
@@ -94,7 +94,7 @@ TEST(DepthGate, ASlantedLargeObjectKeepsItsWholeDepthRange) {
 
 TEST(DepthGate, SmallObjectsHaveTheMinimumBand) {
   // 10 × 10 px at 1 m: S = 1.9 cm, the band is min_band_m (5 cm) + noise (0.5 cm).
-  cv::Mat depth = flat(1.0);
+  cv::Mat depth = flat_at(1.0);
   const cv::Rect r(10, 10, 10, 10);
   depth(cv::Rect(10, 10, 10, 1)).setTo(cv::Scalar(raw(1.05)));  // 5 cm behind: kept
   depth(cv::Rect(10, 11, 10, 1)).setTo(cv::Scalar(raw(1.06)));  // 6 cm behind: removed

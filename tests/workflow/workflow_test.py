@@ -17,9 +17,11 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 SKIP = 77
 failures = []
+STARTED = time.monotonic()
 
 
 def check(condition, message):
@@ -28,9 +30,18 @@ def check(condition, message):
         print("FAIL:", message)
 
 
-def snakemake(args, cwd):
-    return subprocess.run(["snakemake", "-s", SNAKEFILE, "--cores", "2"] + args, cwd=cwd,
-                          capture_output=True, text=True)
+def snakemake(step, args, cwd):
+    """One snakemake invocation; its whole console output is kept in cwd/snakemake_STEP.log (the
+    folder is kept when a check fails), and a line says when it ended, so that a run cut short by
+    ctest's time limit shows which step it was in and how long each took."""
+    start = time.monotonic()
+    r = subprocess.run(["snakemake", "-s", SNAKEFILE, "--cores", "2"] + args, cwd=cwd,
+                       capture_output=True, text=True)
+    with open(os.path.join(cwd, f"snakemake_{step}.log"), "w") as f:
+        f.write(r.stdout + r.stderr)
+    print(f"[{time.monotonic() - STARTED:.1f} s] snakemake {step}: exit {r.returncode} "
+          f"in {time.monotonic() - start:.1f} s", flush=True)
+    return r
 
 
 def rules_run(output):
@@ -151,7 +162,7 @@ def main():
         config = ["--config", "manifest=recordings.tsv", "results=results", f"objmap={OBJMAP}"]
         results = os.path.join(tmp, "results")
 
-        first = snakemake(config, tmp)
+        first = snakemake("first", config, tmp)
         check(first.returncode == 0, f"first run: exit {first.returncode}: " + first.stderr[-3000:])
         for name in names:
             for f in ("track/tracks.json", "map/objects.json", "map/run.json", "eval/ate.json",
@@ -163,13 +174,13 @@ def main():
             check(os.path.isfile(os.path.join(results, "summary", f)), f"summary/{f} missing")
         check_summary_figures(results, names)
 
-        again = snakemake(config + ["-n"], tmp)
+        again = snakemake("again", config + ["-n"], tmp)
         check("Nothing to be done" in again.stdout + again.stderr,
               "second invocation: " + (again.stdout + again.stderr)[:3000])
 
         before = mtimes(results, names)
         os.remove(os.path.join(results, names[1], "map", "objects.json"))
-        rerun = snakemake(config, tmp)
+        rerun = snakemake("rerun", config, tmp)
         check(rerun.returncode == 0, f"rerun: exit {rerun.returncode}: " + rerun.stderr[-3000:])
         jobs = rules_run(rerun.stdout + rerun.stderr)
         expected = {("fuse", names[1]), ("eval_ate", names[1]), ("eval_rpe", names[1]),
@@ -184,7 +195,7 @@ def main():
         with open(os.path.join(tmp, "broken.txt"), "w") as f:
             f.write("1700000000.1 0 0 0\n")
         write_manifest(os.path.join(tmp, "recordings.tsv"), rows + [dict(rows[1], name="broken", trajectory="broken.txt", correct="no")])
-        broken = snakemake(config + ["--keep-going"], tmp)
+        broken = snakemake("broken", config + ["--keep-going"], tmp)
         check(broken.returncode != 0, "a failed recording must make snakemake fail")
         jobs = rules_run(broken.stdout + broken.stderr)
         check(all(n == "broken" for r, n in jobs if n), f"only the broken recording runs: {jobs}")
