@@ -36,7 +36,7 @@ cv::Mat wall(double z_m) {
 }
 
 // A camera at (x, 0, 0) looking along +z (the world's axes).
-Pose camera_at(double x) {
+Pose camera_along_x(double x) {
   Pose p = Pose::Identity();
   p.translation() = Vec3(x, 0.0, 0.0);
   return p;
@@ -45,8 +45,8 @@ Pose camera_at(double x) {
 TEST(ViewLog, APlaceIsInViewInTheImageInFrontOfOrOnTheSurfaceNotBehindIt) {
   const Camera camera = small_camera();
   ViewLog log(camera);
-  log.add(1.0, log.thin(wall(2.0)), camera_at(0.0));
-  log.add(2.0, log.thin(wall(0.0)), camera_at(0.0));  // no depth: says nothing
+  log.add(1.0, log.thin(wall(2.0)), camera_along_x(0.0));
+  log.add(2.0, log.thin(wall(0.0)), camera_along_x(0.0));  // no depth: says nothing
   VisibilityOptions o;
   const auto in_view = [&](const Vec3& p, double max_distance = 0.0) {
     return log.frames_in_view({p}, p, max_distance, o);
@@ -70,7 +70,7 @@ TEST(ViewLog, BadInputsAreNamed) {
   const Camera camera = small_camera();
   ViewLog log(camera);
   EXPECT_THROW(log.thin(cv::Mat(10, 10, CV_16UC1)), InputError);
-  EXPECT_THROW(log.add(0.0, cv::Mat(12, 16, CV_8UC1), camera_at(0.0)), InputError);
+  EXPECT_THROW(log.add(0.0, cv::Mat(12, 16, CV_8UC1), camera_along_x(0.0)), InputError);
   VisibilityOptions o;
   o.min_visible_fraction = 0.0;
   try {
@@ -117,7 +117,7 @@ struct ShareScene {
   ViewLog log{small_camera()};
   explicit ShareScene(const ObjectMapOptions& options) : map(options) {
     for (int f = 0; f < 20; ++f) {
-      const Pose cam = camera_at(0.1 * f);
+      const Pose cam = camera_along_x(0.1 * f);
       const double t = f;
       std::vector<Observation> frame{seen(t, 1, "cup", patch(1.0, 0.0, 2.0), cam)};
       if (f < 3) frame.push_back(seen(t, 2, "cup", patch(0.8, 0.2, 2.0), cam));
