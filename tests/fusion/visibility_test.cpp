@@ -9,6 +9,7 @@
 #include "fusion_test_util.h"
 #include "objmap/core/error.h"
 #include "objmap/fusion/object_map.h"
+#include "support/test_support.h"
 
 // Where an object's place was in view (ViewLog), the confirmation by the detected share, bleed
 // instances and fragments inside a larger object's box (fusion/object_map.h).
@@ -18,17 +19,7 @@ namespace {
 using test::box;
 using test::instance;
 
-// A 64×48 pinhole camera, 1 mm depth units.
-Camera small_camera() {
-  Camera c;
-  c.width = 64;
-  c.height = 48;
-  c.fx = c.fy = 50.0;
-  c.cx = 32.0;
-  c.cy = 24.0;
-  c.depth_factor = 1000.0;
-  return c;
-}
+Camera small_camera() { return objmap::test::small_test_camera(); }
 
 // A depth image of a wall `z_m` in front of the camera (0: no depth anywhere).
 cv::Mat wall(double z_m) {

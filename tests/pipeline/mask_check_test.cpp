@@ -10,16 +10,7 @@
 namespace objmap::pipeline {
 namespace {
 
-Camera camera() {
-  Camera c;
-  c.width = 64;
-  c.height = 48;
-  c.fx = c.fy = 50.0;
-  c.cx = 32.0;
-  c.cy = 24.0;
-  c.depth_factor = 1000.0;
-  return c;
-}
+Camera camera() { return test::small_test_camera(); }
 
 // The point that pixel (u, v)'s centre sees at depth z (camera at the origin).
 Vec3f point_at(int u, int v, double z) {

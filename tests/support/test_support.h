@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "objmap/core/camera.h"
+
 namespace objmap::test {
 
 namespace fs = std::filesystem;
@@ -67,6 +69,18 @@ RunResult run_objmap_interrupted(const std::vector<std::string>& args,
 // (when given) says why.
 fs::path cached_output(const std::string& key, const std::vector<std::string>& args,
                        RunResult* result = nullptr);
+
+// A 64×48 pinhole camera (f = 50 px, centred), 1 mm depth units: small images for unit tests.
+inline Camera small_test_camera() {
+  Camera c;
+  c.width = 64;
+  c.height = 48;
+  c.fx = c.fy = 50.0;
+  c.cx = 32.0;
+  c.cy = 24.0;
+  c.depth_factor = 1000.0;
+  return c;
+}
 
 // Total cost of an assignment (row -> column, -1 for none) of a cost matrix, to check an
 // assignment solver against brute force.
