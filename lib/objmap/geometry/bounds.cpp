@@ -3,8 +3,12 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <unordered_set>
 #include <vector>
+
+#include "objmap/core/error.h"
 
 namespace objmap::geometry {
 
@@ -121,6 +125,97 @@ Vec3 percentile_box_centre(const PointCloud& cloud, double q,
     centre[axis] = 0.5 * (a + static_cast<double>(v[hi]));
   }
   return world_axes ? centre : Vec3(frame_from_world.transpose() * centre);
+}
+
+void SupportStripOptions::check() const {
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  const auto share = [](double v) { return v >= 0.0 && v <= 1.0; };
+  require(positive(band_m), "SupportStripOptions.band_m", "must be a positive number of metres");
+  require(positive(reach_m), "SupportStripOptions.reach_m", "must be a positive number of metres");
+  require(positive(area_factor), "SupportStripOptions.area_factor", "must be positive");
+  require(positive(cell_m), "SupportStripOptions.cell_m", "must be a positive number of metres");
+  require(share(min_body_share), "SupportStripOptions.min_body_share", "must be within [0, 1]");
+  require(share(min_strip_share), "SupportStripOptions.min_strip_share", "must be within [0, 1]");
+}
+
+namespace {
+
+// A footprint cell of (x, y) in the gravity frame, packed in one integer.
+std::int64_t footprint_cell(const Vec3& g, double cell_m) {
+  const auto ix = static_cast<std::int64_t>(std::floor(g.x() / cell_m));
+  const auto iy = static_cast<std::int64_t>(std::floor(g.y() / cell_m));
+  return (ix << 32) ^ (iy & 0xffffffffLL);
+}
+
+// The height of the plane the object of `g` (its points in the gravity frame) rests on: the
+// largest plane within reach of its 1st-percentile height and larger than area_factor × its
+// footprint (cells of cell_m holding a point); NaN when there is none.
+double resting_plane(const std::vector<Vec3>& g, const std::vector<SupportPlane>& planes,
+                     const SupportStripOptions& options) {
+  std::vector<double> heights(g.size());
+  std::unordered_set<std::int64_t> cells;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    heights[i] = g[i].z();
+    cells.insert(footprint_cell(g[i], options.cell_m));
+  }
+  const auto rank =
+      static_cast<std::size_t>(std::llround(0.01 * static_cast<double>(heights.size() - 1)));
+  std::nth_element(heights.begin(), heights.begin() + rank, heights.end());
+  const double lowest = heights[rank];
+  const double footprint_m2 = static_cast<double>(cells.size()) * options.cell_m * options.cell_m;
+  double height = std::numeric_limits<double>::quiet_NaN(), area = 0.0;
+  for (const SupportPlane& p : planes)
+    if (std::abs(p.height_m - lowest) <= options.reach_m &&
+        p.area_m2 >= options.area_factor * footprint_m2 && p.area_m2 > area) {
+      height = p.height_m;
+      area = p.area_m2;
+    }
+  return height;
+}
+
+}  // namespace
+
+std::vector<bool> support_strip(const PointCloud& cloud, const Eigen::Matrix3d& gravity_from_world,
+                                const std::vector<SupportPlane>& planes,
+                                const SupportStripOptions& options) {
+  const std::size_t n = cloud.size();
+  std::vector<bool> strip(n, false);
+  if (n < std::max<std::size_t>(options.min_points, 1) || planes.empty()) return strip;
+  std::vector<Vec3> g(n);
+  for (std::size_t i = 0; i < n; ++i) g[i] = gravity_from_world * cloud.points[i].cast<double>();
+  const double plane = resting_plane(g, planes, options);
+  if (!std::isfinite(plane)) return strip;
+  // The footprint of the points above the layer, widened by one cell.
+  std::unordered_set<std::int64_t> footprint;
+  std::size_t above = 0;
+  for (const Vec3& p : g) {
+    if (p.z() <= plane + options.band_m) continue;
+    ++above;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        footprint.insert(footprint_cell(p + Vec3(dx, dy, 0) * options.cell_m, options.cell_m));
+  }
+  if (static_cast<double>(above) < options.min_body_share * static_cast<double>(n)) return strip;
+  std::size_t marked = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    strip[i] = std::abs(g[i].z() - plane) <= options.band_m &&
+               !footprint.count(footprint_cell(g[i], options.cell_m));
+    marked += strip[i];
+  }
+  if (static_cast<double>(marked) < options.min_strip_share * static_cast<double>(n))
+    std::fill(strip.begin(), strip.end(), false);
+  return strip;
+}
+
+PointCloud without(const PointCloud& cloud, const std::vector<bool>& drop) {
+  PointCloud out;
+  const bool colours = cloud.has_colors();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (i < drop.size() && drop[i]) continue;
+    out.points.push_back(cloud.points[i]);
+    if (colours) out.colors.push_back(cloud.colors[i]);
+  }
+  return out;
 }
 
 }  // namespace objmap::geometry
