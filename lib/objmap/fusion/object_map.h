@@ -11,6 +11,7 @@
 #include "objmap/filters/outlier.h"
 #include "objmap/fusion/visibility.h"
 #include "objmap/fusion/voxel_map.h"
+#include "objmap/geometry/bounds.h"
 
 // The object map (paper §3.2-3.3): each instance observation (its back-projected points) is
 // associated with an existing object or starts a new one; objects keep their points in a voxel set
@@ -278,7 +279,10 @@ struct ObjectRecord {
   std::size_t points_voxel = 0;     // after the voxel filter and min_voxel_support (voxels kept;
                                     // after eq 18 too with outlier_on_points)
   std::size_t points_filtered = 0;  // after the outlier filter (eq 18): the cloud
-  double outlier_threshold = 0.0;   // t of eq 18 for this object
+  // Points of the cloud that are the strip of the table or floor it rests on
+  // (geometry::support_strip), left out of `position` and `obb` (the scene step; 0 before it).
+  std::size_t points_support = 0;
+  double outlier_threshold = 0.0;  // t of eq 18 for this object
   int observations = 0;
   int views = 0;            // observations from distinct viewpoints (above)
   bool confirmed = false;   // min_observations views (or ID keyframes, ObjectMapOptions) and the
@@ -295,8 +299,12 @@ struct ObjectRecord {
 struct RecordOptions {
   double position_percentile = 0.01;  // ObjectRecord::position: centre of [q, 1 − q] per axis
   bool position_is_centroid = false;  // ... or the centroid (eq 16, the paper's position)
-  bool confirmed_only = true;         // leave out objects with < min_observations
-  bool outlier_filter = true;         // apply eq 18 to each object's voxel cloud
+  // The scene step (pipeline/fuse_scene.h) gives `position` and `obb` without the strip of the
+  // support (geometry::support_strip) when this is set and position_is_centroid is not.
+  bool position_without_support = true;
+  geometry::SupportStripOptions support_strip;
+  bool confirmed_only = true;  // leave out objects with < min_observations
+  bool outlier_filter = true;  // apply eq 18 to each object's voxel cloud
   // Before eq 18: keep only voxels that were in at least max(1, this × observations) of the
   // object's observations. A voxel of the object's surface is in every view that sees it; a voxel
   // of the background that a mask boundary bled onto (dilated masks, box masks) is in one or two

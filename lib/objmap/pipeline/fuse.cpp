@@ -248,6 +248,17 @@ std::vector<ConfigField> filters_and_masks_fields(FuseOptions& o) {
        "an object's position is its centroid, the mean of its points (eq 16, the paper); false: "
        "the centre of the box of its points' 1st-99th percentiles",
        &o.position_is_centroid},
+      {"objects.position_without_support", "--position-without-support",
+       "an object's position and box leave out the strip of the table or floor it rests on that "
+       "its masks bled onto: its points at the height of that surface of the map outside the "
+       "footprint of its points above",
+       &o.position_without_support},
+      {"objects.support_band_m", "--support-band",
+       "the strip: points within this of the height of the surface the object rests on, m",
+       &o.support_strip.band_m},
+      {"objects.support_cell_m", "--support-cell",
+       "the footprint of the points above the layer: grid cell (widened by one), m",
+       &o.support_strip.cell_m},
       {"box_mask.bin_m", "--box-bin", "box masks: depth histogram bin, m", &b.bin_m},
       {"box_mask.near_mode_min_share", "--box-near-share",
        "box masks: share of the largest peak for the nearest peak to win", &b.near_mode_min_share},
@@ -369,6 +380,7 @@ void set_method_preset(FuseOptions& o) {
   o.voxel_nearest_centre = true;
   // The object's position is its centroid (eq 16).
   o.position_is_centroid = true;
+  o.position_without_support = false;
 }
 
 void FuseOptions::check() const {
@@ -407,6 +419,8 @@ void FuseOptions::check() const {
           "'" + method + "' is not a method; expected objmap or paper");
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
           "objects.min_voxel_support", "must be in [0, 1]");
+  check_part([&] { support_strip.check(); }, "SupportStripOptions", "objects",
+             {{"band_m", "objects.support_band_m"}, {"cell_m", "objects.support_cell_m"}});
   check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
   check_part([&] { duplicates.check(); }, "DuplicateOptions", "duplicates");
   check_part([&] { scene.up.check(); }, "UpOptions", "scene.up", {{"mode", "scene.up"}});
@@ -737,6 +751,7 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
       {"raw", r.points_raw},
       {"voxel_filtered", r.points_voxel},
       {"outlier_filtered", r.points_filtered},
+      {"support_strip", r.points_support},
       {"outlier_threshold", std::isfinite(r.outlier_threshold) ? ordered_json(r.outlier_threshold)
                                                                : ordered_json(nullptr)}};
   o["observation_count"] = r.observations;
@@ -1084,6 +1099,8 @@ fusion::RecordOptions record_options(const FuseOptions& options, int threads) {
   r.outlier_on_points = options.outlier_on_points;
   r.voxel_nearest_centre = options.voxel_nearest_centre;
   r.position_is_centroid = options.position_is_centroid;
+  r.position_without_support = options.position_without_support;
+  r.support_strip = options.support_strip;
   return r;
 }
 

@@ -10,6 +10,7 @@
 #include "objmap/fusion/duplicates.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/geometry/backproject.h"
+#include "objmap/geometry/bounds.h"
 #include "objmap/pipeline/config.h"
 #include "objmap/pipeline/fuse_mesh.h"
 #include "objmap/pipeline/keyframes.h"
@@ -66,9 +67,13 @@ struct FuseOptions {
   bool outlier_on_points = false;        // eq 18 before the voxel filter, on the points (paper)
   bool voxel_nearest_centre = false;     // the voxel filter keeps the point nearest the centre
   bool position_is_centroid = false;     // objects.json `position`: the centroid (eq 16, paper)
-  fusion::DuplicateOptions duplicates;   // suspected duplicates in run.json: touching = 2 cm
-  scene::SceneOptions scene;             // up direction, support surfaces, relations
-  MeshOptions mesh;                      // objects' and scene meshes (pipeline/fuse_mesh.h)
+  // `position` and `obb` leave out the strip of the table/floor an object rests on that its masks
+  // bled onto (geometry::support_strip; needs the scene step's up).
+  bool position_without_support = true;
+  geometry::SupportStripOptions support_strip;  // its lowest layer 1 cm, footprint cells 2 cm
+  fusion::DuplicateOptions duplicates;          // suspected duplicates in run.json: touching = 2 cm
+  scene::SceneOptions scene;                    // up direction, support surfaces, relations
+  MeshOptions mesh;                             // objects' and scene meshes (pipeline/fuse_mesh.h)
   int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
   void check() const;  // throws InputError naming the bad field
 };

@@ -72,11 +72,22 @@ ordered_json surface_json(const scene::Surface& s) {
 void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::SceneOptions& options,
                      const fusion::RecordOptions& record_options, scene::SceneGraph& graph) {
   const auto t0 = Clock::now();
+  std::vector<geometry::SupportPlane> planes;
+  for (const scene::Surface& s : graph.surfaces) planes.push_back({s.height_m, s.area_m2});
   for (auto& r : records) {
-    if (!record_options.position_is_centroid)
-      r.position = geometry::percentile_box_centre(r.cloud, record_options.position_percentile,
-                                                   graph.up.gravity_from_world);
-    r.obb = geometry::compute_upright_obb(r.cloud, graph.up.up);
+    if (record_options.position_is_centroid) {
+      r.obb = geometry::compute_upright_obb(r.cloud, graph.up.up);
+      continue;
+    }
+    std::vector<bool> strip;
+    if (record_options.position_without_support)
+      strip = geometry::support_strip(r.cloud, graph.up.gravity_from_world, planes,
+                                      record_options.support_strip);
+    r.points_support = static_cast<std::size_t>(std::count(strip.begin(), strip.end(), true));
+    const PointCloud& body = r.points_support ? geometry::without(r.cloud, strip) : r.cloud;
+    r.position = geometry::percentile_box_centre(body, record_options.position_percentile,
+                                                 graph.up.gravity_from_world);
+    r.obb = geometry::compute_upright_obb(body, graph.up.up);
   }
   const std::vector<scene::SceneObject> objects = scene_objects(records);
   scene::mark_object_tops(graph.surfaces, graph.up.up, objects);
