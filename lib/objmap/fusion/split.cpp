@@ -77,6 +77,7 @@ std::vector<VoxelKey> coarse_cells(std::vector<VoxelKey> voxels, int cell_voxels
   for (VoxelKey& k : voxels) k = coarse_cell(k, cell_voxels);
   std::sort(voxels.begin(), voxels.end());
   voxels.erase(std::unique(voxels.begin(), voxels.end()), voxels.end());
+  voxels.shrink_to_fit();  // kept per observation: a cell per 16-64 voxels
   return voxels;
 }
 
