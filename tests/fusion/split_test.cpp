@@ -65,6 +65,21 @@ TEST(SplitCells, CellsAreConnectedInTheirNeighbourhoodAndApartBeyondIt) {
   EXPECT_EQ(labels, (std::vector<int>{0, 0, 0, 1}));  // sorted: (-1,0,0) (0,0,0) (1,1,1) (3,1,1)
 }
 
+TEST(SplitCells, AVoxelMapSubsetKeepsTheChosenVoxelsWithTheirSums) {
+  VoxelMap map;
+  PointCloud points;
+  for (float x : {0.001f, 0.002f, 0.003f, 0.051f, 0.052f}) points.push_back(Vec3f(x, 0.f, 0.f));
+  map.insert(points);
+  const VoxelKey far_key = map.key_of(Vec3f(0.051f, 0.f, 0.f));
+  const VoxelMap part = map.subset([&](VoxelKey key) { return key == far_key; });
+  ASSERT_EQ(part.size(), 1u);
+  EXPECT_EQ(part.points_inserted(), 2u);
+  ASSERT_NE(part.find(far_key), nullptr);
+  EXPECT_EQ(part.find(far_key)->count, 2u);
+  EXPECT_NEAR(part.mean_position(far_key, *part.find(far_key)).x(), 0.0515, 1e-6);
+  EXPECT_EQ(map.size(), 2u);  // the map itself is left as it was
+}
+
 TEST(SplitCells, TwoClustersSeenApartAreTwoPartsSeenTogetherOne) {
   using geometry::pack_voxel;
   const std::vector<VoxelKey> cells{pack_voxel(0, 0, 0), pack_voxel(0, 0, 1), pack_voxel(5, 0, 0),
