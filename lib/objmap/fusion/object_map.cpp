@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <iterator>
 #include <limits>
 #include <set>
@@ -10,6 +11,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/fusion/palette.h"
+#include "objmap/fusion/split.h"
 #include "objmap/geometry/bounds.h"
 #include "objmap/segmentation/coco_classes.h"
 
@@ -72,6 +74,13 @@ void ObjectMapOptions::check() const {
   require(std::isfinite(bleed_min_ratio) && bleed_min_ratio >= 1.0,
           "ObjectMapOptions.bleed_min_ratio",
           "must be >= 1, got " + std::to_string(bleed_min_ratio));
+  require(split_cell_voxels >= 1 && split_cell_voxels <= 64, "ObjectMapOptions.split_cell_voxels",
+          "must be in [1, 64], got " + std::to_string(split_cell_voxels));
+  for (const auto& [name, v] : {std::make_pair("split_min_share", split_min_share),
+                                std::make_pair("split_cover_share", split_cover_share),
+                                std::make_pair("split_max_joint", split_max_joint)})
+    require(std::isfinite(v) && v > 0.0 && v <= 1.0, std::string("ObjectMapOptions.") + name,
+            "must be in (0, 1], got " + std::to_string(v));
   require(min_observations >= 1, "ObjectMapOptions.min_observations",
           "must be >= 1, got " + std::to_string(min_observations));
   require(
@@ -114,6 +123,7 @@ void set_paper_rules(ObjectMapOptions& o) {
   o.merge_fragments_in_box = false;
   o.drop_bleed = false;
   o.drop_spanning = false;
+  o.split_clusters = false;
   o.confirmation = Confirmation::kIdKeyframes;
   o.min_observations = 3;
   o.min_detected_share = 0.0;
@@ -233,6 +243,9 @@ struct ObjectMap::Object {
   std::set<int> track_ids;
   double first_seen = 0.0, last_seen = 0.0;
   std::vector<ObservationLink> provenance;
+  // Per provenance entry, the coarse cells its voxels fell in (split_clusters; else empty).
+  std::vector<std::vector<VoxelKey>> cells;
+  std::vector<std::pair<double, int>> moved;  // split_pass(): observation timestamp -> its part
   std::vector<MergeLink> merges;
   PointCloud points;  // its observations' points (ObjectMapOptions::keep_points)
 
@@ -596,6 +609,12 @@ AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* 
     link.score_p = best_scores.score_p;
   }
   o.provenance.push_back(link);
+  if (options_.split_clusters) {
+    std::vector<VoxelKey> keys;
+    keys.reserve(obs_voxels.size());
+    obs_voxels.for_each([&](VoxelKey key, const VoxelData&) { keys.push_back(key); });
+    o.cells.push_back(coarse_cells(std::move(keys), options_.split_cell_voxels));
+  }
 
   result.object_id = o.id;
   result.p_id = link.p_id;
@@ -645,11 +664,24 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   into->track_ids.insert(absorbed->track_ids.begin(), absorbed->track_ids.end());
   into->first_seen = std::min(into->first_seen, absorbed->first_seen);
   into->last_seen = std::max(into->last_seen, absorbed->last_seen);
+  // Provenance by timestamp, then insertion order; the cells follow their entries.
   into->provenance.insert(into->provenance.end(), absorbed->provenance.begin(),
                           absorbed->provenance.end());
-  std::stable_sort(
-      into->provenance.begin(), into->provenance.end(),
-      [](const ObservationLink& x, const ObservationLink& y) { return x.timestamp < y.timestamp; });
+  const bool cells = into->cells.size() + absorbed->cells.size() == into->provenance.size();
+  for (auto& c : absorbed->cells) into->cells.push_back(std::move(c));
+  std::vector<std::size_t> order(into->provenance.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+    return into->provenance[x].timestamp < into->provenance[y].timestamp;
+  });
+  std::vector<ObservationLink> provenance;
+  std::vector<std::vector<VoxelKey>> sorted_cells;
+  for (std::size_t i : order) {
+    provenance.push_back(std::move(into->provenance[i]));
+    if (cells) sorted_cells.push_back(std::move(into->cells[i]));
+  }
+  into->provenance = std::move(provenance);
+  into->cells = std::move(sorted_cells);
   into->merges.push_back(link);
   into->merges.insert(into->merges.end(), absorbed->merges.begin(), absorbed->merges.end());
   absorbed->alive = false;
@@ -658,6 +690,7 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   absorbed->near.clear();
   absorbed->frames.clear();
   absorbed->provenance.clear();
+  absorbed->cells.clear();
   absorbed->merges.clear();
   absorbed->points = PointCloud();
 }
@@ -976,6 +1009,173 @@ void ObjectMap::merge_fragments_in_box(std::vector<MergeLink>& made) {
   }
 }
 
+std::vector<SplitLink> ObjectMap::split_pass() {
+  std::vector<SplitLink> made;
+  if (!options_.split_clusters) return made;
+  const std::size_t n = objects_.size();  // the parts made are not split again
+  for (std::size_t i = 0; i < n; ++i) {
+    SplitLink link;
+    if (objects_[i]->alive && split_object(i, link)) made.push_back(std::move(link));
+  }
+  return made;
+}
+
+bool ObjectMap::split_object(std::size_t index, SplitLink& link) {
+  Object& o = *objects_[index];
+  if (o.cells.size() != o.provenance.size() || o.provenance.size() < 2) return false;
+  const int cv = options_.split_cell_voxels;
+  // 1. The surface (voxels seen in >= 10% of its observations, as the visibility sample) per
+  //    coarse cell, and the cells of all its voxels.
+  const double need = std::min(255.0, std::max(1.0, 0.1 * o.observations));
+  std::vector<VoxelKey> surface, all;
+  o.voxels.for_each([&](VoxelKey key, const VoxelData&) {
+    const VoxelKey cell = coarse_cell(key, cv);
+    all.push_back(cell);
+    const std::uint8_t* hits = o.near.find(key);
+    if (hits && *hits >= need) surface.push_back(cell);
+  });
+  std::sort(surface.begin(), surface.end());
+  std::vector<VoxelKey> cells;
+  std::vector<std::size_t> weight;  // surface voxels per cell
+  for (VoxelKey c : surface) {
+    if (cells.empty() || cells.back() != c) {
+      cells.push_back(c);
+      weight.push_back(0);
+    }
+    ++weight.back();
+  }
+  // 2. Its clusters, and which of them its observations see apart.
+  std::vector<const std::vector<VoxelKey>*> observed;
+  for (const auto& c : o.cells) observed.push_back(&c);
+  const SplitPlan plan = plan_split(
+      cells, weight, observed,
+      SplitRules{options_.split_min_share, options_.split_cover_share, options_.split_max_joint});
+  if (plan.groups < 2) return false;
+  // 3. Each observation to its part (none of its cells on the surface: the nearest part's
+  //    centre); every part must have the views to be confirmed, or nothing is split.
+  const double cell_m = cv * options_.voxel_m;
+  std::vector<Vec3> centre(plan.groups, Vec3::Zero());
+  std::vector<double> mass(plan.groups, 0.0);
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const Vec3 at = (geometry::unpack_voxel(cells[i]).cast<double>().array() + 0.5) * cell_m;
+    centre[plan.cell_group[i]] += weight[i] * at;
+    mass[plan.cell_group[i]] += weight[i];
+  }
+  for (int g = 0; g < plan.groups; ++g) centre[g] /= mass[g];
+  const auto nearest_part = [&](const Vec3& p) {
+    int best = 0;
+    for (int g = 1; g < plan.groups; ++g)
+      if ((p - centre[g]).squaredNorm() < (p - centre[best]).squaredNorm()) best = g;
+    return best;
+  };
+  std::vector<int> obs_part = plan.observation_group;
+  std::vector<std::vector<ObservationLink>> part_links(plan.groups);
+  for (std::size_t j = 0; j < obs_part.size(); ++j) {
+    if (obs_part[j] < 0) obs_part[j] = nearest_part(o.provenance[j].centroid_in_world);
+    part_links[obs_part[j]].push_back(o.provenance[j]);
+  }
+  for (const auto& links : part_links)
+    if (count_views(links, options_) < options_.min_observations) return false;
+  // 4. Each voxel to the part of its cell: a surface cell's part, else that of the nearest surface
+  //    cell through the object's cells (breadth first), else the nearest part's centre.
+  std::sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  std::vector<int> all_part(all.size(), -1);
+  std::deque<std::size_t> todo;
+  for (std::size_t i = 0, k = 0; i < all.size(); ++i) {
+    while (k < cells.size() && cells[k] < all[i]) ++k;
+    if (k < cells.size() && cells[k] == all[i]) {
+      all_part[i] = plan.cell_group[k];
+      todo.push_back(i);
+    }
+  }
+  const auto& offsets = geometry::neighbourhood_offsets();
+  for (; !todo.empty(); todo.pop_front())
+    for (VoxelKey off : offsets) {
+      const auto it = std::lower_bound(all.begin(), all.end(), all[todo.front()] + off);
+      if (it == all.end() || *it != all[todo.front()] + off) continue;
+      const std::size_t j = static_cast<std::size_t>(it - all.begin());
+      if (all_part[j] >= 0) continue;
+      all_part[j] = all_part[todo.front()];
+      todo.push_back(j);
+    }
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (all_part[i] < 0)
+      all_part[i] =
+          nearest_part((geometry::unpack_voxel(all[i]).cast<double>().array() + 0.5) * cell_m);
+  const auto voxel_part = [&](VoxelKey key) {
+    const VoxelKey cell = coarse_cell(key, cv);
+    const auto it = std::lower_bound(all.begin(), all.end(), cell);
+    return it != all.end() && *it == cell ? all_part[it - all.begin()] : 0;
+  };
+  // 5. The parts: the one with most observations keeps the id (and the merges), the others are
+  //    new objects.
+  std::vector<std::unique_ptr<Object>> parts = make_parts(o, obs_part, plan.groups, voxel_part);
+  int keep = 0;
+  for (int g = 1; g < plan.groups; ++g)
+    if (parts[g]->observations > parts[keep]->observations) keep = g;
+  link.from = o.id;
+  link.large_clusters = plan.large_clusters;
+  parts[keep]->id = o.id;
+  parts[keep]->merges = std::move(o.merges);
+  for (int g = 0; g < plan.groups; ++g) {
+    if (g == keep) continue;
+    parts[g]->id = static_cast<int>(objects_.size());
+    link.parts.push_back(parts[g]->id);
+    for (const ObservationLink& l : parts[g]->provenance)
+      parts[keep]->moved.emplace_back(l.timestamp, parts[g]->id);
+    objects_.push_back(std::move(parts[g]));
+  }
+  std::sort(parts[keep]->moved.begin(), parts[keep]->moved.end());
+  objects_[index] = std::move(parts[keep]);  // `o` is gone from here on
+  return true;
+}
+
+std::vector<std::unique_ptr<ObjectMap::Object>> ObjectMap::make_parts(
+    Object& o, const std::vector<int>& obs_part, int n,
+    const std::function<int(VoxelKey)>& voxel_part) {
+  std::vector<std::unique_ptr<Object>> parts;
+  for (int g = 0; g < n; ++g) {
+    auto p = std::make_unique<Object>(options_.voxel_m);
+    p->voxels = o.voxels.subset([&](VoxelKey key) { return voxel_part(key) == g; });
+    // `near`: each voxel's hits as they were (the observations that had it), its neighbourhood.
+    std::vector<VoxelKey> keys;
+    p->voxels.for_each([&](VoxelKey key, const VoxelData&) { keys.push_back(key); });
+    for (VoxelKey key : keys) {
+      const std::uint8_t* hits = o.near.find(key);
+      p->near[key] = hits ? std::max<std::uint8_t>(1, *hits) : 1;
+    }
+    p->dilate(keys);
+    p->refresh();
+    parts.push_back(std::move(p));
+  }
+  // Its observations: provenance, cells, votes, track ids, frames.
+  for (std::size_t j = 0; j < o.provenance.size(); ++j) {
+    Object& p = *parts[obs_part[j]];
+    const ObservationLink& link = o.provenance[j];
+    ClassVote& vote = p.histogram[link.class_name];
+    vote.score_sum += link.score;
+    ++vote.count;
+    p.score_sum += link.score;
+    p.first_seen = p.observations == 0 ? link.timestamp : std::min(p.first_seen, link.timestamp);
+    p.last_seen = p.observations == 0 ? link.timestamp : std::max(p.last_seen, link.timestamp);
+    ++p.observations;
+    if (link.track_id) p.track_ids.insert(*link.track_id);
+    p.add_frame(link.timestamp);
+    p.provenance.push_back(link);
+    p.cells.push_back(std::move(o.cells[j]));
+  }
+  // The kept points (keep_points) by their voxel.
+  const bool colours = o.points.colors.size() == o.points.points.size();
+  for (std::size_t i = 0; i < o.points.size(); ++i) {
+    const VoxelKey key = o.voxels.key_of(o.points.points[i]);
+    PointCloud& to = parts[key == geometry::kNoVoxel ? 0 : voxel_part(key)]->points;
+    to.points.push_back(o.points.points[i]);
+    if (colours) to.colors.push_back(o.points.colors[i]);
+  }
+  return parts;
+}
+
 std::size_t ObjectMap::below_share_count() const {
   std::size_t n = 0;
   for (const auto& o : objects_)
@@ -1027,6 +1227,15 @@ int ObjectMap::resolve(int object_id) const {
   if (object_id < 0 || object_id >= static_cast<int>(objects_.size())) return -1;
   while (!objects_[object_id]->alive) object_id = objects_[object_id]->absorbed_into;
   return object_id;
+}
+
+int ObjectMap::resolve(int object_id, double timestamp) const {
+  const int id = resolve(object_id);
+  if (id < 0) return id;
+  const auto& moved = objects_[id]->moved;
+  const auto it = std::lower_bound(moved.begin(), moved.end(),
+                                   std::make_pair(timestamp, std::numeric_limits<int>::min()));
+  return it != moved.end() && it->first == timestamp ? it->second : id;
 }
 
 Vec3 ObjectMap::centroid(int object_id) const {

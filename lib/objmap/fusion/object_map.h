@@ -180,6 +180,22 @@ struct ObjectMapOptions {
   // the other's voxels and, in the merge pass, the other object itself. It is ignored.
   bool drop_spanning = true;
   double span_min_share = 0.25;
+  // Split (after the merge passes, before judge_visibility()): an object whose surface (voxels
+  // seen in >= 10% of its observations) falls into separate clusters of coarse cells
+  // (split_cell_voxels voxels a side, 26-connected: clusters at least one cell apart), two or more
+  // of them large (split_min_share of the surface voxels each), is two objects when its
+  // observations see those clusters apart: at most split_max_joint of the observations covering
+  // the less covered cluster (split_cover_share of an observation's cells on it) cover the other
+  // too. Chairs side by side that a tracker's ID swap joined are seen one per observation; a
+  // chair whose thin legs are a cluster apart from its seat is seen with its legs in the same
+  // observations, and stays one. Each part takes the observations that lie mostly on it (its
+  // provenance, track ids, frames, class votes, views), and every part must have
+  // min_observations views, or nothing is split. Small clusters go to the part nearest them.
+  bool split_clusters = true;
+  int split_cell_voxels = 4;
+  double split_min_share = 0.2;
+  double split_cover_share = 0.1;
+  double split_max_joint = 0.2;
   bool require_same_class = false;  // only match observations to objects of the voted class
   // The paper's method (`objmap fuse --method paper`, docs/fusion.md "The paper's method") needs
   // these; the defaults are objmap's.
@@ -228,6 +244,14 @@ struct MergeLink {
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
   bool class_confusion = false;  // joined by the class-confusion rule (overlap = containment)
   bool fragment = false;  // joined by the fragment rule (overlap = share inside the larger's box)
+};
+
+// A split of split_pass(): object `from` kept one part (the one with most observations), the
+// others became the objects `parts`.
+struct SplitLink {
+  int from = -1;
+  std::vector<int> parts;
+  std::size_t large_clusters = 0;  // clusters with split_min_share of the surface voxels
 };
 
 // The rule of the merge pass that keeps two objects apart: the first that refuses, in the pass's
@@ -365,6 +389,11 @@ class ObjectMap {
   // higher id into the lower. Returns the merges made. Calling it again finds nothing new.
   std::vector<MergeLink> merge_pass();
 
+  // Splits the objects whose surface forms clusters that their observations see apart
+  // (ObjectMapOptions::split_clusters; none when off). Call after merge_pass() and before
+  // judge_visibility(). Returns the splits, ascending original id.
+  std::vector<SplitLink> split_pass();
+
   // The rules of merge_pass() for live objects `a` and `b` as they are now, every score computed
   // (the pass stops at the first refusal): after the pass, why two objects stayed apart. Throws
   // InputError for an id that is not a live object.
@@ -379,6 +408,9 @@ class ObjectMap {
   double detected_share_bar() const { return share_bar_; }
   // The id an object id ended up in after merges (itself when never absorbed; -1 if unknown).
   int resolve(int object_id) const;
+  // The id the observation of `timestamp` that joined `object_id` ended up in after merges and
+  // splits (resolve(object_id) when no split moved it).
+  int resolve(int object_id, double timestamp) const;
 
   // For every live object, the keyframes of `log` that had its place in view (fusion/visibility.h;
   // its sample: evenly spaced voxels seen in >= 10% of its observations; its range: the farthest
@@ -442,6 +474,13 @@ class ObjectMap {
   void merge_class_confusions(std::vector<MergeLink>& made);
   // The fragment merges (ObjectMapOptions::merge_fragments_in_box), appended to `made`.
   void merge_fragments_in_box(std::vector<MergeLink>& made);
+  // split_pass() for objects_[index]: true and `link` when it was split.
+  bool split_object(std::size_t index, SplitLink& link);
+  // The parts of `object` by split_object's plan: observation j to part obs_part[j], voxel (its
+  // cell) to part voxel_part(key).
+  std::vector<std::unique_ptr<Object>> make_parts(Object& object, const std::vector<int>& obs_part,
+                                                  int parts,
+                                                  const std::function<int(VoxelKey)>& voxel_part);
   // The mean positions of the voxels of `object` seen in >= `share` of its observations (all of
   // them when none is), in key order.
   std::vector<Vec3> surface_points(const Object& object, double share) const;

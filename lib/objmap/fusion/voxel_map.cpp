@@ -488,6 +488,17 @@ void VoxelMap::merge(const VoxelMap& other) {
   merge_counts(other);
 }
 
+VoxelMap VoxelMap::subset(const std::function<bool(VoxelKey)>& take) const {
+  VoxelMap out(
+      VoxelMapOptions{voxel_m_, static_cast<int>(threads_), static_cast<int>(shards_.size())});
+  for (const auto& [key, v] : sorted_voxels())
+    if (take(key)) {
+      out.add_voxel(out.shards_[out.shard_of(key)], key, *v);
+      out.points_inserted_ += v->count;
+    }
+  return out;
+}
+
 void VoxelMap::merge_shard(const VoxelMap& other, std::size_t shard) {
   require(other.voxel_m_ == voxel_m_ && other.shards_.size() == shards_.size() &&
               shard < shards_.size(),

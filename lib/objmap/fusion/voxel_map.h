@@ -62,6 +62,9 @@ class VoxelMap {
   void add(const FrameVoxels& frame);
   // Adds `other`'s points_inserted and points_dropped (the part of merge() merge_shard leaves out).
   void merge_counts(const VoxelMap& other);
+  // The voxels for which `take(key)` is true, with their sums, in a map of this voxel size and
+  // shard count; its points_inserted is the points of those voxels (an object split in parts).
+  VoxelMap subset(const std::function<bool(VoxelKey)>& take) const;
   std::size_t shard_count() const { return shards_.size(); }
   // The shard of a voxel: by its x index (no second hash of the key): a frame spans many x slices,
   // so its voxels spread over the shards. A mask when the shard count is a power of two.

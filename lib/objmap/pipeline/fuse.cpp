@@ -159,6 +159,10 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        "an instance of which a quarter or more lies on each of two confirmed objects of its class "
        "is ignored (one mask over two objects side by side)",
        &m.drop_spanning},
+      {"objects.split_clusters", "--split-clusters",
+       "after the merges, an object whose surface forms clusters apart that its observations see "
+       "one at a time is split, one object per cluster (chairs side by side joined by an ID swap)",
+       &m.split_clusters},
       {"objects.drop_bleed", "--drop-bleed",
        "an instance lying on another of its class in the same keyframe, a fifth of its size or "
        "less, is ignored (a mask that bled onto the object in front)",
@@ -1074,7 +1078,8 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
         }
         ++result.observations;
         if (object_views)
-          object_views->add(added[k].object_id, keyframes[done].world_from_cam.translation(),
+          object_views->add(added[k].object_id, keyframes[done].timestamp,
+                            keyframes[done].world_from_cam.translation(),
                             std::move(work.model_points[k]));
       }
       if (scene) scene->add({keyframes[done].world_from_cam.translation(), &work.scene_points});
@@ -1109,6 +1114,7 @@ fusion::RecordOptions record_options(const FuseOptions& options, int threads) {
 void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& objects,
                               const fusion::ViewLog* view_log, FuseResult& result) {
   result.merges = objects.merge_pass();
+  result.splits = objects.split_pass();
   result.objects_total = objects.size();
   if (view_log) {
     objects.judge_visibility(*view_log, options.visibility);
@@ -1270,6 +1276,7 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"objects_below_detected_share", result.objects_below_share},
       {"objects_confirmed", result.objects.size()},
       {"merges", result.merges.size()},
+      {"objects_split", result.splits.size()},
       {"object_meshes", std::count_if(result.object_meshes.begin(), result.object_meshes.end(),
                                       [](const ObjectMesh& m) { return !m.model.mesh.empty(); })},
       {"object_mesh_triangles", mesh_triangles(result.object_meshes)},

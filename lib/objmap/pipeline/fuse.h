@@ -109,6 +109,7 @@ struct FuseResult {
   double detected_share_bar = 0.0;  // the detected share an object needed (0: the rule off)  //
                                     // with enough views, left out by the detected share
   std::vector<fusion::MergeLink> merges;
+  std::vector<fusion::SplitLink> splits;      // objects split in parts (split_clusters)
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
   std::vector<ObjectMesh> object_meshes;      // one per object of `objects` with --mesh objects|all

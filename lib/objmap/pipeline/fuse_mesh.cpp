@@ -27,14 +27,16 @@ PointCloud model_points(const fusion::Observation& obs, const MeshOptions& optio
   return mesh::voxel_means(obs.points_in_world, finest);
 }
 
-void ObjectViews::add(int object_id, const Vec3& camera_in_world, PointCloud&& points) {
-  views_.push_back({object_id, camera_in_world, std::move(points)});
+void ObjectViews::add(int object_id, double timestamp, const Vec3& camera_in_world,
+                      PointCloud&& points) {
+  views_.push_back({object_id, timestamp, camera_in_world, std::move(points)});
 }
 
 std::vector<mesh::DepthView> ObjectViews::views_of(int id, const fusion::ObjectMap& objects) const {
   std::vector<mesh::DepthView> out;
   for (const View& v : views_)
-    if (objects.resolve(v.object_id) == id) out.push_back({v.camera_in_world, &v.points});
+    if (objects.resolve(v.object_id, v.timestamp) == id)
+      out.push_back({v.camera_in_world, &v.points});
   return out;
 }
 

@@ -32,18 +32,19 @@ PointCloud model_points(const fusion::Observation& obs, const MeshOptions& optio
 // models.
 class ObjectViews {
  public:
-  // An observation seen from `camera_in_world` joined object `object_id` (as it was then; merges
-  // are resolved later); `points` from model_points().
-  void add(int object_id, const Vec3& camera_in_world, PointCloud&& points);
+  // An observation of keyframe `timestamp` seen from `camera_in_world` joined object `object_id`
+  // (as it was then; merges and splits are resolved later); `points` from model_points().
+  void add(int object_id, double timestamp, const Vec3& camera_in_world, PointCloud&& points);
   std::size_t views() const { return views_.size(); }
 
-  // Views of object `id` after the merge pass: those of every object that resolves to it, in the
+  // Views of object `id` after the merge and split passes: those that resolve to it, in the
   // order they were added (keyframe order).
   std::vector<mesh::DepthView> views_of(int id, const fusion::ObjectMap& objects) const;
 
  private:
   struct View {
     int object_id;
+    double timestamp;
     Vec3 camera_in_world;
     PointCloud points;
   };
