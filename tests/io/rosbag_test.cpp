@@ -300,6 +300,40 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
                    "bytes; expected a complete bag"),
             std::string::npos)
       << e;
+  // A header field that claims more than its header (ros::Header::parse would read past it): the
+  // file header record's first field, and a connection record's inside an uncompressed chunk.
+  {
+    std::ifstream in(tmp / "short.bag", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const unsigned char long_field[4] = {0x00, 0x21, 0x00, 0x00};
+    bytes.replace(17, 4, reinterpret_cast<const char*>(long_field), 4);
+    std::ofstream(tmp / "field.bag", std::ios::binary) << bytes;
+  }
+  e = error_of([&] { read_dataset(tmp / "field.bag"); });
+  EXPECT_NE(e.find("field.bag: damaged ROS bag: the record at byte 13 has a header field of 8448 "
+                   "bytes beyond its "),
+            std::string::npos)
+      << e;
+  {
+    BagWriter bag(tmp / "plain.bag", "none");
+    bag.image("/c/image_raw", 1.0, cv::Mat(4, 4, CV_8UC3, cv::Scalar(0)), "bgr8");
+    bag.image("/d/image_raw", 1.0, cv::Mat(4, 4, CV_16UC1, cv::Scalar(0)), "16UC1");
+  }
+  ASSERT_NO_THROW(read_dataset(tmp / "plain.bag"));
+  {
+    std::ifstream in(tmp / "plain.bag", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const std::size_t op = bytes.find(std::string("op=\x07", 4));  // the chunk's first connection
+    ASSERT_NE(op, std::string::npos);
+    const unsigned char long_field[4] = {0x00, 0x00, 0x01, 0x00};
+    bytes.replace(op - 4, 4, reinterpret_cast<const char*>(long_field), 4);
+    std::ofstream(tmp / "inner.bag", std::ios::binary) << bytes;
+  }
+  e = error_of([&] { read_dataset(tmp / "inner.bag"); });
+  EXPECT_NE(e.find("inner.bag: damaged ROS bag: the record at byte "), std::string::npos) << e;
+  EXPECT_NE(e.find(" (in a chunk) has a header field of 65536 bytes beyond its "),
+            std::string::npos)
+      << e;
   // Not a bag at all, named as one.
   std::ofstream(tmp / "text.bag") << "hello\n";
   DatasetOptions as_bag;

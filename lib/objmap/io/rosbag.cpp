@@ -505,10 +505,13 @@ cv::Mat decode_depth(const rosbag::MessageInstance& m, const Stream& s, const st
   return depth;
 }
 
-// The bag's top-level records (ROS bag 2.0: <header_len><header><data_len><data> from byte 13 to
-// the end) checked before rosbag_storage reads them: it allocates whatever a length field says, so
-// a damaged or hostile file would claim gigabytes. Each header and data must lie inside the file
-// (headers at most 16 MiB) and a chunk's uncompressed size be at most 1 GiB.
+// The bag's records (ROS bag 2.0: <header_len><header><data_len><data> from byte 13 to the end,
+// and the same inside an uncompressed chunk's data) checked before rosbag_storage reads them: it
+// allocates whatever a length field says, so a damaged or hostile file would claim gigabytes, and
+// its header parser (ros::Header::parse) reads each field's <len><name>=<value> without checking
+// that it lies inside the header. Each header and data must lie inside the file (or its chunk;
+// headers at most 16 MiB), each header field inside its header, and a chunk's uncompressed size be
+// at most 1 GiB. Records inside a compressed chunk are checked by its compression's checksums.
 std::uint32_t little_u32(const unsigned char* p) {
   return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 |
          std::uint32_t{p[3]} << 24;
@@ -527,37 +530,65 @@ std::optional<std::string> header_field(const std::string& header, const std::st
   return std::nullopt;
 }
 
-void check_records(const fs::path& file) {
-  const std::string where = file.string();
-  std::ifstream in(file, std::ios::binary);
-  std::error_code ec;
-  const std::uint64_t size = fs::file_size(file, ec);
-  std::uint64_t at = 13;
-  while (at < size) {
+// Why the fields of `header` do not fill it exactly with <len><field> pairs, or empty.
+std::string header_fields_problem(const std::string& header) {
+  for (std::size_t at = 0; at < header.size();) {
+    if (header.size() - at < 4)
+      return "has a header field length cut short at header byte " + std::to_string(at);
+    const std::uint32_t len = little_u32(reinterpret_cast<const unsigned char*>(&header[at]));
+    if (len > header.size() - at - 4)
+      return "has a header field of " + std::to_string(len) + " bytes beyond its " +
+             std::to_string(header.size()) + "-byte header";
+    at += 4 + std::size_t{len};
+  }
+  return {};
+}
+
+// The records from byte `at` to `end` of `in` (a file of `where`); `in_chunk`: inside a chunk.
+void check_records_in(std::ifstream& in, const std::string& where, std::uint64_t at,
+                      std::uint64_t end, bool in_chunk) {
+  while (at < end) {
     unsigned char len[4];
     auto fail = [&](const std::string& what) {
-      throw InputError(where, "damaged ROS bag: the record at byte " + std::to_string(at) + " " +
-                                  what + "; expected a complete bag (rosbag reindex repairs one)");
+      throw InputError(where, "damaged ROS bag: the record at byte " + std::to_string(at) +
+                                  (in_chunk ? " (in a chunk) " : " ") + what +
+                                  "; expected a complete bag (rosbag reindex repairs one)");
     };
-    if (size - at < 4 ||
+    if (end - at < 4 ||
         !in.seekg(static_cast<std::streamoff>(at)).read(reinterpret_cast<char*>(len), 4))
       fail("is cut short");
     const std::uint32_t header_len = little_u32(len);
-    if (header_len > (16u << 20) || header_len > size - at - 4)
+    if (header_len > (16u << 20) || header_len > end - at - 4)
       fail("claims a header of " + std::to_string(header_len) + " bytes");
     std::string header(header_len, '\0');
-    if (!in.read(header.data(), header_len) || !in.read(reinterpret_cast<char*>(len), 4))
+    if (end - at - 4 - header_len < 4 || !in.read(header.data(), header_len) ||
+        !in.read(reinterpret_cast<char*>(len), 4))
       fail("is cut short");
+    const std::string problem = header_fields_problem(header);
+    if (!problem.empty()) fail(problem);
     const std::uint32_t data_len = little_u32(len);
-    if (data_len > size - at - 8 - header_len)
-      fail("claims " + std::to_string(data_len) + " bytes of data beyond the end of the file");
+    if (data_len > end - at - 8 - header_len)
+      fail("claims " + std::to_string(data_len) + " bytes of data beyond the end of the " +
+           (in_chunk ? "chunk" : "file"));
     const auto op = header_field(header, "op");
-    const auto uncompressed = header_field(header, "size");
-    if (op && *op == std::string(1, '\x05') && uncompressed && uncompressed->size() == 4 &&
-        little_u32(reinterpret_cast<const unsigned char*>(uncompressed->data())) > (1u << 30))
-      fail("is a chunk of more than 1 GiB uncompressed");
-    at += 8 + std::uint64_t{header_len} + data_len;
+    const std::uint64_t data_at = at + 8 + header_len;
+    if (op && *op == std::string(1, '\x05')) {
+      const auto uncompressed = header_field(header, "size");
+      if (uncompressed && uncompressed->size() == 4 &&
+          little_u32(reinterpret_cast<const unsigned char*>(uncompressed->data())) > (1u << 30))
+        fail("is a chunk of more than 1 GiB uncompressed");
+      if (!in_chunk && header_field(header, "compression") == std::optional<std::string>("none"))
+        check_records_in(in, where, data_at, data_at + data_len, true);
+    }
+    at = data_at + data_len;
   }
+}
+
+void check_records(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(file, ec);
+  check_records_in(in, file.string(), 13, size, false);
 }
 
 class BagSource : public FrameSource {
