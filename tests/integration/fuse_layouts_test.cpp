@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "fuse_helpers.h"
 #include "objmap/io/dataset.h"
@@ -102,6 +104,26 @@ TEST(FuseLayouts, SevenScenesFromItsOwnPosesEqualsItsTumConversion) {
   const nlohmann::json objects_tum = read_json(tmp / "runtum" / "objects.json");
   ASSERT_GE(objects7["objects"].size(), 2u) << "the kitchen's table, chairs or cup";
   EXPECT_TRUE(same_json(objects7["objects"], objects_tum["objects"], "objects", 1e-9));
+
+  // Every frame (50 keyframes against the motion rule's few): the same objects within 10 %, and no
+  // object stands on another of its own class (docs/fusion.md, per-density table).
+  const RunResult every =
+      run_objmap({"fuse", "--dataset", scenes.string(), "--segmentation", (tmp / "seg").string(),
+                  "--keyframes", "all", "--out", (tmp / "run7all").string()});
+  ASSERT_EQ(every.exit_code, 0) << every.err;
+  const nlohmann::json objects_all = read_json(tmp / "run7all" / "objects.json");
+  const double n_kf = static_cast<double>(objects7["objects"].size());
+  const double n_all = static_cast<double>(objects_all["objects"].size());
+  EXPECT_LE(std::abs(n_all - n_kf), 0.1 * n_kf) << every.out;
+  for (const nlohmann::json* doc : {&objects7, &objects_all}) {
+    std::map<int, std::string> class_of;
+    for (const auto& o : (*doc)["objects"]) class_of[o["id"].get<int>()] = o["class"];
+    for (const auto& o : (*doc)["objects"]) {
+      const auto& on = o["relations"]["on"];
+      if (!on.is_object() || on["kind"] != "object") continue;
+      EXPECT_NE(class_of[on["id"].get<int>()], o["class"].get<std::string>()) << o["id"];
+    }
+  }
 }
 
 #if OBJMAP_TEST_BAGS
