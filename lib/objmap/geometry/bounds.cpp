@@ -141,10 +141,15 @@ void SupportStripOptions::check() const {
 namespace {
 
 // A footprint cell of (x, y) in the gravity frame, packed in one integer.
-std::int64_t footprint_cell(const Vec3& g, double cell_m) {
-  const auto ix = static_cast<std::int64_t>(std::floor(g.x() / cell_m));
-  const auto iy = static_cast<std::int64_t>(std::floor(g.y() / cell_m));
-  return (ix << 32) ^ (iy & 0xffffffffLL);
+std::uint64_t footprint_cell(const Vec3& g, double cell_m) {
+  // Indices clamped to 32 bits (a point 40,000 km away shares a cell with others out there),
+  // shifted unsigned: a negative index is no undefined behaviour.
+  const auto index = [cell_m](double v) {
+    const double f = std::floor(v / cell_m);
+    const double i = std::isnan(f) ? 0.0 : std::clamp(f, -2147483648.0, 2147483647.0);
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(i));
+  };
+  return (index(g.x()) << 32) ^ (index(g.y()) & 0xffffffffULL);
 }
 
 // The height of the plane the object of `g` (its points in the gravity frame) rests on: the
@@ -153,7 +158,7 @@ std::int64_t footprint_cell(const Vec3& g, double cell_m) {
 double resting_plane(const std::vector<Vec3>& g, const std::vector<SupportPlane>& planes,
                      const SupportStripOptions& options) {
   std::vector<double> heights(g.size());
-  std::unordered_set<std::int64_t> cells;
+  std::unordered_set<std::uint64_t> cells;
   for (std::size_t i = 0; i < g.size(); ++i) {
     heights[i] = g[i].z();
     cells.insert(footprint_cell(g[i], options.cell_m));
@@ -186,7 +191,7 @@ std::vector<bool> support_strip(const PointCloud& cloud, const Eigen::Matrix3d& 
   const double plane = resting_plane(g, planes, options);
   if (!std::isfinite(plane)) return strip;
   // The footprint of the points above the layer, widened by one cell.
-  std::unordered_set<std::int64_t> footprint;
+  std::unordered_set<std::uint64_t> footprint;
   std::size_t above = 0;
   for (const Vec3& p : g) {
     if (p.z() <= plane + options.band_m) continue;
