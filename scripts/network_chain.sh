@@ -25,7 +25,7 @@ run() {
   if [[ $front == given:* ]]; then
     seg=$dataset/${front#given:}
   else
-    "$objmap" detect --dataset "$dataset" --model "$front" --classes paper "$@" --out "$dir/detect" \
+    "$objmap" detect --dataset "$dataset" --model "$front" "$@" --out "$dir/detect" \
       > "$dir/detect.log"
     seg=$dir/detect
   fi
