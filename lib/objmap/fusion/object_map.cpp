@@ -10,6 +10,7 @@
 #include <string>
 
 #include "objmap/core/error.h"
+#include "objmap/fusion/object_map_object.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/fusion/split.h"
 #include "objmap/geometry/bounds.h"
@@ -124,6 +125,7 @@ void set_paper_rules(ObjectMapOptions& o) {
   o.drop_bleed = false;
   o.drop_spanning = false;
   o.split_clusters = false;
+  o.oversize.enabled = false;
   o.confirmation = Confirmation::kIdKeyframes;
   o.min_observations = 3;
   o.min_detected_share = 0.0;
@@ -217,68 +219,6 @@ PointCloud voxel_nearest_centre(const PointCloud& cloud, double voxel_m,
   }
   return out;
 }
-
-struct ObjectMap::Object {
-  int id = -1;
-  bool alive = true;
-  int absorbed_into = -1;
-  VoxelMap voxels;
-  Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();  // voxel bounds
-  Vec3 centroid = Vec3::Zero();                                                // voxel-weighted
-  double radius = 0.0;  // RMS distance of the voxels' mean positions from the centroid
-  // Every voxel within one voxel (3×3×3) of an occupied voxel (the tolerant overlap test is one
-  // lookup per voxel of the other set); the value is, for an occupied voxel, the number of
-  // observations that had it (saturating at 255), 0 for a neighbour only.
-  geometry::VoxelHashTable<std::uint8_t> near;
-  std::vector<double> frames;  // timestamps of its observations, ascending, unique
-  int frames_in_view = -1;     // judge_visibility(): keyframes in view or detected; -1: not judged
-  bool has_frame(double t) const { return std::binary_search(frames.begin(), frames.end(), t); }
-  void add_frame(double t) {
-    auto it = std::lower_bound(frames.begin(), frames.end(), t);
-    if (it == frames.end() || *it != t) frames.insert(it, t);
-  }
-  std::map<std::string, ClassVote> histogram;
-  double score_sum = 0.0;
-  int observations = 0;
-  std::set<int> track_ids;
-  double first_seen = 0.0, last_seen = 0.0;
-  std::vector<ObservationLink> provenance;
-  // Per provenance entry, the coarse cells its voxels fell in (split_clusters; else empty).
-  std::vector<std::vector<VoxelKey>> cells;
-  std::vector<std::pair<double, int>> moved;  // split_pass(): observation timestamp -> its part
-  std::vector<MergeLink> merges;
-  PointCloud points;  // its observations' points (ObjectMapOptions::keep_points)
-
-  explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
-  // Marks the neighbourhoods of `keys` (voxels new to this object) in `near`.
-  void dilate(const std::vector<VoxelKey>& keys) {
-    const auto& offsets = geometry::neighbourhood_offsets();
-    near.reserve(near.size() + keys.size() * 4);
-    // The 27 slots of a key two keys ahead are prefetched, so that the cache misses of a large
-    // table overlap (the slots, not the values, depend on the order: the table ends the same).
-    constexpr std::size_t kAhead = 2;
-    for (std::size_t i = 0; i < keys.size(); ++i) {
-      if (i + kAhead < keys.size())
-        for (VoxelKey off : offsets) near.prefetch(keys[i + kAhead] + off);
-      for (VoxelKey off : offsets) near[keys[i] + off];  // inserted as 0 when absent
-    }
-  }
-  // Bounds, voxel-weighted centroid and RMS radius in one pass over the voxels.
-  void refresh() {
-    Vec3 sum = Vec3::Zero();
-    double sq = 0.0;
-    bool any = false;
-    voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-      geometry::extend_voxel_bounds(key, any, lo, hi);
-      const Vec3 p = voxels.mean_position(key, v);
-      sum += p;
-      sq += p.squaredNorm();
-    });
-    const double n = static_cast<double>(voxels.size());
-    centroid = n > 0 ? Vec3(sum / n) : Vec3::Zero();
-    radius = n > 0 ? std::sqrt(std::max(0.0, sq / n - centroid.squaredNorm())) : 0.0;
-  }
-};
 
 ObjectMap::ObjectMap(const ObjectMapOptions& options) : options_(options) { options_.check(); }
 ObjectMap::~ObjectMap() = default;
@@ -609,7 +549,7 @@ AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* 
     link.score_p = best_scores.score_p;
   }
   o.provenance.push_back(link);
-  if (options_.split_clusters) {
+  if (options_.split_clusters || options_.oversize.enabled) {
     std::vector<VoxelKey> keys;
     keys.reserve(obs_voxels.size());
     obs_voxels.for_each([&](VoxelKey key, const VoxelData&) { keys.push_back(key); });
@@ -667,21 +607,8 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   // Provenance by timestamp, then insertion order; the cells follow their entries.
   into->provenance.insert(into->provenance.end(), absorbed->provenance.begin(),
                           absorbed->provenance.end());
-  const bool cells = into->cells.size() + absorbed->cells.size() == into->provenance.size();
   for (auto& c : absorbed->cells) into->cells.push_back(std::move(c));
-  std::vector<std::size_t> order(into->provenance.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
-    return into->provenance[x].timestamp < into->provenance[y].timestamp;
-  });
-  std::vector<ObservationLink> provenance;
-  std::vector<std::vector<VoxelKey>> sorted_cells;
-  for (std::size_t i : order) {
-    provenance.push_back(std::move(into->provenance[i]));
-    if (cells) sorted_cells.push_back(std::move(into->cells[i]));
-  }
-  into->provenance = std::move(provenance);
-  into->cells = std::move(sorted_cells);
+  into->sort_provenance();
   into->merges.push_back(link);
   into->merges.insert(into->merges.end(), absorbed->merges.begin(), absorbed->merges.end());
   absorbed->alive = false;
@@ -1110,25 +1037,34 @@ bool ObjectMap::split_object(std::size_t index, SplitLink& link) {
   };
   // 5. The parts: the one with most observations keeps the id (and the merges), the others are
   //    new objects.
-  std::vector<std::unique_ptr<Object>> parts = make_parts(o, obs_part, plan.groups, voxel_part);
+  link.large_clusters = plan.large_clusters;
+  install_parts(index, make_parts(o, obs_part, plan.groups, voxel_part), link);
+  return true;  // `o` is gone from here on
+}
+
+void ObjectMap::install_parts(std::size_t index, std::vector<std::unique_ptr<Object>> parts,
+                              SplitLink& link) {
+  Object& o = *objects_[index];
+  const int n = static_cast<int>(parts.size());
   int keep = 0;
-  for (int g = 1; g < plan.groups; ++g)
+  for (int g = 1; g < n; ++g)
     if (parts[g]->observations > parts[keep]->observations) keep = g;
   link.from = o.id;
-  link.large_clusters = plan.large_clusters;
   parts[keep]->id = o.id;
   parts[keep]->merges = std::move(o.merges);
-  for (int g = 0; g < plan.groups; ++g) {
+  parts[keep]->moved = std::move(o.moved);  // an earlier split's moves stay valid
+  for (int g = 0; g < n; ++g) {
     if (g == keep) continue;
     parts[g]->id = static_cast<int>(objects_.size());
     link.parts.push_back(parts[g]->id);
+    // An observation that both parts took (a mask over both) stays with the kept part.
     for (const ObservationLink& l : parts[g]->provenance)
-      parts[keep]->moved.emplace_back(l.timestamp, parts[g]->id);
+      if (!parts[keep]->has_frame(l.timestamp))
+        parts[keep]->moved.emplace_back(l.timestamp, parts[g]->id);
     objects_.push_back(std::move(parts[g]));
   }
   std::sort(parts[keep]->moved.begin(), parts[keep]->moved.end());
-  objects_[index] = std::move(parts[keep]);  // `o` is gone from here on
-  return true;
+  objects_[index] = std::move(parts[keep]);
 }
 
 std::vector<std::unique_ptr<ObjectMap::Object>> ObjectMap::make_parts(
@@ -1150,21 +1086,9 @@ std::vector<std::unique_ptr<ObjectMap::Object>> ObjectMap::make_parts(
     parts.push_back(std::move(p));
   }
   // Its observations: provenance, cells, votes, track ids, frames.
-  for (std::size_t j = 0; j < o.provenance.size(); ++j) {
-    Object& p = *parts[obs_part[j]];
-    const ObservationLink& link = o.provenance[j];
-    ClassVote& vote = p.histogram[link.class_name];
-    vote.score_sum += link.score;
-    ++vote.count;
-    p.score_sum += link.score;
-    p.first_seen = p.observations == 0 ? link.timestamp : std::min(p.first_seen, link.timestamp);
-    p.last_seen = p.observations == 0 ? link.timestamp : std::max(p.last_seen, link.timestamp);
-    ++p.observations;
-    if (link.track_id) p.track_ids.insert(*link.track_id);
-    p.add_frame(link.timestamp);
-    p.provenance.push_back(link);
-    p.cells.push_back(std::move(o.cells[j]));
-  }
+  for (std::size_t j = 0; j < o.provenance.size(); ++j)
+    parts[obs_part[j]]->take(o.provenance[j],
+                             j < o.cells.size() ? std::move(o.cells[j]) : std::vector<VoxelKey>{});
   // The kept points (keep_points) by their voxel.
   const bool colours = o.points.colors.size() == o.points.points.size();
   for (std::size_t i = 0; i < o.points.size(); ++i) {
@@ -1230,12 +1154,16 @@ int ObjectMap::resolve(int object_id) const {
 }
 
 int ObjectMap::resolve(int object_id, double timestamp) const {
-  const int id = resolve(object_id);
-  if (id < 0) return id;
-  const auto& moved = objects_[id]->moved;
-  const auto it = std::lower_bound(moved.begin(), moved.end(),
-                                   std::make_pair(timestamp, std::numeric_limits<int>::min()));
-  return it != moved.end() && it->first == timestamp ? it->second : id;
+  int id = resolve(object_id);
+  // A part may have been cut again (split_oversize): follow the moves to the last part.
+  for (std::size_t hops = 0; id >= 0 && hops < objects_.size(); ++hops) {
+    const auto& moved = objects_[id]->moved;
+    const auto it = std::lower_bound(moved.begin(), moved.end(),
+                                     std::make_pair(timestamp, std::numeric_limits<int>::min()));
+    if (it == moved.end() || it->first != timestamp) break;
+    id = it->second;
+  }
+  return id;
 }
 
 Vec3 ObjectMap::centroid(int object_id) const {

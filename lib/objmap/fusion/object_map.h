@@ -9,6 +9,7 @@
 
 #include "objmap/core/types.h"
 #include "objmap/filters/outlier.h"
+#include "objmap/fusion/oversize.h"
 #include "objmap/fusion/visibility.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/bounds.h"
@@ -17,6 +18,10 @@
 // associated with an existing object or starts a new one; objects keep their points in a voxel set
 // (memory bounded by the object's surface), a score-weighted class vote and the provenance of every
 // observation. A final pass merges objects that the same criteria say are one (ID-switch repair).
+namespace objmap::segmentation {
+class ClassSizes;
+}
+
 namespace objmap::fusion {
 
 // One instance in one keyframe: what fuse() hands to the object map.
@@ -196,6 +201,10 @@ struct ObjectMapOptions {
   double split_min_share = 0.2;
   double split_cover_share = 0.1;
   double split_max_joint = 0.2;
+  // Oversize (split_oversize(), once the up is known): an object wider than its class allows
+  // (segmentation/class_sizes.h) is cut in two at the emptiest place along its long axis, again
+  // until no part is (fusion/oversize.h).
+  OversizeOptions oversize;
   bool require_same_class = false;  // only match observations to objects of the voted class
   // The paper's method (`objmap fuse --method paper`, docs/fusion.md "The paper's method") needs
   // these; the defaults are objmap's.
@@ -394,6 +403,14 @@ class ObjectMap {
   // judge_visibility(). Returns the splits, ascending original id.
   std::vector<SplitLink> split_pass();
 
+  // Splits every confirmed-by-views object wider than its class allows (`sizes`; `up` the world's
+  // up, unit) in two at the emptiest place along its long axis (plan_oversize_cut), and each part
+  // again while it is too wide: one mask over two chairs that the tracker gave one id, or two
+  // objects a merge joined. Each part takes the voxels on its side and the observations whose
+  // cells lie mostly on it. Call after split_pass(); when it splits anything, judge_visibility()
+  // again. Returns the splits (SplitLink::large_clusters 0), in the order made.
+  std::vector<SplitLink> split_oversize(const Vec3& up, const segmentation::ClassSizes& sizes);
+
   // The rules of merge_pass() for live objects `a` and `b` as they are now, every score computed
   // (the pass stops at the first refusal): after the pass, why two objects stayed apart. Throws
   // InputError for an id that is not a live object.
@@ -476,6 +493,12 @@ class ObjectMap {
   void merge_fragments_in_box(std::vector<MergeLink>& made);
   // split_pass() for objects_[index]: true and `link` when it was split.
   bool split_object(std::size_t index, SplitLink& link);
+  // Puts `parts` of objects_[index] in its place: the part with most observations keeps its id
+  // and merges, the others are new objects (link.parts).
+  void install_parts(std::size_t index, std::vector<std::unique_ptr<Object>> parts,
+                     SplitLink& link);
+  // split_oversize() for objects_[index] with its class's size: true and `link` when it was cut.
+  bool cut_oversize(std::size_t index, const Vec3& up, double min_m, double max_m, SplitLink& link);
   // The parts of `object` by split_object's plan: observation j to part obs_part[j], voxel (its
   // cell) to part voxel_part(key).
   std::vector<std::unique_ptr<Object>> make_parts(Object& object, const std::vector<int>& obs_part,

@@ -28,6 +28,7 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/pipeline/fuse_scene.h"
+#include "objmap/segmentation/class_sizes.h"
 #include "objmap/segmentation/instance_masks.h"
 #include "objmap/segmentation/read.h"
 
@@ -163,6 +164,16 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        "after the merges, an object whose surface forms clusters apart that its observations see "
        "one at a time is split, one object per cluster (chairs side by side joined by an ID swap)",
        &m.split_clusters},
+      {"objects.split_oversize", "--split-oversize",
+       "an object wider than its class allows (--class-sizes) is cut at the emptiest place along "
+       "its long axis, again while a part is (one mask over chairs packed along a table)",
+       &m.oversize.enabled},
+      {"objects.oversize_margin", "--oversize-margin",
+       "... wider than the class's largest usual size times 1 + this", &m.oversize.margin},
+      {"objects.class_sizes", "--class-sizes",
+       "builtin (the COCO classes' usual sizes, docs/fusion.md), none, or a JSON file "
+       "{\"sizes\": {\"chair\": [0.4, 0.7]}} of sizes in metres added to the built-in table",
+       &o.class_sizes},
       {"objects.drop_bleed", "--drop-bleed",
        "an instance lying on another of its class in the same keyframe, a fifth of its size or "
        "less, is ignored (a mask that bled onto the object in front)",
@@ -415,6 +426,10 @@ void FuseOptions::check() const {
   check_part([&] { mask_refine.check(); }, "MaskRefineOptions", "mask_refine");
   check_part([&] { depth_gate.check(); }, "DepthGateOptions", "depth_gate");
   check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
+  check_part([&] { objects.oversize.check(); }, "OversizeOptions", "objects",
+             {{"margin", "objects.oversize_margin"}});
+  require(!class_sizes.empty(), "objects.class_sizes",
+          "is empty; expected builtin, none or a JSON file of class sizes");
   check_part([&] { visibility.check(); }, "VisibilityOptions", "visibility");
   fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
   fusion::parse_distance_score(distance_score, "objects.distance_score");
@@ -1109,24 +1124,52 @@ fusion::RecordOptions record_options(const FuseOptions& options, int threads) {
   return r;
 }
 
-// Step 4: the final merge pass (ID-switch repair), where each object was in view (with
-// `view_log`), then each confirmed object's filtered record.
-void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& objects,
-                              const fusion::ViewLog* view_log, FuseResult& result) {
-  result.merges = objects.merge_pass();
-  result.splits = objects.split_pass();
+// Each confirmed object's filtered record, and their point counts (Table 6).
+void make_records(const FuseOptions& options, const fusion::ObjectMap& objects,
+                  FuseResult& result) {
+  result.objects = objects.records(record_options(options, result.threads));
+  result.object_points_raw = result.object_points_voxel = result.object_points_filtered = 0;
+  for (const auto& r : result.objects) {
+    result.object_points_raw += r.points_raw;
+    result.object_points_voxel += r.points_voxel;
+    result.object_points_filtered += r.points_filtered;
+  }
+}
+
+// Where each object was in view (with `view_log`), then each confirmed object's filtered record.
+void judge_and_record(const FuseOptions& options, fusion::ObjectMap& objects,
+                      const fusion::ViewLog* view_log, FuseResult& result) {
   result.objects_total = objects.size();
   if (view_log) {
     objects.judge_visibility(*view_log, options.visibility);
     result.objects_below_share = objects.below_share_count();
     result.detected_share_bar = objects.detected_share_bar();
   }
-  result.objects = objects.records(record_options(options, result.threads));
-  for (const auto& r : result.objects) {
-    result.object_points_raw += r.points_raw;
-    result.object_points_voxel += r.points_voxel;
-    result.object_points_filtered += r.points_filtered;
+  make_records(options, objects, result);
+}
+
+// Step 4: the final merge pass (ID-switch repair) and the split of clusters seen apart, then where
+// each object was in view and each confirmed object's filtered record.
+void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& objects,
+                              const fusion::ViewLog* view_log, FuseResult& result) {
+  result.merges = objects.merge_pass();
+  result.splits = objects.split_pass();
+  judge_and_record(options, objects, view_log, result);
+}
+
+// Step 4c: with the up known, the objects wider than their class allows are cut (one mask over
+// chairs packed along a table); when any is, where each object was in view is judged again and
+// the records and suspected duplicates are made again.
+void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassSizes& sizes,
+                          fusion::ObjectMap& objects, const fusion::ViewLog* view_log,
+                          FuseResult& result) {
+  const auto t0 = Clock::now();
+  result.oversize = objects.split_oversize(result.scene.up.up, sizes);
+  if (!result.oversize.empty()) {
+    judge_and_record(options, objects, view_log, result);
+    result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
   }
+  result.times.push_back({"oversize objects", seconds_since(t0)});
 }
 
 // The point counts of the written maps (run.json "points").
@@ -1277,6 +1320,7 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"objects_confirmed", result.objects.size()},
       {"merges", result.merges.size()},
       {"objects_split", result.splits.size()},
+      {"objects_cut_for_size", result.oversize.size()},
       {"object_meshes", std::count_if(result.object_meshes.begin(), result.object_meshes.end(),
                                       [](const ObjectMesh& m) { return !m.model.mesh.empty(); })},
       {"object_mesh_triangles", mesh_triangles(result.object_meshes)},
@@ -1352,6 +1396,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
                                                     {"--trajectory", options.trajectory},
                                                     {"--segmentation", options.segmentation}});
   io::require_replaceable(options.out, io::kRunFolder);  // before the work, not after it
+  const segmentation::ClassSizes class_sizes =
+      segmentation::ClassSizes::from_spec(options.class_sizes);
   const auto t_start = Clock::now();
   FuseResult result;
   // 1-2. Inputs (the TUM folder, the camera, the trajectory, the segmentation) and keyframes.
@@ -1417,13 +1463,16 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
                           result.scene.seconds_up + result.scene.seconds_surfaces});
   for (const auto& w : result.scene.up.warnings) result.warnings.push_back("up direction: " + w);
 
-  // 4c. The objects' boxes stand on up; the surfaces that are objects' tops; the relations (on,
+  // 4c. Objects wider than their class allows are cut, now that the up is known.
+  cut_oversize_objects(options, class_sizes, objects, view_log ? &*view_log : nullptr, result);
+
+  // 4d. The objects' boxes stand on up; the surfaces that are objects' tops; the relations (on,
   //     near, above, under).
   relate_to_scene(result.objects, options.scene, record_options(options, result.threads),
                   result.scene);
   result.times.push_back({"boxes upright and relations", result.scene.seconds_relations});
 
-  // 4d. The meshes: each object's TSDF model from the observations that joined it (merged objects
+  // 4e. The meshes: each object's TSDF model from the observations that joined it (merged objects
   //     union theirs), in its box; the scene's model, fused keyframe by keyframe, meshed.
   if (object_views) {
     t0 = Clock::now();

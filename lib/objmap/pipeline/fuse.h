@@ -61,6 +61,9 @@ struct FuseOptions {
   std::string confirmation = "views";     // views (default) or id_keyframes (paper)
   double min_voxel_support = 0.1;    // an object keeps voxels seen in >= 10% of its observations
   fusion::ObjectMapOptions objects;  // association (eq 22), confirmation, merge pass
+  // Class sizes (segmentation/class_sizes.h) for objects.oversize: "builtin" (the COCO table),
+  // "none" (no class has a size), or a JSON file of sizes added to the built-in table.
+  std::string class_sizes = "builtin";
   fusion::VisibilityOptions visibility;  // where an object was in view (the detected share)
   bool outlier_filter = true;            // eq 18 on each object's cloud
   filters::OutlierOptions outlier;       // K = 20, k = 1.0
@@ -110,6 +113,7 @@ struct FuseResult {
                                     // with enough views, left out by the detected share
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::SplitLink> splits;      // objects split in parts (split_clusters)
+  std::vector<fusion::SplitLink> oversize;    // objects cut for their class's size (oversize)
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
   std::vector<ObjectMesh> object_meshes;      // one per object of `objects` with --mesh objects|all

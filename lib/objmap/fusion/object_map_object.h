@@ -1,0 +1,112 @@
+#pragma once
+// ObjectMap's object, shared by the files that implement ObjectMap (object_map.cpp,
+// object_map_oversize.cpp). Private to lib/objmap/fusion: include it from nowhere else.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "objmap/fusion/object_map.h"
+#include "objmap/geometry/bounds.h"
+#include "objmap/geometry/voxel_key.h"
+
+namespace objmap::fusion {
+
+struct ObjectMap::Object {
+  int id = -1;
+  bool alive = true;
+  int absorbed_into = -1;
+  VoxelMap voxels;
+  Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();  // voxel bounds
+  Vec3 centroid = Vec3::Zero();                                                // voxel-weighted
+  double radius = 0.0;  // RMS distance of the voxels' mean positions from the centroid
+  // Every voxel within one voxel (3×3×3) of an occupied voxel (the tolerant overlap test is one
+  // lookup per voxel of the other set); the value is, for an occupied voxel, the number of
+  // observations that had it (saturating at 255), 0 for a neighbour only.
+  geometry::VoxelHashTable<std::uint8_t> near;
+  std::vector<double> frames;  // timestamps of its observations, ascending, unique
+  int frames_in_view = -1;     // judge_visibility(): keyframes in view or detected; -1: not judged
+  bool has_frame(double t) const { return std::binary_search(frames.begin(), frames.end(), t); }
+  void add_frame(double t) {
+    auto it = std::lower_bound(frames.begin(), frames.end(), t);
+    if (it == frames.end() || *it != t) frames.insert(it, t);
+  }
+  std::map<std::string, ClassVote> histogram;
+  double score_sum = 0.0;
+  int observations = 0;
+  std::set<int> track_ids;
+  double first_seen = 0.0, last_seen = 0.0;
+  std::vector<ObservationLink> provenance;
+  // Per provenance entry, the coarse cells its voxels fell in (split_clusters; else empty).
+  std::vector<std::vector<VoxelKey>> cells;
+  std::vector<std::pair<double, int>> moved;  // split_pass(): observation timestamp -> its part
+  std::vector<MergeLink> merges;
+  PointCloud points;  // its observations' points (ObjectMapOptions::keep_points)
+
+  explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
+  // Provenance by timestamp, then insertion order; the cells follow their entries (when every
+  // entry has its cells; else none is kept).
+  void sort_provenance() {
+    const bool with_cells = cells.size() == provenance.size();
+    std::vector<std::size_t> order(provenance.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+      return provenance[x].timestamp < provenance[y].timestamp;
+    });
+    std::vector<ObservationLink> sorted;
+    std::vector<std::vector<VoxelKey>> sorted_cells;
+    for (std::size_t i : order) {
+      sorted.push_back(std::move(provenance[i]));
+      if (with_cells) sorted_cells.push_back(std::move(cells[i]));
+    }
+    provenance = std::move(sorted);
+    cells = std::move(sorted_cells);
+  }
+  // Takes one observation of another object's (a split's part): its provenance entry and coarse
+  // cells, its class vote, track id and frame.
+  void take(const ObservationLink& link, std::vector<VoxelKey> link_cells) {
+    ClassVote& vote = histogram[link.class_name];
+    vote.score_sum += link.score;
+    ++vote.count;
+    score_sum += link.score;
+    first_seen = observations == 0 ? link.timestamp : std::min(first_seen, link.timestamp);
+    last_seen = observations == 0 ? link.timestamp : std::max(last_seen, link.timestamp);
+    ++observations;
+    if (link.track_id) track_ids.insert(*link.track_id);
+    add_frame(link.timestamp);
+    provenance.push_back(link);
+    cells.push_back(std::move(link_cells));
+  }
+  // Marks the neighbourhoods of `keys` (voxels new to this object) in `near`.
+  void dilate(const std::vector<VoxelKey>& keys) {
+    const auto& offsets = geometry::neighbourhood_offsets();
+    near.reserve(near.size() + keys.size() * 4);
+    // The 27 slots of a key two keys ahead are prefetched, so that the cache misses of a large
+    // table overlap (the slots, not the values, depend on the order: the table ends the same).
+    constexpr std::size_t kAhead = 2;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (i + kAhead < keys.size())
+        for (VoxelKey off : offsets) near.prefetch(keys[i + kAhead] + off);
+      for (VoxelKey off : offsets) near[keys[i] + off];  // inserted as 0 when absent
+    }
+  }
+  // Bounds, voxel-weighted centroid and RMS radius in one pass over the voxels.
+  void refresh() {
+    Vec3 sum = Vec3::Zero();
+    double sq = 0.0;
+    bool any = false;
+    voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+      geometry::extend_voxel_bounds(key, any, lo, hi);
+      const Vec3 p = voxels.mean_position(key, v);
+      sum += p;
+      sq += p.squaredNorm();
+    });
+    const double n = static_cast<double>(voxels.size());
+    centroid = n > 0 ? Vec3(sum / n) : Vec3::Zero();
+    radius = n > 0 ? std::sqrt(std::max(0.0, sq / n - centroid.squaredNorm())) : 0.0;
+  }
+};
+
+}  // namespace objmap::fusion

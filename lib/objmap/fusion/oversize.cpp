@@ -1,0 +1,108 @@
+#include "objmap/fusion/oversize.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "objmap/core/error.h"
+
+namespace objmap::fusion {
+
+namespace {
+
+// Two unit vectors that span the plane perpendicular to `up`.
+std::pair<Vec3, Vec3> horizontal_basis(const Vec3& up) {
+  const Vec3 n = up.normalized();
+  const Vec3 seed = std::fabs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 e1 = (seed - seed.dot(n) * n).normalized();
+  return {e1, n.cross(e1)};
+}
+
+// The q-quantile of sorted values (nearest rank).
+double quantile(const std::vector<double>& sorted, double q) {
+  const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(sorted.size() - 1)));
+  return sorted[std::min(k, sorted.size() - 1)];
+}
+
+}  // namespace
+
+void OversizeOptions::check() const {
+  require(margin >= 0.0 && margin <= 10.0, "OversizeOptions.margin", "must be in [0, 10]");
+  require(percentile >= 0.0 && percentile < 0.5, "OversizeOptions.percentile",
+          "must be in [0, 0.5)");
+  require(bin_m > 0.0 && bin_m <= 1.0, "OversizeOptions.bin_m", "must be in (0, 1] m");
+  require(smooth_bins >= 0 && smooth_bins <= 50, "OversizeOptions.smooth_bins",
+          "must be in [0, 50]");
+}
+
+double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, double percentile,
+                         Vec3* axis) {
+  if (surface.size() < 2) return 0.0;
+  const auto [e1, e2] = horizontal_basis(up);
+  // The long axis: the principal axis of the horizontal projections.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const Vec3& p : surface) mean += Eigen::Vector2d(e1.dot(p), e2.dot(p));
+  mean /= static_cast<double>(surface.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const Vec3& p : surface) {
+    const Eigen::Vector2d d = Eigen::Vector2d(e1.dot(p), e2.dot(p)) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const Eigen::Vector2d major = eig.eigenvectors().col(1);
+  Vec3 long_axis = (major.x() * e1 + major.y() * e2).normalized();
+  // A fixed sign, so that the same surface gives the same axis whatever its order.
+  if (long_axis.x() + 1e-9 * long_axis.y() < 0.0) long_axis = -long_axis;
+  std::vector<double> along;
+  along.reserve(surface.size());
+  for (const Vec3& p : surface) along.push_back(long_axis.dot(p));
+  std::sort(along.begin(), along.end());
+  if (axis) *axis = long_axis;
+  return quantile(along, 1.0 - percentile) - quantile(along, percentile);
+}
+
+std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, const Vec3& up,
+                                             double min_m, double max_m, const OversizeOptions& o) {
+  if (!o.enabled || surface.size() < 10 || !(max_m > 0.0)) return std::nullopt;
+  OversizeCut cut;
+  cut.extent_m = horizontal_extent(surface, up, o.percentile, &cut.axis);
+  cut.limit_m = max_m * (1.0 + o.margin);
+  if (cut.extent_m <= cut.limit_m) return std::nullopt;
+  // 1. The profile along the long axis between the quantiles, in bins.
+  std::vector<double> along;
+  for (const Vec3& p : surface) along.push_back(cut.axis.dot(p));
+  std::sort(along.begin(), along.end());
+  const double lo = quantile(along, o.percentile), hi = quantile(along, 1.0 - o.percentile);
+  const int bins = std::max(3, static_cast<int>(std::ceil((hi - lo) / o.bin_m)));
+  const double bin = (hi - lo) / bins;
+  std::vector<double> count(bins, 0.0);
+  for (double a : along)
+    if (a >= lo && a <= hi) ++count[std::min(bins - 1, static_cast<int>((a - lo) / bin))];
+  std::vector<double> smooth(bins, 0.0);
+  for (int b = 0; b < bins; ++b) {
+    int n = 0;
+    for (int k = std::max(0, b - o.smooth_bins); k <= std::min(bins - 1, b + o.smooth_bins); ++k) {
+      smooth[b] += count[k];
+      ++n;
+    }
+    smooth[b] /= n;
+  }
+  // 2. The emptiest bin where both sides are at least min_m wide (half the extent at most), the
+  //    one nearest the middle among equals; the cut at its centre.
+  const double side = std::min(min_m, 0.5 * (hi - lo));
+  int best = -1;
+  for (int b = 0; b < bins; ++b) {
+    const double at = lo + (b + 0.5) * bin;
+    if (at - lo < side - 0.5 * bin || hi - at < side - 0.5 * bin) continue;
+    const double middle = std::fabs(b + 0.5 - 0.5 * bins);
+    if (best < 0 || smooth[b] < smooth[best] ||
+        (smooth[b] == smooth[best] && middle < std::fabs(best + 0.5 - 0.5 * bins)))
+      best = b;
+  }
+  if (best < 0) best = bins / 2;
+  cut.cut = lo + (best + 0.5) * bin;
+  return cut;
+}
+
+}  // namespace objmap::fusion

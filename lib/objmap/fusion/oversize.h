@@ -1,0 +1,47 @@
+#pragma once
+#include <optional>
+#include <vector>
+
+#include "objmap/core/types.h"
+
+// The extent of one instance (docs/fusion.md, "The extent of one instance"): an object of the map
+// wider than its class allows (segmentation/class_sizes.h) is not one instance. A detector gives
+// one mask over two or three chairs packed along a table, the tracker gives that mask one id, and
+// their surfaces fuse into one object 1-1.5 m wide. Its surface, seen from above, is then two
+// masses with a gap or a thin neck between them along its long axis: the cut goes through the
+// emptiest place there, each side at least as wide as the smallest instance of the class.
+namespace objmap::fusion {
+
+struct OversizeOptions {
+  bool enabled = true;       // off: no object is split for its size (`--method paper`)
+  double margin = 0.15;      // wider than the class's max_m × (1 + margin) is too wide
+  double percentile = 0.02;  // the extent spans the [q, 1 − q] quantiles of the surface
+  double bin_m = 0.02;       // the surface's profile along the long axis, in bins of this
+  int smooth_bins = 1;       // ... averaged over ±this many bins
+  void check() const;        // throws InputError naming the bad field
+};
+
+// Where an object is cut. `axis` is horizontal (perpendicular to up), unit, in the world frame; a
+// point p lies on side 0 when axis · p < cut, else on side 1.
+struct OversizeCut {
+  Vec3 axis = Vec3::UnitX();
+  double cut = 0.0;
+  double extent_m = 0.0;  // the object's horizontal extent along `axis` (quantiles)
+  double limit_m = 0.0;   // what its class allows (max_m × (1 + margin))
+};
+
+// The horizontal extent of `surface` (points in the world frame; `up` unit) along its long axis
+// (the principal axis of the points projected on the horizontal plane), between the percentile
+// quantiles.
+double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, double percentile,
+                         Vec3* axis = nullptr);
+
+// The cut of an object whose surface is wider than max_m × (1 + margin) along its long axis:
+// the least dense place of its profile (bins of bin_m, smoothed) where both sides span at least
+// min_m (half the extent when the extent is under 2 × min_m); ties: the place nearest the middle.
+// nullopt when the object is not too wide (or has fewer than 10 points).
+std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, const Vec3& up,
+                                             double min_m, double max_m,
+                                             const OversizeOptions& options);
+
+}  // namespace objmap::fusion
