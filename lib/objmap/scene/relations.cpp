@@ -227,35 +227,42 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
   }
 }
 
-// Furniture on a table or on nothing stands on the floor if one is seen near it and its bottom
-// is within floor_gap_m of the floor's height: the floor under furniture is hidden by it, so a
-// floor piece below its bottom (on_below) whose outline comes within floor_reach_m of its
-// footprint will do, the nearest. A chair seen from above has its seat, not in its mask, as a
-// patch at its bottom that the table rule labels: the table a chair, couch, bench or bed was on
-// becomes its seat when nothing else stands on it and a floor is seen below. With a floor seen
-// below but further than floor_gap_m under its bottom (a chair pushed under a desk, its back above
+// The floor's plane holds for the whole room: the floor under furniture is hidden by it, and a
+// fridge or a couch against a wall may have no floor seen beside it. So furniture found on a table
+// or on nothing, and any object found on nothing, stands on the floor when its bottom is within
+// floor_gap_m above the floor's height (at most on_below_m below it), whichever floor piece was
+// seen, anywhere: the nearest to its footprint. A chair seen from above has its seat, not in its
+// mask, as a patch at its bottom that the table rule labels: the table a chair, couch, bench or
+// bed was on becomes its seat when nothing else stands on it and a floor is seen. With a floor
+// seen but further than floor_gap_m under its bottom (a chair pushed under a desk, its back above
 // the desk top and its legs hidden), furniture stands on nothing seen, not on the table.
-void furniture_on_floor(const std::vector<SceneObject>& objects,
-                        const std::vector<detail::Footprint>& feet, std::vector<Surface>& surfaces,
-                        const Eigen::Matrix3d& gravity, const RelationOptions& o,
-                        std::vector<Relations>& relations) {
+void on_the_floor(const std::vector<SceneObject>& objects,
+                  const std::vector<detail::Footprint>& feet, std::vector<Surface>& surfaces,
+                  const Eigen::Matrix3d& gravity, const RelationOptions& o,
+                  std::vector<Relations>& relations) {
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const std::optional<Support>& on = relations[i].on;
     const detail::Footprint& f = feet[i];
-    if (!furniture(objects[i].class_name) || (on && on->label != "table")) continue;
+    const bool is_furniture = furniture(objects[i].class_name);
+    if (on && !(is_furniture && on->label == "table")) continue;
     const Surface* floor = nullptr;
-    double floor_reach = -o.floor_reach_m;  // inside_distance of the nearest floor piece
+    double floor_reach = -std::numeric_limits<double>::infinity();
     for (const Surface& s : surfaces) {
       if (s.label != "floor" || f.bottom - s.height_m < -o.on_below_m) continue;
       const std::vector<cv::Point2f> hull = outline_xy(s, gravity);
       double reach = detail::inside_distance(hull, f.centre);
       for (const cv::Point2f& p : f.hull) reach = std::max(reach, detail::inside_distance(hull, p));
-      if (reach >= floor_reach) {
+      if (reach > floor_reach) {
         floor = &s;
         floor_reach = reach;
       }
     }
     if (!floor) continue;
+    const double gap = f.bottom - floor->height_m;
+    if (!is_furniture) {  // on nothing: the floor when it is at the floor's height
+      if (gap <= o.floor_gap_m) relations[i].on = Support{"surface", floor->id, floor->label, gap};
+      continue;
+    }
     const auto carries_another = [&](int surface_id) {
       for (std::size_t j = 0; j < objects.size(); ++j)
         if (j != i && relations[j].on && relations[j].on->kind == "surface" &&
@@ -273,11 +280,36 @@ void furniture_on_floor(const std::vector<SceneObject>& objects,
         }
     // On the floor only when its bottom is near the floor's height; otherwise what it stands on is
     // not seen (furniture does not stand on a table, nor on its own seat).
-    const double gap = f.bottom - floor->height_m;
     if (gap <= o.floor_gap_m)
       relations[i].on = Support{"surface", floor->id, floor->label, gap};
     else
       relations[i].on.reset();
+  }
+}
+
+// A table top holds under what stands on it, seen or hidden: the visible outline of a desk ends
+// where the monitors at its back edge hide it. An object on nothing whose bottom lies at the
+// height of a table (within on_below_m / on_above_m) and whose footprint comes within
+// hidden_reach_m of the table's outline stands on it. Furniture does not stand on a table.
+void on_a_hidden_table(const std::vector<SceneObject>& objects,
+                       const std::vector<detail::Footprint>& feet,
+                       const std::vector<Surface>& surfaces, const Eigen::Matrix3d& gravity,
+                       const RelationOptions& o, std::vector<Relations>& relations) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const detail::Footprint& f = feet[i];
+    if (relations[i].on || furniture(objects[i].class_name) || f.hull.size() < 3) continue;
+    std::optional<Support> best;
+    for (const Surface& s : surfaces) {
+      if (s.label != "table") continue;
+      const double gap = f.bottom - s.height_m;
+      if (gap < -o.on_below_m || gap > o.on_above_m) continue;
+      if (best && std::fabs(gap) >= std::fabs(best->gap_m)) continue;
+      const std::vector<cv::Point2f> hull = outline_xy(s, gravity);
+      double reach = detail::inside_distance(hull, f.centre);
+      for (const cv::Point2f& p : f.hull) reach = std::max(reach, detail::inside_distance(hull, p));
+      if (reach >= -o.hidden_reach_m) best = Support{"surface", s.id, s.label, gap};
+    }
+    if (best) relations[i].on = best;
   }
 }
 
@@ -311,8 +343,8 @@ void RelationOptions::check() const {
   require(near_radius_m > 0.0, "RelationOptions.near_radius_m", "must be > 0");
   require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
   require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");
-  require(floor_reach_m >= 0.0, "RelationOptions.floor_reach_m", "must be >= 0");
   require(top_band_m >= 0.0, "RelationOptions.top_band_m", "must be >= 0");
+  require(hidden_reach_m >= 0.0, "RelationOptions.hidden_reach_m", "must be >= 0");
   require(floor_gap_m >= 0.0, "RelationOptions.floor_gap_m", "must be >= 0");
   require(duplicate_overlap > 0.0 && duplicate_overlap <= 1.0, "RelationOptions.duplicate_overlap",
           "must be in (0, 1]");
@@ -345,7 +377,8 @@ std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
           if (s.id == r.on->id) r.on->label = s.label;
   };
   refresh_labels();
-  furniture_on_floor(objects, feet, surfaces, gravity, options, relations);
+  on_the_floor(objects, feet, surfaces, gravity, options, relations);
+  on_a_hidden_table(objects, feet, surfaces, gravity, options, relations);
   refresh_labels();  // a table that was a chair's seat
   near_above_under(objects, feet, options, relations);
   return relations;

@@ -117,9 +117,14 @@ struct RelationOptions {
   double near_radius_m = 0.5;           // `near`: box centres within this distance
   double stack_tolerance_m = 0.03;      // `above`: bottom at least top − this
   double support_min_area_ratio = 0.5;  // an object support's top ≥ this × the object's footprint
-  double top_band_m = 0.05;    // an object's top: its points this close below its top height
-  double floor_reach_m = 1.0;  // furniture stands on a floor piece seen this near its footprint
-  double floor_gap_m = 0.15;   // ... when its bottom is at most this above the floor's height
+  double top_band_m = 0.05;  // an object's top: its points this close below its top height
+  // Furniture, and what stands on nothing, stands on the floor (any piece seen in the room) when
+  // its bottom is at most this above the floor's height.
+  double floor_gap_m = 0.15;
+  // A table top holds under what hides it: an object on nothing at a table's height whose
+  // footprint comes within this of the table's seen outline stands on it (the outline is sampled
+  // on 4 cm cells and ends where the object hides the top).
+  double hidden_reach_m = 0.1;
   // Two objects of one class whose boxes interpenetrate by this share of the smaller box (the
   // footprints' overlap share × the height ranges' overlap share) are a suspected duplicate: one
   // physical object seen as two, neither on the other.
