@@ -69,6 +69,10 @@ void SegNoiseOptions::check() const {
   require(std::isfinite(score_min) && std::isfinite(score_max) && 0.0 <= score_min &&
               score_min <= score_max && score_max <= 1.0,
           "SegNoiseOptions.score_min", "scores must satisfy 0 <= score_min <= score_max <= 1");
+  require(probability(merge_touching_prob), "--merge-touching-rate",
+          "must be a probability in [0, 1], got " + num(merge_touching_prob));
+  require(touch_px >= 0 && touch_px <= 20, "SegNoiseOptions.touch_px",
+          "must be in [0, 20] pixels, got " + std::to_string(touch_px));
   require(bleed_px >= 0 && bleed_px <= 20, "--mask-bleed-px",
           "must be in [0, 20] pixels (0 = no bleed), got " + std::to_string(bleed_px));
 }
@@ -194,7 +198,9 @@ seg::FrameSegmentation exact_segmentation(const cv::Mat& labels, const Scene& sc
 }
 
 SegmentationNoise::SegmentationNoise(const SegNoiseOptions& options, std::uint64_t seed)
-    : options_(options), rng_(derive_seed(seed, 0, 0x5E6)) {
+    : options_(options),
+      rng_(derive_seed(seed, 0, 0x5E6)),
+      merge_rng_(derive_seed(seed, 0, 0x3E6E)) {
   options_.check();
 }
 
@@ -311,9 +317,65 @@ seg::FrameSegmentation SegmentationNoise::apply(const seg::FrameSegmentation& ex
     out.instances.push_back(std::move(instance));
   }
 
+  if (o.merge_touching_prob > 0.0) merge_touching(&out);
   add_false_positives(width, height, &out);
   ++frame_;
   return out;
+}
+
+void SegmentationNoise::merge_touching(seg::FrameSegmentation* out) {
+  auto& instances = out->instances;
+  const int n = static_cast<int>(instances.size());
+  if (n < 2) return;
+  const int t = options_.touch_px;
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, {2 * t + 1, 2 * t + 1});
+  std::vector<cv::Mat> masks;
+  std::vector<cv::Rect> boxes;
+  for (const auto& in : instances) {
+    masks.push_back(to_mat(*in.mask));
+    boxes.push_back(cv::boundingRect(masks.back()));
+  }
+  // Union-find over the pairs that touch and draw a merge; one draw per touching pair.
+  std::vector<int> root(n);
+  for (int i = 0; i < n; ++i) root[i] = i;
+  const auto find = [&](int i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) {
+      if (instances[i].class_name != instances[j].class_name) continue;
+      const cv::Rect grown(boxes[i].x - t, boxes[i].y - t, boxes[i].width + 2 * t,
+                           boxes[i].height + 2 * t);
+      const cv::Rect common = grown & boxes[j];
+      if (common.area() == 0) continue;
+      const cv::Rect roi = (grown | boxes[j]) & cv::Rect(0, 0, masks[i].cols, masks[i].rows);
+      cv::Mat near_i;
+      cv::dilate(masks[i](roi), near_i, kernel);
+      if (cv::countNonZero(near_i & masks[j](roi)) == 0) continue;
+      if (merge_rng_.uniform() < options_.merge_touching_prob) root[find(j)] = find(i);
+    }
+  // Each group: one mask (the union), the larger's track ID, the highest score.
+  std::vector<seg::Instance> kept;
+  for (int i = 0; i < n; ++i) {
+    if (find(i) != i) continue;
+    int largest = i;
+    cv::Mat joined = masks[i].clone();
+    double score = instances[i].score;
+    for (int j = i + 1; j < n; ++j) {
+      if (find(j) != i) continue;
+      cv::bitwise_or(joined, masks[j], joined);
+      score = std::max(score, instances[j].score);
+      if (cv::countNonZero(masks[j]) > cv::countNonZero(masks[largest])) largest = j;
+      ++stats_.merged;
+    }
+    seg::Instance in = instances[largest];
+    in.score = score;
+    in.mask = to_mask(joined);
+    in.bbox = mask_box(*in.mask);
+    kept.push_back(std::move(in));
+  }
+  instances = std::move(kept);
 }
 
 }  // namespace objmap::sim

@@ -19,6 +19,11 @@ struct ClassConfusion {
   double probability;  // per instance and frame
 };
 
+// The share of frames in which the walk-through preset gives touching instances of one class as
+// one mask (SegNoiseOptions::merge_touching_prob; docs/fusion.md "The extent of one instance" says
+// how it was measured on real masks).
+inline constexpr double kWalkthroughMergeTouching = 0.3;
+
 struct SegNoiseOptions {
   // Instances with fewer visible pixels are not reported (neither in the exact nor the noisy
   // output).
@@ -45,6 +50,12 @@ struct SegNoiseOptions {
   // than this many frames: seen again, it gets a new track ID, as on a walk-through's revisit.
   // 0 = never (the object keeps its ID).
   int new_track_after_frames = 0;
+  // Packed objects: two reported instances of one class whose masks touch (within touch_px) are
+  // given as one mask, in this share of the frames in which they touch (a detector's one mask over
+  // chairs packed along a table); the tracker gives it the track ID of the larger. Chains join
+  // (three chairs in a row). Drawn from a stream of its own: 0 leaves every other draw as it was.
+  double merge_touching_prob = 0.0;
+  int touch_px = 2;
 
   void check() const;             // throws InputError naming the bad field
   static SegNoiseOptions none();  // no error at all: the noisy output equals the exact one
@@ -75,14 +86,18 @@ class SegmentationNoise {
     int id_reuses = 0;
     int revisit_ids = 0;         // new IDs given to objects seen again after new_track_after_frames
     long long bleed_pixels = 0;  // pixels added to reported masks by the bleed
+    int merged = 0;              // instances given as part of another's mask (merge_touching_prob)
   };
   const Stats& stats() const { return stats_; }
 
  private:
   void add_false_positives(int width, int height, segmentation::FrameSegmentation* out);
+  // merge_touching_prob: joins touching instances of one class of `out` (its true instances).
+  void merge_touching(segmentation::FrameSegmentation* out);
 
   SegNoiseOptions options_;
   Rng rng_;
+  Rng merge_rng_;                       // merge_touching_prob's draws, apart from the others
   std::map<int, int> track_of_object_;  // object id -> current track id
   std::map<int, int> last_seen_frame_;  // object id -> the last frame it was in view
   int frame_ = 0;                       // frames applied so far
