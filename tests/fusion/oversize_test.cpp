@@ -20,7 +20,8 @@ using test::instance;
 PointCloud oversize_joined(const std::vector<PointCloud>& parts) {
   PointCloud all;
   for (const PointCloud& p : parts)
-    for (std::size_t i = 0; i < p.size(); ++i) all.push_back(p.points[i], p.colors[i]);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      all.push_back(p.points[i], p.colors.empty() ? Rgb{200, 100, 50} : p.colors[i]);
   return all;
 }
 
@@ -59,6 +60,7 @@ TEST(Oversize, TheCutGoesThroughTheGapBetweenTwoChairs) {
   EXPECT_GT(cut->extent_m, 0.8);
   EXPECT_GT(cut->axis.x() * cut->cut, 0.715);
   EXPECT_LT(cut->axis.x() * cut->cut, 0.765);
+  EXPECT_TRUE(cut->apart);  // a valley between two halves: two instances
   // One chair is not cut; neither are the two as a table; nor with the rule off.
   EXPECT_FALSE(plan_oversize_cut(a, Vec3::UnitZ(), 0.4, 0.7, options).has_value());
   EXPECT_FALSE(plan_oversize_cut(two, Vec3::UnitZ(), 0.5, 4.0, options).has_value());
@@ -118,6 +120,31 @@ TEST(ObjectMap, OneMaskOverTwoOrThreePackedChairsIsCutIntoOneObjectPerChair) {
     std::sort(xs.begin(), xs.end());
     for (int k = 0; k < n; ++k) EXPECT_NEAR(xs[k], 0.505 + 0.47 * k, 0.02) << n << " chairs";
   }
+}
+
+// A mouse (a 6 x 10 x 3 cm box) whose box masks also held a strip of the desk beside it, 30 cm
+// long, seen in every observation: no valley between two instances, so the strip is cut off and
+// the mouse stays one object, its position on the mouse.
+TEST(ObjectMap, AnObjectWithAStripAttachedIsTrimmedNotSplit) {
+  PointCloud mouse;
+  for (int i = -3; i <= 3; ++i)
+    for (int j = -5; j <= 5; ++j)
+      for (int k = 0; k <= 3; ++k) mouse.push_back(Vec3f(0.5f + 0.01f * i, 0.01f * j, 0.01f * k));
+  PointCloud strip;
+  for (int i = 4; i <= 33; ++i)
+    for (int j = -5; j <= 5; ++j) strip.push_back(Vec3f(0.5f + 0.01f * i, 0.01f * j, 0.0f));
+  const auto cut = plan_oversize_cut(oversize_points(oversize_joined({mouse, strip})),
+                                     Vec3::UnitZ(), 0.05, 0.14, OversizeOptions{});
+  ASSERT_TRUE(cut.has_value());
+  EXPECT_FALSE(cut->apart);
+  ObjectMap map;
+  for (int f = 0; f < 6; ++f)
+    map.add_frame({instance(f, 1, "mouse", oversize_joined({mouse, strip}))});
+  EXPECT_FALSE(map.split_oversize(Vec3::UnitZ(), {}).empty());
+  const auto records = map.records(RecordOptions{});
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_LT(oversize_width_x(records[0]), 0.14 * 1.15);
+  EXPECT_LT(std::fabs(records[0].position.x() - 0.5), 0.04);
 }
 
 TEST(ObjectMap, AClassWithoutASizeOrWideEnoughIsNotCut) {

@@ -450,14 +450,17 @@ struct ChairSeenFromAbove {
   std::vector<Surface> surfaces;  // of the last relate()
 };
 
-TEST(Relations, AChairSeenFromAboveIsOnNeitherItsSeatNorTheFloorFarBelowIt) {
-  // Its bottom (the back's lowest point) is 0.55 m above the floor: more than floor_gap_m (0.15 m),
-  // so it stands on nothing seen; the patch at its bottom is its own seat, not a table it is on.
-  for (double gap : {0.0, 0.8}) {  // the floor seen up to the chair, or from 0.8 m away
+TEST(Relations, AChairSeenFromAboveStandsOnTheFloorNotOnItsSeat) {
+  // Its bottom (the back's lowest point) is 0.55 m above the floor: its legs are hidden (within
+  // hidden_base_m, 1 m), so it stands on the floor, gap_m 0.55; the patch at its bottom is its own
+  // seat, not a table it is on.
+  for (double gap : {0.0, 0.8, 1.2}) {  // the floor seen up to the chair, or from further away
     SCOPED_TRACE("floor from " + std::to_string(gap) + " m");
     ChairSeenFromAbove scene(gap);
     const auto chair = scene.relate("chair");
-    EXPECT_FALSE(chair[0].on) << chair[0].on->label << " " << chair[0].on->gap_m;
+    ASSERT_TRUE(chair[0].on);
+    EXPECT_EQ(chair[0].on->label, "floor");
+    EXPECT_NEAR(chair[0].on->gap_m, 0.55, 0.02);
     ASSERT_FALSE(scene.surfaces.empty());
     const Surface& seat = scene.surfaces.back();  // the smallest
     EXPECT_EQ(seat.label, "seat");
@@ -469,9 +472,10 @@ TEST(Relations, AChairSeenFromAboveIsOnNeitherItsSeatNorTheFloorFarBelowIt) {
   }
 }
 
-TEST(Relations, ADiningTableSeenByItsTopIsNotOnTheFloorFarBelowIt) {
+TEST(Relations, ADiningTableSeenByItsTopStandsOnTheFloorItsLegsHidden) {
   // Only the top slab (0.70-0.75 m) of a 1.2 x 0.8 m dining table is in its mask, in a room whose
-  // floor is seen around it: the floor is 0.70 m below its bottom, so it is on nothing seen.
+  // floor is seen around it: the floor is 0.70 m below its bottom, its legs hidden: on the floor,
+  // gap_m 0.70. With hidden_base_m 0.5 it stands on nothing seen.
   std::vector<Vec3f> map;
   add_rect(map, 0.0, 3.0, 0.0, 3.0, 0.0);
   PointCloud table;
@@ -482,8 +486,13 @@ TEST(Relations, ADiningTableSeenByItsTopIsNotOnTheFloorFarBelowIt) {
   std::vector<Surface> surfaces = surfaces_and_tops(map, Vec3::UnitZ(), objects);
   const auto relations =
       relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, RelationOptions{});
-  EXPECT_FALSE(relations[0].on) << relations[0].on->label << " " << relations[0].on->gap_m;
-  // With its legs seen down to 5 cm above the floor it stands on the floor.
+  ASSERT_TRUE(relations[0].on);
+  EXPECT_EQ(relations[0].on->label, "floor");
+  EXPECT_NEAR(relations[0].on->gap_m, 0.70, 0.02);
+  RelationOptions strict;
+  strict.hidden_base_m = 0.5;
+  EXPECT_FALSE(relate_objects(objects, surfaces, Vec3::UnitZ(), SurfaceOptions{}, strict)[0].on);
+  // With its legs seen down to 5 cm above the floor it stands on the floor, gap_m small.
   for (double x : {0.52, 1.66})  // four legs 3 x 3 cm, one point per 1 cm voxel
     for (double y : {0.52, 1.26})
       for (double z = 0.05; z < 0.70; z += 0.01)
@@ -568,10 +577,6 @@ TEST(Relations, AChairSeenFromAboveWithNoFloorStaysWhereItIsSeen) {
   ASSERT_TRUE(chair[0].on);
   EXPECT_NE(chair[0].on->label, "floor");
   EXPECT_NEAR(chair[0].on->gap_m, 0.0, 0.02);
-  // The floor seen 1.2 m away holds under the chair too: its bottom is 0.55 m above it, so it
-  // stands on nothing seen (its seat is its own), as with the floor seen up to it.
-  ChairSeenFromAbove far(1.2);
-  EXPECT_FALSE(far.relate("chair")[0].on);
 }
 
 TEST(Relations, AMonitorAtTheDesksBackEdgeStandsOnTheDeskItHides) {

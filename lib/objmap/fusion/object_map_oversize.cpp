@@ -42,9 +42,10 @@ bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, do
       plan_oversize_cut(surface_points(o, 0.1), up, min_m, max_m, options_.oversize);
   if (!cut) return false;
   const auto side = [&](const Vec3& p) { return cut->axis.dot(p) < cut->cut ? 0 : 1; };
-  // 2. Each observation to the side that holds most of its coarse cells (or its centroid's
-  //    side); one that holds a quarter of its cells on the other side too (a mask over both) is
-  //    taken by both, with its cells on each.
+  // 2. Two instances: each observation to the side that holds most of its coarse cells (or its
+  //    centroid's side); one that holds a quarter of its cells on the other side too (a mask over
+  //    both) is taken by both, with its cells on each. One instance with something attached:
+  //    every observation to the kept side, and the other side's voxels are no object's.
   const double cell_m = options_.split_cell_voxels * options_.voxel_m;
   const auto cell_side = [&](VoxelKey c) {
     return side((geometry::unpack_voxel(c).cast<double>().array() + 0.5) * cell_m);
@@ -56,6 +57,10 @@ bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, do
     if (j < o.cells.size())
       for (VoxelKey c : o.cells[j]) on[cell_side(c)].push_back(c);
     const std::size_t n = on[0].size() + on[1].size();
+    if (!cut->apart) {  // one instance: every observation stays with it
+      obs_part[j] = cut->keep;
+      continue;
+    }
     obs_part[j] =
         n > 0 ? (on[1].size() > on[0].size() ? 1 : 0) : side(o.provenance[j].centroid_in_world);
     const int other = 1 - obs_part[j];

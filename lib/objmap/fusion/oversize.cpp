@@ -1,6 +1,7 @@
 #include "objmap/fusion/oversize.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
@@ -34,6 +35,10 @@ void OversizeOptions::check() const {
   require(bin_m > 0.0 && bin_m <= 1.0, "OversizeOptions.bin_m", "must be in (0, 1] m");
   require(smooth_bins >= 0 && smooth_bins <= 50, "OversizeOptions.smooth_bins",
           "must be in [0, 50]");
+  require(valley_ratio >= 0.0 && valley_ratio <= 1.0, "OversizeOptions.valley_ratio",
+          "must be in [0, 1]");
+  require(min_side_share >= 0.0 && min_side_share <= 0.5, "OversizeOptions.min_side_share",
+          "must be in [0, 0.5]");
 }
 
 double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, double percentile,
@@ -102,6 +107,20 @@ std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, c
   }
   if (best < 0) best = bins / 2;
   cut.cut = lo + (best + 0.5) * bin;
+  // 3. Two instances, or one with something attached: the sides' shares of the surface and mean
+  //    densities (the cut's bin on neither side).
+  std::array<double, 2> mass{0.0, 0.0}, width{0.0, 0.0};
+  for (int b = 0; b < bins; ++b) {
+    if (b == best) continue;
+    mass[b < best ? 0 : 1] += count[b];
+    width[b < best ? 0 : 1] += 1.0;
+  }
+  const double total = mass[0] + mass[1] + count[best];
+  const double weaker_density =
+      std::min(mass[0] / std::max(1.0, width[0]), mass[1] / std::max(1.0, width[1]));
+  cut.keep = mass[1] > mass[0] ? 1 : 0;
+  cut.apart = total > 0.0 && std::min(mass[0], mass[1]) >= o.min_side_share * total &&
+              count[best] <= o.valley_ratio * weaker_density;
   return cut;
 }
 

@@ -18,7 +18,10 @@ struct OversizeOptions {
   double percentile = 0.02;  // the extent spans the [q, 1 − q] quantiles of the surface
   double bin_m = 0.02;       // the surface's profile along the long axis, in bins of this
   int smooth_bins = 1;       // ... averaged over ±this many bins
-  void check() const;        // throws InputError naming the bad field
+  double valley_ratio =
+      0.5;  // two instances: the cut bin's count at most this × either side's mean
+  double min_side_share = 0.25;  // ... and each side at least this share of the surface
+  void check() const;            // throws InputError naming the bad field
 };
 
 // Where an object is cut. `axis` is horizontal (perpendicular to up), unit, in the world frame; a
@@ -28,6 +31,12 @@ struct OversizeCut {
   double cut = 0.0;
   double extent_m = 0.0;  // the object's horizontal extent along `axis` (quantiles)
   double limit_m = 0.0;   // what its class allows (max_m × (1 + margin))
+  // Two instances: the cut lies in a valley of the profile (at most valley_ratio × the mean
+  // density of either side) and each side holds at least min_side_share of the surface. Else the
+  // object is one instance with something attached (a strip of the table its box masks held):
+  // `keep` is the side with more of the surface, the other is not the object.
+  bool apart = false;
+  int keep = 0;
 };
 
 // The horizontal extent of `surface` (points in the world frame; `up` unit) along its long axis

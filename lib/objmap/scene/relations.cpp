@@ -231,11 +231,12 @@ void label_surfaces(std::vector<Surface>& surfaces, const std::vector<SceneObjec
 // fridge or a couch against a wall may have no floor seen beside it. So furniture found on a table
 // or on nothing, and any object found on nothing, stands on the floor when its bottom is within
 // floor_gap_m above the floor's height (at most on_below_m below it), whichever floor piece was
-// seen, anywhere: the nearest to its footprint. A chair seen from above has its seat, not in its
-// mask, as a patch at its bottom that the table rule labels: the table a chair, couch, bench or
-// bed was on becomes its seat when nothing else stands on it and a floor is seen. With a floor
-// seen but further than floor_gap_m under its bottom (a chair pushed under a desk, its back above
-// the desk top and its legs hidden), furniture stands on nothing seen, not on the table.
+// seen, anywhere: the nearest to its footprint. Furniture stands on the floor too when what is
+// hidden of it is at most hidden_base_m (a chair seen from above over a table, its legs hidden;
+// a chair pushed under a desk; a dining table seen by its top): a chair does not float. A chair
+// seen from above has its seat, not in its mask, as a patch at its bottom that the table rule
+// labels: the table a chair, couch, bench or bed was on becomes its seat when nothing else
+// stands on it and a floor is seen.
 void on_the_floor(const std::vector<SceneObject>& objects,
                   const std::vector<detail::Footprint>& feet, std::vector<Surface>& surfaces,
                   const Eigen::Matrix3d& gravity, const RelationOptions& o,
@@ -278,9 +279,11 @@ void on_the_floor(const std::vector<SceneObject>& objects,
           s.label_rule = "the seat of object " + std::to_string(objects[i].id) +
                          ", at its bottom (furniture stands on the floor)";
         }
-    // On the floor only when its bottom is near the floor's height; otherwise what it stands on is
-    // not seen (furniture does not stand on a table, nor on its own seat).
-    if (gap <= o.floor_gap_m)
+    // On the floor when its bottom is near the floor's height, or when no more of it than a
+    // chair's or a table's legs are hidden (seen from above, pushed under a desk): gap_m says how
+    // much. Otherwise what it stands on is not seen (furniture does not stand on a table, nor on
+    // its own seat).
+    if (gap <= std::max(o.floor_gap_m, o.hidden_base_m))
       relations[i].on = Support{"surface", floor->id, floor->label, gap};
     else
       relations[i].on.reset();
@@ -345,6 +348,7 @@ void RelationOptions::check() const {
   require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");
   require(top_band_m >= 0.0, "RelationOptions.top_band_m", "must be >= 0");
   require(hidden_reach_m >= 0.0, "RelationOptions.hidden_reach_m", "must be >= 0");
+  require(hidden_base_m >= 0.0, "RelationOptions.hidden_base_m", "must be >= 0");
   require(floor_gap_m >= 0.0, "RelationOptions.floor_gap_m", "must be >= 0");
   require(duplicate_overlap > 0.0 && duplicate_overlap <= 1.0, "RelationOptions.duplicate_overlap",
           "must be in (0, 1]");

@@ -121,6 +121,9 @@ struct RelationOptions {
   // Furniture, and what stands on nothing, stands on the floor (any piece seen in the room) when
   // its bottom is at most this above the floor's height.
   double floor_gap_m = 0.15;
+  // Furniture stands on the floor also when its bottom is up to this above it: its legs or base
+  // hidden (seen from above over a table, under a desk); gap_m then says how much is hidden.
+  double hidden_base_m = 1.0;
   // A table top holds under what hides it: an object on nothing at a table's height whose
   // footprint comes within this of the table's seen outline stands on it (the outline is sampled
   // on 4 cm cells and ends where the object hides the top).
