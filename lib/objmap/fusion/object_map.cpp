@@ -1107,11 +1107,12 @@ std::size_t ObjectMap::below_share_count() const {
   return n;
 }
 
-void ObjectMap::judge_visibility(const ViewLog& log, const VisibilityOptions& options) {
+void ObjectMap::judge_visibility(const ViewLog& log, const VisibilityOptions& options,
+                                 bool only_unjudged) {
   options.check();
   for (const auto& op : objects_) {
     Object& o = *op;
-    if (!o.alive) continue;
+    if (!o.alive || (only_unjudged && o.frames_in_view >= 0)) continue;
     // The sample: evenly spaced among the voxels of its surface (seen in >= 10% of its
     // observations; all of them when none is), in key order.
     const std::vector<Vec3> surface = surface_points(o, 0.1);
@@ -1226,9 +1227,18 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
 }
 
 std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const {
+  std::set<int> all;
+  for (const auto& op : objects_)
+    if (op->alive) all.insert(op->id);
+  return records(options, all);
+}
+
+std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options,
+                                             const std::set<int>& ids) const {
   std::vector<ObjectRecord> out;
-  for (const auto& op : objects_) {
-    const Object& o = *op;
+  for (int id : ids) {
+    if (id < 0 || id >= static_cast<int>(objects_.size())) continue;
+    const Object& o = *objects_[id];
     if (!o.alive) continue;
     const int views = count_views(o.provenance, options_);
     const bool is_confirmed = confirmed(o);

@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -433,10 +434,15 @@ class ObjectMap {
   // its sample: evenly spaced voxels seen in >= 10% of its observations; its range: the farthest
   // camera of its observations), so that confirmation can ask for min_detected_share. Call after
   // merge_pass(); objects made or merged later are not judged (the share rule passes them).
-  void judge_visibility(const ViewLog& log, const VisibilityOptions& options);
+  // `only_unjudged`: only the objects made since the last call (split_oversize's parts); the bar
+  // is made again from every object.
+  void judge_visibility(const ViewLog& log, const VisibilityOptions& options,
+                        bool only_unjudged = false);
 
   // The object records, ascending id, each with its filtered cloud.
   std::vector<ObjectRecord> records(const RecordOptions& options = {}) const;
+  // The records of the objects `ids` only (those live and, with confirmed_only, confirmed).
+  std::vector<ObjectRecord> records(const RecordOptions& options, const std::set<int>& ids) const;
 
   // Voxel-weighted centroid of object `object_id` as it is now (for tests and the pose correction).
   Vec3 centroid(int object_id) const;

@@ -13,6 +13,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "objmap/core/error.h"
@@ -1124,16 +1125,21 @@ fusion::RecordOptions record_options(const FuseOptions& options, int threads) {
   return r;
 }
 
-// Each confirmed object's filtered record, and their point counts (Table 6).
-void make_records(const FuseOptions& options, const fusion::ObjectMap& objects,
-                  FuseResult& result) {
-  result.objects = objects.records(record_options(options, result.threads));
+// The point counts of the records (Table 6).
+void count_points(FuseResult& result) {
   result.object_points_raw = result.object_points_voxel = result.object_points_filtered = 0;
   for (const auto& r : result.objects) {
     result.object_points_raw += r.points_raw;
     result.object_points_voxel += r.points_voxel;
     result.object_points_filtered += r.points_filtered;
   }
+}
+
+// Each confirmed object's filtered record, and their point counts.
+void make_records(const FuseOptions& options, const fusion::ObjectMap& objects,
+                  FuseResult& result) {
+  result.objects = objects.records(record_options(options, result.threads));
+  count_points(result);
 }
 
 // Where each object was in view (with `view_log`), then each confirmed object's filtered record.
@@ -1158,15 +1164,40 @@ void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& obj
 }
 
 // Step 4c: with the up known, the objects wider than their class allows are cut (one mask over
-// chairs packed along a table); when any is, where each object was in view is judged again and
-// the records and suspected duplicates are made again.
+// chairs packed along a table). When any is, its parts are judged in view and recorded (every
+// object again only if the detected-share bar moved), and the suspected duplicates made again.
 void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassSizes& sizes,
                           fusion::ObjectMap& objects, const fusion::ViewLog* view_log,
                           FuseResult& result) {
   const auto t0 = Clock::now();
   result.oversize = objects.split_oversize(result.scene.up.up, sizes);
   if (!result.oversize.empty()) {
-    judge_and_record(options, objects, view_log, result);
+    std::set<int> cut;
+    for (const fusion::SplitLink& link : result.oversize) {
+      cut.insert(link.from);
+      cut.insert(link.parts.begin(), link.parts.end());
+    }
+    const double bar = result.detected_share_bar;
+    result.objects_total = objects.size();
+    if (view_log) {
+      objects.judge_visibility(*view_log, options.visibility, /*only_unjudged=*/true);
+      result.objects_below_share = objects.below_share_count();
+      result.detected_share_bar = objects.detected_share_bar();
+    }
+    if (result.detected_share_bar != bar) {
+      make_records(options, objects, result);
+    } else {
+      std::vector<fusion::ObjectRecord> records;
+      for (auto& r : result.objects)
+        if (!cut.count(r.id)) records.push_back(std::move(r));
+      for (auto& r : objects.records(record_options(options, result.threads), cut))
+        records.push_back(std::move(r));
+      std::sort(
+          records.begin(), records.end(),
+          [](const fusion::ObjectRecord& x, const fusion::ObjectRecord& y) { return x.id < y.id; });
+      result.objects = std::move(records);
+      count_points(result);
+    }
     result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
   }
   result.times.push_back({"oversize objects", seconds_since(t0)});
