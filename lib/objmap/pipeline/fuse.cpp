@@ -303,8 +303,18 @@ std::vector<ConfigField> scene_fields(FuseOptions& o) {
        "find the support surfaces (floor, tables, seats) in the dense map for the objects' `on` "
        "relations",
        &o.scene.surfaces.enabled},
+      {"scene.near_scale", "--near-scale",
+       "relations: two objects are `near` when the clearance between them (their footprints' and "
+       "heights' gaps) is at most this times the smaller one's largest horizontal extent ...",
+       &o.scene.relations.near_scale},
+      {"scene.near_min_m", "--near-min", "... but at least this, m", &o.scene.relations.near_min_m},
+      {"scene.near_max_m", "--near-max", "... and at most this, m", &o.scene.relations.near_max_m},
+      {"scene.near_by_centres", "--near-by-centres",
+       "relations: the old `near`, box centres within --near-radius",
+       &o.scene.relations.near_by_centres},
       {"scene.near_radius_m", "--near-radius",
-       "relations: objects whose box centres are within this distance are `near`, m",
+       "relations, with --near-by-centres: objects whose box centres are within this distance are "
+       "`near`, m",
        &o.scene.relations.near_radius_m},
   };
 }
@@ -430,7 +440,10 @@ void FuseOptions::check() const {
   check_part([&] { scene.up.check(); }, "UpOptions", "scene.up", {{"mode", "scene.up"}});
   check_part([&] { scene.surfaces.check(); }, "SurfaceOptions", "scene.surfaces");
   check_part([&] { scene.relations.check(); }, "RelationOptions", "scene.relations",
-             {{"near_radius_m", "scene.near_radius_m"}});
+             {{"near_radius_m", "scene.near_radius_m"},
+              {"near_scale", "scene.near_scale"},
+              {"near_min_m", "scene.near_min_m"},
+              {"near_max_m", "scene.near_max_m"}});
   mesh.check();
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
