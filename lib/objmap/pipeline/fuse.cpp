@@ -1417,6 +1417,14 @@ void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseI
   io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
 }
 
+// Step 4a (docs/fusion.md, "Sightings"): the objects of a mover class are taken out of
+// result.objects into result.sightings, so they stay out of the duplicates, the relations and the
+// maps.
+void take_sightings(const FuseOptions& options, FuseResult& result) {
+  result.sightings =
+      fusion::take_movers(result.objects, fusion::parse_movers(options.movers, "objects.movers"));
+}
+
 }  // namespace
 
 FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
@@ -1477,10 +1485,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   merge_and_filter_objects(options, objects, view_log ? &*view_log : nullptr, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  // 4a. What moves is not the map: the objects of a mover class (a person, a dog) are sightings,
-  //     kept out of the duplicates, the relations and the maps (docs/fusion.md, "Sightings").
-  result.sightings =
-      fusion::take_movers(result.objects, fusion::parse_movers(options.movers, "objects.movers"));
+  // 4a. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
+  take_sightings(options, result);
 
   // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
   //     pass's reason for keeping them apart (no ground truth needed), on the boxes of
