@@ -127,12 +127,20 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("objmap ") + objmap::version());
   app.require_subcommand(1);
   objmap::app::setup_all(app);
+  // A word that names no command is a usage error even beside --help, which CLI11 honours first
+  // (`objmap NOSUCHCOMMAND --help` printed the main help and exited 0).
+  const auto help_or_unknown = [&](const CLI::ParseError& e) {
+    const std::string unknown = objmap::app::unknown_command(app, argc, argv);
+    if (unknown.empty()) return app.exit(e);
+    std::cerr << "objmap: usage error: " << unknown << " (see 'objmap --help')\n";
+    return 2;
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return help_or_unknown(e);
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return help_or_unknown(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {

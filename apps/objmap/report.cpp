@@ -181,6 +181,7 @@ RunFiles read_run(const ReportOptions& options, report::PageContent& page) {
   files.objects_file = options.run / "objects.json";
   files.objects = io::read_objects_json(files.objects_file);
   files.objects_doc = read_json(files.objects_file);
+  page.sightings = io::read_sightings(files.objects_file);
   const fs::path run_file = options.run / "run.json";
   if (fs::exists(run_file)) {
     files.run = read_json(run_file);

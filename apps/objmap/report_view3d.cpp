@@ -35,6 +35,12 @@ std::vector<std::string> relation_lines(const io::SceneDescription& scene, int i
     for (const auto& [other, d] : *list)
       lines.push_back(std::string(name) + " " + object_text(scene, other) + ", " +
                       fixed_text(d, 3) + " m");
+  if (o->near_surfaces)
+    for (const auto& [id, d] : *o->near_surfaces) {
+      const io::SceneSurface* s = scene.surface(id);
+      lines.push_back("near surface " + std::to_string(id) + (s ? " (" + s->label + ")" : "") +
+                      ", " + fixed_text(d, 3) + " m");
+    }
   return lines;
 }
 

@@ -57,6 +57,22 @@ TEST(CommandsCli, AnUnknownCommandIsNamed) {
   EXPECT_EQ(std::count(eval.err.begin(), eval.err.end(), '\n'), 1) << eval.err;
 }
 
+TEST(CommandsCli, AnUnknownCommandBesideHelpIsNamedNotHelped) {
+  // --help was honoured first: the main help on stdout and exit 0.
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"NOSUCHCOMMAND", "--help"}, {"eval", "nosuch", "--help"}}) {
+    const RunResult r = run_objmap(args);
+    EXPECT_EQ(r.exit_code, 2) << args[0];
+    EXPECT_NE(r.err.find("unknown command '" + args[args.size() - 2] + "'"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  const RunResult help = run_objmap({"eval", "ate", "--help"});  // a known command: its help
+  EXPECT_EQ(help.exit_code, 0) << help.err;
+  EXPECT_NE(help.out.find("--gt"), std::string::npos);
+}
+
 TEST(CommandsCli, APathTheSystemCannotResolveIsBadInput) {
   // A symbolic link loop as the dataset: the filesystem's error was exit 1 ("internal error").
   TempDir dir;

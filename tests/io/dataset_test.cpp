@@ -406,6 +406,22 @@ TEST(DatasetErrors, GenericCameraFromWorldPosesAreInverted) {
   EXPECT_EQ(d.depth_invalid, 65535);
 }
 
+TEST(DatasetErrors, GenericDepthInvalidZeroIsAccepted) {
+  // 0 already means no depth: "depth_invalid": 0 says nothing more, and was refused ([1, 65535]).
+  TempDir tmp;
+  write_tiny_seven_scenes(tmp.path(), 2, /*poses=*/false);
+  const std::string layout =
+      R"({"color": "frame-*.color.png", "depth": "frame-*.depth.png", "depth_scale": 1000,
+          "intrinsics": {"fx": 50, "fy": 50, "cx": 32, "cy": 24}, "depth_invalid": )";
+  write_text(tmp / "objmap_layout.json", layout + "0}");
+  EXPECT_EQ(read_dataset(tmp.path()).depth_invalid, 0);
+  write_text(tmp / "objmap_layout.json", layout + "65536}");
+  std::string where;
+  const std::string reason = test::error_reason([&] { read_dataset(tmp.path()); }, "65536", &where);
+  EXPECT_EQ(where, (tmp / "objmap_layout.json").string() + ": depth_invalid");
+  EXPECT_EQ(reason, "is 65536; expected a number in [0.0, 65535.0]");
+}
+
 TEST(DatasetErrors, AnUnknownLayoutNameIsRefused) {
   TempDir tmp;
   DatasetOptions options;

@@ -72,6 +72,27 @@ TEST(Page, MarkdownReferencesTheFilesBeside) {
   EXPECT_EQ(md.find("base64"), std::string::npos);
 }
 
+TEST(Page, SeenMovingThingsAreATableOfTheirOwn) {
+  PageContent c = small_page();
+  EXPECT_EQ(page_html(c).find("Seen moving things"), std::string::npos);  // none: no table
+  io::Sighting s;
+  s.id = 5;
+  s.class_name = "person";
+  s.position = Vec3(1.0, -0.5, 0.9);
+  s.first_seen = 1305031234.46;
+  s.last_seen = 1305031253.17;
+  s.frames = 39;
+  c.sightings.push_back(s);
+  const std::string html = page_html(c);
+  EXPECT_EQ(xml_problem(html), "");
+  EXPECT_NE(html.find("<h2>Seen moving things</h2>"), std::string::npos);
+  EXPECT_EQ(count_of(html, "data-object-id=\""), 2u) << "not among the objects";
+  EXPECT_NE(page_markdown(c).find("| 5 | person | 1.00, -0.50, 0.90 | 1305031234.460 | "
+                                  "1305031253.170 | 39 |"),
+            std::string::npos)
+      << page_markdown(c);
+}
+
 TEST(Page, SuspectedDuplicatesAreATableWithTheReason) {
   PageContent c = small_page();
   EXPECT_EQ(page_html(c).find("Suspected duplicates"), std::string::npos);  // no section: none

@@ -544,17 +544,28 @@ TEST(ReadPaper, PixelListsToMasks) {
                    "two.txt: not a track file; expected <track_id>.txt");
 }
 
-TEST(ReadJson, ANumberBeyondADoubleIsNamed) {
-  // "score": 1e999 overflows a double: nlohmann's out_of_range error was exit 1 naming no file.
+TEST(ReadJson, ANumberBeyondADoubleIsNamedByItsField) {
+  // "score": 1e999 overflows a double: nlohmann's out_of_range error (406) was exit 1 naming no
+  // file, then named the file alone; the other readers name the field.
   test::TempDir dir;
   test::write_text(dir / "1.000000.json",
-                   R"({"instances":[{"class":"cup","score":1e999,"bbox":[1,2,3,4]}]})");
+                   R"({"instances":[{"class":"cup","score":0.5,"bbox":[1,2,3,4]},
+                                    {"class":"cup","score":1e999,"bbox":[1,2,3,4]}]})");
   try {
     read_segmentation(dir.path());
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), (dir / "1.000000.json").string());
+    EXPECT_EQ(e.where(), (dir / "1.000000.json").string() + ": instances[1].score");
     EXPECT_NE(e.reason().find("number overflow parsing '1e999'"), std::string::npos) << e.what();
+    EXPECT_NE(e.reason().find("expected a finite number in [0, 1]"), std::string::npos) << e.what();
+  }
+  test::write_text(dir / "1.000000.json",
+                   R"({"instances":[{"class":"cup","score":0.5,"bbox":[1,2,-1e999,4]}]})");
+  try {
+    read_segmentation(dir.path());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (dir / "1.000000.json").string() + ": instances[0].bbox[2]");
   }
 }
 

@@ -78,6 +78,12 @@ class FieldTracker : public nlohmann::json_sax<json> {
 
 }  // namespace
 
+std::string json_failing_field(const std::string& text) {
+  FieldTracker tracker;
+  json::sax_parse(text, &tracker);
+  return tracker.where();
+}
+
 nlohmann::json read_json_file(const std::filesystem::path& file, const std::string& cannot_open) {
   // A folder opens as a stream on Linux; reading it would then throw std::ios_base::failure.
   std::error_code ec;

@@ -13,4 +13,9 @@ namespace objmap::io {
 // reading it fails.
 nlohmann::json read_json_file(const std::filesystem::path& file, const std::string& cannot_open);
 
+// The field where parsing `text` fails ("instances[0].score"): the one that holds the value the
+// parser refused (a number beyond a double, a broken string); "" at the top level or when it
+// parses.
+std::string json_failing_field(const std::string& text);
+
 }  // namespace objmap::io

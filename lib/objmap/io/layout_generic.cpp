@@ -184,8 +184,8 @@ Dataset read_generic(const fs::path& dir, const fs::path& layout_file,
   d.depth_rows = depth.size();
   d.frames = pair_in_order(color, depth, [&](const NumberedFile& c) { return frame_time(c, fps); });
   d.depth_factor = f.number("depth_scale", 1e-6, 1e9);
-  if (f.has("depth_invalid"))
-    d.depth_invalid = static_cast<std::uint16_t>(f.number("depth_invalid", 1, 65535));
+  if (f.has("depth_invalid"))  // 0: no value besides 0 itself, which is always "no depth"
+    d.depth_invalid = static_cast<std::uint16_t>(f.number("depth_invalid", 0, 65535));
   const auto [width, height] = image_size(d.frames.front().rgb_file);
   d.camera = generic_camera(f, dir, width, height, d.depth_factor);
   d.camera_source = file;

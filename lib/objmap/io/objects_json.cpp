@@ -106,4 +106,28 @@ std::vector<MappedObject> read_objects_json(const std::filesystem::path& file) {
   return out;
 }
 
+std::vector<Sighting> read_sightings(const std::filesystem::path& file) {
+  const json doc = read_json_file(file, "cannot open; expected RUN/objects.json of objmap fuse");
+  if (!doc.is_object() || !doc.contains("sightings")) return {};
+  const json& list = doc["sightings"];
+  if (!list.is_array()) throw InputError(file.string() + ": sightings", "expected an array");
+  std::vector<Sighting> out;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const json& o = list[i];
+    const std::string where = file.string() + ": sightings[" + std::to_string(i) + "]";
+    Sighting s;
+    s.id = static_cast<int>(whole_number(o, "id", where, kIntMin, kIntMax));
+    const json& cls = field(o, "class", where);
+    if (!cls.is_string()) throw InputError(where + ".class", "expected a string");
+    s.class_name = cls.get<std::string>();
+    s.score = number(o, "score", where);
+    s.position = vec3(o, "position", where);
+    s.first_seen = number(o, "first_seen", where);
+    s.last_seen = number(o, "last_seen", where);
+    s.frames = static_cast<int>(whole_number(o, "frames", where, 0, kIntMax));
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
 }  // namespace objmap::io

@@ -26,4 +26,18 @@ struct MappedObject {
 // Throws InputError "<file>: <field>: ..." for malformed JSON, a missing field or a wrong type.
 std::vector<MappedObject> read_objects_json(const std::filesystem::path& file);
 
+// A thing that moves by itself, seen during the run (objects.json `sightings`, docs/fusion.md).
+struct Sighting {
+  int id = -1;
+  std::string class_name;
+  double score = 0.0;
+  Vec3 position = Vec3::Zero();              // where it was (its points over all its keyframes)
+  double first_seen = 0.0, last_seen = 0.0;  // timestamps, s
+  int frames = 0;                            // keyframes with an observation of it
+};
+
+// objects.json `sightings`; empty when the file has none (an objmap before sightings, or fuse
+// --movers none). Throws as read_objects_json.
+std::vector<Sighting> read_sightings(const std::filesystem::path& file);
+
 }  // namespace objmap::io

@@ -141,6 +141,8 @@ SceneObject read_object(const json& o, const std::string& where, const SceneFile
   out.near = read_neighbours(relations, "near", "distance_m", at, file);
   out.above = read_neighbours(relations, "above", "gap_m", at, file);
   out.under = read_neighbours(relations, "under", "gap_m", at, file);
+  if (relations.contains("near_surfaces"))
+    out.near_surfaces = read_neighbours(relations, "near_surfaces", "distance_m", at, file);
   return out;
 }
 

@@ -38,6 +38,9 @@ struct SceneObject {
   std::optional<SceneRelation> on;
   // objects.json relations (objects_gt.json: empty): id and distance_m (near) or gap_m.
   std::vector<std::pair<int, double>> near, above, under;
+  // relations.near_surfaces: the surfaces (id, distance_m) near it; absent from an objects.json
+  // written before fuse wrote them (query then measures from the object's position).
+  std::optional<std::vector<std::pair<int, double>>> near_surfaces;
 };
 
 struct SceneDescription {

@@ -20,6 +20,7 @@
 #include "objmap/core/parallel.h"
 #include "objmap/core/version.h"
 #include "objmap/fusion/frame_voxels.h"
+#include "objmap/fusion/movers.h"
 #include "objmap/fusion/palette.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/io/atomic.h"
@@ -307,6 +308,11 @@ std::vector<ConfigField> filters_and_masks_fields(FuseOptions& o) {
 // The scene after the objects: up direction, support surfaces, relations (docs/scene.md).
 std::vector<ConfigField> scene_fields(FuseOptions& o) {
   return {
+      {"objects.movers", "--movers",
+       "classes that move by themselves: their objects are sightings (objects.json `sightings`), "
+       "not map objects, kept out of the maps and relations: default (person and the COCO "
+       "animals), none (the paper) or a,b,c",
+       &o.movers},
       {"scene.up", "--up",
        "the world's up: auto (the cameras, refined by the map's horizontal planes), an axis (z, "
        "-y, ...) or a vector x,y,z; boxes turn about it, heights are along it",
@@ -315,8 +321,18 @@ std::vector<ConfigField> scene_fields(FuseOptions& o) {
        "find the support surfaces (floor, tables, seats) in the dense map for the objects' `on` "
        "relations",
        &o.scene.surfaces.enabled},
+      {"scene.near_scale", "--near-scale",
+       "relations: two objects are `near` when the clearance between them (their footprints' and "
+       "heights' gaps) is at most this times the smaller one's largest horizontal extent ...",
+       &o.scene.relations.near_scale},
+      {"scene.near_min_m", "--near-min", "... but at least this, m", &o.scene.relations.near_min_m},
+      {"scene.near_max_m", "--near-max", "... and at most this, m", &o.scene.relations.near_max_m},
+      {"scene.near_by_centres", "--near-by-centres",
+       "relations: the old `near`, box centres within --near-radius",
+       &o.scene.relations.near_by_centres},
       {"scene.near_radius_m", "--near-radius",
-       "relations: objects whose box centres are within this distance are `near`, m",
+       "relations, with --near-by-centres: objects whose box centres are within this distance are "
+       "`near`, m",
        &o.scene.relations.near_radius_m},
   };
 }
@@ -397,6 +413,8 @@ void set_method_preset(FuseOptions& o) {
   // The object's position is its centroid (eq 16).
   o.position_is_centroid = true;
   o.position_without_support = false;
+  // Persons are objects like any other (§4).
+  o.movers = "none";
 }
 
 void FuseOptions::check() const {
@@ -443,10 +461,14 @@ void FuseOptions::check() const {
              {{"band_m", "objects.support_band_m"}, {"cell_m", "objects.support_cell_m"}});
   check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
   check_part([&] { duplicates.check(); }, "DuplicateOptions", "duplicates");
+  fusion::parse_movers(movers, "objects.movers");
   check_part([&] { scene.up.check(); }, "UpOptions", "scene.up", {{"mode", "scene.up"}});
   check_part([&] { scene.surfaces.check(); }, "SurfaceOptions", "scene.surfaces");
   check_part([&] { scene.relations.check(); }, "RelationOptions", "scene.relations",
-             {{"near_radius_m", "scene.near_radius_m"}});
+             {{"near_radius_m", "scene.near_radius_m"},
+              {"near_scale", "scene.near_scale"},
+              {"near_min_m", "scene.near_min_m"},
+              {"near_max_m", "scene.near_max_m"}});
   mesh.check();
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
@@ -745,6 +767,37 @@ std::vector<Rgb> semantic_colors(const DenseCloud& dense, double voxel_m,
       colors[static_cast<std::size_t>(it - dense.keys.begin())] = record_color[slot - 1];
   });
   return colors;
+}
+
+// Leaves out of the dense map (and so of the semantic map) the voxels that hold a point of a
+// sighting and of no map object: what moved is not the map. Its voxels of the keyframes where it
+// was not detected stay. Returns the voxels left out.
+std::size_t drop_sighting_voxels(DenseCloud& dense,
+                                 const std::vector<fusion::ObjectRecord>& sightings,
+                                 const std::vector<fusion::ObjectRecord>& objects, double voxel_m) {
+  if (sightings.empty() || dense.keys.empty()) return 0;
+  const geometry::VoxelHashTable<std::uint32_t> moving = fusion::voxel_owners(sightings, voxel_m);
+  const geometry::VoxelHashTable<std::uint32_t> staying = fusion::voxel_owners(objects, voxel_m);
+  std::vector<char> drop(dense.keys.size(), 0);
+  moving.for_each([&](fusion::VoxelKey key, std::uint32_t) {
+    if (staying.contains(key)) return;
+    const auto it = std::lower_bound(dense.keys.begin(), dense.keys.end(), key);
+    if (it != dense.keys.end() && *it == key)
+      drop[static_cast<std::size_t>(it - dense.keys.begin())] = 1;
+  });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < dense.keys.size(); ++i) {
+    if (drop[i]) continue;
+    dense.cloud.points[kept] = dense.cloud.points[i];
+    dense.cloud.colors[kept] = dense.cloud.colors[i];
+    dense.keys[kept] = dense.keys[i];
+    ++kept;
+  }
+  const std::size_t dropped = dense.keys.size() - kept;
+  dense.cloud.points.resize(kept);
+  dense.cloud.colors.resize(kept);
+  dense.keys.resize(kept);
+  return dropped;
 }
 
 ordered_json vec_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
@@ -1271,7 +1324,23 @@ ordered_json write_maps(const FuseOptions& options, const fs::path& dir,
 }
 
 // objects.json: the records of the confirmed objects.
+// A sighting of objects.json: a thing that moves by itself, where and when it was seen.
+ordered_json sighting_json(const fusion::ObjectRecord& r) {
+  return {{"id", r.id},
+          {"class", r.class_name},
+          {"score", r.mean_score},
+          {"position", vec_json(r.position)},
+          {"aabb", {{"min", vec_json(r.aabb.min)}, {"max", vec_json(r.aabb.max)}}},
+          {"first_seen", r.first_seen},
+          {"last_seen", r.last_seen},
+          {"frames", r.frames_detected},
+          {"observation_count", r.observations},
+          {"track_ids", r.track_ids},
+          {"points", r.points_filtered}};
+}
+
 void write_objects_json(const fs::path& dir, const ordered_json& objects_json,
+                        const std::vector<fusion::ObjectRecord>& sightings,
                         const scene::SceneGraph& scene) {
   ordered_json doc;
   doc["schema_version"] = 1;
@@ -1279,6 +1348,8 @@ void write_objects_json(const fs::path& dir, const ordered_json& objects_json,
   doc["frame"] = "world";
   doc["units"] = "metres";
   doc["objects"] = objects_json;
+  doc["sightings"] = ordered_json::array();
+  for (const fusion::ObjectRecord& r : sightings) doc["sightings"].push_back(sighting_json(r));
   add_scene_json(scene, doc);
   io::write_file_atomic(dir / "objects.json", doc.dump(2) + "\n");
 }
@@ -1349,6 +1420,7 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"objects_before_confirmation", result.objects_total},
       {"objects_below_detected_share", result.objects_below_share},
       {"objects_confirmed", result.objects.size()},
+      {"sightings", result.sightings.size()},
       {"merges", result.merges.size()},
       {"objects_split", result.splits.size()},
       {"objects_cut_for_size", result.oversize.size()},
@@ -1370,6 +1442,7 @@ ordered_json points_json(const FuseResult& result, const MapPoints& maps) {
       {"dense_back_projected", result.dense_points_raw},
       {"dense_map", result.dense_points_map},
       {"dense_pruned", result.dense_voxels_pruned},
+      {"dense_sightings", result.dense_voxels_of_sightings},
       {"objects_raw", result.object_points_raw},
       {"objects_voxel_filtered", result.object_points_voxel},
       {"objects_outlier_filtered", result.object_points_filtered},
@@ -1417,6 +1490,14 @@ void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseI
   run["scene"] = scene_run_json(result.scene);
   run["performance"] = performance_json(result);
   io::write_file_atomic(dir / "run.json", run.dump(2) + "\n");
+}
+
+// Step 4a (docs/fusion.md, "Sightings"): the objects of a mover class are taken out of
+// result.objects into result.sightings, so they stay out of the duplicates, the relations and the
+// maps.
+void take_sightings(const FuseOptions& options, FuseResult& result) {
+  result.sightings =
+      fusion::take_movers(result.objects, fusion::parse_movers(options.movers, "objects.movers"));
 }
 
 }  // namespace
@@ -1481,6 +1562,9 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   merge_and_filter_objects(options, objects, view_log ? &*view_log : nullptr, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
+  // 4a. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
+  take_sightings(options, result);
+
   // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
   //     pass's reason for keeping them apart (no ground truth needed), on the boxes of
   //     the records (before the scene step turns them upright).
@@ -1489,6 +1573,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   result.times.push_back({"duplicate check", seconds_since(t0)});
 
   DenseCloud dense_cloud = dense_future.get();
+  result.dense_voxels_of_sightings =
+      drop_sighting_voxels(dense_cloud, result.sightings, result.objects, options.map_voxel_m);
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
   result.times.push_back({"up and surfaces (parallel to the objects)",
                           result.scene.seconds_up + result.scene.seconds_surfaces});
@@ -1526,7 +1612,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   MapPoints map_points;
   const ordered_json objects_json = write_maps(options, dir, ply, dense_cloud, result, map_points);
   dense_cloud = DenseCloud();
-  write_objects_json(dir, objects_json, result.scene);
+  write_objects_json(dir, objects_json, result.sightings, result.scene);
   result.times.push_back({"write outputs", seconds_since(t0)});
   result.seconds_total = seconds_since(t_start);
   result.peak_rss_kb = peak_rss_kb();

@@ -73,6 +73,9 @@ struct FuseOptions {
   // `position` and `obb` leave out the strip of the table/floor an object rests on that its masks
   // bled onto (geometry::support_strip; needs the scene step's up).
   bool position_without_support = true;
+  // Classes that move by themselves: their objects are sightings, not map objects
+  // (fusion/movers.h): "default" (person and the COCO animals), "none" (the paper) or a,b,c.
+  std::string movers = "default";
   geometry::SupportStripOptions support_strip;  // its lowest layer 1 cm, footprint cells 2 cm
   fusion::DuplicateOptions duplicates;          // suspected duplicates in run.json: touching = 2 cm
   scene::SceneOptions scene;                    // up direction, support surfaces, relations
@@ -115,6 +118,10 @@ struct FuseResult {
   std::vector<fusion::SplitLink> splits;      // objects split in parts (split_clusters)
   std::vector<fusion::SplitLink> oversize;    // objects cut for their class's size (oversize)
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
+  // Confirmed objects of a mover class (FuseOptions::movers), ascending id: not in `objects`, the
+  // duplicates, the relations or the maps.
+  std::vector<fusion::ObjectRecord> sightings;
+  std::size_t dense_voxels_of_sightings = 0;  // dense map voxels left out as a sighting's
   fusion::DuplicateReport duplicates;         // same-class pairs that overlap or touch
   std::vector<ObjectMesh> object_meshes;      // one per object of `objects` with --mesh objects|all
   mesh::ModelResult scene_mesh;               // with --mesh scene|all

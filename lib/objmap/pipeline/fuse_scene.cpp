@@ -43,6 +43,7 @@ ordered_json relations_json(const scene::Relations& r) {
   else
     o["on"] = nullptr;
   o["near"] = neighbours_json(r.near, "distance_m");
+  o["near_surfaces"] = neighbours_json(r.near_surfaces, "distance_m");
   o["above"] = neighbours_json(r.above, "gap_m");
   o["under"] = neighbours_json(r.under, "gap_m");
   ordered_json duplicates = ordered_json::array();

@@ -187,6 +187,24 @@ Table duplicates_table(const std::vector<PageDuplicate>& pairs) {
   return t;
 }
 
+Table sightings_table(const std::vector<io::Sighting>& sightings) {
+  Table t;
+  t.caption =
+      "Seen moving things (objects.json sightings): classes that move by themselves, not part of "
+      "the map; where their points were over the keyframes they were seen in";
+  t.header = {"id", "class", "position [m]", "first seen [s]", "last seen [s]", "keyframes"};
+  t.numeric = {true, false, false, true, true, true};
+  for (const io::Sighting& s : sightings) {
+    t.rows.push_back({std::to_string(s.id), s.class_name,
+                      fixed_text(s.position.x(), 2) + ", " + fixed_text(s.position.y(), 2) + ", " +
+                          fixed_text(s.position.z(), 2),
+                      fixed_text(s.first_seen, 3), fixed_text(s.last_seen, 3),
+                      std::to_string(s.frames)});
+    t.swatches.push_back(hex_color(fusion::class_color(s.class_name)));
+  }
+  return t;
+}
+
 // The duplicates section of a run without any.
 const char* kNoDuplicates =
     "No suspected duplicates: no two objects of one class overlap or touch.";
@@ -315,6 +333,10 @@ std::string page_html(const PageContent& c) {
   h += "<div class=\"tables\">\n<div>" + html_table(class_table(c)) + "</div>\n";
   if (c.points) h += "<div>" + html_table(points_table(*c.points)) + "</div>\n";
   h += "</div>\n";
+  if (!c.sightings.empty()) {
+    h += "<h2>Seen moving things</h2>\n";
+    h += html_table(sightings_table(c.sightings));
+  }
   if (c.duplicates) {
     h += "<h2>Suspected duplicates</h2>\n";
     if (c.duplicates->empty())
@@ -358,6 +380,10 @@ std::string page_markdown(const PageContent& c) {
     m += markdown_table(precision_table(*c.object_eval));
   }
   if (c.points) m += markdown_table(points_table(*c.points));
+  if (!c.sightings.empty()) {
+    m += "## Seen moving things\n\n";
+    m += markdown_table(sightings_table(c.sightings));
+  }
   if (c.duplicates) {
     m += "## Suspected duplicates\n\n";
     m += c.duplicates->empty() ? std::string(kNoDuplicates) + "\n\n"

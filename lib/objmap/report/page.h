@@ -68,6 +68,9 @@ struct PageContent {
   std::optional<eval::PointCounts> points;            // Table 6
   // run.json "duplicates" (absent: a run.json without that section, e.g. of an older objmap).
   std::optional<std::vector<PageDuplicate>> duplicates;
+  // objects.json `sightings`: things that move by themselves, seen during the run (a table of
+  // their own, "Seen moving things"; none: no such table).
+  std::vector<io::Sighting> sightings;
   std::optional<View3dContent> view3d;  // the interactive 3D view; none: the page has none
   View3dOptions view3d_options;
   std::vector<std::string> notes;   // what could not be shown and why

@@ -18,7 +18,9 @@ using Kind = io::SceneRelation::Kind;
 const char* kGrammar =
     "expected CLASS [on|near|above|under CLASS|floor|table|seat|surface], e.g. \"cup on table\"";
 const std::set<std::string> kSurfaceLabels = {"floor", "table", "seat", "surface"};
-constexpr double kNearSurfaceM = 0.5;  // `near` a surface: within this of its outline
+// `near` a surface in an objects.json without relations.near_surfaces: the object's position within
+// this of its outline (the rule before fuse wrote them).
+constexpr double kNearSurfaceM = 0.5;
 
 // Singular forms to try for a (possibly plural) phrase: the last word changed.
 std::vector<std::string> singulars(const std::string& phrase) {
@@ -135,13 +137,19 @@ std::optional<QueryMatch> match_surface(const MapObject& o, const Query& q, cons
     if (label_matches(*s, q.target) &&
         (q.relation == "on" || q.relation == "above" || q.relation == "near"))
       return QueryMatch{&o, describe_support(o, scene), o.on ? o.on->gap_m : 0.0, std::nullopt};
+  std::ostringstream why;
+  why.setf(std::ios::fixed);
+  why.precision(3);
+  if (q.relation == "near" && o.near_surfaces)  // fuse's `near` (docs/scene.md), nearest first
+    for (const auto& [id, gap] : *o.near_surfaces)
+      if (const MapSurface* s = scene.surface(id); s && label_matches(*s, q.target)) {
+        why << "near surface " << s->id << " (" << s->label << "), " << gap << " m";
+        return QueryMatch{&o, why.str(), gap, std::nullopt};
+      }
   for (const MapSurface& s : scene.surfaces) {
     if (!label_matches(s, q.target)) continue;
     const auto [outside, height] = relative_to(s, o.position, scene);
-    std::ostringstream why;
-    why.setf(std::ios::fixed);
-    why.precision(3);
-    if (q.relation == "near" && outside <= kNearSurfaceM) {
+    if (q.relation == "near" && !o.near_surfaces && outside <= kNearSurfaceM) {
       why << outside << " m beside surface " << s.id << " (" << s.label << ")";
       return QueryMatch{&o, why.str(), outside, std::nullopt};
     }

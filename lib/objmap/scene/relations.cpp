@@ -10,6 +10,7 @@
 #include "objmap/core/error.h"
 #include "objmap/core/format.h"
 #include "objmap/scene/footprint.h"
+#include "objmap/scene/near.h"
 #include "objmap/scene/scene.h"
 #include "objmap/segmentation/coco_classes.h"
 
@@ -316,23 +317,20 @@ void on_a_hidden_table(const std::vector<SceneObject>& objects,
   }
 }
 
+// `near` (near.cpp: the clearance against a reach scaled to the smaller object), `above`, `under`.
 void near_above_under(const std::vector<SceneObject>& objects,
-                      const std::vector<detail::Footprint>& feet, const RelationOptions& o,
-                      std::vector<Relations>& relations) {
-  for (std::size_t i = 0; i < objects.size(); ++i) {
+                      const std::vector<detail::Footprint>& feet,
+                      const std::vector<Surface>& surfaces, const Eigen::Matrix3d& gravity,
+                      const RelationOptions& o, std::vector<Relations>& relations) {
+  detail::near_relations(objects, feet, surfaces, gravity, o, relations);
+  for (std::size_t i = 0; i < objects.size(); ++i)
     for (std::size_t j = 0; j < objects.size(); ++j) {
-      if (i == j) continue;
-      const double d = (objects[i].position - objects[j].position).norm();
-      if (d <= o.near_radius_m) relations[i].near.push_back({objects[j].id, d});
-      if (feet[j].hull.size() < 3 || feet[i].bottom < feet[j].top - o.stack_tolerance_m) continue;
+      if (i == j || feet[j].hull.size() < 3 || feet[i].bottom < feet[j].top - o.stack_tolerance_m)
+        continue;
       if (detail::inside_distance(feet[j].hull, feet[i].centre) < -o.outline_margin_m) continue;
       relations[i].above.push_back({objects[j].id, feet[i].bottom - feet[j].top});
       relations[j].under.push_back({objects[i].id, feet[i].bottom - feet[j].top});
     }
-    std::stable_sort(
-        relations[i].near.begin(), relations[i].near.end(),
-        [](const Neighbour& a, const Neighbour& b) { return a.distance_m < b.distance_m; });
-  }
 }
 
 }  // namespace
@@ -344,6 +342,9 @@ void RelationOptions::check() const {
   require(min_footprint_overlap > 0.0 && min_footprint_overlap <= 1.0,
           "RelationOptions.min_footprint_overlap", "must be in (0, 1]");
   require(near_radius_m > 0.0, "RelationOptions.near_radius_m", "must be > 0");
+  require(near_scale > 0.0, "RelationOptions.near_scale", "must be > 0");
+  require(near_min_m >= 0.0, "RelationOptions.near_min_m", "must be >= 0");
+  require(near_max_m >= near_min_m, "RelationOptions.near_max_m", "must be >= near_min_m");
   require(stack_tolerance_m >= 0.0, "RelationOptions.stack_tolerance_m", "must be >= 0");
   require(support_min_area_ratio >= 0.0, "RelationOptions.support_min_area_ratio", "must be >= 0");
   require(top_band_m >= 0.0, "RelationOptions.top_band_m", "must be >= 0");
@@ -384,7 +385,7 @@ std::vector<Relations> relate_objects(const std::vector<SceneObject>& objects,
   on_the_floor(objects, feet, surfaces, gravity, options, relations);
   on_a_hidden_table(objects, feet, surfaces, gravity, options, relations);
   refresh_labels();  // a table that was a chair's seat
-  near_above_under(objects, feet, options, relations);
+  near_above_under(objects, feet, surfaces, gravity, options, relations);
   return relations;
 }
 

@@ -114,7 +114,16 @@ struct RelationOptions {
   double on_above_m = 0.08;  // ... or this far above it (its lowest part hidden from the camera)
   double outline_margin_m = 0.03;  // footprint centre inside the support's outline, this margin
   double min_footprint_overlap = 0.25;  // ... or this share of the footprint over the outline
-  double near_radius_m = 0.5;           // `near`: box centres within this distance
+  // `near`: the clearance between the two objects (their footprints' gap seen from above and the
+  // gap between their height ranges, 0 when they touch or overlap) is at most
+  // clamp(near_scale × the smaller object's largest horizontal extent, near_min_m, near_max_m):
+  // a chair pulled up to a dining table (0.5 m chair: within 0.5 m), a cup 30 cm from a laptop
+  // (within the floor 0.4 m), not a cup 1 m from a fridge. docs/scene.md, "Relations".
+  double near_scale = 1.0;       // times the smaller object's size
+  double near_min_m = 0.4;       // at least this: a small thing is near what is a hand's reach away
+  double near_max_m = 1.0;       // at most this: a sofa is not near what stands 2 m from it
+  bool near_by_centres = false;  // the old rule: box centres within near_radius_m
+  double near_radius_m = 0.5;    // ... that rule's radius (only with near_by_centres)
   double stack_tolerance_m = 0.03;      // `above`: bottom at least top − this
   double support_min_area_ratio = 0.5;  // an object support's top ≥ this × the object's footprint
   double top_band_m = 0.05;  // an object's top: its points this close below its top height
@@ -144,7 +153,9 @@ struct Support {
 
 struct Neighbour {
   int id = 0;
-  double distance_m = 0.0;  // box centre to box centre, or the vertical gap for above/under
+  // near: the clearance between the two (0 when they touch; box centres with near_by_centres);
+  // above/under: the vertical gap.
+  double distance_m = 0.0;
 };
 
 // Another object of the same class that interpenetrates this one (RelationOptions::
@@ -157,7 +168,8 @@ struct SuspectedDuplicate {
 struct Relations {
   std::optional<Support> on;
   std::vector<SuspectedDuplicate> duplicates;  // ascending id
-  std::vector<Neighbour> near;                 // nearest first
+  std::vector<Neighbour> near;                 // objects, nearest first
+  std::vector<Neighbour> near_surfaces;        // surfaces (id), nearest first (same rule)
   std::vector<Neighbour> above;  // objects this one is above (gap = its bottom − their top)
   std::vector<Neighbour> under;  // objects above this one
 };

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "objmap/core/error.h"
+#include "objmap/io/json_file.h"
 #include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/read_internal.h"
 #include "objmap/segmentation/rle.h"
@@ -242,9 +243,12 @@ nlohmann::json parse_json_file(const fs::path& file) {
     throw InputError(
         file.string() + ":" + std::to_string(line),
         "malformed JSON at column " + std::to_string(column) + ": " + parse_error_reason(e.what()));
-  } catch (const json::exception& e) {  // e.g. a number beyond a double's range (1e999)
-    throw InputError(file.string(), "malformed JSON: " + parse_error_reason(e.what()) +
-                                        "; expected numbers a double can hold");
+  } catch (const json::exception& e) {  // a number beyond a double's range (1e999): name its field
+    const std::string field = io::json_failing_field(text);
+    const bool score = field.size() >= 6 && field.compare(field.size() - 6, 6, ".score") == 0;
+    throw InputError(file.string() + (field.empty() ? "" : ": " + field),
+                     "malformed JSON: " + parse_error_reason(e.what()) + "; expected a finite " +
+                         (score ? "number in [0, 1]" : "number (one a double can hold)"));
   }
 }
 
