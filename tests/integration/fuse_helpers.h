@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -59,6 +60,29 @@ inline std::vector<GtObject> read_gt_objects(const fs::path& file) {
     out.push_back(g);
   }
   return out;
+}
+
+// The horizontal widths of an objects.json's objects by id: the larger side of each upright box
+// (obb) seen from above, up = `up_in_world`.
+inline std::map<int, double> horizontal_widths(const fs::path& file) {
+  const nlohmann::json doc = read_json(file);
+  const Eigen::Vector3d up =
+      doc.contains("up_in_world") ? vec3(doc["up_in_world"]) : Eigen::Vector3d::UnitZ();
+  std::map<int, double> widths;
+  for (const auto& o : doc.at("objects")) {
+    const auto& rot = o["obb"]["rotation"];
+    const auto& half = o["obb"]["half_extent"];
+    double width = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d axis(rot[i].get<double>(), rot[3 + i].get<double>(),
+                                 rot[6 + i].get<double>());
+      const double along_up = std::fabs(axis.dot(up));
+      width = std::max(
+          width, 2.0 * half[i].get<double>() * std::sqrt(std::max(0.0, 1.0 - along_up * along_up)));
+    }
+    widths[o["id"].get<int>()] = width;
+  }
+  return widths;
 }
 
 inline std::vector<FusedObject> read_fused_objects(const fs::path& file) {

@@ -1218,7 +1218,7 @@ void merge_and_filter_objects(const FuseOptions& options, fusion::ObjectMap& obj
 
 // Step 4c: with the up known, the objects wider than their class allows are cut (one mask over
 // chairs packed along a table). When any is, its parts are judged in view and recorded (every
-// object again only if the detected-share bar moved), and the suspected duplicates made again.
+// object again only if the detected-share bar moved).
 void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassSizes& sizes,
                           fusion::ObjectMap& objects, const fusion::ViewLog* view_log,
                           FuseResult& result) {
@@ -1251,7 +1251,6 @@ void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassS
       result.objects = std::move(records);
       count_points(result);
     }
-    result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
   }
   result.times.push_back({"oversize objects", seconds_since(t0)});
 }
@@ -1495,6 +1494,27 @@ void write_run_json(const fs::path& dir, const FuseOptions& options, const FuseI
 // Step 4a (docs/fusion.md, "Sightings"): the objects of a mover class are taken out of
 // result.objects into result.sightings, so they stay out of the duplicates, the relations and the
 // maps.
+// Step 4e: the objects' meshes (with `object_views`) and the scene's (with `scene_model`, which
+// is released).
+void make_meshes(const FuseOptions& options, const fusion::ObjectMap& objects,
+                 const ObjectViews* object_views, std::optional<mesh::TsdfModel>& scene_model,
+                 FuseResult& result) {
+  if (object_views) {
+    const auto t0 = Clock::now();
+    result.object_meshes =
+        mesh_objects(result.objects, *object_views, objects, options.mesh,
+                     0.5 * (result.camera.fx + result.camera.fy), result.threads);
+    result.times.push_back({"object meshes", seconds_since(t0)});
+  }
+  if (scene_model) {
+    const auto t0 = Clock::now();
+    result.scene_mesh = scene_model->mesh();
+    scene_model.reset();
+    result.times.push_back(
+        {"scene mesh (and its fusion's share after the keyframes)", seconds_since(t0)});
+  }
+}
+
 void take_sightings(const FuseOptions& options, FuseResult& result) {
   result.sightings =
       fusion::take_movers(result.objects, fusion::parse_movers(options.movers, "objects.movers"));
@@ -1562,26 +1582,26 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   merge_and_filter_objects(options, objects, view_log ? &*view_log : nullptr, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  // 4a. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
-  take_sightings(options, result);
-
-  // 4b. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
-  //     pass's reason for keeping them apart (no ground truth needed), on the boxes of
-  //     the records (before the scene step turns them upright).
-  t0 = Clock::now();
-  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
-  result.times.push_back({"duplicate check", seconds_since(t0)});
-
   DenseCloud dense_cloud = dense_future.get();
-  result.dense_voxels_of_sightings =
-      drop_sighting_voxels(dense_cloud, result.sightings, result.objects, options.map_voxel_m);
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
   result.times.push_back({"up and surfaces (parallel to the objects)",
                           result.scene.seconds_up + result.scene.seconds_surfaces});
   for (const auto& w : result.scene.up.warnings) result.warnings.push_back("up direction: " + w);
 
-  // 4c. Objects wider than their class allows are cut, now that the up is known.
+  // 4a. Objects wider than their class allows are cut, now that the up is known.
   cut_oversize_objects(options, class_sizes, objects, view_log ? &*view_log : nullptr, result);
+
+  // 4b. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
+  take_sightings(options, result);
+  result.dense_voxels_of_sightings =
+      drop_sighting_voxels(dense_cloud, result.sightings, result.objects, options.map_voxel_m);
+
+  // 4c. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
+  //     pass's reason for keeping them apart (no ground truth needed), on the boxes of
+  //     the records (before the scene step turns them upright).
+  t0 = Clock::now();
+  result.duplicates = fusion::find_duplicates(result.objects, objects, options.duplicates);
+  result.times.push_back({"duplicate check", seconds_since(t0)});
 
   // 4d. The objects' boxes stand on up; the surfaces that are objects' tops; the relations (on,
   //     near, above, under).
@@ -1591,20 +1611,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 4e. The meshes: each object's TSDF model from the observations that joined it (merged objects
   //     union theirs), in its box; the scene's model, fused keyframe by keyframe, meshed.
-  if (object_views) {
-    t0 = Clock::now();
-    result.object_meshes =
-        mesh_objects(result.objects, *object_views, objects, options.mesh,
-                     0.5 * (result.camera.fx + result.camera.fy), result.threads);
-    result.times.push_back({"object meshes", seconds_since(t0)});
-  }
-  if (scene_model) {
-    t0 = Clock::now();
-    result.scene_mesh = scene_model->mesh();
-    scene_model.reset();
-    result.times.push_back(
-        {"scene mesh (and its fusion's share after the keyframes)", seconds_since(t0)});
-  }
+  make_meshes(options, objects, object_views ? &*object_views : nullptr, scene_model, result);
 
   // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.
   t0 = Clock::now();
