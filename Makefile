@@ -67,7 +67,7 @@ ablation: deps configure
 
 # make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of tests/fuzz/ (every reader of
 # outside data) for FUZZ_SECONDS under libFuzzer + ASan + UBSan, built with clang in build-fuzz/
-# (scripts/fuzz.sh; 22 targets: ~23 minutes at the default). docs/testing.md.
+# (scripts/fuzz.sh; 23 targets: ~24 minutes at the default). docs/testing.md.
 fuzz:
 	@bash scripts/install-deps.sh --fuzz
 	@FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash scripts/fuzz.sh $(DATA)
