@@ -227,15 +227,15 @@ TEST(FuseScene, Fr1Desk9UpIsNearItsFloorsOwnNormal) {
   EXPECT_LT(angle_deg(up_of(r.run), floor), 3.0);
 }
 
-TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairsOnNothingSeen) {
+TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskTheChairOnTheFloor) {
   // Fused with groundtruth.txt as it is (z up): the desk is a table 0.7 m above the floor, with
   // the keyboards, the mice and the monitor on it. The monitor stands at the desk's back edge,
   // where it hides the desk: it is on it by a quarter of its footprint, not by its centre. The
-  // chair is seen from above, its legs hidden (bottom 0.47 m above the floor): it stands on
-  // nothing seen, neither on its seat nor on the floor far below it. (A second "chair", its bottom
+  // chair is seen from above, its legs hidden (bottom 0.51 m above the floor): it stands on the
+  // floor, its gap saying how much of it is hidden, not on its seat. (A second "chair", its bottom
   // 0.69 m up, was detected in 3 of the 74 keyframes that had its place in view: the detected
-  // share leaves it out.) Whatever is on the floor has its bottom near it, and nothing is on an
-  // object of its own class.
+  // share leaves it out.) Whatever else is on the floor has its bottom near it, and nothing is on
+  // an object of its own class.
   OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
   RunResult why;
   const fs::path run = fuse_cached("fr1-rpy-groundtruth", data, data / "groundtruth.txt",
@@ -254,7 +254,7 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
     if (on["label"] == "table") ++on_table[c];
     if (on["label"] == "floor") {
       ++on_floor[c];
-      EXPECT_LE(on["gap_m"].get<double>(), 0.15) << c << " " << o["id"] << " on the floor";
+      EXPECT_LE(on["gap_m"].get<double>(), c == "chair" ? 0.6 : 0.15) << c << " " << o["id"];
     }
     if (on["kind"] == "object") {
       EXPECT_NE(class_of[on["id"].get<int>()], c) << o["id"] << " on its own class";
@@ -264,7 +264,7 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskChairs
   EXPECT_GE(on_table["mouse"], 3);
   EXPECT_GE(on_table["tv monitor"], 1);
   EXPECT_EQ(count["chair"], 1);
-  EXPECT_EQ(on_floor["chair"], 0) << "the chair's bottom is 0.47 m above the floor";
+  EXPECT_EQ(on_floor["chair"], 1) << "a chair does not float: its legs are hidden";
   EXPECT_EQ(doc["surfaces"][0]["label"], "floor") << "the largest surface is the floor";
 }
 

@@ -1,7 +1,6 @@
 // objmap synth --preset walkthrough -> objmap fuse: a room walked round twice (636 frames, three
 // tables, twelve chairs, six of them packed round a dining table), the detector's noise plus a new
-// track ID for every object seen again after 30 frames away, and one mask over touching chairs in
-// 30% of the frames where they touch. Every true object must be found
+// track ID for every object seen again after 30 frames away. Every true object must be found
 // exactly once, with the default keyframes and with every frame (docs/fusion.md, "Walk-throughs").
 #include <gtest/gtest.h>
 
@@ -42,11 +41,13 @@ TEST_P(FuseWalkthrough, EveryObjectOnceWithTheDefaultKeyframesAndWithEveryFrame)
     EXPECT_EQ(fused_classes, gt_classes);
     // Each true object has its own map object of its class (greedy one-to-one within 0.3 m).
     EXPECT_EQ(match_objects(gt, fused, 0.3, /*same_class=*/true).size(), gt.size());
-    // The packed chairs' masks were merged now and then (--merge-touching-rate 0.3 by default for
-    // the walkthrough): no chair's box is wider than a chair.
+    // No chair's box is wider than a chair.
     const auto widths = horizontal_widths(run / "objects.json");
-    for (const auto& f : fused)
-      if (f.cls == "chair") EXPECT_LE(widths.at(f.id), 0.8) << "chair " << f.id;
+    for (const auto& f : fused) {
+      if (f.cls == "chair") {
+        EXPECT_LE(widths.at(f.id), 0.8) << "chair " << f.id;
+      }
+    }
   }
 }
 

@@ -19,11 +19,6 @@ struct ClassConfusion {
   double probability;  // per instance and frame
 };
 
-// The share of frames in which the walk-through preset gives touching instances of one class as
-// one mask (SegNoiseOptions::merge_touching_prob; docs/fusion.md "The extent of one instance" says
-// how it was measured on real masks).
-inline constexpr double kWalkthroughMergeTouching = 0.3;
-
 struct SegNoiseOptions {
   // Instances with fewer visible pixels are not reported (neither in the exact nor the noisy
   // output).
