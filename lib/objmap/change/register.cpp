@@ -1,0 +1,238 @@
+#include "objmap/change/register.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "objmap/change/dense_icp.h"
+#include "objmap/core/error.h"
+
+namespace objmap::change {
+
+namespace {
+
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof(b), "%g", v);
+  return b;
+}
+
+Pose gravity_pose(const Visit& v) {
+  Pose g = Pose::Identity();
+  g.linear() = v.gravity_from_world;
+  return g;
+}
+
+// An object of the coarse step: its class and position in its visit's gravity frame.
+struct Landmark {
+  const std::string* class_name;
+  Vec3 p;
+};
+
+std::vector<Landmark> landmarks(const Visit& v) {
+  std::vector<Landmark> out;
+  for (const VisitObject& o : v.objects)
+    if (!moves_by_itself(o.class_name))
+      out.push_back({&o.class_name, v.gravity_from_world * o.position});
+  return out;
+}
+
+// The after landmarks that have a same-class before landmark within `radius` once moved by
+// `before_from_after` (one each, the nearest; a before landmark may serve once): their pairs.
+std::vector<std::pair<int, int>> agreeing(const std::vector<Landmark>& before,
+                                          const std::vector<Landmark>& after,
+                                          const Pose& before_from_after, double radius,
+                                          double* sum2) {
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<bool> used(before.size(), false);
+  double s = 0.0;
+  for (std::size_t k = 0; k < after.size(); ++k) {
+    const Vec3 p = before_from_after * after[k].p;
+    int best = -1;
+    double best_d2 = radius * radius;
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      if (used[i] || *before[i].class_name != *after[k].class_name) continue;
+      const double d2 = (before[i].p - p).squaredNorm();
+      if (d2 < best_d2) best_d2 = d2, best = static_cast<int>(i);
+    }
+    if (best < 0) continue;
+    used[best] = true;
+    s += best_d2;
+    pairs.emplace_back(best, static_cast<int>(k));
+  }
+  if (sum2) *sum2 = s;
+  return pairs;
+}
+
+// A candidate correspondence of two before landmarks (i, j) with two after landmarks (k, l) of the
+// same classes and a compatible layout (horizontal span and height difference).
+struct PairOfPairs {
+  int i, j, k, l;
+};
+
+std::vector<PairOfPairs> candidate_pairs(const std::vector<Landmark>& a,
+                                         const std::vector<Landmark>& b,
+                                         const RegistrationOptions& o) {
+  std::vector<PairOfPairs> out;
+  const double tol = 2.0 * o.object_match_m;
+  for (int i = 0; i < static_cast<int>(a.size()); ++i)
+    for (int j = i + 1; j < static_cast<int>(a.size()); ++j) {
+      const Vec3 da = a[j].p - a[i].p;
+      const double span_a = da.head<2>().norm();
+      if (span_a < o.min_pair_span_m) continue;
+      for (int k = 0; k < static_cast<int>(b.size()); ++k) {
+        if (*b[k].class_name != *a[i].class_name) continue;
+        for (int l = 0; l < static_cast<int>(b.size()); ++l) {
+          if (l == k || *b[l].class_name != *a[j].class_name) continue;
+          const Vec3 db = b[l].p - b[k].p;
+          if (std::abs(db.head<2>().norm() - span_a) > tol || std::abs(db.z() - da.z()) > tol)
+            continue;
+          out.push_back({i, j, k, l});
+        }
+      }
+    }
+  if (out.size() > o.max_hypotheses) {  // a fixed-seed sample: deterministic
+    std::mt19937_64 rng(42);
+    std::shuffle(out.begin(), out.end(), rng);
+    out.resize(o.max_hypotheses);
+  }
+  return out;
+}
+
+struct Coarse {
+  Pose gb_to_ga = Pose::Identity();  // gravity-before from gravity-after
+  int common = 0;
+  double rms_m = 0.0;
+  std::size_t hypotheses = 0;
+};
+
+// Step 1: every pair of pairs proposes a yaw and a translation; the one most same-class objects
+// agree with (then the smallest squared distances) wins and is refined by least squares on them.
+Coarse coarse_from_objects(const Visit& before, const Visit& after, const RegistrationOptions& o) {
+  const std::vector<Landmark> a = landmarks(before), b = landmarks(after);
+  const std::vector<PairOfPairs> candidates = candidate_pairs(a, b, o);
+  Coarse best;
+  best.hypotheses = candidates.size();
+  double best_sum2 = std::numeric_limits<double>::infinity();
+  for (const PairOfPairs& c : candidates) {
+    const Pose h = detail::fit_yaw_translation({b[c.k].p, b[c.l].p}, {a[c.i].p, a[c.j].p});
+    double sum2 = 0.0;
+    const int n = static_cast<int>(agreeing(a, b, h, o.object_match_m, &sum2).size());
+    if (n > best.common || (n == best.common && sum2 < best_sum2)) {
+      best.common = n;
+      best.gb_to_ga = h;
+      best_sum2 = sum2;
+    }
+  }
+  // Least squares on the agreeing objects, twice (the pairs may change once).
+  for (int round = 0; round < 2 && best.common >= 2; ++round) {
+    const auto pairs = agreeing(a, b, best.gb_to_ga, o.object_match_m, nullptr);
+    if (pairs.size() < 2) break;
+    std::vector<Vec3> src, dst;
+    for (const auto& [i, k] : pairs) src.push_back(b[k].p), dst.push_back(a[i].p);
+    best.gb_to_ga = detail::fit_yaw_translation(src, dst);
+    double sum2 = 0.0;
+    best.common = static_cast<int>(agreeing(a, b, best.gb_to_ga, o.object_match_m, &sum2).size());
+    best.rms_m = best.common ? std::sqrt(sum2 / best.common) : 0.0;
+  }
+  return best;
+}
+
+std::vector<Vec3f> in_gravity(const Visit& v, const RegistrationOptions& o) {
+  std::vector<Vec3f> points = detail::thin_cloud(v.dense.points, o.icp_voxel_m, 0);
+  const Eigen::Matrix3f g = v.gravity_from_world.cast<float>();
+  for (Vec3f& p : points) p = g * p;
+  return points;
+}
+
+Registration finish(const Visit& before, const Visit& after, const Pose& gb_to_ga,
+                    const detail::DenseFit& fit) {
+  Registration r;
+  r.before_from_after = gravity_pose(before).inverse() * gb_to_ga * gravity_pose(after);
+  r.yaw_deg = yaw_deg_of(gb_to_ga.linear());
+  r.fitness = fit.fitness;
+  r.rms_m = fit.rms_m;
+  r.icp_points = fit.source_points;
+  r.sigma_translation_m = fit.sigma_translation_m;
+  r.sigma_yaw_deg = fit.sigma_yaw_deg;
+  return r;
+}
+
+}  // namespace
+
+void RegistrationOptions::check() const {
+  const auto positive = [](double v, const char* name) {
+    require(std::isfinite(v) && v > 0.0, std::string("RegistrationOptions.") + name,
+            "must be > 0, got " + num(v));
+  };
+  positive(object_match_m, "object_match_m");
+  positive(icp_voxel_m, "icp_voxel_m");
+  positive(icp_max_correspondence_m, "icp_max_correspondence_m");
+  positive(icp_final_correspondence_m, "icp_final_correspondence_m");
+  positive(inlier_m, "inlier_m");
+  require(std::isfinite(min_pair_span_m) && min_pair_span_m >= 0.0,
+          "RegistrationOptions.min_pair_span_m", "must be >= 0, got " + num(min_pair_span_m));
+  require(min_common_objects >= 2, "RegistrationOptions.min_common_objects",
+          "must be >= 2 (two objects fix a yaw), got " + std::to_string(min_common_objects));
+  require(max_hypotheses >= 1, "RegistrationOptions.max_hypotheses", "must be >= 1");
+  require(icp_max_points >= 100, "RegistrationOptions.icp_max_points", "must be >= 100");
+  require(icp_max_iterations >= 1 && icp_max_iterations <= 1000,
+          "RegistrationOptions.icp_max_iterations", "must be in [1, 1000]");
+  require(std::isfinite(min_fitness) && min_fitness >= 0.0 && min_fitness <= 1.0,
+          "RegistrationOptions.min_fitness", "must be in [0, 1], got " + num(min_fitness));
+}
+
+double yaw_deg_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)) * 180.0 / M_PI; }
+
+Registration register_visits(const Visit& before, const Visit& after,
+                             const RegistrationOptions& options) {
+  options.check();
+  // 1. Coarse: the objects, in the two gravity frames.
+  const Coarse coarse = coarse_from_objects(before, after, options);
+  if (coarse.common < options.min_common_objects) {
+    Registration r;
+    r.common_objects = coarse.common;
+    r.hypotheses = coarse.hypotheses;
+    r.why = "too few common objects (" + std::to_string(coarse.common) + " agree on a placement, " +
+            std::to_string(options.min_common_objects) + " needed)";
+    return r;
+  }
+  // 2. Refined: ICP of the dense maps from the coarse estimate, yaw + translation only.
+  const std::vector<Vec3f> target = in_gravity(before, options);
+  const std::vector<Vec3f> source =
+      detail::thin_cloud(in_gravity(after, options), options.icp_voxel_m, options.icp_max_points);
+  const detail::DenseFit fit = detail::align_dense(target, source, coarse.gb_to_ga, options, true);
+  // 3. Fitness and uncertainty; credible or not.
+  Registration r = finish(before, after, fit.target_from_source, fit);
+  r.common_objects = coarse.common;
+  r.coarse_rms_m = coarse.rms_m;
+  r.hypotheses = coarse.hypotheses;
+  r.credible = r.fitness >= options.min_fitness;
+  if (!r.credible)
+    r.why = "ICP fitness " + num(std::round(r.fitness * 1000) / 1000) + " below " +
+            num(options.min_fitness) + " (the dense maps do not overlap where the objects agree)";
+  return r;
+}
+
+Registration score_registration(const Visit& before, const Visit& after,
+                                const Pose& before_from_after, const RegistrationOptions& options) {
+  options.check();
+  const Pose gb_to_ga = gravity_pose(before) * before_from_after * gravity_pose(after).inverse();
+  const std::vector<Vec3f> target = in_gravity(before, options);
+  const std::vector<Vec3f> source =
+      detail::thin_cloud(in_gravity(after, options), options.icp_voxel_m, options.icp_max_points);
+  const detail::DenseFit fit = detail::align_dense(target, source, gb_to_ga, options, false);
+  Registration r = finish(before, after, gb_to_ga, fit);
+  r.before_from_after = before_from_after;  // exactly as given
+  double sum2 = 0.0;
+  r.common_objects = static_cast<int>(
+      agreeing(landmarks(before), landmarks(after), gb_to_ga, options.object_match_m, &sum2)
+          .size());
+  r.coarse_rms_m = r.common_objects ? std::sqrt(sum2 / r.common_objects) : 0.0;
+  r.source = "given";
+  r.credible = true;
+  return r;
+}
+
+}  // namespace objmap::change
