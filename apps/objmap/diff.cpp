@@ -57,6 +57,9 @@ void run_diff_command(DiffCommand& cmd) {
   check_naming_flags([&] { o.check(); },
                      {{"RegistrationOptions.min_fitness", "--min-fitness"},
                       {"RegistrationOptions.min_common_objects", "--min-common-objects"},
+                      {"RegistrationOptions.icp_voxel_m", "--icp-voxel"},
+                      {"RegistrationOptions.icp_final_correspondence_m", "--icp-final-distance"},
+                      {"RegistrationOptions.icp_max_points", "--icp-points"},
                       {"ClassifyOptions.same_place_m", "--same-place"},
                       {"ClassifyOptions.max_range_m", "--max-range"}});
   const pipeline::DiffResult r = pipeline::run_diff(o);
@@ -84,6 +87,15 @@ void setup_diff(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--min-common-objects", cmd->options.registration.min_common_objects,
                 "objects that must agree on the coarse placement")
+      ->capture_default_str();
+  c->add_option("--icp-voxel", cmd->options.registration.icp_voxel_m,
+                "the dense maps are thinned to one point per voxel of this size for ICP, metres")
+      ->capture_default_str();
+  c->add_option("--icp-final-distance", cmd->options.registration.icp_final_correspondence_m,
+                "ICP's last round pairs points closer than this, metres")
+      ->capture_default_str();
+  c->add_option("--icp-points", cmd->options.registration.icp_max_points,
+                "the after map's ICP points, at most")
       ->capture_default_str();
   c->add_option("--same-place", cmd->options.classify.same_place_m,
                 "two objects closer than this (metres; more for large objects) are at the same "

@@ -46,21 +46,21 @@ inline VisitObject make_visit_object(const TestObject& t, double step = 0.01) {
   return o;
 }
 
-// The room (floor z = 0, walls at x = -2 and y = 2, the room 4 x 4 m), a table top at z = 0.75
+// The room (floor z = 0, walls at x = -1.9 and y = 1), a table top at z = 0.75
 // over [-0.8, 0.8] x [-0.45, 0.45], the objects; cameras on a half circle round the table at 1.5 m
 // height looking at its centre.
 inline Visit make_test_visit(const std::vector<TestObject>& objects, int cameras = 12) {
   Visit v;
   v.name = "test visit";
-  const double step = 0.02;
+  const double step = 0.01;
   for (double x = -2.0; x <= 2.0; x += step)
     for (double y = -2.0; y <= 2.0; y += step) {
       v.dense.push_back(Vec3f(x, y, 0.0f));
     }
   for (double s = -2.0; s <= 2.0; s += step)
     for (double z = 0.0; z <= 2.5; z += step) {
-      v.dense.push_back(Vec3f(-2.0f, s, z));
-      v.dense.push_back(Vec3f(s, 2.0f, z));
+      v.dense.push_back(Vec3f(-1.9f, s, z));
+      v.dense.push_back(Vec3f(s, 1.0f, z));
     }
   for (double x = -0.8; x <= 0.8; x += 0.01)
     for (double y = -0.45; y <= 0.45; y += 0.01) v.dense.push_back(Vec3f(x, y, 0.75f));

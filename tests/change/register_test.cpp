@@ -63,12 +63,13 @@ TEST(Register, TooFewCommonObjectsIsNotCredible) {
 }
 
 TEST(Register, AnotherPlaceHasALowFitness) {
-  // The same kinds of objects, laid out alike, but in another room: walls elsewhere, no table.
+  // The same kinds of objects, laid out alike, but in another place: no floor, no table, a wall
+  // right in front of them.
   const Visit before = make_test_visit(test_objects());
   Visit other = make_test_visit(test_objects());
   other.dense.clear();
-  for (double x = -3.0; x <= 3.0; x += 0.02)
-    for (double z = 0.0; z <= 2.5; z += 0.02) other.dense.push_back(Vec3f(x, -3.0f, z));
+  for (double x = -2.0; x <= 2.0; x += 0.02)
+    for (double z = 0.0; z <= 2.5; z += 0.02) other.dense.push_back(Vec3f(x, -0.6f, z));
   for (const VisitObject& o : other.objects)
     for (const Vec3f& p : o.points) other.dense.push_back(p);
   const Registration r = register_visits(before, other, {});

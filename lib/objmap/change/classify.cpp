@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <unordered_set>
 
 #include "objmap/core/error.h"
 #include "objmap/geometry/voxel_key.h"
@@ -25,17 +24,17 @@ class Occupancy {
   Occupancy(const PointCloud& dense, double coarse_m, double fine_m)
       : inv_coarse_(static_cast<float>(1.0 / coarse_m)),
         inv_fine_(static_cast<float>(1.0 / fine_m)) {
-    coarse_.reserve(dense.size() / 4 + 16);
+    coarse_.reserve(dense.size() / 8 + 16);
     fine_.reserve(dense.size() + 16);
     for (const Vec3f& p : dense.points) {
       geometry::VoxelKey k;
-      if (key(p, inv_coarse_, k)) coarse_.insert(k);
-      if (key(p, inv_fine_, k)) fine_.insert(k);
+      if (key(p, inv_coarse_, k)) coarse_[k] = 1;
+      if (key(p, inv_fine_, k)) fine_[k] = 1;
     }
   }
   bool coarse(const Vec3& p) const {
     geometry::VoxelKey k;
-    return key(p.cast<float>(), inv_coarse_, k) && coarse_.count(k);
+    return key(p.cast<float>(), inv_coarse_, k) && coarse_.contains(k);
   }
   // A dense point in the fine voxel of p or one of its 26 neighbours (within 1–3.5 fine voxels).
   bool surface_at(const Vec3& p) const {
@@ -45,7 +44,7 @@ class Occupancy {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz)
-          if (fine_.count(geometry::pack_voxel(ijk.x() + dx, ijk.y() + dy, ijk.z() + dz)))
+          if (fine_.contains(geometry::pack_voxel(ijk.x() + dx, ijk.y() + dy, ijk.z() + dz)))
             return true;
     return false;
   }
@@ -59,7 +58,7 @@ class Occupancy {
     return true;
   }
   float inv_coarse_, inv_fine_;
-  std::unordered_set<geometry::VoxelKey> coarse_, fine_;
+  geometry::VoxelHashTable<std::uint8_t> coarse_, fine_;
 };
 
 constexpr double kFineVoxelM = 0.01;
@@ -74,8 +73,8 @@ std::vector<T> evenly(const std::vector<T>& v, std::size_t max) {
   return out;
 }
 
-// The first occupied coarse voxel along the line from `from` in unit direction `dir` for t in
-// [t0, t1], stepping half a voxel.
+// An occupied coarse voxel along the line from `from` in unit direction `dir` for t in [t0, t1],
+// stepping a voxel (a surface is a layer of voxels: a step may cut a corner, not cross a wall).
 bool occupied_along(const Occupancy& occ, const Vec3& from, const Vec3& dir, double t0, double t1,
                     double step) {
   for (double t = t0; t <= t1; t += step)
@@ -89,7 +88,7 @@ PlaceEvidence evidence_with(const Occupancy& occ, const Visit& viewer,
   const std::vector<Pose> views = evenly(viewer.world_from_cam, o.max_views);
   const std::vector<Vec3> sample = evenly(points, o.max_points);
   const Camera& cam = viewer.camera;
-  const double step = o.voxel_m / 2.0, front_clear = 2.0 * o.voxel_m;
+  const double step = o.voxel_m, front_clear = 2.0 * o.voxel_m;
   for (const Pose& world_from_cam : views) {
     const Pose cam_from_world = world_from_cam.inverse();
     const Vec3 centre = world_from_cam.translation();
@@ -121,23 +120,24 @@ PlaceEvidence evidence_with(const Occupancy& occ, const Visit& viewer,
   return e;
 }
 
-// Pairs of (before index, after index) of the candidates accepted by `accept`, greedily nearest
-// first (ties by index): each object at most once.
-template <typename Accept>
+// Pairs of (before index, after index) of the candidates accepted by `accept`, greedily cheapest
+// first (cost(i, k, distance); ties by index): each object at most once.
+template <typename Accept, typename Cost>
 std::vector<std::pair<int, int>> greedy_pairs(const std::vector<Vec3>& a,
                                               const std::vector<Vec3>& b, std::vector<bool>& used_a,
-                                              std::vector<bool>& used_b, Accept accept) {
+                                              std::vector<bool>& used_b, Accept accept, Cost cost) {
   struct Cand {
-    double d;
+    double c;
     int i, k;
   };
   std::vector<Cand> cands;
   for (int i = 0; i < static_cast<int>(a.size()); ++i)
-    for (int k = 0; k < static_cast<int>(b.size()); ++k)
-      if (!used_a[i] && !used_b[k] && accept(i, k, (a[i] - b[k]).norm()))
-        cands.push_back({(a[i] - b[k]).norm(), i, k});
+    for (int k = 0; k < static_cast<int>(b.size()); ++k) {
+      const double d = (a[i] - b[k]).norm();
+      if (!used_a[i] && !used_b[k] && accept(i, k, d)) cands.push_back({cost(i, k, d), i, k});
+    }
   std::sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) {
-    return x.d != y.d ? x.d < y.d : (x.i != y.i ? x.i < y.i : x.k < y.k);
+    return x.c != y.c ? x.c < y.c : (x.i != y.i ? x.i < y.i : x.k < y.k);
   });
   std::vector<std::pair<int, int>> out;
   for (const Cand& c : cands) {
@@ -147,6 +147,8 @@ std::vector<std::pair<int, int>> greedy_pairs(const std::vector<Vec3>& a,
   }
   return out;
 }
+
+double by_distance(int, int, double d) { return d; }
 
 std::vector<Vec3> points_of(const VisitObject& o, const Pose& to_world) {
   std::vector<Vec3> out;
@@ -215,6 +217,8 @@ void ClassifyOptions::check() const {
   positive(voxel_m, "voxel_m");
   positive(max_range_m, "max_range_m");
   positive(behind_m, "behind_m");
+  require(std::isfinite(colour_weight_m) && colour_weight_m >= 0.0,
+          "ClassifyOptions.colour_weight_m", "must be >= 0, got " + num(colour_weight_m));
   require(std::isfinite(same_place_share) && same_place_share >= 0.0,
           "ClassifyOptions.same_place_share", "must be >= 0, got " + num(same_place_share));
   require(std::isfinite(min_range_m) && min_range_m >= 0.0 && min_range_m < max_range_m,
@@ -223,6 +227,9 @@ void ClassifyOptions::check() const {
   require(max_views >= 1 && max_points >= 1, "ClassifyOptions.max_views",
           "max_views and max_points must be >= 1");
   require(min_sightlines >= 1, "ClassifyOptions.min_sightlines", "must be >= 1");
+  require(std::isfinite(changed_class_size_ratio) && changed_class_size_ratio >= 1.0,
+          "ClassifyOptions.changed_class_size_ratio",
+          "must be >= 1, got " + num(changed_class_size_ratio));
   require(std::isfinite(present_share) && present_share > 0.0 && present_share <= 1.0,
           "ClassifyOptions.present_share", "must be in (0, 1], got " + num(present_share));
 }
@@ -254,14 +261,14 @@ ChangeResult classify_changes(const Visit& before, const Visit& after,
     return std::max(o.same_place_m,
                     o.same_place_share * std::max(a[i]->radius_m(), b[k]->radius_m()));
   };
-  // 1. Same class at the same place: unchanged. 2. Another class there: changed class.
-  const auto same = greedy_pairs(pa, pb, used_a, used_b, [&](int i, int k, double d) {
-    return a[i]->class_name == b[k]->class_name && d <= gate(i, k);
-  });
-  const auto changed = greedy_pairs(pa, pb, used_a, used_b, [&](int i, int k, double d) {
-    return a[i]->class_name != b[k]->class_name && d <= gate(i, k);
-  });
-  // 3. What each visit saw of the other's lone objects' places.
+  // 1. Same class at the same place: unchanged.
+  const auto same = greedy_pairs(
+      pa, pb, used_a, used_b,
+      [&](int i, int k, double d) {
+        return a[i]->class_name == b[k]->class_name && d <= gate(i, k);
+      },
+      by_distance);
+  // 2. What each visit saw of the other's lone objects' places.
   const Occupancy occ_a(before.dense, o.voxel_m, kFineVoxelM);
   const Occupancy occ_b(after.dense, o.voxel_m, kFineVoxelM);
   const Pose after_from_before = before_from_after.inverse();
@@ -273,12 +280,27 @@ ChangeResult classify_changes(const Visit& before, const Visit& after,
   const auto still_there = [&](const std::optional<PlaceEvidence>& e) {
     return e && e->sightlines >= o.min_sightlines && e->surface_share() >= o.present_share;
   };
-  // 4. Same class elsewhere: moved, unless its old place still holds its surface (then the other
+  // 3. Same class elsewhere: moved, unless its old place still holds its surface (then the other
   // is a second object) or the new place already held it.
-  const auto moved = greedy_pairs(pa, pb, used_a, used_b, [&](int i, int k, double d) {
-    return a[i]->class_name == b[k]->class_name && d <= o.max_move_m && !still_there(ev_a[i]) &&
-           !still_there(ev_b[k]);
-  });
+  const auto moved = greedy_pairs(
+      pa, pb, used_a, used_b,
+      [&](int i, int k, double d) {
+        return a[i]->class_name == b[k]->class_name && d <= o.max_move_m && !still_there(ev_a[i]) &&
+               !still_there(ev_b[k]);
+      },
+      [&](int i, int k, double d) {
+        if (!a[i]->colour || !b[k]->colour) return d;
+        return d + o.colour_weight_m * (*a[i]->colour - *b[k]->colour).norm() / 255.0;
+      });
+  // 4. Another class at the same place, of a like size: changed class.
+  const auto changed = greedy_pairs(
+      pa, pb, used_a, used_b,
+      [&](int i, int k, double d) {
+        const double ra = a[i]->radius_m(), rb = b[k]->radius_m();
+        return a[i]->class_name != b[k]->class_name && d <= gate(i, k) &&
+               std::max(ra, rb) <= o.changed_class_size_ratio * std::min(ra, rb);
+      },
+      by_distance);
   // 5. The records: pairs, then lone objects judged by the evidence.
   const auto record = [&](int i, int k, Status s) {
     ObjectChange c;

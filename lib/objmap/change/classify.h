@@ -29,9 +29,13 @@ const char* status_name(Status s);  // "unchanged", "moved", ..., "not_seen_agai
 struct ClassifyOptions {
   double same_place_m = 0.15;     // paired within max(this, same_place_share · radius): same place
   double same_place_share = 0.5;  // ... of the larger object's box radius (big objects' boxes vary)
-  double max_move_m = 20.0;       // a same-class pair farther apart is not one object moved
-  double voxel_m = 0.03;          // the other dense map's occupancy grid
-  double max_range_m = 4.0;       // a view sees a place between min_range_m and this depth
+  double changed_class_size_ratio = 2.0;  // changed class: box radii within this ratio
+  double max_move_m = 20.0;
+  // Moved pairing: a pair's cost is its distance plus this many metres per 255 grey levels of
+  // colour difference (both with colours), so that two cups of another colour are told apart.
+  double colour_weight_m = 3.0;  // a same-class pair farther apart is not one object moved
+  double voxel_m = 0.03;         // the other dense map's occupancy grid
+  double max_range_m = 4.0;      // a view sees a place between min_range_m and this depth
   double min_range_m = 0.3;
   int image_margin_px = 4;      // ... projecting at least this far inside the image
   double behind_m = 1.5;        // seen through: a surface within this behind the point

@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_set>
 
 #include "objmap/geometry/voxel_key.h"
 
@@ -28,6 +27,41 @@ Pose yaw_pose(double yaw_rad, const Vec3& t) {
   return p;
 }
 
+// Unit normals of a cloud (PCA of its 10 nearest points; +z where fewer are found), each
+// computed when first asked for: ICP and the uncertainty need those of the paired points only.
+class LazyNormals {
+ public:
+  LazyNormals(const pcl::KdTreeFLANN<pcl::PointXYZ>& tree, const Cloud& cloud)
+      : tree_(tree), cloud_(cloud), normals_(cloud.size()), done_(cloud.size(), 0) {}
+  const Vec3& operator[](std::size_t i) const {
+    if (!done_[i]) {
+      normals_[i] = compute(i);
+      done_[i] = 1;
+    }
+    return normals_[i];
+  }
+
+ private:
+  Vec3 compute(std::size_t i) const {
+    pcl::Indices nn;
+    std::vector<float> d2;
+    if (tree_.nearestKSearch(cloud_[i], 10, nn, d2) < 5) return Vec3::UnitZ();
+    Vec3 mean = Vec3::Zero();
+    for (int k : nn) mean += Vec3(cloud_[k].x, cloud_[k].y, cloud_[k].z);
+    mean /= static_cast<double>(nn.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (int k : nn) {
+      const Vec3 d = Vec3(cloud_[k].x, cloud_[k].y, cloud_[k].z) - mean;
+      cov += d * d.transpose();
+    }
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  }
+  const pcl::KdTreeFLANN<pcl::PointXYZ>& tree_;
+  const Cloud& cloud_;
+  mutable std::vector<Vec3> normals_;
+  mutable std::vector<char> done_;
+};
+
 // PCL's transformation step of ICP, restricted to a yaw about z and a translation (the two maps'
 // up directions are known). With the correspondences (what IterativeClosestPoint calls): one
 // Gauss-Newton step of the point-to-plane distances n·(R(θ)(p − c) + c + t − q) about the pairs'
@@ -38,8 +72,7 @@ class YawTranslationEstimation
     : public pcl::registration::TransformationEstimation<pcl::PointXYZ, pcl::PointXYZ, float> {
  public:
   using Matrix4 = Eigen::Matrix4f;
-  explicit YawTranslationEstimation(std::vector<Vec3> target_normals)
-      : normals_(std::move(target_normals)) {}
+  explicit YawTranslationEstimation(const LazyNormals& target_normals) : normals_(target_normals) {}
   void estimateRigidTransformation(const Cloud& src, const Cloud& tgt, Matrix4& m) const override {
     std::vector<Vec3> s, t;
     for (std::size_t i = 0; i < std::min(src.size(), tgt.size()); ++i) add(src[i], tgt[i], s, t);
@@ -93,29 +126,8 @@ class YawTranslationEstimation
     return yaw_pose(x(0), c - r.linear() * c + x.tail<3>());
   }
   static Vec3 pt(const pcl::PointXYZ& a) { return Vec3(a.x, a.y, a.z); }
-  std::vector<Vec3> normals_;
+  const LazyNormals& normals_;
 };
-
-// Unit normals of `cloud` (PCA of its 10 nearest points; +z when fewer are found).
-std::vector<Vec3> normals_of(const pcl::KdTreeFLANN<pcl::PointXYZ>& tree,
-                             const pcl::PointCloud<pcl::PointXYZ>& cloud) {
-  std::vector<Vec3> normals(cloud.size(), Vec3::UnitZ());
-  pcl::Indices nn;
-  std::vector<float> d2;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (tree.nearestKSearch(cloud[i], 10, nn, d2) < 5) continue;
-    Vec3 mean = Vec3::Zero();
-    for (int k : nn) mean += Vec3(cloud[k].x, cloud[k].y, cloud[k].z);
-    mean /= static_cast<double>(nn.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int k : nn) {
-      const Vec3 d = Vec3(cloud[k].x, cloud[k].y, cloud[k].z) - mean;
-      cov += d * d.transpose();
-    }
-    normals[i] = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
-  }
-  return normals;
-}
 
 Cloud::Ptr to_pcl(const std::vector<Vec3f>& points) {
   auto cloud = std::make_shared<Cloud>();
@@ -150,7 +162,7 @@ double inlier_share(const pcl::KdTreeFLANN<pcl::PointXYZ>& tree, const Cloud& qu
 // The uncertainty of the alignment from its inlier pairs: point-to-plane residuals r = n·(p − q)
 // with the target normal n (PCA of 10 neighbours), unknowns (yaw about the pairs' centroid, t),
 // covariance = rms² · H⁻¹. Correlated neighbouring residuals make it a lower bound.
-void uncertainty(const Cloud& target, const std::vector<Vec3>& normals,
+void uncertainty(const Cloud& target, const LazyNormals& normals,
                  const std::vector<std::pair<Vec3, int>>& pairs, DenseFit& fit) {
   if (pairs.size() < 10) {
     fit.sigma_translation_m = fit.sigma_yaw_deg = std::numeric_limits<double>::infinity();
@@ -209,15 +221,16 @@ Pose fit_yaw_translation(const std::vector<Vec3>& source, const std::vector<Vec3
 
 std::vector<Vec3f> thin_cloud(const std::vector<Vec3f>& points, double voxel_m,
                               std::size_t max_points) {
-  std::unordered_set<geometry::VoxelKey> seen;
-  seen.reserve(points.size() / 4 + 16);
+  geometry::VoxelHashTable<std::uint8_t> seen(points.size() / 8 + 16);
   std::vector<Vec3f> kept;
   const float inv = static_cast<float>(1.0 / voxel_m);
   Eigen::Vector3i ijk;
   Eigen::Vector3f offset;
   for (const Vec3f& p : points) {
     if (!geometry::voxel_coords(p, inv, ijk, offset)) continue;
-    if (seen.insert(geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z())).second) kept.push_back(p);
+    std::uint8_t& flag = seen[geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z())];
+    if (!flag) kept.push_back(p);
+    flag = 1;
   }
   if (max_points == 0 || kept.size() <= max_points) return kept;
   std::vector<Vec3f> thinned;
@@ -239,7 +252,7 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
   pcl::KdTreeFLANN<pcl::PointXYZ> target_tree, source_tree;
   target_tree.setInputCloud(target);
   source_tree.setInputCloud(source);
-  std::vector<Vec3> normals = normals_of(target_tree, *target);
+  const LazyNormals normals(target_tree, *target);
   if (refine) {
     // ICP in three rounds of shrinking correspondence distance: a coarse guess some 10 cm off
     // first gets its pairs, the last round pairs only points on the same surface.
@@ -267,7 +280,12 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
   std::vector<std::pair<Vec3, int>> pairs;
   const double forward = inlier_share(target_tree, *source, fit.target_from_source,
                                       options.inlier_m, &fit.rms_m, &pairs);
-  const double backward = inlier_share(source_tree, *target, fit.target_from_source.inverse(),
+  // The other direction on as many target points as the source has (evenly thinned).
+  Cloud sampled;
+  const std::size_t every =
+      std::max<std::size_t>(1, target->size() / std::max<std::size_t>(1, source->size()));
+  for (std::size_t i = 0; i < target->size(); i += every) sampled.push_back((*target)[i]);
+  const double backward = inlier_share(source_tree, sampled, fit.target_from_source.inverse(),
                                        options.inlier_m, nullptr, nullptr);
   fit.fitness = std::max(forward, backward);
   uncertainty(*target, normals, pairs, fit);

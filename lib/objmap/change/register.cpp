@@ -102,6 +102,9 @@ std::vector<PairOfPairs> candidate_pairs(const std::vector<Landmark>& a,
 
 struct Coarse {
   Pose gb_to_ga = Pose::Identity();  // gravity-before from gravity-after
+  Vec3 centre_a = Vec3::Zero();      // the agreeing objects' centroid (gravity-before) ...
+  Vec3 centre_b = Vec3::Zero();      // ... and theirs (gravity-after)
+  double spread_m = 0.0;             // their largest horizontal distance from it
   int common = 0;
   double rms_m = 0.0;
   std::size_t hypotheses = 0;
@@ -136,7 +139,22 @@ Coarse coarse_from_objects(const Visit& before, const Visit& after, const Regist
     best.common = static_cast<int>(agreeing(a, b, best.gb_to_ga, o.object_match_m, &sum2).size());
     best.rms_m = best.common ? std::sqrt(sum2 / best.common) : 0.0;
   }
+  const auto pairs = agreeing(a, b, best.gb_to_ga, o.object_match_m, nullptr);
+  for (const auto& [i, k] : pairs) best.centre_a += a[i].p, best.centre_b += b[k].p;
+  if (!pairs.empty()) best.centre_a /= pairs.size(), best.centre_b /= pairs.size();
+  for (const auto& [i, k] : pairs)
+    best.spread_m = std::max(best.spread_m, (a[i].p - best.centre_a).head<2>().norm());
   return best;
+}
+
+// The points within `radius` (horizontally) of `centre`: the place both visits' objects share.
+std::vector<Vec3f> crop(const std::vector<Vec3f>& points, const Vec3& centre, double radius) {
+  std::vector<Vec3f> out;
+  const Eigen::Vector2f c = centre.head<2>().cast<float>();
+  const float r2 = static_cast<float>(radius * radius);
+  for (const Vec3f& p : points)
+    if ((p.head<2>() - c).squaredNorm() <= r2) out.push_back(p);
+  return out;
 }
 
 std::vector<Vec3f> in_gravity(const Visit& v, const RegistrationOptions& o) {
@@ -171,6 +189,7 @@ void RegistrationOptions::check() const {
   positive(icp_max_correspondence_m, "icp_max_correspondence_m");
   positive(icp_final_correspondence_m, "icp_final_correspondence_m");
   positive(inlier_m, "inlier_m");
+  positive(icp_crop_margin_m, "icp_crop_margin_m");
   require(std::isfinite(min_pair_span_m) && min_pair_span_m >= 0.0,
           "RegistrationOptions.min_pair_span_m", "must be >= 0, got " + num(min_pair_span_m));
   require(min_common_objects >= 2, "RegistrationOptions.min_common_objects",
@@ -199,9 +218,13 @@ Registration register_visits(const Visit& before, const Visit& after,
     return r;
   }
   // 2. Refined: ICP of the dense maps from the coarse estimate, yaw + translation only.
-  const std::vector<Vec3f> target = in_gravity(before, options);
+  // Only around the common objects: far surfaces (walls metres away) carry the depth camera's
+  // quantisation steps, which differ between two visits' viewpoints and bias the yaw.
+  const double radius = coarse.spread_m + options.icp_crop_margin_m;
+  const std::vector<Vec3f> target = crop(in_gravity(before, options), coarse.centre_a, radius);
   const std::vector<Vec3f> source =
-      detail::thin_cloud(in_gravity(after, options), options.icp_voxel_m, options.icp_max_points);
+      detail::thin_cloud(crop(in_gravity(after, options), coarse.centre_b, radius),
+                         options.icp_voxel_m, options.icp_max_points);
   const detail::DenseFit fit = detail::align_dense(target, source, coarse.gb_to_ga, options, true);
   // 3. Fitness and uncertainty; credible or not.
   Registration r = finish(before, after, fit.target_from_source, fit);

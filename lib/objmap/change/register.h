@@ -19,13 +19,15 @@ struct RegistrationOptions {
   int min_common_objects = 3;    // fewer objects agree with the best hypothesis: not credible
   std::size_t max_hypotheses = 200000;     // beyond this, a fixed-seed sample of the pairs of pairs
   double icp_voxel_m = 0.03;               // dense maps thinned to one point per voxel for ICP
-  std::size_t icp_max_points = 20000;      // the after map's ICP points, at most (evenly thinned)
+  std::size_t icp_max_points = 10000;      // the after map's ICP points, at most (evenly thinned)
   double icp_max_correspondence_m = 0.15;  // first rounds pair points closer than this ...
   double icp_final_correspondence_m = 0.04;  // ... shrinking to this
-  int icp_max_iterations = 40;               // per round (three rounds)
-  double inlier_m = 0.03;    // fitness: an after point within this of the before map
-  double min_fitness = 0.3;  // a lower fitness: not credible
-  void check() const;        // throws InputError naming the bad field
+  int icp_max_iterations = 30;               // per round (three rounds)
+  double icp_crop_margin_m = 1.0;  // ICP uses the dense points within the common objects' spread
+                                   // + this (horizontally) of their centroid
+  double inlier_m = 0.03;          // fitness: an after point within this of the before map
+  double min_fitness = 0.3;        // a lower fitness: not credible
+  void check() const;              // throws InputError naming the bad field
 };
 
 struct Registration {

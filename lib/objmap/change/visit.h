@@ -1,4 +1,5 @@
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,8 @@ struct VisitObject {
   Vec3 position = Vec3::Zero();     // objects.json `position` (box centre), world
   Vec3 half_extent = Vec3::Zero();  // of its oriented box, metres
   std::vector<Vec3f> points;        // its filtered points (objects/<id>_<class>.ply), world
+  std::optional<Vec3> colour;       // mean red, green, blue (0-255) of its points, when they have
+                                    // colours
   // Radius of its box, at least 5 cm: the gate of "same place" grows with the object.
   double radius_m() const;
 };

@@ -129,7 +129,15 @@ change::Visit read_visit(const fs::path& run) {
     if (!m.ply.empty()) {
       const fs::path ply =
           io::path_in_run(run, m.ply, objects_file, "objects[" + std::to_string(i) + "].ply");
-      if (fs::exists(ply)) o.points = thinned(io::read_ply(ply));
+      if (fs::exists(ply)) {
+        const PointCloud cloud = io::read_ply(ply);
+        o.points = thinned(cloud);
+        if (cloud.has_colors() && !cloud.empty()) {
+          Vec3 sum = Vec3::Zero();
+          for (const Rgb& c : cloud.colors) sum += Vec3(c.r, c.g, c.b);
+          o.colour = sum / static_cast<double>(cloud.size());
+        }
+      }
     }
     v.objects.push_back(std::move(o));
   }

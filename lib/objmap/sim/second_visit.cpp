@@ -132,10 +132,14 @@ SecondVisit make_second_visit(Scene& scene, const SecondVisitOptions& options, s
   std::vector<std::string> status(scene.objects.size(), "unchanged");
   std::vector<Vec3> before(scene.objects.size());
   for (std::size_t i = 0; i < scene.objects.size(); ++i) before[i] = scene.objects[i].obb.center;
+  // A moved or added object keeps clear of the objects there now and of the places the first
+  // visit's objects held: no change lands on another's old place, so each has one answer.
+  const std::vector<SceneObject> first_visit = scene.objects;
   const auto present = [&] {
     std::vector<const SceneObject*> out;
     for (std::size_t i = 0; i < scene.objects.size(); ++i)
       if (i >= status.size() || status[i] != "removed") out.push_back(&scene.objects[i]);
+    for (const SceneObject& ghost : first_visit) out.push_back(&ghost);
     return out;
   };
   // 1. Moves, then removals, from the shuffled candidates.
@@ -155,14 +159,24 @@ SecondVisit make_second_visit(Scene& scene, const SecondVisitOptions& options, s
   for (const SceneObject& o : scene.objects) next_id = std::max(next_id, o.id);
   const std::size_t first_count = scene.objects.size();
   for (int a = 0; a < options.add && !candidates.empty(); ++a) {
-    SceneObject copy =
-        scene.objects[candidates[rng.uniform_int(static_cast<int>(candidates.size()))]];
-    copy.id = ++next_id;
-    Vec3 spot;
-    if (!free_spot(copy, tables, present(), Vec3::Constant(1e9), 0.0, rng, &spot)) continue;
-    place_at(copy, spot);
-    scene.objects.push_back(copy);
-    status.push_back("added");
+    // A random kind first; where it finds no free place, the next ones in turn.
+    const int first = rng.uniform_int(static_cast<int>(candidates.size()));
+    for (std::size_t t = 0; t < candidates.size(); ++t) {
+      SceneObject copy = scene.objects[candidates[(first + t) % candidates.size()]];
+      Vec3 spot;
+      if (!free_spot(copy, tables, present(), Vec3::Constant(1e9), 0.0, rng, &spot)) continue;
+      copy.id = ++next_id;
+      // Another instance of that kind: a colour of its own (a green no cup, bottle or book of the
+      // presets wears), so that it is not a twin of the object it was copied from.
+      for (Part& part : copy.parts) {
+        part.material.base = {40, static_cast<std::uint8_t>(rng.uniform(190, 220)), 60};
+        part.material.seed = static_cast<std::uint32_t>(rng.next());
+      }
+      place_at(copy, spot);
+      scene.objects.push_back(copy);
+      status.push_back("added");
+      break;
+    }
   }
   // 3. The new world frame: a yaw about up and a shift; the orbit's start moves on.
   const double yaw = rng.uniform(-M_PI, M_PI);
