@@ -22,8 +22,8 @@ void print_diff(const pipeline::DiffOptions& o, const pipeline::DiffResult& r) {
       "visits        before %zu objects, %zu dense points, %zu views; after %zu, %zu, %zu\n",
       r.before_objects, r.before_dense_points, r.before_views, r.after_objects,
       r.after_dense_points, r.after_views);
-  std::printf("registration  %s: yaw %.2f deg, translation (%.3f, %.3f, %.3f) m\n",
-              g.source.c_str(), g.yaw_deg, t.x(), t.y(), t.z());
+  std::printf("registration  %s: yaw %.2f deg, tilt %.2f deg, translation (%.3f, %.3f, %.3f) m\n",
+              g.source.c_str(), g.yaw_deg, g.tilt_deg, t.x(), t.y(), t.z());
   std::printf(
       "              %d common objects (rms %.3f m), ICP fitness %.3f (rms %.4f m), "
       "sigma %.4f m / %.3f deg\n",

@@ -269,14 +269,20 @@ ChangeResult classify_changes(const Visit& before, const Visit& after,
       },
       by_distance);
   // 2. What each visit saw of the other's lone objects' places.
-  const Occupancy occ_a(before.dense, o.voxel_m, kFineVoxelM);
-  const Occupancy occ_b(after.dense, o.voxel_m, kFineVoxelM);
+  // (Each visit's occupancy is built only when the other has an object left to judge.)
   const Pose after_from_before = before_from_after.inverse();
   std::vector<std::optional<PlaceEvidence>> ev_a(a.size()), ev_b(b.size());
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (!used_a[i]) ev_a[i] = evidence_with(occ_b, after, points_of(*a[i], after_from_before), o);
-  for (std::size_t k = 0; k < b.size(); ++k)
-    if (!used_b[k]) ev_b[k] = evidence_with(occ_a, before, points_of(*b[k], before_from_after), o);
+  if (std::count(used_a.begin(), used_a.end(), false) > 0) {
+    const Occupancy occ_b(after.dense, o.voxel_m, kFineVoxelM);
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!used_a[i]) ev_a[i] = evidence_with(occ_b, after, points_of(*a[i], after_from_before), o);
+  }
+  if (std::count(used_b.begin(), used_b.end(), false) > 0) {
+    const Occupancy occ_a(before.dense, o.voxel_m, kFineVoxelM);
+    for (std::size_t k = 0; k < b.size(); ++k)
+      if (!used_b[k])
+        ev_b[k] = evidence_with(occ_a, before, points_of(*b[k], before_from_after), o);
+  }
   const auto still_there = [&](const std::optional<PlaceEvidence>& e) {
     return e && e->sightlines >= o.min_sightlines && e->surface_share() >= o.present_share;
   };

@@ -73,6 +73,8 @@ class YawTranslationEstimation
  public:
   using Matrix4 = Eigen::Matrix4f;
   explicit YawTranslationEstimation(const LazyNormals& target_normals) : normals_(target_normals) {}
+  // From now on all three rotations (the last round: where the two maps' up estimates disagree).
+  void set_full_rotation(bool full) { full_ = full; }
   void estimateRigidTransformation(const Cloud& src, const Cloud& tgt, Matrix4& m) const override {
     std::vector<Vec3> s, t;
     for (std::size_t i = 0; i < std::min(src.size(), tgt.size()); ++i) add(src[i], tgt[i], s, t);
@@ -104,29 +106,35 @@ class YawTranslationEstimation
   }
   Pose point_to_plane_step(const Cloud& src, const Cloud& tgt,
                            const pcl::Correspondences& pairs) const {
-    if (pairs.size() < 4) return Pose::Identity();
+    if (pairs.size() < 6) return Pose::Identity();
     Vec3 c = Vec3::Zero();
     for (const pcl::Correspondence& k : pairs) c += pt(src[k.index_query]);
     c /= static_cast<double>(pairs.size());
-    Eigen::Matrix4d h = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d g = Eigen::Vector4d::Zero();
+    // Unknowns: small rotations about x, y, z (about c) and the translation; 4 DoF fixes x, y.
+    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
     for (const pcl::Correspondence& k : pairs) {
       const Vec3 p = pt(src[k.index_query]), q = pt(tgt[k.index_match]);
       const Vec3& n = normals_[k.index_match];
-      const Vec3 arm = p - c;
-      const Eigen::Vector4d jac(n.dot(Vec3(-arm.y(), arm.x(), 0.0)), n.x(), n.y(), n.z());
+      Eigen::Matrix<double, 6, 1> jac;
+      jac << (p - c).cross(n), n;
+      if (!full_) jac(0) = jac(1) = 0.0;
       const double r = n.dot(p - q);
       h += jac * jac.transpose();
       g += jac * r;
     }
     // A direction the surfaces do not constrain (a lone plane) stays put: a light damping.
-    h += Eigen::Matrix4d::Identity() * (1e-9 + 1e-6 * h.trace());
-    const Eigen::Vector4d x = -h.ldlt().solve(g);
-    const Pose r = yaw_pose(x(0), Vec3::Zero());
-    return yaw_pose(x(0), c - r.linear() * c + x.tail<3>());
+    h += Eigen::Matrix<double, 6, 6>::Identity() * (1e-9 + 1e-6 * h.trace());
+    const Eigen::Matrix<double, 6, 1> x = -h.ldlt().solve(g);
+    const Vec3 w = x.head<3>();
+    Pose step = Pose::Identity();
+    if (w.norm() > 0) step.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
+    step.translation() = c - step.linear() * c + x.tail<3>();
+    return step;
   }
   static Vec3 pt(const pcl::PointXYZ& a) { return Vec3(a.x, a.y, a.z); }
   const LazyNormals& normals_;
+  bool full_ = false;
 };
 
 Cloud::Ptr to_pcl(const std::vector<Vec3f>& points) {
@@ -257,7 +265,8 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
     // ICP in three rounds of shrinking correspondence distance: a coarse guess some 10 cm off
     // first gets its pairs, the last round pairs only points on the same surface.
     pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
-    icp.setTransformationEstimation(std::make_shared<YawTranslationEstimation>(normals));
+    const auto estimation = std::make_shared<YawTranslationEstimation>(normals);
+    icp.setTransformationEstimation(estimation);
     icp.setInputTarget(target);
     icp.setInputSource(source);
     icp.setMaximumIterations(options.icp_max_iterations);
@@ -265,17 +274,23 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
     icp.setEuclideanFitnessEpsilon(1e-10);
     const double c0 = options.icp_max_correspondence_m, c2 = options.icp_final_correspondence_m;
     Eigen::Matrix4f current = guess.matrix().cast<float>();
-    for (const double c : {c0, std::sqrt(c0 * c2), c2}) {
-      icp.setMaxCorrespondenceDistance(c);
+    for (const double c : {c0, std::sqrt(c0 * c2), c2, -c2}) {
+      if (c < 0 && !options.refine_tilt) break;
+      estimation->set_full_rotation(c < 0);  // the last round, optional: 6 DoF
+      icp.setMaxCorrespondenceDistance(std::abs(c));
       Cloud aligned;
       icp.align(aligned, current);
       current = icp.getFinalTransformation();
     }
-    fit.target_from_source.matrix() = current.cast<double>();
-    // Re-orthonormalise (float accumulation) and keep it a yaw + translation.
-    const Eigen::Matrix3d r = fit.target_from_source.linear();
-    fit.target_from_source =
-        yaw_pose(std::atan2(r(1, 0), r(0, 0)), fit.target_from_source.translation());
+    // Re-orthonormalise (float accumulation); a yaw + translation stays one.
+    const Eigen::Matrix4d m = current.cast<double>();
+    const Eigen::Matrix3d r = m.block<3, 3>(0, 0);
+    if (options.refine_tilt) {
+      fit.target_from_source.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
+      fit.target_from_source.translation() = m.block<3, 1>(0, 3);
+    } else {
+      fit.target_from_source = yaw_pose(std::atan2(r(1, 0), r(0, 0)), m.block<3, 1>(0, 3));
+    }
   }
   std::vector<std::pair<Vec3, int>> pairs;
   const double forward = inlier_share(target_tree, *source, fit.target_from_source,

@@ -52,7 +52,7 @@ std::vector<std::pair<int, int>> agreeing(const std::vector<Landmark>& before,
     int best = -1;
     double best_d2 = radius * radius;
     for (std::size_t i = 0; i < before.size(); ++i) {
-      if (used[i] || *before[i].class_name != *after[k].class_name) continue;
+      if (used[i] || !same_kind(*before[i].class_name, *after[k].class_name)) continue;
       const double d2 = (before[i].p - p).squaredNorm();
       if (d2 < best_d2) best_d2 = d2, best = static_cast<int>(i);
     }
@@ -82,9 +82,9 @@ std::vector<PairOfPairs> candidate_pairs(const std::vector<Landmark>& a,
       const double span_a = da.head<2>().norm();
       if (span_a < o.min_pair_span_m) continue;
       for (int k = 0; k < static_cast<int>(b.size()); ++k) {
-        if (*b[k].class_name != *a[i].class_name) continue;
+        if (!same_kind(*b[k].class_name, *a[i].class_name)) continue;
         for (int l = 0; l < static_cast<int>(b.size()); ++l) {
-          if (l == k || *b[l].class_name != *a[j].class_name) continue;
+          if (l == k || !same_kind(*b[l].class_name, *a[j].class_name)) continue;
           const Vec3 db = b[l].p - b[k].p;
           if (std::abs(db.head<2>().norm() - span_a) > tol || std::abs(db.z() - da.z()) > tol)
             continue;
@@ -110,41 +110,66 @@ struct Coarse {
   std::size_t hypotheses = 0;
 };
 
-// Step 1: every pair of pairs proposes a yaw and a translation; the one most same-class objects
-// agree with (then the smallest squared distances) wins and is refined by least squares on them.
-Coarse coarse_from_objects(const Visit& before, const Visit& after, const RegistrationOptions& o) {
+// The least-squares refinement of a hypothesis on the objects that agree with it, with their
+// centroids and spread.
+Coarse refine(const std::vector<Landmark>& a, const std::vector<Landmark>& b, Coarse c,
+              const RegistrationOptions& o) {
+  for (int round = 0; round < 2; ++round) {  // twice: the pairs may change once
+    const auto pairs = agreeing(a, b, c.gb_to_ga, o.object_match_m, nullptr);
+    if (pairs.size() < 2) break;
+    std::vector<Vec3> src, dst;
+    for (const auto& [i, k] : pairs) src.push_back(b[k].p), dst.push_back(a[i].p);
+    c.gb_to_ga = detail::fit_yaw_translation(src, dst);
+  }
+  double sum2 = 0.0;
+  const auto pairs = agreeing(a, b, c.gb_to_ga, o.object_match_m, &sum2);
+  c.common = static_cast<int>(pairs.size());
+  c.rms_m = c.common ? std::sqrt(sum2 / c.common) : 0.0;
+  for (const auto& [i, k] : pairs) c.centre_a += a[i].p, c.centre_b += b[k].p;
+  if (!pairs.empty()) c.centre_a /= pairs.size(), c.centre_b /= pairs.size();
+  for (const auto& [i, k] : pairs)
+    c.spread_m = std::max(c.spread_m, (a[i].p - c.centre_a).head<2>().norm());
+  return c;
+}
+
+// Step 1: every pair of pairs proposes a yaw and a translation; the hypotheses most same-class
+// objects agree with (then the smallest squared distances) come first, refined by least squares
+// on them; distinct ones only (yaw 3° and 10 cm apart), at most `max_candidates`.
+std::vector<Coarse> coarse_from_objects(const Visit& before, const Visit& after,
+                                        const RegistrationOptions& o, std::size_t max_candidates) {
   const std::vector<Landmark> a = landmarks(before), b = landmarks(after);
   const std::vector<PairOfPairs> candidates = candidate_pairs(a, b, o);
-  Coarse best;
-  best.hypotheses = candidates.size();
-  double best_sum2 = std::numeric_limits<double>::infinity();
+  struct Scored {
+    int n;
+    double sum2;
+    Pose h;
+  };
+  std::vector<Scored> scored;
   for (const PairOfPairs& c : candidates) {
     const Pose h = detail::fit_yaw_translation({b[c.k].p, b[c.l].p}, {a[c.i].p, a[c.j].p});
     double sum2 = 0.0;
     const int n = static_cast<int>(agreeing(a, b, h, o.object_match_m, &sum2).size());
-    if (n > best.common || (n == best.common && sum2 < best_sum2)) {
-      best.common = n;
-      best.gb_to_ga = h;
-      best_sum2 = sum2;
-    }
+    scored.push_back({n, sum2, h});
   }
-  // Least squares on the agreeing objects, twice (the pairs may change once).
-  for (int round = 0; round < 2 && best.common >= 2; ++round) {
-    const auto pairs = agreeing(a, b, best.gb_to_ga, o.object_match_m, nullptr);
-    if (pairs.size() < 2) break;
-    std::vector<Vec3> src, dst;
-    for (const auto& [i, k] : pairs) src.push_back(b[k].p), dst.push_back(a[i].p);
-    best.gb_to_ga = detail::fit_yaw_translation(src, dst);
-    double sum2 = 0.0;
-    best.common = static_cast<int>(agreeing(a, b, best.gb_to_ga, o.object_match_m, &sum2).size());
-    best.rms_m = best.common ? std::sqrt(sum2 / best.common) : 0.0;
+  std::stable_sort(scored.begin(), scored.end(), [](const Scored& x, const Scored& y) {
+    return x.n != y.n ? x.n > y.n : x.sum2 < y.sum2;
+  });
+  std::vector<Coarse> out;
+  for (const Scored& s : scored) {
+    if (out.size() >= max_candidates) break;
+    Coarse c;
+    c.gb_to_ga = s.h;
+    c = refine(a, b, c, o);
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const Coarse& d) {
+      return std::abs(yaw_deg_of((d.gb_to_ga.linear().transpose() * c.gb_to_ga.linear()))) < 3.0 &&
+             (d.gb_to_ga.translation() - c.gb_to_ga.translation()).norm() < 0.1;
+    });
+    if (!seen) out.push_back(c);
   }
-  const auto pairs = agreeing(a, b, best.gb_to_ga, o.object_match_m, nullptr);
-  for (const auto& [i, k] : pairs) best.centre_a += a[i].p, best.centre_b += b[k].p;
-  if (!pairs.empty()) best.centre_a /= pairs.size(), best.centre_b /= pairs.size();
-  for (const auto& [i, k] : pairs)
-    best.spread_m = std::max(best.spread_m, (a[i].p - best.centre_a).head<2>().norm());
-  return best;
+  for (Coarse& c : out) c.hypotheses = candidates.size();
+  std::stable_sort(out.begin(), out.end(),
+                   [](const Coarse& x, const Coarse& y) { return x.common > y.common; });
+  return out;
 }
 
 // The points within `radius` (horizontally) of `centre`: the place both visits' objects share.
@@ -169,6 +194,8 @@ Registration finish(const Visit& before, const Visit& after, const Pose& gb_to_g
   Registration r;
   r.before_from_after = gravity_pose(before).inverse() * gb_to_ga * gravity_pose(after);
   r.yaw_deg = yaw_deg_of(gb_to_ga.linear());
+  r.tilt_deg =
+      std::acos(std::clamp((gb_to_ga.linear() * Vec3::UnitZ()).z(), -1.0, 1.0)) * 180.0 / M_PI;
   r.fitness = fit.fitness;
   r.rms_m = fit.rms_m;
   r.icp_points = fit.source_points;
@@ -202,30 +229,61 @@ void RegistrationOptions::check() const {
           "RegistrationOptions.min_fitness", "must be in [0, 1], got " + num(min_fitness));
 }
 
+bool same_kind(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  static const char* const kScreens[] = {"tv", "tv monitor", "tvmonitor", "monitor", "laptop"};
+  const auto screen = [](const std::string& c) {
+    return std::any_of(std::begin(kScreens), std::end(kScreens),
+                       [&](const char* s) { return c == s; });
+  };
+  return screen(a) && screen(b);
+}
+
 double yaw_deg_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)) * 180.0 / M_PI; }
 
 Registration register_visits(const Visit& before, const Visit& after,
                              const RegistrationOptions& options) {
   options.check();
-  // 1. Coarse: the objects, in the two gravity frames.
-  const Coarse coarse = coarse_from_objects(before, after, options);
-  if (coarse.common < options.min_common_objects) {
+  // 1. Coarse: the objects, in the two gravity frames; a few distinct hypotheses.
+  std::vector<Coarse> hypotheses = coarse_from_objects(before, after, options, 6);
+  const int best_common = hypotheses.empty() ? 0 : hypotheses.front().common;
+  if (best_common < options.min_common_objects) {
     Registration r;
-    r.common_objects = coarse.common;
-    r.hypotheses = coarse.hypotheses;
-    r.why = "too few common objects (" + std::to_string(coarse.common) + " agree on a placement, " +
+    r.common_objects = best_common;
+    r.hypotheses = hypotheses.empty() ? 0 : hypotheses.front().hypotheses;
+    r.why = "too few common objects (" + std::to_string(best_common) + " agree on a placement, " +
             std::to_string(options.min_common_objects) + " needed)";
     return r;
   }
-  // 2. Refined: ICP of the dense maps from the coarse estimate, yaw + translation only.
-  // Only around the common objects: far surfaces (walls metres away) carry the depth camera's
-  // quantisation steps, which differ between two visits' viewpoints and bias the yaw.
-  const double radius = coarse.spread_m + options.icp_crop_margin_m;
-  const std::vector<Vec3f> target = crop(in_gravity(before, options), coarse.centre_a, radius);
-  const std::vector<Vec3f> source =
-      detail::thin_cloud(crop(in_gravity(after, options), coarse.centre_b, radius),
-                         options.icp_voxel_m, options.icp_max_points);
-  const detail::DenseFit fit = detail::align_dense(target, source, coarse.gb_to_ga, options, true);
+  // 2. Refined: ICP of the dense maps, yaw + translation (and a last round for the tilt). Only
+  // around the common objects: far surfaces (walls metres away) carry the depth camera's
+  // quantisation steps, which differ between two visits' viewpoints and bias the yaw. Where
+  // several placements fit the objects (two objects, two alike), a quick ICP of each picks the one
+  // the dense maps agree with best.
+  const std::vector<Vec3f> before_points = in_gravity(before, options);
+  const std::vector<Vec3f> after_points = in_gravity(after, options);
+  const auto align = [&](const Coarse& c, const RegistrationOptions& o) {
+    const double radius = c.spread_m + o.icp_crop_margin_m;
+    return detail::align_dense(
+        crop(before_points, c.centre_a, radius),
+        detail::thin_cloud(crop(after_points, c.centre_b, radius), o.icp_voxel_m, o.icp_max_points),
+        c.gb_to_ga, o, true);
+  };
+  std::size_t chosen = 0;
+  if (hypotheses.size() > 1 && hypotheses[1].common == best_common) {
+    RegistrationOptions quick = options;
+    quick.icp_max_points = std::min<std::size_t>(options.icp_max_points, 2000);
+    quick.icp_max_iterations = std::min(options.icp_max_iterations, 15);
+    quick.refine_tilt = false;
+    double best_fitness = -1.0;
+    for (std::size_t h = 0; h < hypotheses.size(); ++h) {
+      if (hypotheses[h].common < best_common) continue;  // only those tied with the best
+      const double f = align(hypotheses[h], quick).fitness;
+      if (f > best_fitness) best_fitness = f, chosen = h;
+    }
+  }
+  const Coarse& coarse = hypotheses[chosen];
+  const detail::DenseFit fit = align(coarse, options);
   // 3. Fitness and uncertainty; credible or not.
   Registration r = finish(before, after, fit.target_from_source, fit);
   r.common_objects = coarse.common;

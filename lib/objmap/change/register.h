@@ -16,7 +16,8 @@ namespace objmap::change {
 struct RegistrationOptions {
   double object_match_m = 0.25;  // coarse: a same-class pair agrees within this distance
   double min_pair_span_m = 0.2;  // coarse: two objects closer than this do not fix a yaw
-  int min_common_objects = 3;    // fewer objects agree with the best hypothesis: not credible
+  int min_common_objects = 2;    // fewer objects agree with the best hypothesis: not credible
+                                 // (two fix a yaw; the dense maps must then agree: fitness)
   std::size_t max_hypotheses = 200000;     // beyond this, a fixed-seed sample of the pairs of pairs
   double icp_voxel_m = 0.03;               // dense maps thinned to one point per voxel for ICP
   std::size_t icp_max_points = 10000;      // the after map's ICP points, at most (evenly thinned)
@@ -25,14 +26,18 @@ struct RegistrationOptions {
   int icp_max_iterations = 30;               // per round (three rounds)
   double icp_crop_margin_m = 1.0;  // ICP uses the dense points within the common objects' spread
                                    // + this (horizontally) of their centroid
-  double inlier_m = 0.03;          // fitness: an after point within this of the before map
-  double min_fitness = 0.3;        // a lower fitness: not credible
-  void check() const;              // throws InputError naming the bad field
+  // A last ICP round in all 6 DoF: corrects where the two maps' up estimates disagree (a short run
+  // estimates its up a few degrees off); the result's tilt is reported.
+  bool refine_tilt = true;
+  double inlier_m = 0.03;    // fitness: an after point within this of the before map
+  double min_fitness = 0.3;  // a lower fitness: not credible
+  void check() const;        // throws InputError naming the bad field
 };
 
 struct Registration {
   Pose before_from_after = Pose::Identity();  // world of the before map from world of the after
   double yaw_deg = 0.0;                       // about up (the before map's gravity frame)
+  double tilt_deg = 0.0;       // the after map's up, registered, against the before map's
   int common_objects = 0;      // coarse: objects that agree with the chosen hypothesis
   double coarse_rms_m = 0.0;   // coarse: RMS distance of those pairs after the refinement
   std::size_t hypotheses = 0;  // coarse: pairs of pairs tried
@@ -59,5 +64,9 @@ Registration score_registration(const Visit& before, const Visit& after,
 
 // The yaw (degrees, about up) and the translation of a 4-DoF transform given in two gravity frames.
 double yaw_deg_of(const Eigen::Matrix3d& rotation);
+
+// Classes a detector takes for one another (a monitor is a "tv" in one run, a "laptop" in the
+// next): the coarse step pairs them as one kind; the statuses do not.
+bool same_kind(const std::string& a, const std::string& b);
 
 }  // namespace objmap::change

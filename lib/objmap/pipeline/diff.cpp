@@ -84,6 +84,7 @@ ordered_json registration_json(const change::Registration& r) {
   return {{"source", r.source},
           {"before_from_after", matrix_json(r.before_from_after)},
           {"yaw_deg", r.yaw_deg},
+          {"tilt_deg", r.tilt_deg},
           {"translation_m", vec_json(r.before_from_after.translation())},
           {"common_objects", r.common_objects},
           {"coarse_rms_m", r.coarse_rms_m},
