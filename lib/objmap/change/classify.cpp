@@ -171,6 +171,12 @@ void judge_lone(ObjectChange& c, const PlaceEvidence& e, bool before_side,
     c.why = "not detected by the " + std::string(before_side ? "after" : "before") +
             " visit, but its surface is there (" + num(std::round(100 * e.surface_share())) +
             "% of the lines of sight end on it)";
+  } else if (1.0 - e.surface_share() < o.empty_share) {
+    c.status = before_side ? Status::kNotSeenAgain : Status::kNotSeenBefore;
+    c.why = "mixed evidence from the " + std::string(before_side ? "after" : "before") +
+            " visit: " + num(std::round(100 * (1.0 - e.surface_share()))) +
+            "% of the lines of sight pass through its place, " +
+            num(std::round(100 * o.empty_share)) + "% needed to call it empty";
   } else {
     c.status = before_side ? Status::kRemoved : Status::kAdded;
     c.why = "its place was seen " +
@@ -230,6 +236,8 @@ void ClassifyOptions::check() const {
   require(std::isfinite(changed_class_size_ratio) && changed_class_size_ratio >= 1.0,
           "ClassifyOptions.changed_class_size_ratio",
           "must be >= 1, got " + num(changed_class_size_ratio));
+  require(std::isfinite(empty_share) && empty_share > 0.0 && empty_share <= 1.0,
+          "ClassifyOptions.empty_share", "must be in (0, 1], got " + num(empty_share));
   require(std::isfinite(present_share) && present_share > 0.0 && present_share <= 1.0,
           "ClassifyOptions.present_share", "must be in (0, 1], got " + num(present_share));
 }

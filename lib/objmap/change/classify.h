@@ -44,6 +44,8 @@ struct ClassifyOptions {
   int min_sightlines = 20;      // fewer unoccluded (view, point) lines: its place not seen
   double present_share = 0.5;   // of those lines, the share ending on the object's surface
                                 // from which it is still there (undetected)
+  double empty_share = 0.7;     // ... passing through it, from which its place is empty (removed,
+                                // added); in between: unknown (not seen again / before)
   void check() const;           // throws InputError naming the bad field
 };
 

@@ -307,4 +307,18 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
   return fit;
 }
 
+std::vector<double> overlap_shares(const std::vector<Vec3f>& target_points,
+                                   const std::vector<Vec3f>& source_points,
+                                   const std::vector<Pose>& guesses, double inlier_m) {
+  std::vector<double> shares(guesses.size(), 0.0);
+  const Cloud::Ptr target = to_pcl(target_points);
+  const Cloud::Ptr source = to_pcl(source_points);
+  if (target->size() < 10 || source->empty()) return shares;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(target);
+  for (std::size_t g = 0; g < guesses.size(); ++g)
+    shares[g] = inlier_share(tree, *source, guesses[g], inlier_m, nullptr, nullptr);
+  return shares;
+}
+
 }  // namespace objmap::change::detail

@@ -31,4 +31,10 @@ struct DenseFit {
 DenseFit align_dense(const std::vector<Vec3f>& target, const std::vector<Vec3f>& source,
                      const Pose& guess, const RegistrationOptions& options, bool refine);
 
+// For each guess (target_from_source), the share of `source` points within `inlier_m` of `target`
+// (one kd-tree for all): a cheap score to rank many placements before any ICP.
+std::vector<double> overlap_shares(const std::vector<Vec3f>& target,
+                                   const std::vector<Vec3f>& source,
+                                   const std::vector<Pose>& guesses, double inlier_m);
+
 }  // namespace objmap::change::detail

@@ -204,6 +204,48 @@ Registration finish(const Visit& before, const Visit& after, const Pose& gb_to_g
   return r;
 }
 
+// Placements from single same-kind correspondences (before object i ↔ after object k) at 24
+// yaws; the 3 whose thinned after map overlaps the before map most (within 10 cm).
+std::vector<Coarse> sweep(const Visit& before, const Visit& after,
+                          const std::vector<Vec3f>& before_points,
+                          const std::vector<Vec3f>& after_points, const RegistrationOptions& o) {
+  const std::vector<Landmark> a = landmarks(before), b = landmarks(after);
+  std::vector<Coarse> candidates;
+  std::vector<Pose> guesses;
+  for (const Landmark& la : a)
+    for (const Landmark& lb : b) {
+      if (!same_kind(*la.class_name, *lb.class_name)) continue;
+      for (int step = 0; step < 24; ++step) {
+        Coarse c;
+        c.gb_to_ga.linear() = Eigen::AngleAxisd(step * M_PI / 12.0, Vec3::UnitZ()).matrix();
+        c.gb_to_ga.translation() = la.p - c.gb_to_ga.linear() * lb.p;
+        c.centre_a = la.p;
+        c.centre_b = lb.p;
+        candidates.push_back(c);
+        guesses.push_back(c.gb_to_ga);
+      }
+    }
+  // Both ways (a small map inside a large one overlaps it well in one direction only).
+  std::vector<Pose> inverses;
+  for (const Pose& g : guesses) inverses.push_back(g.inverse());
+  std::vector<double> shares = detail::overlap_shares(
+      before_points, detail::thin_cloud(after_points, o.icp_voxel_m, 2000), guesses, 0.1);
+  const std::vector<double> back = detail::overlap_shares(
+      after_points, detail::thin_cloud(before_points, o.icp_voxel_m, 2000), inverses, 0.1);
+  for (std::size_t i = 0; i < shares.size(); ++i) shares[i] = std::max(shares[i], back[i]);
+  std::vector<std::size_t> order(candidates.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t x, std::size_t y) { return shares[x] > shares[y]; });
+  std::vector<Coarse> out;
+  for (std::size_t i = 0; i < std::min<std::size_t>(3, order.size()); ++i) {
+    Coarse c = candidates[order[i]];
+    c.hypotheses = candidates.size();
+    out.push_back(c);
+  }
+  return out;
+}
+
 }  // namespace
 
 void RegistrationOptions::check() const {
@@ -269,6 +311,14 @@ Registration register_visits(const Visit& before, const Visit& after,
         detail::thin_cloud(crop(after_points, c.centre_b, radius), o.icp_voxel_m, o.icp_max_points),
         c.gb_to_ga, o, true);
   };
+  // With few objects (two agree at best) the true placement may have only one: add the best
+  // placements of a yaw sweep about single same-kind correspondences, ranked by dense overlap.
+  if (best_common <= 2) {
+    std::vector<Coarse> swept = sweep(before, after, before_points, after_points, options);
+    for (Coarse& c : swept) c.common = best_common;  // ranked with the tied ones below
+    hypotheses.insert(hypotheses.end(), swept.begin(), swept.end());
+  }
+  const std::vector<Landmark> a_marks = landmarks(before), b_marks = landmarks(after);
   std::size_t chosen = 0;
   if (hypotheses.size() > 1 && hypotheses[1].common == best_common) {
     RegistrationOptions quick = options;
@@ -278,19 +328,29 @@ Registration register_visits(const Visit& before, const Visit& after,
     double best_fitness = -1.0;
     for (std::size_t h = 0; h < hypotheses.size(); ++h) {
       if (hypotheses[h].common < best_common) continue;  // only those tied with the best
-      const double f = align(hypotheses[h], quick).fitness;
-      if (f > best_fitness) best_fitness = f, chosen = h;
+      const detail::DenseFit f = align(hypotheses[h], quick);
+      // A placement no object agrees with any more is the dense maps' coincidence: not taken.
+      if (agreeing(a_marks, b_marks, f.target_from_source, options.object_match_m, nullptr).empty())
+        continue;
+      if (f.fitness > best_fitness) best_fitness = f.fitness, chosen = h;
     }
   }
   const Coarse& coarse = hypotheses[chosen];
   const detail::DenseFit fit = align(coarse, options);
   // 3. Fitness and uncertainty; credible or not.
   Registration r = finish(before, after, fit.target_from_source, fit);
-  r.common_objects = coarse.common;
-  r.coarse_rms_m = coarse.rms_m;
+  double sum2 = 0.0;
+  r.common_objects =
+      static_cast<int>(agreeing(landmarks(before), landmarks(after), fit.target_from_source,
+                                options.object_match_m, &sum2)
+                           .size());
+  r.coarse_rms_m = r.common_objects ? std::sqrt(sum2 / r.common_objects) : 0.0;
   r.hypotheses = coarse.hypotheses;
-  r.credible = r.fitness >= options.min_fitness;
-  if (!r.credible)
+  r.credible = r.fitness >= options.min_fitness && r.common_objects >= 1;
+  if (r.common_objects < 1)
+    r.why = "no object agrees with the placement the dense maps fit best (ICP fitness " +
+            num(std::round(r.fitness * 1000) / 1000) + ")";
+  else if (!r.credible)
     r.why = "ICP fitness " + num(std::round(r.fitness * 1000) / 1000) + " below " +
             num(options.min_fitness) + " (the dense maps do not overlap where the objects agree)";
   return r;
