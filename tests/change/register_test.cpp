@@ -52,13 +52,23 @@ TEST(Register, RecoversAHalfTurnWithTiltedUp) {
   EXPECT_LT(rotation_error_deg(r.before_from_after, truth), 0.05);
 }
 
-TEST(Register, TooFewCommonObjectsIsNotCredible) {
+TEST(Register, OneCommonObjectNeedsTheDenseMapsToAgree) {
   const std::vector<testing::TestObject> all = test_objects();
-  const std::vector<testing::TestObject> two(all.begin(), all.begin() + 1);  // one object
-  const Visit before = make_test_visit(two);
-  const Visit after = moved_visit(before, yaw_shift(20.0, Vec3(0.3, 0.1, 0.0)));
-  const Registration r = register_visits(before, after, {});
-  EXPECT_FALSE(r.credible);
+  const std::vector<testing::TestObject> one(all.begin(), all.begin() + 1);
+  const Visit before = make_test_visit(one);
+  // The same room: a yaw sweep about the one object finds it, the dense maps agree.
+  const Pose after_from_before = yaw_shift(20.0, Vec3(0.3, 0.1, 0.0));
+  const Registration same = register_visits(before, moved_visit(before, after_from_before), {});
+  ASSERT_TRUE(same.credible) << same.why;
+  EXPECT_LT(rotation_error_deg(same.before_from_after, after_from_before.inverse()), 0.05);
+  // Another place with that object: not credible, too few common objects.
+  Visit other = make_test_visit(one);
+  other.dense.clear();
+  for (double x = -2.0; x <= 2.0; x += 0.02)
+    for (double z = 0.0; z <= 2.5; z += 0.02) other.dense.push_back(Vec3f(x, -0.6f, z));
+  for (const Vec3f& p : other.objects[0].points) other.dense.push_back(p);
+  const Registration r = register_visits(before, other, {});
+  EXPECT_FALSE(r.credible) << r.fitness;
   EXPECT_NE(r.why.find("too few common objects"), std::string::npos) << r.why;
 }
 

@@ -3,6 +3,8 @@
 // ../shared/data (skipped with a message when it is absent).
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <nlohmann/json.hpp>
 
 #include "support/schema_check.h"
@@ -163,6 +165,44 @@ TEST(DiffReal, ARecordingAgainstItselfRegistersAtTheIdentityUnchanged) {
   const json diff = json::parse(read_text(tmp / "diff" / "diff.json"));
   EXPECT_NEAR(diff["registration"]["yaw_deg"].get<double>(), 0.0, 0.01);
   EXPECT_EQ(diff["counts"]["unchanged"].get<int>(), static_cast<int>(diff["objects"].size()));
+}
+
+TEST(DiffReal, TwoHalvesOfASevenScenesClipRegisterAndAgree) {
+  if (!diff_real_data("7scenes_redkitchen_3dmatch_50f")) GTEST_SKIP() << "real data absent";
+  const fs::path model = data_dir() / "../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx";
+  if (!fs::exists(model)) GTEST_SKIP() << "model absent: " << model;
+  // Frames 8-32 and 33-57, each a 7-Scenes folder of its own (links), detected and fused apart.
+  TempDir tmp;
+  const fs::path clip = data_dir() / "7scenes_redkitchen_3dmatch_50f";
+  fs::path runs[2];
+  for (int h = 0; h < 2; ++h) {
+    const fs::path half = tmp / ("half" + std::to_string(h));
+    fs::create_directories(half);
+    fs::copy_file(clip / "camera-intrinsics.txt", half / "camera-intrinsics.txt");
+    for (int i = 8 + 25 * h; i < 33 + 25 * h; ++i) {
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "frame-%06d", i);
+      for (const char* ext : {".color.png", ".depth.png", ".pose.txt"})
+        fs::create_symlink(clip / (std::string(stem) + ext), half / (std::string(stem) + ext));
+    }
+    const RunResult det = run_objmap({"detect", "--dataset", half.string(), "--model",
+                                      model.string(), "--out", (half / "seg").string()});
+    ASSERT_EQ(det.exit_code, 0) << det.err;
+    runs[h] = tmp / ("run" + std::to_string(h));
+    const RunResult fuse = run_objmap({"fuse", "--dataset", half.string(), "--segmentation",
+                                       (half / "seg").string(), "--out", runs[h].string()});
+    ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
+  }
+  const RunResult d = run_objmap({"diff", "--before", runs[0].string(), "--after", runs[1].string(),
+                                  "--out", (tmp / "diff").string()});
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  const json diff = json::parse(read_text(tmp / "diff" / "diff.json"));
+  // One recording, one world frame: the identity.
+  EXPECT_NEAR(diff["registration"]["yaw_deg"].get<double>(), 0.0, 1.0) << d.out;
+  for (int k : {3, 7, 11})
+    EXPECT_NEAR(diff["registration"]["before_from_after"][k].get<double>(), 0.0, 0.03) << d.out;
+  expect_no_unsupported_changes(diff);
+  EXPECT_EQ(diff["counts"]["removed"].get<int>() + diff["counts"]["added"].get<int>(), 0) << d.out;
 }
 
 TEST(DiffReal, TwoDifferentPlacesAreExit2Named) {

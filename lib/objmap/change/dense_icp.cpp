@@ -303,6 +303,7 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
   const double backward = inlier_share(source_tree, sampled, fit.target_from_source.inverse(),
                                        options.inlier_m, nullptr, nullptr);
   fit.fitness = std::max(forward, backward);
+  fit.fitness_both = std::min(forward, backward);
   uncertainty(*target, normals, pairs, fit);
   return fit;
 }

@@ -20,7 +20,8 @@ std::vector<Vec3f> thin_cloud(const std::vector<Vec3f>& points, double voxel_m,
 struct DenseFit {
   Pose target_from_source = Pose::Identity();
   double fitness = 0.0;  // the larger of the two shares of points within inlier_m of the other map
-  double rms_m = 0.0;    // of the source points' inlier distances
+  double fitness_both = 0.0;  // the smaller of the two
+  double rms_m = 0.0;         // of the source points' inlier distances
   std::size_t source_points = 0;
   double sigma_translation_m = 0.0;
   double sigma_yaw_deg = 0.0;

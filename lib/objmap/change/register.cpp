@@ -197,6 +197,7 @@ Registration finish(const Visit& before, const Visit& after, const Pose& gb_to_g
   r.tilt_deg =
       std::acos(std::clamp((gb_to_ga.linear() * Vec3::UnitZ()).z(), -1.0, 1.0)) * 180.0 / M_PI;
   r.fitness = fit.fitness;
+  r.fitness_both = fit.fitness_both;
   r.rms_m = fit.rms_m;
   r.icp_points = fit.source_points;
   r.sigma_translation_m = fit.sigma_translation_m;
@@ -267,6 +268,10 @@ void RegistrationOptions::check() const {
   require(icp_max_points >= 100, "RegistrationOptions.icp_max_points", "must be >= 100");
   require(icp_max_iterations >= 1 && icp_max_iterations <= 1000,
           "RegistrationOptions.icp_max_iterations", "must be in [1, 1000]");
+  require(std::isfinite(min_fitness_few_objects) && min_fitness_few_objects >= 0.0 &&
+              min_fitness_few_objects <= 1.0,
+          "RegistrationOptions.min_fitness_few_objects",
+          "must be in [0, 1], got " + num(min_fitness_few_objects));
   require(std::isfinite(min_fitness) && min_fitness >= 0.0 && min_fitness <= 1.0,
           "RegistrationOptions.min_fitness", "must be in [0, 1], got " + num(min_fitness));
 }
@@ -289,14 +294,15 @@ Registration register_visits(const Visit& before, const Visit& after,
   // 1. Coarse: the objects, in the two gravity frames; a few distinct hypotheses.
   std::vector<Coarse> hypotheses = coarse_from_objects(before, after, options, 6);
   const int best_common = hypotheses.empty() ? 0 : hypotheses.front().common;
-  if (best_common < options.min_common_objects) {
+  const bool few = best_common < options.min_common_objects;
+  const auto too_few = [&](const std::string& more) {
     Registration r;
     r.common_objects = best_common;
     r.hypotheses = hypotheses.empty() ? 0 : hypotheses.front().hypotheses;
     r.why = "too few common objects (" + std::to_string(best_common) + " agree on a placement, " +
-            std::to_string(options.min_common_objects) + " needed)";
+            std::to_string(options.min_common_objects) + " needed" + more + ")";
     return r;
-  }
+  };
   // 2. Refined: ICP of the dense maps, yaw + translation (and a last round for the tilt). Only
   // around the common objects: far surfaces (walls metres away) carry the depth camera's
   // quantisation steps, which differ between two visits' viewpoints and bias the yaw. Where
@@ -313,11 +319,13 @@ Registration register_visits(const Visit& before, const Visit& after,
   };
   // With few objects (two agree at best) the true placement may have only one: add the best
   // placements of a yaw sweep about single same-kind correspondences, ranked by dense overlap.
+  // Fewer than min_common_objects: only with a dense fitness of min_fitness_few_objects.
   if (best_common <= 2) {
     std::vector<Coarse> swept = sweep(before, after, before_points, after_points, options);
     for (Coarse& c : swept) c.common = best_common;  // ranked with the tied ones below
     hypotheses.insert(hypotheses.end(), swept.begin(), swept.end());
   }
+  if (hypotheses.empty()) return too_few("");
   const std::vector<Landmark> a_marks = landmarks(before), b_marks = landmarks(after);
   std::size_t chosen = 0;
   if (hypotheses.size() > 1 && hypotheses[1].common == best_common) {
@@ -346,7 +354,12 @@ Registration register_visits(const Visit& before, const Visit& after,
                            .size());
   r.coarse_rms_m = r.common_objects ? std::sqrt(sum2 / r.common_objects) : 0.0;
   r.hypotheses = coarse.hypotheses;
-  r.credible = r.fitness >= options.min_fitness && r.common_objects >= 1;
+  r.credible = (few ? r.fitness_both >= options.min_fitness_few_objects
+                    : r.fitness >= options.min_fitness) &&
+               r.common_objects >= 1;
+  if (few && !r.credible)
+    return too_few(", or one and both maps' ICP fitness " + num(options.min_fitness_few_objects) +
+                   ": " + num(std::round(r.fitness_both * 1000) / 1000));
   if (r.common_objects < 1)
     r.why = "no object agrees with the placement the dense maps fit best (ICP fitness " +
             num(std::round(r.fitness * 1000) / 1000) + ")";

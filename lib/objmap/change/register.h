@@ -31,7 +31,10 @@ struct RegistrationOptions {
   bool refine_tilt = true;
   double inlier_m = 0.03;    // fitness: an after point within this of the before map
   double min_fitness = 0.3;  // a lower fitness: not credible
-  void check() const;        // throws InputError naming the bad field
+  // Fewer common objects than min_common_objects (one, found by a yaw sweep about it): credible
+  // only when both maps' shares near the other reach this (a wall and one object fit anywhere).
+  double min_fitness_few_objects = 0.6;
+  void check() const;  // throws InputError naming the bad field
 };
 
 struct Registration {
@@ -41,7 +44,8 @@ struct Registration {
   int common_objects = 0;      // coarse: objects that agree with the chosen hypothesis
   double coarse_rms_m = 0.0;   // coarse: RMS distance of those pairs after the refinement
   std::size_t hypotheses = 0;  // coarse: pairs of pairs tried
-  double fitness = 0.0;        // share of the after map's ICP points within inlier_m
+  double fitness = 0.0;        // the larger of the two maps' shares of points near the other
+  double fitness_both = 0.0;   // the smaller of the two maps' shares (the fitness: the larger)
   double rms_m = 0.0;          // RMS distance of those inliers
   std::size_t icp_points = 0;  // after map points used by ICP
   // Uncertainty: standard deviations from rms² · H⁻¹ of the point-to-plane problem in the 4

@@ -90,6 +90,7 @@ ordered_json registration_json(const change::Registration& r) {
           {"coarse_rms_m", r.coarse_rms_m},
           {"hypotheses", r.hypotheses},
           {"fitness", r.fitness},
+          {"fitness_both", r.fitness_both},
           {"rms_m", r.rms_m},
           {"icp_points", r.icp_points},
           {"sigma_translation_m", std::isfinite(r.sigma_translation_m)
