@@ -117,5 +117,47 @@ TEST(DiffCli, EvalDiffNamesAMalformedTruthFile) {
   EXPECT_NE(r.err.find("changes_gt.json: objects[0].before_position"), std::string::npos) << r.err;
 }
 
+TEST(DiffCli, EvalDiffCountsAMoveFoundAsRemovedPlusAddedAsWrong) {
+  TempDir tmp;
+  // Truth: one object moved from (0,0,0) to (1,0,0); the after world is the before world + 2 m in
+  // x.
+  write_text(tmp / "changes_gt.json", R"({"before_from_after":[1,0,0,-2,0,1,0,0,0,0,1,0,0,0,0,1],
+    "objects":[{"status":"moved","before_position":[0,0,0],"after_position":[3,0,0]},
+               {"status":"removed","before_position":[5,5,0],"after_position":null}]})");
+  const auto diff = [](const std::string& objects) {
+    return R"({"registration":{"before_from_after":[1,0,0,-2,0,1,0,0,0,0,1,0,0,0,0,1]},"objects":)" +
+           objects + "}";
+  };
+  // Found as moved (and the removal found): all right.
+  write_text(
+      tmp / "right.json",
+      diff(R"([{"status":"moved","before":{"position":[0.05,0,0]},"after":{"position":[3,0.1,0]}},
+                      {"status":"removed","before":{"position":[5,5,0.1]},"after":null}])"));
+  RunResult r =
+      run_objmap({"eval", "diff", "--diff", (tmp / "right.json").string(), "--gt",
+                  (tmp / "changes_gt.json").string(), "--json", (tmp / "e1.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json e = json::parse(read_text(tmp / "e1.json"));
+  EXPECT_DOUBLE_EQ(e["all"]["f1"].get<double>(), 1.0);
+  EXPECT_NEAR(e["registration"]["rotation_error_deg"].get<double>(), 0.0, 1e-9);
+  // Found as removed + added: two false positives and a miss (the true removal still right).
+  write_text(tmp / "split.json",
+             diff(R"([{"status":"removed","before":{"position":[0,0,0]},"after":null},
+                      {"status":"added","before":null,"after":{"position":[3,0,0]}},
+                      {"status":"removed","before":{"position":[5,5,0]},"after":null}])"));
+  r = run_objmap({"eval", "diff", "--diff", (tmp / "split.json").string(), "--gt",
+                  (tmp / "changes_gt.json").string(), "--json", (tmp / "e2.json").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  e = json::parse(read_text(tmp / "e2.json"));
+  EXPECT_EQ(e["moved"]["correct"].get<int>(), 0);
+  EXPECT_EQ(e["added"]["found"].get<int>(), 1);
+  EXPECT_EQ(e["added"]["correct"].get<int>(), 0);
+  EXPECT_EQ(e["removed"]["found"].get<int>(), 2);
+  EXPECT_EQ(e["removed"]["correct"].get<int>(), 1);
+  EXPECT_EQ(e["all"]["correct"].get<int>(), 1);
+  EXPECT_EQ(e["all"]["found"].get<int>(), 3);
+  EXPECT_EQ(e["all"]["truth"].get<int>(), 2);
+}
+
 }  // namespace
 }  // namespace objmap::test
