@@ -47,8 +47,10 @@ void read_first_visit(const std::filesystem::path& folder, SecondVisitOptions& o
                       std::string& preset);
 
 // Changes `scene` (the first visit's, in its world) as `options` asks, with randomness from
-// `seed`, and moves it into the second visit's world. Returns the record of what was done (fewer
-// moves or additions than asked when no free place is found).
+// `seed`, and draws the second visit's world frame and orbit start; the scene stays in the first
+// visit's world (transform_scene moves it, after the camera path is made there). Returns the
+// record, after positions in the second visit's world (fewer moves or additions than asked when no
+// free place is found).
 SecondVisit make_second_visit(Scene& scene, const SecondVisitOptions& options, std::uint64_t seed);
 
 // Moves every object and structure of `scene` by `after_from_before` (and the light with it).
