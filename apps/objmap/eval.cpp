@@ -30,6 +30,8 @@ void setup_eval_masks(CLI::App& eval_app);
 void setup_eval_scene(CLI::App& eval_app);
 // apps/objmap/eval_surface.cpp: `objmap eval surface` (meshes and clouds against true models).
 void setup_eval_surface(CLI::App& eval_app);
+// apps/objmap/eval_diff.cpp: `objmap eval diff` (objmap diff against a second visit's truth).
+void setup_eval_diff(CLI::App& eval_app);
 
 namespace {
 
@@ -321,7 +323,7 @@ void setup_eval_objects(CLI::App& eval_app) {
 // The subcommands of `objmap eval`, in --help order.
 const SetupFn kEvalSubcommands[] = {setup_eval_ate,   setup_eval_rpe,     setup_eval_objects,
                                     setup_eval_scene, setup_eval_surface, setup_eval_tracks,
-                                    setup_eval_masks};
+                                    setup_eval_masks, setup_eval_diff};
 
 void setup_eval(CLI::App& app) {
   CLI::App* eval_app = app.add_subcommand(

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "command.h"
+#include "objmap/io/atomic.h"
 #include "objmap/sim/camera_path.h"
 #include "objmap/sim/synth.h"
 #include "objmap/sim/writer.h"
@@ -19,6 +20,7 @@ struct SynthCommand {
   bool noise_free = false;
   std::optional<double> confusion_rate;  // unset: keep the per-pair defaults
   std::optional<int> new_track_after;    // unset: the preset's (walkthrough 30 frames, else never)
+  std::string second_visit_of;           // empty: a first visit
   sim::SynthOptions options;
 };
 
@@ -29,6 +31,11 @@ void run_synth(SynthCommand& cmd) {
   o.seg_noise.new_track_after_frames =
       cmd.new_track_after.value_or(o.preset == "walkthrough" ? 30 : 0);
   if (cmd.noise_free) o.set_noise_free();
+  if (!cmd.second_visit_of.empty()) {  // the first visit's scene: its preset and seed
+    io::require_not_an_input({"--out", cmd.out}, {{"--second-visit-of", cmd.second_visit_of}});
+    sim::read_first_visit(cmd.second_visit_of, o.second_visit, o.preset);
+    o.second_visit.enabled = true;
+  }
   o.check();
   sim::check_output_dir(cmd.out);
 
@@ -64,6 +71,16 @@ void run_synth(SynthCommand& cmd) {
   if (o.seg_noise.merge_touching_prob > 0.0)
     std::printf("packed        %d instances given inside another's mask (touching, one class)\n",
                 st.merged);
+  if (seq.second_visit) {
+    int moved = 0, removed = 0, added = 0;
+    for (const auto& c : seq.second_visit->changes) {
+      moved += c.status == "moved";
+      removed += c.status == "removed";
+      added += c.status == "added";
+    }
+    std::printf("second visit  of %s: %d moved, %d removed, %d added; changes_gt.json\n",
+                cmd.second_visit_of.c_str(), moved, removed, added);
+  }
   if (o.seg_noise.bleed_px > 0)
     std::printf("mask bleed    %lld pixels added behind the objects (up to %d px from the masks)\n",
                 st.bleed_pixels, o.seg_noise.bleed_px);
@@ -165,6 +182,17 @@ void setup_synth(CLI::App& app) {
                 "translation drift of estimated.txt at the end, fraction of the path length")
       ->capture_default_str();
   c->add_option("--yaw-drift", o.drift.yaw_deg_per_m, "yaw drift rate sigma, degrees per metre")
+      ->capture_default_str();
+  c->add_option("--second-visit-of", cmd->second_visit_of,
+                "a second visit of the scene of this synth folder (its preset and seed): objects "
+                "moved, removed and added (--move, --remove, --add; --seed drives the changes), "
+                "another start pose, another world frame (a random yaw about up and a shift); "
+                "writes changes_gt.json for objmap eval diff");
+  c->add_option("--move", o.second_visit.move, "--second-visit-of: objects moved on the tables")
+      ->capture_default_str();
+  c->add_option("--remove", o.second_visit.remove, "--second-visit-of: objects taken away")
+      ->capture_default_str();
+  c->add_option("--add", o.second_visit.add, "--second-visit-of: objects added on the tables")
       ->capture_default_str();
   c->callback([cmd] { run_synth(*cmd); });
 }

@@ -37,6 +37,7 @@ void SynthOptions::check() const {
   seg_noise.check();
   drift.check();
   if (!use_preset_path) path.check();
+  second_visit.check();
   require(std::isfinite(orbit_speed_deg_per_s) && orbit_speed_deg_per_s >= 0 &&
               orbit_speed_deg_per_s <= 360,
           "--orbit-speed", "must be in [0, 360] degrees per second (0: the preset's)");
@@ -110,14 +111,23 @@ SynthSequence prepare_sequence(const SynthOptions& options) {
   seq.camera = synthetic_camera(options.resolution_scale);
 
   // The scene and the camera path (ground truth), then the drifting estimate.
-  seq.scene = make_scene(options.preset, options.seed);
+  const SecondVisitOptions& second = options.second_visit;
+  seq.scene = make_scene(options.preset, second.enabled ? second.first_seed : options.seed);
+  if (second.enabled) seq.second_visit = make_second_visit(seq.scene, second, options.seed);
   CameraPathOptions path =
       options.use_preset_path ? preset_camera_path(options.preset) : options.path;
   if (options.orbit_speed_deg_per_s > 0) path.speed_deg_per_s = options.orbit_speed_deg_per_s;
   std::vector<double> timestamps;
   for (int i = 0; i < options.frames; ++i)
     timestamps.push_back(frame_timestamp(options.start_time_s, options.frame_rate_hz, i));
+  if (seq.second_visit) path.start_angle_deg += seq.second_visit->start_angle_offset_deg;
   seq.groundtruth = make_camera_path(path, timestamps, options.seed);
+  if (seq.second_visit) {  // the scene and the path into the second visit's world
+    const Pose& after_from_before = seq.second_visit->after_from_before;
+    transform_scene(seq.scene, after_from_before);
+    for (StampedPose& p : seq.groundtruth.poses)
+      p.world_from_cam = after_from_before * p.world_from_cam;
+  }
   seq.groundtruth.source = "synthetic ground truth";
   seq.estimated = add_drift(seq.groundtruth, options.drift, options.seed);
   return seq;

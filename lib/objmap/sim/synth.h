@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "objmap/sim/camera_path.h"
 #include "objmap/sim/depth_noise.h"
 #include "objmap/sim/scene.h"
+#include "objmap/sim/second_visit.h"
 #include "objmap/sim/seg_noise.h"
 
 // A synthetic RGB-D sequence with exact ground truth: scene -> camera path -> ray-cast images ->
@@ -38,6 +40,9 @@ struct SynthOptions {
   double orbit_speed_deg_per_s = 0.0;  // > 0: the preset's orbit at this azimuth rate (more sides
                                        // of every object in the same number of frames)
   int threads = 0;  // worker threads (0 = all cores); results do not depend on it
+  // A second visit of another sequence's scene (--second-visit-of): that scene (its seed), changed,
+  // in another world frame, the orbit starting elsewhere; `seed` drives the changes and the rest.
+  SecondVisitOptions second_visit;
 
   void check() const;  // throws InputError naming the bad option
   // Turns every noise off: exact depth, exact segmentation, no rgb noise, no drift. (The hand-held
@@ -68,6 +73,7 @@ struct SynthSequence {
   Trajectory groundtruth;  // world_from_cam at the rgb timestamps
   Trajectory estimated;    // drifting copy of groundtruth
   SegmentationNoise::Stats seg_stats;
+  std::optional<SecondVisit> second_visit;  // the changes made (options.second_visit.enabled)
 
   segmentation::Segmentation segmentation() const;     // the noisy frames as one Segmentation
   segmentation::Segmentation segmentation_gt() const;  // the exact frames

@@ -174,6 +174,12 @@ std::string synth_json(const SynthSequence& s) {
                 {"false_positives", s.seg_stats.false_positives},
                 {"id_switches", s.seg_stats.id_switches},
                 {"id_reuses", s.seg_stats.id_reuses}}}};
+  if (o.second_visit.enabled)  // only then, so that other synth.json files stay as they were
+    doc["second_visit"] = {{"first_visit", o.second_visit.first_visit.string()},
+                           {"first_seed", o.second_visit.first_seed},
+                           {"move", o.second_visit.move},
+                           {"remove", o.second_visit.remove},
+                           {"add", o.second_visit.add}};
   // Recorded only when on, so that the synth.json of a sequence without bleed stays as it was.
   if (o.seg_noise.bleed_px > 0) {
     doc["segmentation_noise"]["bleed_px"] = o.seg_noise.bleed_px;
@@ -228,6 +234,8 @@ void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
                            what);
   write_text(dir / "objects_gt.json", objects_gt_json(s.scene));
   write_text(dir / "synth.json", synth_json(s));
+  if (s.second_visit)
+    write_text(dir / "changes_gt.json", changes_gt_json(*s.second_visit, s.options.second_visit));
 }
 
 }  // namespace
