@@ -38,8 +38,8 @@ ChangedPair changed_pair() {
   std::vector<TestObject> objects = test_objects();
   ChangedPair p;
   p.before = make_test_visit(objects);
-  objects[3].centre += Vec3(0.6, 0.0, 0.0);                               // cup 4 moved
-  objects.erase(objects.begin() + 5);                                     // bottle 6 removed
+  objects[3].centre += Vec3(0.6, 0.0, 0.0);                                // cup 4 moved
+  objects.erase(objects.begin() + 5);                                      // bottle 6 removed
   objects.push_back({9, "book", {-0.45, 0.05, 0.77}, {0.1, 0.07, 0.02}});  // book 9 added
   const Pose after_from_before = yaw_shift(50.0, Vec3(1.0, 2.0, 0.0));
   p.after = moved_visit(make_test_visit(objects), after_from_before);
