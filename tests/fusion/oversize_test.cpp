@@ -68,6 +68,16 @@ TEST(Oversize, TheCutGoesThroughTheGapBetweenTwoChairs) {
   EXPECT_FALSE(plan_oversize_cut(two, Vec3::UnitZ(), 0.4, 0.7, options).has_value());
 }
 
+TEST(Oversize, OneInstanceWhosePartBeyondTheCutIsTallIsNotCut) {
+  // A monitor's screen (0.66 m wide, 0.40 m tall, no gap) that the detector named "laptop"
+  // (largest 0.5 m): what lies beyond the cut is as tall as the rest, no strip of the table, so
+  // the object is left whole rather than trimmed to a laptop's width.
+  std::vector<Vec3> screen;
+  for (int i = 0; i <= 66; ++i)
+    for (int k = 0; k <= 40; ++k) screen.push_back(Vec3(0.01 * i, 0.0, 0.8 + 0.01 * k));
+  EXPECT_FALSE(plan_oversize_cut(screen, Vec3::UnitZ(), 0.25, 0.5, OversizeOptions{}).has_value());
+}
+
 TEST(Oversize, OptionsAreChecked) {
   OversizeOptions o;
   o.margin = -0.1;

@@ -39,6 +39,7 @@ void OversizeOptions::check() const {
           "must be in [0, 1]");
   require(min_side_share >= 0.0 && min_side_share <= 0.5, "OversizeOptions.min_side_share",
           "must be in [0, 0.5]");
+  require(flat_m >= 0.0 && flat_share >= 0.0, "OversizeOptions.flat_m", "must be >= 0");
 }
 
 double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, double percentile,
@@ -121,6 +122,20 @@ std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, c
   cut.keep = mass[1] > mass[0] ? 1 : 0;
   cut.apart = total > 0.0 && std::min(mass[0], mass[1]) >= o.min_side_share * total &&
               count[best] <= o.valley_ratio * weaker_density;
+  if (cut.apart) return cut;
+  // 4. One instance: what is cut off must be a flat strip (the table or floor its masks held),
+  //    its heights within max(flat_m, flat_share × the kept side's); anything taller is part of
+  //    the object (a monitor that the detector named "laptop"), and nothing is cut.
+  std::array<std::vector<double>, 2> heights;
+  const Vec3 n = up.normalized();
+  for (const Vec3& p : surface) heights[cut.axis.dot(p) < cut.cut ? 0 : 1].push_back(n.dot(p));
+  std::array<double, 2> span{0.0, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    if (heights[k].size() < 2) continue;
+    std::sort(heights[k].begin(), heights[k].end());
+    span[k] = quantile(heights[k], 1.0 - o.percentile) - quantile(heights[k], o.percentile);
+  }
+  if (span[1 - cut.keep] > std::max(o.flat_m, o.flat_share * span[cut.keep])) return std::nullopt;
   return cut;
 }
 

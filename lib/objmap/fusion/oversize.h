@@ -21,7 +21,11 @@ struct OversizeOptions {
   double valley_ratio =
       0.5;  // two instances: the cut bin's count at most this × either side's mean
   double min_side_share = 0.25;  // ... and each side at least this share of the surface
-  void check() const;            // throws InputError naming the bad field
+  // One instance: the side cut off is a flat strip when its heights span at most the larger of
+  // these (m; share of the kept side's span); else nothing is cut.
+  double flat_m = 0.03;
+  double flat_share = 0.25;
+  void check() const;  // throws InputError naming the bad field
 };
 
 // Where an object is cut. `axis` is horizontal (perpendicular to up), unit, in the world frame; a
@@ -48,7 +52,8 @@ double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, doubl
 // The cut of an object whose surface is wider than max_m × (1 + margin) along its long axis:
 // the least dense place of its profile (bins of bin_m, smoothed) where both sides span at least
 // min_m (half the extent when the extent is under 2 × min_m); ties: the place nearest the middle.
-// nullopt when the object is not too wide (or has fewer than 10 points).
+// nullopt when the object is not too wide (or has fewer than 10 points), and when it is one
+// instance whose part beyond the cut is not a flat strip (OversizeOptions::flat_m).
 std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, const Vec3& up,
                                              double min_m, double max_m,
                                              const OversizeOptions& options);
