@@ -1,6 +1,7 @@
 #pragma once
 // ObjectMap's object, shared by the files that implement ObjectMap (object_map*.cpp: association,
-// merges, splits, oversize cuts, records). Private to lib/objmap/fusion: include it from nowhere else.
+// merges, splits, oversize cuts, records). Private to lib/objmap/fusion: include it from nowhere
+// else.
 #include <algorithm>
 #include <cmath>
 #include <map>
