@@ -20,6 +20,7 @@ struct SynthCommand {
   bool noise_free = false;
   std::optional<double> confusion_rate;  // unset: keep the per-pair defaults
   std::optional<int> new_track_after;    // unset: the preset's (walkthrough 30 frames, else never)
+  std::optional<double> merge_touching;  // unset: the preset's (walkthrough 0.3, else 0)
   std::string second_visit_of;           // empty: a first visit
   sim::SynthOptions options;
 };
@@ -30,6 +31,8 @@ void run_synth(SynthCommand& cmd) {
     for (auto& c : o.seg_noise.confusions) c.probability = *cmd.confusion_rate;
   o.seg_noise.new_track_after_frames =
       cmd.new_track_after.value_or(o.preset == "walkthrough" ? 30 : 0);
+  o.seg_noise.merge_touching_prob =
+      cmd.merge_touching.value_or(o.preset == "walkthrough" ? 0.3 : 0);
   if (cmd.noise_free) o.set_noise_free();
   if (!cmd.second_visit_of.empty()) {  // the first visit's scene: its preset and seed
     io::require_not_an_input({"--out", cmd.out}, {{"--second-visit-of", cmd.second_visit_of}});
@@ -170,11 +173,10 @@ void setup_synth(CLI::App& app) {
                 "an object out of view for more than this many frames gets a new track ID when "
                 "seen again, as a tracker that lost it gives (default: 30 for walkthrough, else "
                 "never; 0 = never)");
-  c->add_option("--merge-touching-rate", o.seg_noise.merge_touching_prob,
+  c->add_option("--merge-touching-rate", cmd->merge_touching,
                 "share of the frames in which two instances of one class whose masks touch are "
                 "given as one mask with the larger's track ID, as detectors do with chairs packed "
-                "along a table")
-      ->capture_default_str();
+                "along a table (default: 0.3 for walkthrough, else 0)");
   c->add_option("--id-reuse", o.seg_noise.id_reuse_prob,
                 "share of ID switches that re-use an ID dropped by another track")
       ->capture_default_str();

@@ -254,6 +254,7 @@ struct MergeLink {
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
   bool class_confusion = false;  // joined by the class-confusion rule (overlap = containment)
   bool fragment = false;  // joined by the fragment rule (overlap = share inside the larger's box)
+  bool part = false;  // join_parts(): parts of one instance (overlap = share inside the footprint)
 };
 
 // A split of split_pass(): object `from` kept one part (the one with most observations), the
@@ -396,7 +397,8 @@ class ObjectMap {
 
   // The final merge pass (ID-switch repair): repeatedly joins the pair of objects with the highest
   // P > merge_threshold (P_ID = the two share a track id; D and M between the two objects), the
-  // higher id into the lower. Returns the merges made. Calling it again finds nothing new.
+  // higher id into the lower; then the class-confusion and fragment merges; all again until none
+  // joins anything. Returns the merges made. Calling it again finds nothing new.
   std::vector<MergeLink> merge_pass();
 
   // Splits the objects whose surface forms clusters that their observations see apart
@@ -411,6 +413,12 @@ class ObjectMap {
   // cells lie mostly on it. Call after split_pass(); when it splits anything, judge_visibility()
   // again. Returns the splits (SplitLink::large_clusters 0), in the order made.
   std::vector<SplitLink> split_oversize(const Vec3& up, const segmentation::ClassSizes& sizes);
+  // Once the up is known, after split_oversize: joins the objects of one class that are parts of
+  // one instance (OversizeOptions::join_parts: a chair's back seen over a table, its legs seen
+  // below it, when a mask over two chairs took its other views), the smaller footprint into the
+  // larger, a confirmed object, the best fit first; the joined object is judged in view again.
+  // Returns the joins.
+  std::vector<MergeLink> join_parts(const Vec3& up, const segmentation::ClassSizes& sizes);
 
   // The rules of merge_pass() for live objects `a` and `b` as they are now, every score computed
   // (the pass stops at the first refusal): after the pass, why two objects stayed apart. Throws
@@ -493,6 +501,8 @@ class ObjectMap {
   void absorb(Object& into, Object& absorbed, const MergeLink& link);
   // The share of a's voxels within reach of b's supported voxels (class confusion).
   double supported_share(const Object& a, const Object& b) const;
+  // The pair rule of merge_pass() (highest P first), its merges appended to `made`.
+  void merge_scored_pairs(std::vector<MergeLink>& made);
   // The class-confusion merges (ObjectMapOptions::merge_class_confusions), appended to `made`.
   void merge_class_confusions(std::vector<MergeLink>& made);
   // The fragment merges (ObjectMapOptions::merge_fragments_in_box), appended to `made`.
@@ -505,6 +515,9 @@ class ObjectMap {
                      SplitLink& link);
   // split_oversize() for objects_[index] with its class's size: true and `link` when it was cut.
   bool cut_oversize(std::size_t index, const Vec3& up, double min_m, double max_m, SplitLink& link);
+  // Half or more of `part` (surface points of `o`) lies over the footprint of another confirmed
+  // object of o's class (cut_oversize: the part beyond a cut is that instance's).
+  bool on_another_instance(const Object& o, const std::vector<Vec3>& part, const Vec3& up) const;
   // The parts of `object` by split_object's plan: observation j to part obs_part[j], voxel (its
   // cell) to part voxel_part(key).
   std::vector<std::unique_ptr<Object>> make_parts(Object& object, const std::vector<int>& obs_part,

@@ -155,6 +155,19 @@ MergeVerdict ObjectMap::merge_verdict(int a, int b) const {
 
 std::vector<MergeLink> ObjectMap::merge_pass() {
   std::vector<MergeLink> made;
+  // The pair rule, then the rules for class confusions and fragments, until none joins anything:
+  // an object that absorbed a fragment is larger, and a pair that the score refused before may now
+  // pass (one chair seen from its two sides, its views apart joined by a fragment's).
+  while (true) {
+    const std::size_t before = made.size();
+    merge_scored_pairs(made);
+    if (options_.merge_class_confusions) merge_class_confusions(made);
+    if (options_.merge_fragments_in_box) merge_fragments_in_box(made);
+    if (made.size() == before) return made;
+  }
+}
+
+void ObjectMap::merge_scored_pairs(std::vector<MergeLink>& made) {
   // Scores of every live pair (i < j), computed once; after a merge only the pairs of the grown
   // object are computed again (those of the absorbed one are dropped).
   struct Pair {
@@ -211,9 +224,6 @@ std::vector<MergeLink> ObjectMap::merge_pass() {
       return std::make_pair(x.i, x.j) < std::make_pair(y.i, y.j);
     });
   }
-  if (options_.merge_class_confusions) merge_class_confusions(made);
-  if (options_.merge_fragments_in_box) merge_fragments_in_box(made);
-  return made;
 }
 
 double ObjectMap::supported_share(const Object& a, const Object& b) const {

@@ -7,6 +7,7 @@
 #include "objmap/fusion/object_map_object.h"
 #include "objmap/fusion/split.h"
 #include "objmap/segmentation/class_sizes.h"
+#include "objmap/segmentation/coco_classes.h"
 
 namespace objmap::fusion {
 
@@ -38,10 +39,20 @@ bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, do
                              SplitLink& link) {
   Object& o = *objects_[index];
   // 1. The cut through its surface (voxels seen in >= 10% of its observations).
+  const std::vector<Vec3> surface = surface_points(o, 0.1);
+  bool tall_beyond = false;
   const std::optional<OversizeCut> cut =
-      plan_oversize_cut(surface_points(o, 0.1), up, min_m, max_m, options_.oversize);
+      plan_oversize_cut(surface, up, min_m, max_m, options_.oversize, &tall_beyond);
   if (!cut) return false;
   const auto side = [&](const Vec3& p) { return cut->axis.dot(p) < cut->cut ? 0 : 1; };
+  //    One instance with a tall part beyond the cut: trimmed only when that part stands on
+  //    another confirmed object of its class (the chair beside it that a mask over both held).
+  if (tall_beyond) {
+    std::vector<Vec3> beyond;
+    for (const Vec3& p : surface)
+      if (side(p) != cut->keep) beyond.push_back(p);
+    if (!on_another_instance(o, beyond, up)) return false;
+  }
   // 2. Two instances: each observation to the side that holds most of its coarse cells (or its
   //    centroid's side); one that holds a quarter of its cells on the other side too (a mask over
   //    both) is taken by both, with its cells on each. One instance with something attached:
@@ -78,6 +89,23 @@ bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, do
   link.large_clusters = 0;
   install_parts(index, std::move(parts), link);
   return true;  // `o` is gone from here on
+}
+
+bool ObjectMap::on_another_instance(const Object& o, const std::vector<Vec3>& part,
+                                    const Vec3& up) const {
+  if (part.empty()) return false;
+  const std::string cls = segmentation::canonical_class(voted_class(o));
+  const OversizeOptions& opt = options_.oversize;
+  for (const auto& other : objects_) {
+    if (!other->alive || other.get() == &o || !confirmed(*other) ||
+        segmentation::canonical_class(voted_class(*other)) != cls)
+      continue;
+    const std::vector<Vec3> surface = surface_points(*other, 0.1);
+    const PartsFit fit = fit_parts(part, surface, footprint(surface, up, opt.percentile), up,
+                                   opt.percentile, opt.join_grow_m);
+    if (fit.inside_share >= 0.5) return true;
+  }
+  return false;
 }
 
 }  // namespace objmap::fusion

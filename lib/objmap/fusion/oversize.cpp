@@ -40,6 +40,12 @@ void OversizeOptions::check() const {
   require(min_side_share >= 0.0 && min_side_share <= 0.5, "OversizeOptions.min_side_share",
           "must be in [0, 0.5]");
   require(flat_m >= 0.0 && flat_share >= 0.0, "OversizeOptions.flat_m", "must be >= 0");
+  require(join_gap_m >= 0.0 && join_gap_m <= 10.0, "OversizeOptions.join_gap_m",
+          "must be in [0, 10] m");
+  require(join_grow_m >= 0.0 && join_grow_m <= 10.0, "OversizeOptions.join_grow_m",
+          "must be in [0, 10] m");
+  require(join_min_inside >= 0.0 && join_min_inside <= 1.0, "OversizeOptions.join_min_inside",
+          "must be in [0, 1]");
 }
 
 double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, double percentile,
@@ -69,7 +75,9 @@ double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, doubl
 }
 
 std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, const Vec3& up,
-                                             double min_m, double max_m, const OversizeOptions& o) {
+                                             double min_m, double max_m, const OversizeOptions& o,
+                                             bool* tall_beyond) {
+  if (tall_beyond) *tall_beyond = false;
   if (!o.enabled || surface.size() < 10 || !(max_m > 0.0)) return std::nullopt;
   OversizeCut cut;
   cut.extent_m = horizontal_extent(surface, up, o.percentile, &cut.axis);
@@ -135,8 +143,56 @@ std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, c
     std::sort(heights[k].begin(), heights[k].end());
     span[k] = quantile(heights[k], 1.0 - o.percentile) - quantile(heights[k], o.percentile);
   }
-  if (span[1 - cut.keep] > std::max(o.flat_m, o.flat_share * span[cut.keep])) return std::nullopt;
+  if (span[1 - cut.keep] > std::max(o.flat_m, o.flat_share * span[cut.keep])) {
+    if (!tall_beyond) return std::nullopt;
+    *tall_beyond = true;
+  }
   return cut;
+}
+
+Footprint footprint(const std::vector<Vec3>& surface, const Vec3& up, double percentile) {
+  Footprint f;
+  horizontal_extent(surface, up, percentile, &f.axes[0]);
+  f.axes[2] = up.normalized();
+  f.axes[1] = f.axes[2].cross(f.axes[0]).normalized();
+  if (surface.empty()) return f;
+  std::vector<double> along(surface.size());
+  for (int k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < surface.size(); ++i) along[i] = f.axes[k].dot(surface[i]);
+    std::sort(along.begin(), along.end());
+    f.lo[k] = quantile(along, percentile);
+    f.hi[k] = quantile(along, 1.0 - percentile);
+  }
+  return f;
+}
+
+PartsFit fit_parts(const std::vector<Vec3>& small, const std::vector<Vec3>& large,
+                   const Footprint& lf, const Vec3& up, double percentile, double grow_m) {
+  PartsFit fit;
+  if (small.empty() || large.empty()) return fit;
+  std::size_t inside = 0;
+  std::array<std::vector<double>, 3> at;
+  for (const Vec3& p : small) {
+    bool in = true;
+    for (int k = 0; k < 3; ++k) {
+      at[k].push_back(lf.axes[k].dot(p));
+      if (k < 2) in = in && at[k].back() >= lf.lo[k] - grow_m && at[k].back() <= lf.hi[k] + grow_m;
+    }
+    inside += in;
+  }
+  fit.inside_share = static_cast<double>(inside) / static_cast<double>(small.size());
+  double gap2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    std::sort(at[k].begin(), at[k].end());
+    const double lo = quantile(at[k], percentile), hi = quantile(at[k], 1.0 - percentile);
+    const double gap = std::max({0.0, lo - lf.hi[k], lf.lo[k] - hi});
+    gap2 += gap * gap;
+  }
+  fit.gap_m = std::sqrt(gap2);
+  std::vector<Vec3> both = large;
+  both.insert(both.end(), small.begin(), small.end());
+  fit.union_extent_m = horizontal_extent(both, up, percentile);
+  return fit;
 }
 
 }  // namespace objmap::fusion

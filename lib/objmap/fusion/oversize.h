@@ -25,6 +25,14 @@ struct OversizeOptions {
   // these (m; share of the kept side's span); else nothing is cut.
   double flat_m = 0.03;
   double flat_share = 0.25;
+  // Parts of one instance (ObjectMap::join_parts): two objects of one class, rarely seen in the
+  // same keyframes, whose union is no wider than the class allows, at most join_gap_m apart, and
+  // either the smaller's surface at least join_min_inside within the larger's footprint (grown by
+  // join_grow_m) or one track id in common: a chair's back seen over a table, its legs seen below.
+  bool join_parts = true;
+  double join_gap_m = 0.10;
+  double join_grow_m = 0.03;
+  double join_min_inside = 0.8;
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -53,9 +61,33 @@ double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, doubl
 // the least dense place of its profile (bins of bin_m, smoothed) where both sides span at least
 // min_m (half the extent when the extent is under 2 × min_m); ties: the place nearest the middle.
 // nullopt when the object is not too wide (or has fewer than 10 points), and when it is one
-// instance whose part beyond the cut is not a flat strip (OversizeOptions::flat_m).
+// instance whose part beyond the cut is not a flat strip (OversizeOptions::flat_m) — unless
+// `tall_beyond` is given: then that cut is returned too, with *tall_beyond true, for the caller to
+// trim only when the part beyond is another instance's (ObjectMap::cut_oversize).
 std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, const Vec3& up,
                                              double min_m, double max_m,
-                                             const OversizeOptions& options);
+                                             const OversizeOptions& options,
+                                             bool* tall_beyond = nullptr);
+
+// A surface seen from above: its long horizontal axis, the horizontal axis across it, and its
+// extents along those and up between the percentile quantiles.
+struct Footprint {
+  Vec3 axes[3];  // long, across, up (unit)
+  double lo[3] = {0.0, 0.0, 0.0};
+  double hi[3] = {0.0, 0.0, 0.0};
+};
+Footprint footprint(const std::vector<Vec3>& surface, const Vec3& up, double percentile);
+
+// How two surfaces of one class fit as parts of one instance, in the frame of `large`'s
+// footprint: the share of `small` inside that footprint (grown by grow_m across and along), the
+// clearance between their boxes there, and the horizontal extent of both together.
+struct PartsFit {
+  double inside_share = 0.0;
+  double gap_m = 0.0;
+  double union_extent_m = 0.0;
+};
+PartsFit fit_parts(const std::vector<Vec3>& small, const std::vector<Vec3>& large,
+                   const Footprint& large_footprint, const Vec3& up, double percentile,
+                   double grow_m);
 
 }  // namespace objmap::fusion

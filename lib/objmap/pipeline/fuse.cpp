@@ -430,7 +430,8 @@ ordered_json object_json(const fusion::ObjectRecord& r, const std::string& ply_n
                       {"distance_m", mlink.distance_m},
                       {"overlap", mlink.overlap},
                       {"p", mlink.score_p},
-                      {"rule", mlink.fragment          ? "fragment in box"
+                      {"rule", mlink.part              ? "parts of one instance"
+                               : mlink.fragment        ? "fragment in box"
                                : mlink.class_confusion ? "class confusion"
                                                        : "same class"}});
   o["merged"] = merges;
@@ -792,12 +793,14 @@ void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassS
                           FuseResult& result) {
   const auto t0 = Clock::now();
   result.oversize = objects.split_oversize(result.scene.up.up, sizes);
-  if (!result.oversize.empty()) {
-    std::set<int> cut;
-    for (const fusion::SplitLink& link : result.oversize) {
-      cut.insert(link.from);
-      cut.insert(link.parts.begin(), link.parts.end());
-    }
+  result.part_joins = objects.join_parts(result.scene.up.up, sizes);
+  std::set<int> cut;
+  for (const fusion::SplitLink& link : result.oversize) {
+    cut.insert(link.from);
+    cut.insert(link.parts.begin(), link.parts.end());
+  }
+  for (const fusion::MergeLink& link : result.part_joins) cut.insert({link.into, link.absorbed});
+  if (!cut.empty()) {
     const double bar = result.detected_share_bar;
     result.objects_total = objects.size();
     if (view_log) {
@@ -991,6 +994,7 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"merges", result.merges.size()},
       {"objects_split", result.splits.size()},
       {"objects_cut_for_size", result.oversize.size()},
+      {"objects_joined_as_parts", result.part_joins.size()},
       {"object_meshes", std::count_if(result.object_meshes.begin(), result.object_meshes.end(),
                                       [](const ObjectMesh& m) { return !m.model.mesh.empty(); })},
       {"object_mesh_triangles", mesh_triangles(result.object_meshes)},

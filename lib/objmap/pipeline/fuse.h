@@ -117,6 +117,7 @@ struct FuseResult {
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::SplitLink> splits;      // objects split in parts (split_clusters)
   std::vector<fusion::SplitLink> oversize;    // objects cut for their class's size (oversize)
+  std::vector<fusion::MergeLink> part_joins;  // objects joined as parts of one instance
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   // Confirmed objects of a mover class (FuseOptions::movers), ascending id: not in `objects`, the
   // duplicates, the relations or the maps.

@@ -166,6 +166,12 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        &m.oversize.enabled},
       {"objects.oversize_margin", "--oversize-margin",
        "... wider than the class's largest usual size times 1 + this", &m.oversize.margin},
+      {"objects.join_parts", "--join-parts",
+       "with --split-oversize: two objects of one class, rarely seen together, whose union is no "
+       "wider than the class allows and whose boxes are at most 10 cm apart, are one instance when "
+       "the smaller lies over the larger's footprint or they share a track id (a chair's back seen "
+       "over a table, its legs below it)",
+       &m.oversize.join_parts},
       {"objects.class_sizes", "--class-sizes",
        "builtin (the COCO classes' usual sizes, docs/fusion.md), none, or a JSON file "
        "{\"sizes\": {\"chair\": [0.4, 0.7]}} of sizes in metres added to the built-in table",

@@ -1,0 +1,105 @@
+// ObjectMap::join_parts: two objects of one class that are parts of one instance are joined once
+// the up is known (fusion/oversize.h, docs/fusion.md "The extent of one instance").
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <optional>
+
+#include "objmap/fusion/object_map_object.h"
+#include "objmap/fusion/oversize.h"
+#include "objmap/segmentation/class_sizes.h"
+#include "objmap/segmentation/coco_classes.h"
+
+namespace objmap::fusion {
+
+std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
+                                             const segmentation::ClassSizes& sizes) {
+  std::vector<MergeLink> made;
+  const OversizeOptions& o = options_.oversize;
+  if (!o.enabled || !o.join_parts) return made;
+  o.check();
+  // An object as the rule sees it: its class, size limit, surface and footprint.
+  struct PartView {
+    Object* object = nullptr;
+    std::string cls;
+    double limit_m = 0.0;
+    std::vector<Vec3> surface;
+    Footprint box;
+    double area = 0.0;  // of the footprint (m²)
+    bool confirmed = false;
+  };
+  const auto share_a_track = [](const Object& a, const Object& b) {
+    for (int t : a.track_ids)
+      if (b.track_ids.count(t)) return true;
+    return false;
+  };
+  // The voxel bounds of a and b are more than join_gap_m apart along some world axis.
+  const auto far_apart = [&](const Object& a, const Object& b) {
+    const int reach = static_cast<int>(std::ceil(o.join_gap_m / options_.voxel_m)) + 1;
+    for (int k = 0; k < 3; ++k)
+      if (a.lo[k] - b.hi[k] > reach || b.lo[k] - a.hi[k] > reach) return true;
+    return false;
+  };
+  const auto view_of = [&](Object* object) {
+    PartView v;
+    v.object = object;
+    v.cls = segmentation::canonical_class(voted_class(*object));
+    const std::optional<segmentation::ClassSize> size = sizes.find(v.cls);
+    v.limit_m = size ? size->max_m * (1.0 + o.margin) : 0.0;
+    v.surface = surface_points(*object, 0.1);
+    v.box = footprint(v.surface, up, o.percentile);
+    v.area = (v.box.hi[0] - v.box.lo[0]) * (v.box.hi[1] - v.box.lo[1]);
+    v.confirmed = confirmed(*object);
+    return v;
+  };
+  std::vector<PartView> views;
+  for (const auto& object : objects_)
+    if (object->alive && object->observations > 0) {
+      PartView v = view_of(object.get());
+      if (v.limit_m > 0.0 && !v.surface.empty()) views.push_back(std::move(v));
+    }
+  while (true) {
+    // The pair (smaller, larger footprint) of one class that fits best: the smallest gap, then the
+    // larger share inside; ties: the lower ids.
+    std::size_t best_small = 0, best_large = 0;
+    std::optional<PartsFit> best;
+    for (std::size_t ia = 0; ia < views.size(); ++ia)
+      for (std::size_t ib = 0; ib < views.size(); ++ib) {
+        const PartView& a = views[ia];
+        const PartView& b = views[ib];
+        if (ia == ib || a.cls != b.cls || a.area > b.area) continue;
+        if (a.area == b.area && a.object->id > b.object->id) continue;
+        if (!b.confirmed) continue;  // fragments join an object; they do not make one
+        if (far_apart(*a.object, *b.object)) continue;
+        std::vector<double> shared;
+        std::set_intersection(a.object->frames.begin(), a.object->frames.end(),
+                              b.object->frames.begin(), b.object->frames.end(),
+                              std::back_inserter(shared));
+        const std::size_t fewer = std::min(a.object->frames.size(), b.object->frames.size());
+        if (shared.size() > options_.merge_max_shared_frames * fewer) continue;
+        const PartsFit fit =
+            fit_parts(a.surface, b.surface, b.box, up, o.percentile, o.join_grow_m);
+        if (fit.gap_m > o.join_gap_m || fit.union_extent_m > b.limit_m) continue;
+        if (fit.inside_share < o.join_min_inside && !share_a_track(*a.object, *b.object)) continue;
+        if (best && (fit.gap_m > best->gap_m ||
+                     (fit.gap_m == best->gap_m && fit.inside_share <= best->inside_share)))
+          continue;
+        best = fit;
+        best_small = ia;
+        best_large = ib;
+      }
+    if (!best) return made;
+    Object& large = *views[best_large].object;
+    Object& small = *views[best_small].object;
+    MergeLink link{large.id, small.id, share_a_track(small, large) ? 1.0 : 0.0,
+                   (small.centroid - large.centroid).norm(), best->inside_share};
+    link.part = true;
+    absorb(large, small, link);
+    large.frames_in_view = -1;  // judged again (judge_visibility's only_unjudged)
+    made.push_back(link);
+    views[best_large] = view_of(&large);
+    views.erase(views.begin() + static_cast<std::ptrdiff_t>(best_small));
+  }
+}
+
+}  // namespace objmap::fusion

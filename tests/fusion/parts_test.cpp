@@ -1,0 +1,120 @@
+// Parts of one instance (ObjectMap::join_parts) and the trim of another instance's part
+// (ObjectMap::cut_oversize), once the up is known: docs/fusion.md "The extent of one instance".
+#include <gtest/gtest.h>
+
+#include "fusion_test_util.h"
+#include "objmap/fusion/object_map.h"
+#include "objmap/segmentation/class_sizes.h"
+
+namespace objmap::fusion {
+namespace {
+
+using test::box;
+using test::instance;
+
+// Only the rules under test: no merge pass, no fragment or class-confusion merges.
+ObjectMapOptions parts_options() {
+  ObjectMapOptions o;
+  o.final_merge = false;
+  o.merge_fragments_in_box = false;
+  o.merge_class_confusions = false;
+  return o;
+}
+
+// A chair's seat and legs as a 0.41 m box seen from the front (no -y face), x 0.305-0.705,
+// y -0.095-0.305, z 0.005-0.405.
+PointCloud parts_seat(double x = 0.505) { return box(Vec3(x, 0.105, 0.205), 20, 63 & ~4); }
+
+// The back of that chair seen from behind over a table: a slab 2 cm behind the seat's back edge,
+// from just above the seat to 0.815 m.
+PointCloud parts_back(double x = 0.505) {
+  PointCloud back;
+  for (int i = -20; i <= 20; ++i)
+    for (int k = 0; k <= 40; ++k)
+      back.push_back(Vec3f(static_cast<float>(x + 0.01 * i), -0.115f, 0.415f + 0.01f * k));
+  return back;
+}
+
+double parts_width_x(const ObjectRecord& r) { return r.aabb.max.x() - r.aabb.min.x(); }
+
+TEST(ObjectMap, AChairsBackSeenAloneInOtherKeyframesJoinsTheChair) {
+  ObjectMap map(parts_options());
+  for (int f = 0; f < 6; ++f) map.add_frame({instance(f, 1, "chair", parts_seat())});
+  for (int f = 10; f < 16; ++f) map.add_frame({instance(f, 2, "chair", parts_back())});
+  ASSERT_EQ(map.records(RecordOptions{}).size(), 2u);  // two objects before the rule
+  const std::vector<MergeLink> joins = map.join_parts(Vec3::UnitZ(), {});
+  ASSERT_EQ(joins.size(), 1u);
+  EXPECT_TRUE(joins[0].part);
+  EXPECT_GE(joins[0].overlap, 0.8);  // the back lies over the seat's footprint
+  const auto records = map.records(RecordOptions{});
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_LT(parts_width_x(records[0]), 0.45);
+  EXPECT_GT(records[0].aabb.max.z(), 0.75);  // the back is the chair's (the seat: 0.405)
+  EXPECT_LT(records[0].aabb.min.z(), 0.03);
+  EXPECT_TRUE(map.join_parts(Vec3::UnitZ(), {}).empty());  // nothing is left to join
+}
+
+TEST(ObjectMap, PackedChairsCupsApartAndFragmentsAloneAreNotJoined) {
+  // Two chairs 6 cm apart, seen by turns, with one track id or two: together 0.87 m wide, more
+  // than a chair.
+  for (int second_track : {1, 2}) {
+    ObjectMap map(parts_options());
+    for (int f = 0; f < 6; ++f) map.add_frame({instance(f, 1, "chair", parts_seat(0.505))});
+    for (int f = 10; f < 16; ++f)
+      map.add_frame({instance(f, second_track, "chair", parts_seat(0.975))});
+    ASSERT_EQ(map.records(RecordOptions{}).size(), 2u);
+    EXPECT_TRUE(map.join_parts(Vec3::UnitZ(), {}).empty()) << "track " << second_track;
+  }
+  // Two cups (5 cm cubes) 8 cm apart, seen by turns: together no wider than a cup, but neither
+  // lies over the other's footprint and they share no track id.
+  {
+    ObjectMap map(parts_options());
+    for (int f = 0; f < 6; ++f)
+      map.add_frame({instance(f, 1, "cup", box(Vec3(0.505, 0.105, 0.025), 2))});
+    for (int f = 10; f < 16; ++f)
+      map.add_frame({instance(f, 2, "cup", box(Vec3(0.585, 0.105, 0.025), 2))});
+    ASSERT_EQ(map.records(RecordOptions{}).size(), 2u);
+    EXPECT_TRUE(map.join_parts(Vec3::UnitZ(), {}).empty());
+  }
+  // A back and a seat seen twice each: neither is confirmed, so no object is made of them.
+  {
+    ObjectMap map(parts_options());
+    for (int f = 0; f < 2; ++f) map.add_frame({instance(f, 1, "chair", parts_seat())});
+    for (int f = 10; f < 12; ++f) map.add_frame({instance(f, 2, "chair", parts_back())});
+    EXPECT_TRUE(map.join_parts(Vec3::UnitZ(), {}).empty());
+  }
+  // --method paper (oversize off) and join_parts off: no joins.
+  for (bool enabled : {false, true}) {
+    ObjectMapOptions o = parts_options();
+    o.oversize.enabled = enabled;
+    o.oversize.join_parts = false;
+    ObjectMap map(o);
+    for (int f = 0; f < 6; ++f) map.add_frame({instance(f, 1, "chair", parts_seat())});
+    for (int f = 10; f < 16; ++f) map.add_frame({instance(f, 2, "chair", parts_back())});
+    EXPECT_TRUE(map.join_parts(Vec3::UnitZ(), {}).empty());
+  }
+}
+
+// A mask over a chair and the side of the chair beside it (x 1.18, a tall face): not two
+// instances (the side is under a quarter of the surface) and not a flat strip, so without the
+// neighbour as an object nothing is cut; with it confirmed, the side is trimmed off as its part.
+TEST(ObjectMap, ATallPartBeyondTheCutIsTrimmedOnlyWhenItIsAnotherInstances) {
+  const PointCloud side = box(Vec3(0.975, 0.105, 0.205), 20, 2);  // +x face of the next chair
+  PointCloud joined = box(Vec3(0.505, 0.105, 0.205), 20);
+  for (std::size_t i = 0; i < side.size(); ++i) joined.push_back(side.points[i], side.colors[i]);
+  for (bool neighbour : {false, true}) {
+    ObjectMap map(parts_options());
+    for (int f = 0; f < 6; ++f) map.add_frame({instance(f, 1, "chair", joined)});
+    if (neighbour)
+      for (int f = 10; f < 16; ++f)
+        map.add_frame({instance(f, 2, "chair", box(Vec3(0.975, 0.105, 0.205), 20))});
+    const auto cuts = map.split_oversize(Vec3::UnitZ(), {});
+    EXPECT_EQ(cuts.size(), neighbour ? 1u : 0u);
+    const auto records = map.records(RecordOptions{});
+    ASSERT_EQ(records.size(), neighbour ? 2u : 1u);
+    EXPECT_NEAR(parts_width_x(records[0]), neighbour ? 0.40 : 0.88, 0.02);
+  }
+}
+
+}  // namespace
+}  // namespace objmap::fusion
