@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
@@ -255,6 +256,29 @@ TEST(FuseReal, Fr1RpyEveryFrameGivesTheSameObjectsAsTheKeyframes) {
   EXPECT_GE(n_kf, 14) << keyframes.out;
   EXPECT_LE(std::abs(n_all - n_kf), 0.1 * n_kf) << keyframes.out << every.out;
   EXPECT_LE(all["duplicates"]["count"].get<int>(), kf["duplicates"]["count"].get<int>());
+}
+
+TEST(FuseReal, Fr1RpyTakenOneFrameInFiveOrEighteenSplitsNoObject) {
+  // Sparse exports keep one frame in ~18 of a scan (docs/fusion.md, "Sparse frames"):
+  // fr1_rpy_every4 is itself one frame in 4 of fr1_rpy, so stride 5 is about one in 18 of the
+  // recording, and stride 18 one in 72. Fewer views confirm fewer objects, but no class gains one:
+  // no object of the keyframes is split in two.
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_rpy_every4");
+  TempDir dir;
+  const auto keyframes = fuse_real(data, "detections_yolofastest", dir / "kf");
+  ASSERT_EQ(keyframes.exit_code, 0) << keyframes.err;
+  std::map<std::string, int> dense;
+  for (const auto& f : read_fused_objects(dir / "kf" / "objects.json")) ++dense[f.cls];
+  for (const std::string stride : {"5", "18"}) {
+    const fs::path out = dir / ("stride" + stride);
+    const auto sparse = fuse_real(data, "detections_yolofastest", out,
+                                  {"--keyframes", "stride", "--stride", stride});
+    ASSERT_EQ(sparse.exit_code, 0) << sparse.err;
+    std::map<std::string, int> counts;
+    for (const auto& f : read_fused_objects(out / "objects.json")) ++counts[f.cls];
+    EXPECT_FALSE(counts.empty()) << "stride " << stride;
+    for (const auto& [cls, n] : counts) EXPECT_LE(n, dense[cls]) << cls << ", stride " << stride;
+  }
 }
 
 }  // namespace
