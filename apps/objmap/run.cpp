@@ -21,6 +21,8 @@
 #include <vector>
 
 #include "command.h"
+#include "objmap/core/checksum.h"
+#include "objmap/core/clock.h"
 #include "objmap/core/error.h"
 #include "objmap/core/version.h"
 #include "objmap/io/atomic.h"
@@ -56,20 +58,6 @@ struct Stage {
   fs::path out;
   std::string done_file;
 };
-
-std::uint64_t fnv1a(const std::string& bytes, std::uint64_t h = 1469598103934665603ULL) {
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
-std::string hex(std::uint64_t h) {
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
-  return text;
-}
 
 // What a file or folder is, cheaply: every file's relative name, size and modification time.
 std::string fingerprint(const std::string& path) {
@@ -141,7 +129,7 @@ std::string stage_key(const Stage& stage, const RunCommand& c, const std::string
     if (stage.name == "detect") text += fingerprint(c.model);
     if (stage.name == "fuse") text += fingerprint(c.fuse_config);
   }
-  return hex(fnv1a(text));
+  return hex64(fnv1a(text));
 }
 
 // Runs this objmap binary with `args`, its output into `log`; returns the exit code.
@@ -214,10 +202,9 @@ void run_run(const RunCommand& c) {
     std::printf("%-8s running ... ", stage.name.c_str());
     std::fflush(stdout);
     const fs::path log = run / "logs" / (stage.name + ".log");
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     const int code = spawn_objmap(stage.args, log);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds = seconds_since(t0);
     if (code != 0) {
       std::printf("failed\n");
       record.erase(stage.name);

@@ -1,5 +1,6 @@
 #include "objmap/eval/objects.h"
 
+#include "objmap/core/json_vec.h"
 #include "objmap/track/assignment.h"
 
 #include <Eigen/Geometry>
@@ -593,8 +594,6 @@ PointCounts read_point_counts(const std::filesystem::path& run_json) {
 namespace {
 
 using nlohmann::ordered_json;
-
-ordered_json vec3_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
 
 ordered_json alignment_json(const ObjectAlignment& a) {
   ordered_json out;
