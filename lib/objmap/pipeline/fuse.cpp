@@ -30,7 +30,7 @@ namespace fs = std::filesystem;
 using ordered_json = nlohmann::ordered_json;
 
 FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
-  options.check();
+  const FuseChoices choices = options.check();  // the option strings parsed, once
   io::require_not_an_input({"--out", options.out}, {{"--dataset", options.dataset},
                                                     {"--trajectory", options.trajectory},
                                                     {"--segmentation", options.segmentation}});
@@ -49,9 +49,9 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const fusion::VoxelMapOptions dense_options = dense_map_options(options, result.threads);
   fusion::VoxelMap dense(dense_options);
   const fusion::ObjectMapOptions object_options =
-      object_map_options(options, result.keyframes.still_camera);
+      object_map_options(options, choices, result.keyframes.still_camera);
   fusion::ObjectMap objects(object_options);
-  const mesh::MeshSelection meshes = mesh::parse_mesh_selection(options.mesh.select, "mesh.select");
+  const mesh::MeshSelection& meshes = choices.meshes;
   std::optional<ObjectViews> object_views;
   if (meshes.objects) object_views.emplace();
   std::optional<mesh::TsdfModel> scene_model;
@@ -60,7 +60,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
                         scene_tsdf_options(options.mesh));
   std::optional<fusion::ViewLog> view_log;
   if (object_options.min_detected_share > 0.0) view_log.emplace(result.camera);
-  fuse_keyframes(options, progress, inputs, options.dense_map ? &dense : nullptr, objects,
+  fuse_keyframes(options, choices, progress, inputs, options.dense_map ? &dense : nullptr, objects,
                  object_views ? &*object_views : nullptr, scene_model ? &*scene_model : nullptr,
                  view_log ? &*view_log : nullptr, result);
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
@@ -99,7 +99,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   cut_oversize_objects(options, class_sizes, objects, view_log ? &*view_log : nullptr, result);
 
   // 4b. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
-  take_sightings(options, result);
+  take_sightings(choices, result);
   result.dense_voxels_of_sightings =
       drop_sighting_voxels(dense_cloud, result.sightings, result.objects, options.map_voxel_m);
 

@@ -5,6 +5,7 @@
 #include <future>
 #include <memory>
 #include <mutex>
+#include <optional>
 
 #include "objmap/core/parallel.h"
 #include "objmap/fusion/frame_voxels.h"
@@ -131,39 +132,60 @@ segmentation::InstanceMaskOptions instance_mask_options(const FuseOptions& optio
   return o;
 }
 
+// What every keyframe of a run shares: the options, the camera, its ray table, the recording, the
+// mask cleaning's options and the meshes asked for (none for re-made observations), made once.
+struct KeyframeContext {
+  const FuseOptions& options;
+  const Camera& camera;
+  const geometry::RayTable& rays;
+  const io::Dataset& dataset;
+  segmentation::InstanceMaskOptions masks;  // instance_mask_options(options)
+  mesh::MeshSelection meshes;               // the rays of the scene model, the objects' models
+  bool view_depth = false;                  // keep the thinned depth for the view log
+};
+
+// Where a keyframe's dense voxels go: the dense map, shard by shard in keyframe order, through a
+// pooled frame buffer.
+struct DenseMerge {
+  fusion::VoxelMap& map;
+  ShardedMergeOrder& order;
+  FrameVoxelsPool& pool;
+};
+
 // Back-projects one keyframe: the dense points summed by voxel (frame_voxels.h, so that voxels are
-// merged, not pixels) and added to `dense` in keyframe order, and each instance's pixels
-// into an observation. Without `dense` (and `order`, `pool`), the observations only.
-FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
-                           const geometry::RayTable& rays, const io::Dataset& dataset,
-                           const io::FramePair& frame, const Keyframe& keyframe, int keyframe_index,
-                           const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
-                           ShardedMergeOrder* order, FrameVoxelsPool* pool) {
+// merged, not pixels) and added to the dense map in keyframe order, and each instance's pixels
+// into an observation. Without `dense`, no dense map.
+FrameWork process_keyframe(const KeyframeContext& ctx, const io::FramePair& frame,
+                           const Keyframe& keyframe, int keyframe_index,
+                           const segmentation::FrameSegmentation* seg, DenseMerge* dense) {
+  const FuseOptions& options = ctx.options;
+  const Camera& camera = ctx.camera;
+  const geometry::RayTable& rays = ctx.rays;
   FrameWork work;
 
   // 1. The images (checked: size, type).
-  const cv::Mat bgr = io::read_frame_rgb(dataset, frame, camera.width, camera.height);
-  const cv::Mat depth = io::read_frame_depth(dataset, frame, camera);
+  const cv::Mat bgr = io::read_frame_rgb(ctx.dataset, frame, camera.width, camera.height);
+  const cv::Mat depth = io::read_frame_depth(ctx.dataset, frame, camera);
   if (dense && options.dense_prune.every_keyframes > 0) work.depth = depth;
-  if (order && options.objects.min_detected_share > 0.0)
-    work.view_depth = fusion::ViewLog(camera).thin(depth);
+  if (ctx.view_depth) work.view_depth = fusion::ViewLog(camera).thin(depth);
 
   // 2. Dense map: every valid pixel (eqs 11-15) with its colour.
   geometry::BackprojectOptions dense_options = options.depth;
   dense_options.stride = options.dense_stride;
   const geometry::DepthFrame dense_frame(depth, keyframe.world_from_cam, &bgr);
   if (dense) {
-    std::unique_ptr<fusion::FrameVoxels> frame_voxels = pool->take();
-    fusion::frame_voxels(rays, dense_frame, dense_options, *dense, *frame_voxels);
+    std::unique_ptr<fusion::FrameVoxels> frame_voxels = dense->pool.take();
+    fusion::frame_voxels(rays, dense_frame, dense_options, dense->map, *frame_voxels);
     work.dense_points = frame_voxels->points();
-    order->merge_in_order(static_cast<std::size_t>(keyframe_index),
-                          [&](std::size_t shard) { dense->add_shard(*frame_voxels, shard); });
-    pool->give_back(std::move(frame_voxels));
+    dense->order.merge_in_order(static_cast<std::size_t>(keyframe_index), [&](std::size_t shard) {
+      dense->map.add_shard(*frame_voxels, shard);
+    });
+    dense->pool.give_back(std::move(frame_voxels));
   }
 
-  // 2b. The scene model's rays: every valid pixel, averaged per scene-model voxel (in a fuse,
-  //     which passes `order`; not for re-made observations).
-  if (order && mesh::parse_mesh_selection(options.mesh.select, "mesh.select").scene)
+  // 2b. The scene model's rays: every valid pixel, averaged per scene-model voxel (in a fuse
+  //     with a scene mesh; not for re-made observations).
+  if (ctx.meshes.scene)
     work.scene_points =
         mesh::voxel_means(geometry::backproject(rays, dense_frame, dense_options).points_in_world,
                           options.mesh.scene_voxel_m);
@@ -172,8 +194,8 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
   if (!seg) return work;
   // 3a. Each instance's cleaned mask and its bounds; one instance per object and keyframe (a
   //     second box of the same object is dropped).
-  const std::vector<segmentation::InstanceMask> masks = segmentation::clean_instance_masks(
-      *seg, depth, camera, instance_mask_options(options), work.masks);
+  const std::vector<segmentation::InstanceMask> masks =
+      segmentation::clean_instance_masks(*seg, depth, camera, ctx.masks, work.masks);
   // 3b. The kept instances' pixels in the world, in the segmentation's order.
   for (const segmentation::InstanceMask& m : masks) {
     const geometry::DepthFrame instance_frame(depth, keyframe.world_from_cam, &bgr, &m.mask(),
@@ -196,8 +218,7 @@ FrameWork process_keyframe(const FuseOptions& options, const Camera& camera,
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;
     obs.world_from_cam = keyframe.world_from_cam;
-    if (order && mesh::parse_mesh_selection(options.mesh.select, "mesh.select").objects)
-      work.model_points.push_back(model_points(obs, options.mesh));
+    if (ctx.meshes.objects) work.model_points.push_back(model_points(obs, options.mesh));
     work.observations.push_back(std::move(obs));
   }
   return work;
@@ -232,15 +253,24 @@ fusion::VoxelMapOptions dense_map_options(const FuseOptions& options, int thread
   return dense_options;
 }
 
-void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
-                    const FuseInputs& inputs, fusion::VoxelMap* dense, fusion::ObjectMap& objects,
-                    ObjectViews* object_views, mesh::TsdfModel* scene, fusion::ViewLog* view_log,
-                    FuseResult& result) {
+void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
+                    const FuseProgress& progress, const FuseInputs& inputs, fusion::VoxelMap* dense,
+                    fusion::ObjectMap& objects, ObjectViews* object_views, mesh::TsdfModel* scene,
+                    fusion::ViewLog* view_log, FuseResult& result) {
   const Camera& camera = result.camera;
   const auto& keyframes = result.keyframes.keyframes;
   const geometry::RayTable rays = geometry::make_ray_table(camera, result.threads);
+  const KeyframeContext ctx{options,
+                            camera,
+                            rays,
+                            inputs.dataset,
+                            instance_mask_options(options),
+                            choices.meshes,
+                            options.objects.min_detected_share > 0.0};
   ShardedMergeOrder merge_order(kDenseShards);
   FrameVoxelsPool frame_voxels;
+  std::optional<DenseMerge> dense_merge;
+  if (dense) dense_merge.emplace(DenseMerge{*dense, merge_order, frame_voxels});
   const std::size_t window = static_cast<std::size_t>(result.threads);
   const std::size_t prune_every =
       dense ? static_cast<std::size_t>(options.dense_prune.every_keyframes) : 0;
@@ -258,9 +288,9 @@ void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
         // segmentation.
         segmentation::FrameSegmentation lazy;
         const segmentation::FrameSegmentation* seg_frame = keyframe_segmentation(inputs, i, lazy);
-        return process_keyframe(options, camera, rays, inputs.dataset,
-                                inputs.dataset.frames[keyframes[i].frame], keyframes[i],
-                                static_cast<int>(i), seg_frame, dense, &merge_order, &frame_voxels);
+        return process_keyframe(ctx, inputs.dataset.frames[keyframes[i].frame], keyframes[i],
+                                static_cast<int>(i), seg_frame,
+                                dense_merge ? &*dense_merge : nullptr);
       } catch (...) {
         merge_order.fail();  // later keyframes must not wait for this one's merge
         throw;
@@ -333,9 +363,12 @@ std::vector<fusion::Observation> keyframe_observations(
     const FuseInputs& inputs, const std::vector<Keyframe>& keyframes, std::size_t i) {
   segmentation::FrameSegmentation lazy;
   const segmentation::FrameSegmentation* seg = keyframe_segmentation(inputs, i, lazy);
-  return process_keyframe(options, camera, rays, inputs.dataset,
-                          inputs.dataset.frames[keyframes[i].frame], keyframes[i],
-                          static_cast<int>(i), seg, nullptr, nullptr, nullptr)
+  // No dense map, no meshes, no view log: the observations alone.
+  const KeyframeContext ctx{
+      options, camera, rays, inputs.dataset, instance_mask_options(options), mesh::MeshSelection{},
+      false};
+  return process_keyframe(ctx, inputs.dataset.frames[keyframes[i].frame], keyframes[i],
+                          static_cast<int>(i), seg, nullptr)
       .observations;
 }
 

@@ -30,10 +30,10 @@ fusion::VoxelMapOptions dense_map_options(const FuseOptions& options, int thread
 // next keyframes held back from the map meanwhile: always between the same two keyframes.
 // The observations that joined objects go to `views` and each keyframe's depth to `scene`, when
 // given, for the meshes; each keyframe's thinned depth to `view_log`, when given.
-void fuse_keyframes(const FuseOptions& options, const FuseProgress& progress,
-                    const FuseInputs& inputs, fusion::VoxelMap* dense, fusion::ObjectMap& objects,
-                    ObjectViews* object_views, mesh::TsdfModel* scene, fusion::ViewLog* view_log,
-                    FuseResult& result);
+void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
+                    const FuseProgress& progress, const FuseInputs& inputs, fusion::VoxelMap* dense,
+                    fusion::ObjectMap& objects, ObjectViews* object_views, mesh::TsdfModel* scene,
+                    fusion::ViewLog* view_log, FuseResult& result);
 
 // Keyframe i's instance observations alone (no map), made exactly as fuse_keyframes makes them.
 std::vector<fusion::Observation> keyframe_observations(

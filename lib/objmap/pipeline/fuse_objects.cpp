@@ -41,14 +41,12 @@ void judge_and_record(const FuseOptions& options, fusion::ObjectMap& objects,
 
 }  // namespace
 
-fusion::ObjectMapOptions object_map_options(const FuseOptions& options, bool still_camera) {
+fusion::ObjectMapOptions object_map_options(const FuseOptions& options, const FuseChoices& choices,
+                                            bool still_camera) {
   fusion::ObjectMapOptions object_options = options.objects;
-  object_options.overlap_measure =
-      fusion::parse_overlap_measure(options.overlap_measure, "objects.overlap_measure");
-  object_options.distance_score =
-      fusion::parse_distance_score(options.distance_score, "objects.distance_score");
-  object_options.confirmation =
-      fusion::parse_confirmation(options.confirmation, "objects.confirmation");
+  object_options.overlap_measure = choices.overlap_measure;
+  object_options.distance_score = choices.distance_score;
+  object_options.confirmation = choices.confirmation;
   object_options.keep_points = options.outlier_on_points || options.voxel_nearest_centre;
   if (still_camera) {
     // A camera that hardly moves has one viewpoint: its frames are the views.
@@ -116,9 +114,8 @@ void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassS
   result.times.push_back({"oversize objects", seconds_since(t0)});
 }
 
-void take_sightings(const FuseOptions& options, FuseResult& result) {
-  result.sightings =
-      fusion::take_movers(result.objects, fusion::parse_movers(options.movers, "objects.movers"));
+void take_sightings(const FuseChoices& choices, FuseResult& result) {
+  result.sightings = fusion::take_movers(result.objects, choices.movers);
 }
 
 void make_meshes(const FuseOptions& options, const fusion::ObjectMap& objects,

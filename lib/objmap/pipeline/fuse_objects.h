@@ -13,7 +13,8 @@
 namespace objmap::pipeline {
 
 // The object map's options: a camera that hardly moves has one viewpoint, its frames are the views.
-fusion::ObjectMapOptions object_map_options(const FuseOptions& options, bool still_camera);
+fusion::ObjectMapOptions object_map_options(const FuseOptions& options, const FuseChoices& choices,
+                                            bool still_camera);
 
 // How each confirmed object's record is made: filters and position.
 fusion::RecordOptions record_options(const FuseOptions& options, int threads);
@@ -33,7 +34,7 @@ void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassS
 // Step 4a (docs/fusion.md, "Sightings"): the objects of a mover class are taken out of
 // result.objects into result.sightings, so they stay out of the duplicates, the relations and the
 // maps.
-void take_sightings(const FuseOptions& options, FuseResult& result);
+void take_sightings(const FuseChoices& choices, FuseResult& result);
 
 // Step 4e: the objects' meshes (with `object_views`) and the scene's (with `scene_model`, which
 // is released).
