@@ -6,6 +6,7 @@
 
 #include "objmap/fusion/object_map.h"
 #include "objmap/io/ply.h"
+#include "objmap/pipeline/correct.h"
 #include "objmap/pipeline/dense_cloud.h"
 #include "objmap/pipeline/fuse.h"
 #include "objmap/pipeline/fuse_inputs.h"
@@ -13,7 +14,8 @@
 
 // The files of a run folder as `objmap fuse` writes them (and `objmap correct`, which fuses again):
 // the maps (map_dense.ply, map_semantic.ply, map_objects.ply, map_mesh.ply), one PLY per object,
-// objects.json, run.json and the dataset's own trajectory. Their readers: run_json.h.
+// objects.json, run.json and the dataset's own trajectory; `objmap correct`'s correction.json
+// (run_folder_correction.cpp). Their readers: run_json.h.
 namespace objmap::pipeline {
 
 // The point counts of the written maps (run.json "points").
@@ -44,5 +46,11 @@ void write_run_json(const std::filesystem::path& dir, const FuseOptions& options
 // The dataset's own poses as OUT/dataset_trajectory.txt, when the run has no --trajectory.
 void write_dataset_trajectory(const std::filesystem::path& dir, const FuseOptions& options,
                               const FuseInputs& inputs, const FuseResult& result);
+
+// correction.json (schemas/correction.schema.json): the run, the method and the verdict, the
+// options, the counts, the consistency, the largest correction, the time taken, and per keyframe,
+// observation and view link; `input_trajectory` is the trajectory the run was fused with.
+std::string correction_json(const CorrectOptions& options, const CorrectResult& result,
+                            const RunProblem& rp, const std::string& input_trajectory);
 
 }  // namespace objmap::pipeline
