@@ -1,10 +1,12 @@
-// `objmap fuse` as an outline: each step is a function of its own file (docs/architecture.md).
-//   1-2 inputs and keyframes ........ fuse_inputs.cpp (segmentation frames:
-//   segmentation_frames.cpp) 3   keyframe loop, threads ...... fuse_keyframes.cpp 4   merge,
-//   records, cuts, meshes  fuse_objects.cpp; dense cloud: dense_cloud.cpp; scene:
-//                                     fuse_scene.cpp
-//   5   the run folder's files ...... run_folder.cpp
-// Options, their tables and checks: fuse_options.cpp.
+// `objmap fuse` as an outline (run_fuse): each step is a function in a file of its own.
+//  - steps 1-2, inputs and keyframes: fuse_inputs.cpp; which segmentation frame each keyframe
+//    takes: segmentation_frames.cpp
+//  - step 3, the keyframe loop and its threads: fuse_keyframes.cpp
+//  - step 4, the objects after the keyframes (merge pass, records, oversize cut, sightings,
+//    meshes): fuse_objects.cpp; the dense map as a cloud: dense_cloud.cpp; the scene:
+//    fuse_scene.cpp
+//  - step 5, the run folder's files: run_folder.cpp
+//  - the options' tables, preset and checks: fuse_options.cpp
 #include "objmap/pipeline/fuse.h"
 
 #include <future>
