@@ -9,6 +9,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/core/format.h"
+#include "objmap/core/json_vec.h"
 #include "objmap/core/polygon.h"
 #include "objmap/eval/json.h"
 #include "objmap/eval/objects.h"
@@ -208,8 +209,6 @@ namespace {
 
 using nlohmann::ordered_json;
 
-ordered_json vec_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
-
 ordered_json relation_json(const std::optional<OnRelation>& on) {
   if (!on) return nullptr;
   ordered_json j;
@@ -226,7 +225,8 @@ ordered_json alignment_json(const SceneAlignment& a) {
   ordered_json rotation = ordered_json::array();
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) rotation.push_back(a.gt_from_map.rotation(r, c));
-  j["gt_from_map"] = {{"rotation", rotation}, {"translation", vec_json(a.gt_from_map.translation)}};
+  j["gt_from_map"] = {{"rotation", rotation},
+                      {"translation", vec3_json(a.gt_from_map.translation)}};
   j["ate_m"] = stats_json(a.ate_m);
   return j;
 }

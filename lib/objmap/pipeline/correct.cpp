@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "objmap/core/clock.h"
 #include "objmap/core/error.h"
 #include "objmap/core/parallel.h"
 #include "objmap/core/version.h"
@@ -23,7 +24,9 @@
 #include "objmap/io/run_path.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/pipeline/config.h"
+#include "objmap/pipeline/run_folder.h"
 #include "objmap/pipeline/run_json.h"
+#include "objmap/pose/view_groups.h"
 
 namespace objmap::pipeline {
 namespace {
@@ -31,11 +34,6 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 using ordered_json = nlohmann::ordered_json;
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 json read_json_file(const fs::path& file) { return run_json::read_file(file); }
 using run_json::field;
@@ -80,173 +78,6 @@ class ScratchDir {
   fs::path path_;
   io::UnfinishedOutput unfinished_;
 };
-
-// correction.json's options: those of the pose stage, and check_map.
-ordered_json options_json(const CorrectOptions& options) {
-  const pose::CorrectionOptions& o = options.correction;
-  ordered_json out = {{"min_pairs", o.min_pairs},
-                      {"min_spread_m", o.min_spread_m},
-                      {"observation_sigma_m", o.observation_sigma_m},
-                      {"robust_sigmas", o.robust_sigmas},
-                      {"odometry_sigma_m", o.odometry_sigma_m},
-                      {"odometry_sigma_fraction", o.odometry_sigma_fraction},
-                      {"odometry_sigma_deg", o.odometry_sigma_deg},
-                      {"odometry_sigma_deg_per_deg", o.odometry_sigma_deg_per_deg},
-                      {"odometry_sigma_deg_per_m", o.odometry_sigma_deg_per_m},
-                      {"max_translation_m", o.max_translation_m},
-                      {"max_translation_fraction", o.max_translation_fraction},
-                      {"max_rotation_deg", o.max_rotation_deg},
-                      {"max_rotation_deg_per_m", o.max_rotation_deg_per_m},
-                      {"link_sigma_m", o.link_sigma_m},
-                      {"link_sigma_deg", o.link_sigma_deg},
-                      {"min_held_out_link_improvement", o.min_held_out_link_improvement},
-                      {"min_improvement", o.min_improvement},
-                      {"min_translation_m", o.min_translation_m},
-                      {"min_rotation_deg", o.min_rotation_deg},
-                      {"min_held_out_improvement", o.min_held_out_improvement},
-                      {"reweight_rounds", o.reweight_rounds},
-                      {"paper_prior", o.paper_prior},
-                      {"paper_prior_fraction", o.paper_prior_fraction},
-                      {"max_iterations", o.max_iterations},
-                      {"check_map", options.check_map}};
-  return out;
-}
-
-// correction.json's consistency: observation, held-out, odometry and link RMS, and the map's
-// object scatter before and after.
-ordered_json consistency_json(const CorrectResult& result) {
-  const pose::CorrectionResult& c = result.correction;
-  ordered_json out = {
-      {"observation_rms_before_m", c.residual_before_m},
-      {"held_out_rms_before_m", c.held_out_before_m},
-      {"held_out_rms_after_m", c.held_out_after_m},
-      {"observation_rms_after_m", c.residual_after_m},
-      {"odometry_rms_sigmas", c.odometry_rms_sigmas},
-      {"link_rms_before_sigmas", result.with_links.link_rms_before_sigmas},
-      {"link_rms_after_sigmas", result.with_links.link_rms_after_sigmas},
-      {"held_out_link_rms_before_sigmas", result.with_links.held_out_link_before_sigmas},
-      {"held_out_link_rms_after_sigmas", result.with_links.held_out_link_after_sigmas},
-      {"map_scatter_before_m", result.map_rms_before_m},
-      {"map_scatter_after_m", result.map_rms_after_m},
-      {"map_objects_before", result.map_objects_before},
-      {"map_objects_after", result.map_objects_after}};
-  return out;
-}
-
-// Per keyframe: its objects, the verdict and the solver's proposed pose (also when refused).
-ordered_json keyframes_json(const CorrectResult& result, const RunProblem& rp) {
-  const pose::CorrectionResult& c = result.correction;
-  ordered_json kfs = ordered_json::array();
-  for (const auto& k : c.keyframes) {
-    ordered_json e;
-    e["index"] = k.index;
-    e["timestamp"] = k.timestamp;
-    e["objects"] = rp.keyframe_objects[k.index];
-    e["matched"] = k.matched;
-    e["spread_m"] = k.spread_m;
-    e["corrected"] = result.accepted && k.corrected;
-    e["reason"] = k.reason;
-    e["residual_before_m"] = k.residual_before_m;
-    e["residual_after_m"] = k.residual_after_m;
-    e["translation_m"] = k.translation_m;
-    e["rotation_deg"] = k.rotation_deg;
-    const Pose& p = c.proposed[k.index];
-    const Eigen::Quaterniond q = io::quaternion_of(p);
-    e["proposed_world_from_cam"] = {
-        p.translation().x(), p.translation().y(), p.translation().z(), q.x(), q.y(), q.z(), q.w()};
-    kfs.push_back(e);
-  }
-  return kfs;
-}
-
-// Per observation: which object from which keyframe, its partial-view bias and residuals.
-ordered_json observations_json(const pose::CorrectionResult& c, const RunProblem& rp) {
-  std::vector<Vec3> mean(rp.problem.landmarks.size(), Vec3::Zero());
-  std::vector<int> count(rp.problem.landmarks.size(), 0);
-  for (const auto& ob : rp.problem.observations) {
-    mean[ob.landmark] +=
-        rp.problem.keyframes[ob.keyframe].world_from_cam * ob.centroid_in_cam - ob.bias_in_world;
-    ++count[ob.landmark];
-  }
-  ordered_json obs = ordered_json::array();
-  for (const auto& ob : rp.problem.observations) {
-    const Vec3 m = mean[ob.landmark] / count[ob.landmark];
-    const Vec3 before =
-        rp.problem.keyframes[ob.keyframe].world_from_cam * ob.centroid_in_cam - ob.bias_in_world;
-    const Vec3 after = c.proposed[ob.keyframe] * ob.centroid_in_cam - ob.bias_in_world;
-    obs.push_back({{"object", rp.object_ids[ob.landmark]},
-                   {"keyframe", ob.keyframe},
-                   {"bias_m", ob.bias_in_world.norm()},
-                   {"residual_before_m", (before - m).norm()},
-                   {"residual_after_m", (after - c.landmarks_in_world[ob.landmark]).norm()}});
-  }
-  return obs;
-}
-
-// Per view link: the two keyframes, the object, how far the poses are from the measured relative
-// pose, before and after.
-ordered_json links_json(const pose::CorrectionResult& c, const RunProblem& rp) {
-  ordered_json links = ordered_json::array();
-  for (const auto& l : rp.problem.links) {
-    const auto error = [&](const Pose& a, const Pose& b) {
-      const Pose e = l.a_from_b.inverse() * (a.inverse() * b);
-      return std::make_pair(e.translation().norm(),
-                            Eigen::AngleAxisd(e.linear()).angle() * 180.0 / 3.14159265358979323846);
-    };
-    const auto [tb, rb] =
-        error(rp.problem.keyframes[l.a].world_from_cam, rp.problem.keyframes[l.b].world_from_cam);
-    const auto [ta, ra] = error(c.proposed[l.a], c.proposed[l.b]);
-    links.push_back({{"object", rp.object_ids[l.landmark]},
-                     {"keyframes", {l.a, l.b}},
-                     {"sigma_m", l.sigma_m},
-                     {"sigma_deg", l.sigma_deg},
-                     {"error_before_m", tb},
-                     {"error_before_deg", rb},
-                     {"error_after_m", ta},
-                     {"error_after_deg", ra}});
-  }
-  return links;
-}
-
-std::string correction_json(const CorrectOptions& options, const CorrectResult& result,
-                            const RunProblem& rp, const std::string& input_trajectory) {
-  const pose::CorrectionResult& c = result.correction;
-  ordered_json doc;
-  // The run, the method and the verdict.
-  doc["schema_version"] = 1;
-  doc["generator"] = std::string("objmap ") + objmap::version();
-  doc["command"] = "correct";
-  doc["run"] = options.run.string();
-  doc["input_trajectory"] = input_trajectory;
-  doc["output_trajectory"] = "trajectory_corrected.txt";
-  doc["method"] = options.correction.method;
-  doc["view_model"] = options.view_model;
-  doc["accepted"] = result.accepted;
-  doc["reason"] = result.reason;
-  doc["view_links_used"] = result.links_used;
-  doc["reason_with_view_links"] = result.reason_with_links;
-  // The options.
-  doc["options"] = options_json(options);
-  // Counts, consistency, the largest correction and the time taken.
-  doc["counts"] = {{"keyframes", c.keyframes.size()},
-                   {"keyframes_corrected", result.accepted ? c.corrected_keyframes : 0},
-                   {"landmarks", result.landmarks},
-                   {"observations", result.observations},
-                   {"observations_without_view", result.observations_without_view},
-                   {"observations_aligned", result.observations_aligned},
-                   {"view_links", result.links},
-                   {"view_links_tried", result.links_tried}};
-  doc["consistency"] = consistency_json(result);
-  doc["max_correction"] = {{"translation_m", c.max_translation_m},
-                           {"rotation_deg", c.max_rotation_deg}};
-  doc["solver"] = {{"iterations", c.iterations}, {"seconds", c.seconds}};
-  doc["seconds"] = {{"correct", result.seconds_correct}, {"total", result.seconds_total}};
-  // Per keyframe, per observation, per view link.
-  doc["keyframes"] = keyframes_json(result, rp);
-  doc["observations"] = observations_json(c, rp);
-  doc["links"] = links_json(c, rp);
-  return doc.dump(2) + "\n";
-}
 
 // The fuse options of a run (its run.json "options"), with the run's inputs.
 FuseOptions fuse_options_of(const fs::path& run_dir, const json& run, const fs::path& scratch) {
@@ -301,78 +132,6 @@ void CorrectOptions::check() const {
 
 namespace {
 
-constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
-
-// The direction from the keyframe's camera to observation i's centroid, world frame.
-Vec3 view_direction(const pose::Problem& problem, std::size_t i) {
-  const Pose& pose = problem.keyframes[problem.observations[i].keyframe].world_from_cam;
-  return (pose * problem.observations[i].centroid_in_cam - pose.translation()).normalized();
-}
-
-// View links: each observation aligned to a few earlier views of its object that look at the
-// same side (the previous one, the earliest, the one between); an alignment measures the relative
-// pose of the two keyframes. `source[i]` holds observation i's points (world frame, input poses),
-// `of_landmark[j]` object j's observations in keyframe order; `tried` counts the alignments.
-std::vector<pose::ViewLink> view_links(const pose::Problem& problem,
-                                       const std::vector<const fusion::Observation*>& source,
-                                       const std::vector<std::vector<std::size_t>>& of_landmark,
-                                       const CorrectOptions& options, std::size_t& tried_total) {
-  std::vector<pose::ViewLink> links;
-  const double cos_link = std::cos(options.icp_link_max_view_angle_deg * kRadPerDeg);
-  pose::IcpOptions link_icp = options.icp;
-  link_icp.max_points = options.icp_link_max_points;
-  link_icp.max_model_points = options.icp_link_max_model_points;
-  for (std::size_t j = 0; j < of_landmark.size(); ++j) {
-    const std::vector<std::size_t>& mine = of_landmark[j];
-    if (mine.size() < 2) continue;
-    std::vector<Vec3> view(mine.size());
-    std::vector<std::unique_ptr<pose::ModelAligner>> aligners(mine.size());
-    parallel_for(mine.size(), options.threads, [&](std::size_t p) {
-      view[p] = view_direction(problem, mine[p]);
-      aligners[p] =
-          std::make_unique<pose::ModelAligner>(source[mine[p]]->points_in_world, link_icp);
-    });
-    std::vector<std::vector<pose::ViewLink>> found(mine.size());
-    std::vector<std::size_t> tried(mine.size(), 0);
-    parallel_for(mine.size(), options.threads, [&](std::size_t p) {
-      const std::size_t kb = problem.observations[mine[p]].keyframe;
-      std::vector<std::size_t> candidates;
-      for (std::size_t q = 0; q < p; ++q)
-        if (problem.observations[mine[q]].keyframe != kb && view[q].dot(view[p]) >= cos_link)
-          candidates.push_back(q);
-      if (candidates.empty()) return;
-      std::vector<std::size_t> targets = {candidates.back(), candidates.front(),
-                                          candidates[candidates.size() / 2]};
-      targets.resize(std::min<std::size_t>(targets.size(), options.icp_links));
-      std::sort(targets.begin(), targets.end());
-      targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
-      const Pose& pose_b = problem.keyframes[kb].world_from_cam;
-      for (std::size_t q : targets) {
-        ++tried[p];
-        const pose::IcpResult r = aligners[q]->align(source[mine[p]]->points_in_world);
-        if (!r.aligned || !std::isfinite(r.rotation_sigma_deg)) continue;
-        const std::size_t ka = problem.observations[mine[q]].keyframe;
-        const Pose& pose_a = problem.keyframes[ka].world_from_cam;
-        // A rotation error about the object's centre moves the camera by that angle times its
-        // distance.
-        const double distance = (r.centre - pose_b.translation()).norm();
-        const double scale = options.icp_link_sigma_scale;
-        pose::ViewLink link{ka, kb, j, pose_a.inverse() * r.correction * pose_b};
-        link.sigma_deg = scale * r.rotation_sigma_deg;
-        link.sigma_m =
-            scale * (r.translation_sigma_m + r.rotation_sigma_deg * M_PI / 180.0 * distance);
-        if (link.sigma_deg > options.icp_link_max_sigma_deg) continue;
-        found[p].push_back(link);
-      }
-    });
-    for (std::size_t p = 0; p < mine.size(); ++p) {
-      links.insert(links.end(), found[p].begin(), found[p].end());
-      tried_total += tried[p];
-    }
-  }
-  return links;
-}
-
 // The remade observations of a run's keyframes, and for each problem observation the remade one
 // with the same keyframe and centroid (null when there is none).
 struct RemadeViews {
@@ -412,162 +171,19 @@ RemadeViews remade_views(const fs::path& run, const json& run_doc, const Correct
   return views;
 }
 
-// Per object, its observations with points in keyframe order (the problem keeps them by object).
-std::vector<std::vector<std::size_t>> in_keyframe_order(
-    const pose::Problem& problem, const std::vector<const fusion::Observation*>& source) {
-  std::vector<std::vector<std::size_t>> of_landmark(problem.landmarks.size());
-  for (std::size_t i = 0; i < problem.observations.size(); ++i)
-    if (source[i]) of_landmark[problem.observations[i].landmark].push_back(i);
-  for (auto& v : of_landmark)
-    std::stable_sort(v.begin(), v.end(), [&](std::size_t a, std::size_t b) {
-      return problem.observations[a].keyframe < problem.observations[b].keyframe;
-    });
-  return of_landmark;
-}
-
-struct Member {
-  std::size_t observation;
-  Pose correction;
-};
-
-// An anchor view of an object and the views aligned to it.
-struct Group {
-  std::size_t landmark;
-  Vec3 anchor_centroid, view;  // world frame; view: unit vector camera -> anchor centroid
-  std::unique_ptr<pose::ModelAligner> aligner;
-  std::vector<Member> members;
-};
-
-Group make_group(const pose::Problem& problem,
-                 const std::vector<const fusion::Observation*>& source,
-                 const CorrectOptions& options, std::size_t j, std::size_t i) {
-  Group group;
-  group.landmark = j;
-  group.anchor_centroid = geometry::centroid(source[i]->points_in_world);
-  group.view = view_direction(problem, i);
-  group.aligner = std::make_unique<pose::ModelAligner>(source[i]->points_in_world, options.icp);
-  group.members.push_back({i, Pose::Identity()});
-  return group;
-}
-
-// One anchor per object (its first view); every other view aligns to it on its own, so all
-// alignments run in parallel.
-void align_to_first_views(const pose::Problem& problem,
-                          const std::vector<const fusion::Observation*>& source,
-                          const std::vector<std::vector<std::size_t>>& of_landmark,
-                          const CorrectOptions& options, std::vector<std::vector<Group>>& groups) {
-  const double cos_max = std::cos(options.icp_max_view_angle_deg * kRadPerDeg);
-  parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
-    if (!of_landmark[j].empty())
-      groups[j].push_back(make_group(problem, source, options, j, of_landmark[j].front()));
-  });
-  std::vector<std::pair<std::size_t, std::size_t>> jobs;  // (landmark, observation)
-  for (std::size_t j = 0; j < of_landmark.size(); ++j)
-    for (std::size_t k = 1; k < of_landmark[j].size(); ++k) jobs.emplace_back(j, of_landmark[j][k]);
-  std::vector<std::optional<Pose>> aligned(jobs.size());
-  parallel_for(jobs.size(), options.threads, [&](std::size_t n) {
-    const auto [j, i] = jobs[n];
-    const Group& g = groups[j].front();
-    if (g.view.dot(view_direction(problem, i)) < cos_max) return;
-    const pose::IcpResult r = g.aligner->align(source[i]->points_in_world);
-    if (r.aligned) aligned[n] = r.correction;
-  });
-  for (std::size_t n = 0; n < jobs.size(); ++n)
-    if (aligned[n]) groups[jobs[n].first].front().members.push_back({jobs[n].second, *aligned[n]});
-}
-
-// Groups: an observation joins the first anchor (closest direction first) that aligns it, or
-// anchors a group of its own; the order matters, so each object runs in keyframe order.
-void align_in_groups(const pose::Problem& problem,
-                     const std::vector<const fusion::Observation*>& source,
-                     const std::vector<std::vector<std::size_t>>& of_landmark,
-                     const CorrectOptions& options, std::vector<std::vector<Group>>& groups) {
-  const double cos_max = std::cos(options.icp_max_view_angle_deg * kRadPerDeg);
-  parallel_for(problem.landmarks.size(), options.threads, [&](std::size_t j) {
-    auto& mine = groups[j];
-    for (std::size_t i : of_landmark[j]) {
-      const Vec3 view = view_direction(problem, i);
-      std::vector<std::pair<double, std::size_t>> candidates;
-      for (std::size_t g = 0; g < mine.size(); ++g) {
-        const double c = mine[g].view.dot(view);
-        if (c >= cos_max) candidates.emplace_back(-c, g);
-      }
-      std::sort(candidates.begin(), candidates.end());
-      bool joined = false;
-      for (const auto& [c, g] : candidates) {
-        const pose::IcpResult r = mine[g].aligner->align(source[i]->points_in_world);
-        if (!r.aligned) continue;
-        mine[g].members.push_back({i, r.correction});
-        joined = true;
-        break;
-      }
-      if (!joined) mine.push_back(make_group(problem, source, options, j, i));
-    }
-  });
-}
-
-// One anchor per object: each aligned view observes the anchor's centroid where its alignment
-// puts it; the observations it does not align keep the visible-part model.
-void observe_first_views(const std::vector<std::vector<Group>>& groups, RunProblem& rp) {
-  const pose::Problem& problem = rp.problem;
-  for (std::size_t j = 0; j < groups.size(); ++j) {
-    if (groups[j].empty() || groups[j][0].members.size() < 2) continue;
-    const Group& g = groups[j][0];
-    for (const Member& m : g.members) {
-      pose::Observation& o = rp.problem.observations[m.observation];
-      o.centroid_in_cam = (m.correction * problem.keyframes[o.keyframe].world_from_cam).inverse() *
-                          g.anchor_centroid;
-      o.bias_in_world = g.anchor_centroid - problem.landmarks[j].position_in_world;
-      ++rp.observations_aligned;
-    }
-  }
-}
-
-// The problem of the groups: one landmark per group of >= 2 members at its anchor's centroid;
-// links keep their keyframes, their landmark becomes the object's first group.
-RunProblem problem_of_groups(const std::vector<std::vector<Group>>& groups,
-                             const std::vector<pose::ViewLink>& links,
-                             const std::vector<const fusion::Observation*>& source,
-                             const RunProblem& rp) {
-  const pose::Problem& problem = rp.problem;
-  RunProblem out;
-  out.problem.keyframes = problem.keyframes;
-  out.keyframe_objects = rp.keyframe_objects;
-  out.observations_without_view = 0;
-  for (std::size_t j = 0; j < groups.size(); ++j) {
-    for (const Group& g : groups[j]) {
-      if (g.members.size() < 2) {
-        ++out.observations_without_view;
-        continue;
-      }
-      pose::Landmark landmark = problem.landmarks[j];
-      landmark.position_in_world = g.anchor_centroid;
-      for (const Member& m : g.members) {
-        pose::Observation o = problem.observations[m.observation];
-        o.landmark = out.problem.landmarks.size();
-        o.centroid_in_cam =
-            (m.correction * problem.keyframes[o.keyframe].world_from_cam).inverse() *
-            g.anchor_centroid;
-        o.bias_in_world = Vec3::Zero();
-        out.problem.observations.push_back(o);
-        ++out.observations_aligned;
-      }
-      out.problem.landmarks.push_back(landmark);
-      out.object_ids.push_back(rp.object_ids[j]);
-    }
-  }
-  for (std::size_t i = 0; i < problem.observations.size(); ++i)
-    if (!source[i]) ++out.observations_without_view;
-  std::map<int, std::size_t> first_landmark;
-  for (std::size_t k = out.object_ids.size(); k-- > 0;) first_landmark[out.object_ids[k]] = k;
-  for (pose::ViewLink l : links) {
-    const auto it = first_landmark.find(rp.object_ids[l.landmark]);
-    if (it == first_landmark.end()) continue;
-    l.landmark = it->second;
-    out.problem.links.push_back(l);
-  }
-  out.links_tried = rp.links_tried;
-  return out;
+// The view-grouping options of pose/view_groups.h from correct's.
+pose::ViewGroupOptions view_group_options(const CorrectOptions& options) {
+  pose::ViewGroupOptions o;
+  o.icp = options.icp;
+  o.icp_max_view_angle_deg = options.icp_max_view_angle_deg;
+  o.icp_links = options.icp_links;
+  o.icp_link_max_view_angle_deg = options.icp_link_max_view_angle_deg;
+  o.icp_link_max_points = options.icp_link_max_points;
+  o.icp_link_max_model_points = options.icp_link_max_model_points;
+  o.icp_link_sigma_scale = options.icp_link_sigma_scale;
+  o.icp_link_max_sigma_deg = options.icp_link_max_sigma_deg;
+  o.threads = options.threads;
+  return o;
 }
 
 struct RawObservation {
@@ -768,30 +384,43 @@ void icp_landmarks(const fs::path& run, const json& run_doc, const CorrectOption
                    const std::map<int, double>& keyframe_time, RunProblem& rp) {
   ScratchDir scratch(options.out, "icp");
   const pose::Problem& problem = rp.problem;
+  const pose::ViewGroupOptions group_options = view_group_options(options);
   // 1. Each observation's points, made again from the run's inputs.
   const RemadeViews views =
       remade_views(run, run_doc, options, keyframe_time, problem, scratch.path());
-  const std::vector<const fusion::Observation*>& source = views.source;
+  pose::ViewClouds source(views.source.size(), nullptr);
+  for (std::size_t i = 0; i < source.size(); ++i)
+    if (views.source[i]) source[i] = &views.source[i]->points_in_world;
   // 2. Per object, its observations in keyframe order.
-  const std::vector<std::vector<std::size_t>> of_landmark = in_keyframe_order(problem, source);
+  const std::vector<std::vector<std::size_t>> of_landmark =
+      pose::in_keyframe_order(problem, source);
   // 3. Each view aligned to an anchor view of its object: its first view, or groups.
-  std::vector<std::vector<Group>> groups(problem.landmarks.size());
+  std::vector<std::vector<pose::ViewGroup>> groups(problem.landmarks.size());
   if (options.icp_groups)
-    align_in_groups(problem, source, of_landmark, options, groups);
+    pose::align_in_groups(problem, source, of_landmark, group_options, groups);
   else
-    align_to_first_views(problem, source, of_landmark, options, groups);
+    pose::align_to_first_views(problem, source, of_landmark, group_options, groups);
   // 4. View links between the views of each object.
   std::vector<pose::ViewLink> links;
   if (options.icp_links > 0)
-    links = view_links(problem, source, of_landmark, options, rp.links_tried);
+    links = pose::view_links(problem, source, of_landmark, group_options, rp.links_tried);
   // 5. The aligned views observe their anchor's centroid: in place with one anchor per object, a
   //    new problem with a landmark per group.
   if (!options.icp_groups) {
     rp.problem.links = links;
-    observe_first_views(groups, rp);
+    rp.observations_aligned += pose::observe_first_views(groups, rp.problem);
     return;
   }
-  rp = problem_of_groups(groups, links, source, rp);
+  pose::GroupedProblem grouped =
+      pose::problem_of_groups(groups, links, source, problem, rp.object_ids);
+  RunProblem out;
+  out.problem = std::move(grouped.problem);
+  out.object_ids = std::move(grouped.object_ids);
+  out.keyframe_objects = rp.keyframe_objects;
+  out.observations_without_view = grouped.observations_without_view;
+  out.observations_aligned = grouped.observations_aligned;
+  out.links_tried = rp.links_tried;
+  rp = std::move(out);
 }
 
 RunProblem problem_from_run(const fs::path& run, const Trajectory& trajectory,

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "objmap/core/clock.h"
 #include "objmap/core/error.h"
+#include "objmap/core/json_vec.h"
 #include "objmap/core/version.h"
 #include "objmap/io/atomic.h"
 #include "objmap/io/json_file.h"
@@ -29,10 +31,6 @@ constexpr std::size_t kMaxObjectPoints = 400;
 // A diff folder: diff.json marks an earlier one (io::require_replaceable).
 const io::OutputKind kDiffFolder{"diff", {"diff.json"}, false};
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 std::vector<Vec3f> thinned(const PointCloud& cloud) {
   if (cloud.size() <= kMaxObjectPoints) return cloud.points;
   std::vector<Vec3f> out;
@@ -56,8 +54,6 @@ std::vector<Pose> read_views(const fs::path& run, Camera& camera) {
   return views;
 }
 
-ordered_json vec_json(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
-
 ordered_json matrix_json(const Pose& p) {
   ordered_json m = ordered_json::array();
   for (int r = 0; r < 4; ++r)
@@ -75,8 +71,8 @@ ordered_json evidence_json(const std::optional<change::PlaceEvidence>& e) {
 ordered_json side_json(const std::optional<int>& id, const std::string& cls,
                        const std::optional<Vec3>& position, const std::optional<Vec3>& in_before) {
   if (!id) return nullptr;
-  ordered_json j = {{"id", *id}, {"class", cls}, {"position", vec_json(*position)}};
-  if (in_before) j["position_in_before"] = vec_json(*in_before);
+  ordered_json j = {{"id", *id}, {"class", cls}, {"position", vec3_json(*position)}};
+  if (in_before) j["position_in_before"] = vec3_json(*in_before);
   return j;
 }
 
@@ -85,7 +81,7 @@ ordered_json registration_json(const change::Registration& r) {
           {"before_from_after", matrix_json(r.before_from_after)},
           {"yaw_deg", r.yaw_deg},
           {"tilt_deg", r.tilt_deg},
-          {"translation_m", vec_json(r.before_from_after.translation())},
+          {"translation_m", vec3_json(r.before_from_after.translation())},
           {"common_objects", r.common_objects},
           {"coarse_rms_m", r.coarse_rms_m},
           {"hypotheses", r.hypotheses},
@@ -205,7 +201,7 @@ std::string diff_json(const DiffOptions& options, const DiffResult& result) {
           side_json(c.after_id, c.after_class, c.after_position, c.after_position_in_before)},
          {"distance_m", pair ? ordered_json(c.distance_m) : ordered_json(nullptr)},
          {"displacement_m",
-          c.status == change::Status::kMoved ? vec_json(c.displacement) : ordered_json(nullptr)},
+          c.status == change::Status::kMoved ? vec3_json(c.displacement) : ordered_json(nullptr)},
          {"evidence",
           {{"after_visit", evidence_json(c.evidence_after)},
            {"before_visit", evidence_json(c.evidence_before)}}},
@@ -223,7 +219,7 @@ DiffResult run_diff(const DiffOptions& options) {
   io::require_replaceable(options.out, kDiffFolder);
   DiffResult result;
   // 1. Read both visits: objects, up, dense map, views.
-  auto t0 = std::chrono::steady_clock::now();
+  auto t0 = Clock::now();
   const change::Visit before = read_visit(options.before);
   const change::Visit after = read_visit(options.after);
   result.before_objects = before.objects.size();
@@ -234,7 +230,7 @@ DiffResult run_diff(const DiffOptions& options) {
   result.after_views = after.world_from_cam.size();
   result.seconds_read = seconds_since(t0);
   // 2. Register the after world to the before world (or take the given transform).
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   result.registration =
       options.align.empty()
           ? change::register_visits(before, after, options.registration)
@@ -246,7 +242,7 @@ DiffResult run_diff(const DiffOptions& options) {
                      "no credible registration: " + result.registration.why +
                          "; expected two visits of the same place (or give --align FILE)");
   // 3. Classify every object of both maps.
-  t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   result.changes = change::classify_changes(before, after, result.registration.before_from_after,
                                             options.classify);
   result.seconds_classify = seconds_since(t0);

@@ -27,6 +27,15 @@
 // map_objects.ply, run.json; with --mesh, objects/<id>_<class>_mesh.ply and map_mesh.ply.
 namespace objmap::pipeline {
 
+// The option strings of FuseOptions as the values the stages take: parsed once, by check().
+struct FuseChoices {
+  fusion::OverlapMeasure overlap_measure = fusion::OverlapMeasure::kContainment;
+  fusion::DistanceScore distance_score = fusion::DistanceScore::kLinear;
+  fusion::Confirmation confirmation = fusion::Confirmation::kViews;
+  std::vector<std::string> movers;  // the classes that move by themselves (fusion/movers.h)
+  mesh::MeshSelection meshes;       // mesh.select
+};
+
 struct FuseOptions {
   // "objmap" (default): the options as set. "paper": the paper's rules; set_method_preset() sets
   // them (the command line does so for every option not given, docs/cli.md). run_fuse() only
@@ -80,8 +89,9 @@ struct FuseOptions {
   fusion::DuplicateOptions duplicates;          // suspected duplicates in run.json: touching = 2 cm
   scene::SceneOptions scene;                    // up direction, support surfaces, relations
   MeshOptions mesh;                             // objects' and scene meshes (pipeline/fuse_mesh.h)
-  int threads = 0;     // worker threads, 0 = all cores; outputs identical for any count
-  void check() const;  // throws InputError naming the bad field
+  int threads = 0;  // worker threads, 0 = all cores; outputs identical for any count
+  // Throws InputError naming the bad field; returns the option strings parsed (FuseChoices).
+  FuseChoices check() const;
 };
 
 struct StageTime {

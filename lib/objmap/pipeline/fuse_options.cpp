@@ -417,7 +417,8 @@ void set_method_preset(FuseOptions& o) {
   o.movers = "none";
 }
 
-void FuseOptions::check() const {
+FuseChoices FuseOptions::check() const {
+  FuseChoices choices;
   require(!dataset.empty(), "--dataset", "missing; expected a recording folder");
   io::DatasetOptions dataset_options;
   dataset_options.layout = layout;
@@ -450,9 +451,10 @@ void FuseOptions::check() const {
   require(!class_sizes.empty(), "objects.class_sizes",
           "is empty; expected builtin, none or a JSON file of class sizes");
   check_part([&] { visibility.check(); }, "VisibilityOptions", "visibility");
-  fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
-  fusion::parse_distance_score(distance_score, "objects.distance_score");
-  fusion::parse_confirmation(confirmation, "objects.confirmation");
+  choices.overlap_measure =
+      fusion::parse_overlap_measure(overlap_measure, "objects.overlap_measure");
+  choices.distance_score = fusion::parse_distance_score(distance_score, "objects.distance_score");
+  choices.confirmation = fusion::parse_confirmation(confirmation, "objects.confirmation");
   require(method == "objmap" || method == "paper", "method",
           "'" + method + "' is not a method; expected objmap or paper");
   require(std::isfinite(min_voxel_support) && min_voxel_support >= 0 && min_voxel_support <= 1,
@@ -461,7 +463,7 @@ void FuseOptions::check() const {
              {{"band_m", "objects.support_band_m"}, {"cell_m", "objects.support_cell_m"}});
   check_part([&] { outlier.check(); }, "OutlierOptions", "outlier");
   check_part([&] { duplicates.check(); }, "DuplicateOptions", "duplicates");
-  fusion::parse_movers(movers, "objects.movers");
+  choices.movers = fusion::parse_movers(movers, "objects.movers");
   check_part([&] { scene.up.check(); }, "UpOptions", "scene.up", {{"mode", "scene.up"}});
   check_part([&] { scene.surfaces.check(); }, "SurfaceOptions", "scene.surfaces");
   check_part([&] { scene.relations.check(); }, "RelationOptions", "scene.relations",
@@ -470,8 +472,10 @@ void FuseOptions::check() const {
               {"near_min_m", "scene.near_min_m"},
               {"near_max_m", "scene.near_max_m"}});
   mesh.check();
+  choices.meshes = mesh::parse_mesh_selection(mesh.select, "mesh.select");
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
+  return choices;
 }
 
 }  // namespace objmap::pipeline

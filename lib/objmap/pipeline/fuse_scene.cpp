@@ -2,19 +2,14 @@
 
 #include <chrono>
 
+#include "objmap/core/clock.h"
+#include "objmap/core/json_vec.h"
 #include "objmap/geometry/bounds.h"
 
 namespace objmap::pipeline {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using nlohmann::ordered_json;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-ordered_json vec(const Vec3& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
 
 ordered_json rows(const Eigen::Matrix3d& m) {
   ordered_json a = ordered_json::array();
@@ -57,10 +52,10 @@ ordered_json surface_json(const scene::Surface& s) {
   o["id"] = s.id;
   o["label"] = s.label;
   o["height_m"] = s.height_m;
-  o["center"] = vec(s.center);
+  o["center"] = vec3_json(s.center);
   o["area_m2"] = s.area_m2;
   ordered_json outline = ordered_json::array();
-  for (const Vec3& p : s.outline) outline.push_back(vec(p));
+  for (const Vec3& p : s.outline) outline.push_back(vec3_json(p));
   o["outline"] = outline;
   o["points"] = s.points;
   if (s.object) o["object"] = *s.object;
@@ -98,7 +93,7 @@ void relate_to_scene(std::vector<fusion::ObjectRecord>& records, const scene::Sc
 }
 
 void add_scene_json(const scene::SceneGraph& graph, ordered_json& doc) {
-  doc["up_in_world"] = vec(graph.up.up);
+  doc["up_in_world"] = vec3_json(graph.up.up);
   doc["gravity_from_world"] = rows(graph.up.gravity_from_world);
   ordered_json surfaces = ordered_json::array();
   for (const auto& s : graph.surfaces) surfaces.push_back(surface_json(s));
@@ -112,16 +107,16 @@ ordered_json scene_run_json(const scene::SceneGraph& graph) {
   const scene::UpEstimate& u = graph.up;
   ordered_json planes = ordered_json::array();
   for (const auto& p : u.planes)
-    planes.push_back({{"normal", vec(p.normal)},
+    planes.push_back({{"normal", vec3_json(p.normal)},
                       {"offset_m", p.offset},
                       {"inliers", p.inliers},
                       {"angle_to_prior_deg", p.angle_to_prior_deg},
                       {"view_elevation", p.view_elevation},
                       {"used", p.used}});
   ordered_json up = {{"source", u.source},
-                     {"up_in_world", vec(u.up)},
-                     {"camera_prior", vec(u.camera_prior)},
-                     {"camera_view", vec(u.camera_view)},
+                     {"up_in_world", vec3_json(u.up)},
+                     {"camera_prior", vec3_json(u.camera_prior)},
+                     {"camera_view", vec3_json(u.camera_view)},
                      {"camera_agreement", u.camera_agreement},
                      {"prior_to_up_deg", u.prior_to_up_deg},
                      {"sample_points", u.sample_points},

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 
+#include "objmap/core/clock.h"
 #include "objmap/core/error.h"
 #include "objmap/pose/align.h"
 
@@ -679,7 +680,7 @@ void guardrails(const Problem& problem, const CorrectionOptions& options, const 
 CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& options) {
   options.check();
   validate(problem);
-  const auto t_start = std::chrono::steady_clock::now();
+  const auto t_start = Clock::now();
   CorrectionResult result;
   result.method = options.method;
   const Inputs in = inputs_of(problem);
@@ -710,8 +711,7 @@ CorrectionResult correct_poses(const Problem& problem, const CorrectionOptions& 
   result.landmarks_in_world = result.accepted ? all.landmarks : in.landmarks;
   if (!result.accepted)
     for (auto& kc : result.keyframes) kc.corrected = false;
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  result.seconds = seconds_since(t_start);
   return result;
 }
 

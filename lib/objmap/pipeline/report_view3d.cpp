@@ -1,4 +1,4 @@
-#include "report_view3d.h"
+#include "objmap/pipeline/report_view3d.h"
 
 #include <set>
 
@@ -8,7 +8,7 @@
 #include "objmap/scene/query.h"
 #include "objmap/segmentation/coco_classes.h"
 
-namespace objmap::app {
+namespace objmap::pipeline {
 namespace {
 
 // "5 (keyboard)" for an object of the scene, "5" for one it does not know.
@@ -129,4 +129,4 @@ report::View3dContent view3d_content(View3dInputs in) {
   return c;
 }
 
-}  // namespace objmap::app
+}  // namespace objmap::pipeline

@@ -11,7 +11,7 @@
 #include "objmap/io/scene_json.h"
 #include "objmap/report/view3d.h"
 
-namespace objmap::app {
+namespace objmap::pipeline {
 
 struct View3dInputs {
   const std::vector<io::MappedObject>* objects = nullptr;  // objects.json, world frame
@@ -32,4 +32,4 @@ report::View3dContent view3d_content(View3dInputs inputs);
 // scene::run_query matches for it (only phrases with a match).
 std::map<std::string, std::vector<int>> all_query_matches(const io::SceneDescription& scene);
 
-}  // namespace objmap::app
+}  // namespace objmap::pipeline
