@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <map>
 
+#include "objmap/core/error.h"
 #include "objmap/segmentation/detect_compare.h"
 #include "objmap/segmentation/read.h"
 
@@ -18,8 +19,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: detect_agreement REFERENCE_SEG OTHER_SEG\n");
     return 2;
   }
-  const Segmentation reference = read_segmentation(argv[1]);
-  const Segmentation other = read_segmentation(argv[2]);
+  Segmentation reference, other;
+  try {
+    reference = read_segmentation(argv[1]);
+    other = read_segmentation(argv[2]);
+  } catch (const objmap::InputError& e) {
+    std::fprintf(stderr, "detect_agreement: %s\n", e.what());
+    return 2;
+  }
   std::map<double, const FrameSegmentation*> by_time;
   for (const auto& f : other.frames) by_time[f.timestamp] = &f;
   MaskAgreement all;

@@ -297,7 +297,7 @@ void onnx_runtime_outputs(const OnnxRuntimeSession& session, const DetectOptions
   const auto size = [&](int asked, std::int64_t model, const char* what) {
     require(asked == 0 || model <= 0 || asked == model, "DetectOptions.input_width/input_height",
             std::string("the model's input ") + what + " is fixed at " + std::to_string(model) +
-                " in ONNX Runtime; expected 0 (the model's) or --backend opencv");
+                " in ONNX Runtime; expected 0 (the model's size)");
     return asked > 0 ? asked : model > 0 ? static_cast<int>(model) : 640;
   };
   info.input_width = size(options.input_width, shape[3], "width");
@@ -599,6 +599,8 @@ struct Detector::Impl {
   std::unique_ptr<OnnxRuntimeSession> ort;  // ONNX Runtime (ONNX models)
   std::vector<std::string> output_names;
   std::string class_source;  // for messages: the classes file or "the built-in COCO-80 names"
+  cv::Mat canvas, blob;      // ONNX: the letterboxed frame and the network input, reused
+  std::vector<Instance> detect_onnx_seg(const cv::Mat& image_bgr, const std::string& where);
 };
 
 Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -641,25 +643,21 @@ const ModelInfo& Detector::info() const { return impl_->info; }
 
 const DetectOptions& Detector::options() const { return impl_->options; }
 
-namespace {
-
-// An Ultralytics segmentation export on one image: letterboxed into the input, run (ONNX Runtime
-// or OpenCV), decoded (yolo_seg.h); the output with 4 dimensions is the prototypes, the other the
-// detections.
-std::vector<Instance> detect_onnx_seg(cv::dnn::Net& net, OnnxRuntimeSession* ort,
-                                      const std::vector<std::string>& names, const ModelInfo& info,
-                                      const DetectOptions& options, const cv::Mat& image_bgr,
-                                      const std::string& where) {
+// An Ultralytics segmentation export on one image: letterboxed into the input (buffers reused),
+// run (ONNX Runtime or OpenCV), decoded (yolo_seg.h); the output with 4 dimensions is the
+// prototypes, the other the detections.
+std::vector<Instance> Detector::Impl::detect_onnx_seg(const cv::Mat& image_bgr,
+                                                      const std::string& where) {
   const Letterbox lb =
       make_letterbox(image_bgr.cols, image_bgr.rows, info.input_width, info.input_height);
   std::vector<cv::Mat> outputs;
   try {
-    const cv::Mat blob = letterbox_blob(image_bgr, lb);
+    letterbox_blob(image_bgr, lb, canvas, blob);
     if (ort) {
       outputs = ort->run(blob, where);
     } else {
       net.setInput(blob);
-      net.forward(outputs, names);
+      net.forward(outputs, output_names);
     }
   } catch (const cv::Exception& e) {
     throw InputError(info.model.string(),
@@ -670,15 +668,12 @@ std::vector<Instance> detect_onnx_seg(cv::dnn::Net& net, OnnxRuntimeSession* ort
                          outputs[first_is_protos ? 0 : 1], lb);
 }
 
-}  // namespace
-
 std::vector<Instance> Detector::detect(const cv::Mat& image_bgr, const std::string& where) {
   Impl& d = *impl_;
   const ModelInfo& info = d.info;
   require(!image_bgr.empty() && image_bgr.type() == CV_8UC3, where,
           "not a colour image; expected 8-bit BGR");
-  if (info.kind == ModelKind::kOnnxYoloSeg)
-    return detect_onnx_seg(d.net, d.ort.get(), d.output_names, info, d.options, image_bgr, where);
+  if (info.kind == ModelKind::kOnnxYoloSeg) return d.detect_onnx_seg(image_bgr, where);
   const bool yolo = info.kind == ModelKind::kDarknetYolo;
 
   // 1. The blob: resized to the network's input (no crop), RGB; YOLO wants pixels in [0, 1].

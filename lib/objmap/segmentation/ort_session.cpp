@@ -68,9 +68,12 @@ Runtime& runtime() {
   std::call_once(once, [] {
     std::string tried;
     std::vector<std::string> places;
-    if (const char* env = std::getenv("OBJMAP_ONNXRUNTIME"); env && *env) places.push_back(env);
-    places.push_back("/usr/local/lib/objmap/libonnxruntime.so.1");
-    places.push_back("libonnxruntime.so.1");
+    if (const char* env = std::getenv("OBJMAP_ONNXRUNTIME"); env && *env) {
+      places.push_back(env);  // that file only
+    } else {
+      places.push_back("/usr/local/lib/objmap/libonnxruntime.so.1");
+      places.push_back("libonnxruntime.so.1");
+    }
     for (const std::string& place : places)
       if (try_load(place, rt, tried)) return;
     rt.status.reason = "ONNX Runtime not found (" + tried.substr(2) + ")";
@@ -98,8 +101,15 @@ struct OnnxRuntimeSession::Impl {
   OrtMemoryInfo* memory = nullptr;
   std::vector<std::string> input_names, output_names;
   std::vector<std::int64_t> input_shape;
+  std::vector<OrtValue*> outputs;  // of the last run, until the next one
+  void release_outputs() {
+    for (OrtValue* v : outputs)
+      if (v) api->ReleaseValue(v);
+    outputs.clear();
+  }
   ~Impl() {
     if (api == nullptr) return;
+    release_outputs();
     if (memory) api->ReleaseMemoryInfo(memory);
     if (session) api->ReleaseSession(session);
   }
@@ -184,15 +194,16 @@ std::vector<cv::Mat> OnnxRuntimeSession::run(const cv::Mat& input, const std::st
   std::vector<const char*> input_names{d.input_names[0].c_str()}, output_names;
   for (const auto& n : d.output_names) output_names.push_back(n.c_str());
   std::vector<OrtValue*> values(output_names.size(), nullptr);
+  d.release_outputs();  // the last run's, so that ONNX Runtime's arena can reuse their memory
   OrtStatus* s = api->Run(d.session, nullptr, input_names.data(), &tensor, 1, output_names.data(),
                           output_names.size(), values.data());
   api->ReleaseValue(tensor);
-  const auto release = [&] {
+  if (s != nullptr)
     for (OrtValue* v : values)
       if (v) api->ReleaseValue(v);
-  };
-  if (s != nullptr) release();
   check(api, s, d.model, "run the network on " + where);
+  // The outputs stay ONNX Runtime's until the next run (no copy): wrapped, not cloned.
+  d.outputs = values;
   std::vector<cv::Mat> out;
   for (OrtValue* v : values) {
     OrtTensorTypeAndShapeInfo* info = nullptr;
@@ -204,12 +215,10 @@ std::vector<cv::Mat> OnnxRuntimeSession::run(const cv::Mat& input, const std::st
     if (info) api->ReleaseTensorTypeAndShapeInfo(info);
     float* data = nullptr;
     if (e == nullptr) e = api->GetTensorMutableData(v, reinterpret_cast<void**>(&data));
-    if (e != nullptr) release();
     check(api, e, d.model, "read the outputs of " + where);
     const std::vector<int> sizes(size.begin(), size.end());
-    out.push_back(cv::Mat(static_cast<int>(sizes.size()), sizes.data(), CV_32F, data).clone());
+    out.push_back(cv::Mat(static_cast<int>(sizes.size()), sizes.data(), CV_32F, data));
   }
-  release();
   return out;
 }
 

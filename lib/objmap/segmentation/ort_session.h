@@ -10,7 +10,8 @@
 // ONNX Runtime as a second backend of `objmap detect` for ONNX models, through its C API. The
 // library is optional: it is loaded at run time (dlopen), never linked, so objmap builds and runs
 // without it (OpenCV's dnn is then the only backend). Where it is looked for, in order:
-//   1. the file named by the environment variable OBJMAP_ONNXRUNTIME;
+//   1. the file named by the environment variable OBJMAP_ONNXRUNTIME, when set: that file only (a
+//      name that does not exist, e.g. "none", turns ONNX Runtime off);
 //   2. /usr/local/lib/objmap/libonnxruntime.so.1, where `scripts/install-deps.sh` (make deps)
 //      puts the library of the npm package onnxruntime-node (docs/cli.md, "objmap detect");
 //   3. libonnxruntime.so.1 on the loader's path (LD_LIBRARY_PATH, ldconfig).
@@ -43,7 +44,8 @@ class OnnxRuntimeSession {
   std::size_t output_count() const;
 
   // Runs the model on `input` (CV_32F, its dims the input tensor's, e.g. 1 × 3 × H × W) and returns
-  // every output as a float Mat of the output's dims (their own memory). Throws InputError naming
+  // every output as a float Mat of the output's dims, valid until the next run (ONNX Runtime's
+  // memory, not copied). Throws InputError naming
   // the model and `where` when ONNX Runtime refuses (e.g. an input size the model does not take).
   std::vector<cv::Mat> run(const cv::Mat& input, const std::string& where);
 
