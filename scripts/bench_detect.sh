@@ -48,11 +48,7 @@ clip=$out/clip
 rm -rf "$clip"
 mkdir -p "$clip"
 ln -s "$(realpath "$seq/rgb")" "$clip/rgb"
-if [ "$frames" -gt 0 ]; then
-  grep -v '^#' "$seq/rgb.txt" | head -n "$frames" >"$clip/rgb.txt"
-else
-  grep -v '^#' "$seq/rgb.txt" >"$clip/rgb.txt"
-fi
+awk -v n="$frames" '!/^#/ && (n == 0 || kept < n) {print; kept++}' "$seq/rgb.txt" >"$clip/rgb.txt"
 n=$(wc -l <"$clip/rgb.txt")
 
 echo "bench_detect: $n frames of $seq, $rounds rounds, model $(basename "$model"); $(uptime)" >&2

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <future>
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
@@ -746,9 +747,17 @@ DetectResult detect_frames(Detector& detector, const std::vector<DetectFrame>& f
   result.model = detector.info();
   result.segmentation.format = "json";
   result.segmentation.source = where;
+  // The next frame's image is read (decoded) on a second thread while the network runs on this
+  // one's: reading overlaps the inference, one image ahead at most.
+  const auto read = [&frames](std::size_t i) {
+    return frames[i].read ? frames[i].read() : io::read_rgb(frames[i].rgb_file, 0, 0);
+  };
+  std::future<cv::Mat> next;
+  if (!frames.empty()) next = std::async(std::launch::async, read, 0);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const DetectFrame& frame = frames[i];
-    const cv::Mat image = frame.read ? frame.read() : io::read_rgb(frame.rgb_file, 0, 0);
+    const cv::Mat image = next.get();
+    if (i + 1 < frames.size()) next = std::async(std::launch::async, read, i + 1);
     FrameSegmentation out;
     out.timestamp = frame.timestamp;
     out.source = frame.rgb_file.string();

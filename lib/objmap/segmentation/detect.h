@@ -156,7 +156,8 @@ struct DetectResult {
                        // the images and running the network on all frames
 };
 
-// Runs the detector on every frame (images read strictly with io::read_rgb). `progress(done,
+// Runs the detector on every frame (images read strictly with io::read_rgb, or DetectFrame::read;
+// the next frame's on a second thread while the network runs, one call at a time). `progress(done,
 // total)` is called after each frame when given. Throws InputError as Detector does, for an
 // unreadable image, and when no frame has any detection ("no detections in any of the N frames").
 DetectResult detect_frames(const std::vector<DetectFrame>& frames, const DetectOptions& options,
