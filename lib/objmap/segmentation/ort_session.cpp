@@ -51,7 +51,8 @@ bool try_load(const std::string& file, Runtime& rt, std::string& tried) {
     dlclose(handle);
     return false;
   }
-  OrtStatus* s = rt.api->CreateEnv(ORT_LOGGING_LEVEL_ERROR, "objmap", &rt.env);
+  // Its errors come back as statuses (one line, objmap's); its own log only for fatal ones.
+  OrtStatus* s = rt.api->CreateEnv(ORT_LOGGING_LEVEL_FATAL, "objmap", &rt.env);
   if (s != nullptr) {
     tried += "; " + file + ": " + rt.api->GetErrorMessage(s);
     rt.api->ReleaseStatus(s);
