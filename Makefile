@@ -7,7 +7,7 @@ OBJMAP := $(BUILD)/bin/objmap
 
 FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build test test-slurm demo bench bench-memory ablation fuzz sanitize format clean
+.PHONY: all deps configure build test test-slurm demo bench bench-detect bench-memory ablation fuzz sanitize format clean
 
 all: build
 
@@ -49,6 +49,14 @@ bench: deps build
 	@bash scripts/install-deps.sh --bench
 	@BENCH_COMMAND="make bench$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
 	  bash scripts/bench.sh $(OBJMAP) $(DATA)
+	@[ "$(BENCH_DETECT)" = 0 ] || bash scripts/bench_detect.sh $(OBJMAP) $(DATA) out/bench/detect
+
+# make bench-detect [DATA=DIR]: objmap detect's frames/s per backend (OpenCV's dnn, ONNX Runtime)
+# and thread count on the first 40 frames of fr1_rpy_every4, interleaved rounds, medians, and the
+# masks of each against the reference (scripts/bench_detect.sh; about 5 minutes on 2 cores; also
+# the end of make bench, BENCH_DETECT=0 leaves it out). docs/benchmarks.md, "Speed of detect".
+bench-detect: deps build
+	@bash scripts/bench_detect.sh $(OBJMAP) $(DATA) out/bench_detect
 
 # make bench-memory: peak memory and dense-map voxels of objmap fuse on a synthetic scene circled
 # for 300 and 1200 frames, with and without the dense map's pruning, then the peak memory of objmap

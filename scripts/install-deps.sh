@@ -11,6 +11,13 @@
 #                                     llvm-symbolizer (llvm) for readable reports
 #   scripts/install-deps.sh --slurm   also what `make test-slurm` uses: a single-node Slurm
 #                                     (slurm-wlm: slurmctld + slurmd) and munge
+# Every run also installs ONNX Runtime when it is missing (optional, like python3-open3d: when it
+# cannot be installed objmap detect runs ONNX models in OpenCV's dnn, about 3x slower; docs/cli.md).
+# Debian has no package: the x64 library of the npm package onnxruntime-node (pinned below, the
+# release of the C API headers in lib/objmap/segmentation/onnxruntime/) goes to
+# /usr/local/lib/objmap/libonnxruntime.so.1, where objmap loads it at run time (dlopen; objmap
+# builds and works without it).
+#   scripts/install-deps.sh --no-onnxruntime   leaves ONNX Runtime out
 set -euo pipefail
 packages=(build-essential cmake pkg-config ccache
           libeigen3-dev libflann-dev liblz4-dev libpcl-dev libopencv-dev libceres-dev nlohmann-json3-dev libcli11-dev
@@ -23,13 +30,18 @@ bench_required=(python3)
 bench_optional=(python3-open3d)
 fuzz_required=(clang libclang-rt-14-dev llvm)
 slurm_required=(slurm-wlm munge)
+onnxruntime_npm=onnxruntime-node@1.29.0
+onnxruntime_dir=/usr/local/lib/objmap
 bench=0
+onnxruntime=1
 for arg in "$@"; do
   case "$arg" in
     --bench) bench=1 ;;
+    --no-onnxruntime) onnxruntime=0 ;;
     --fuzz) packages+=("${fuzz_required[@]}") ;;
     --slurm) packages+=("${slurm_required[@]}") ;;
-    *) echo "install-deps: unknown option $arg (expected --bench, --fuzz or --slurm)" >&2; exit 2 ;;
+    *) echo "install-deps: unknown option $arg (expected --bench, --fuzz, --slurm or --no-onnxruntime)" >&2
+       exit 2 ;;
   esac
 done
 [ $bench -eq 1 ] && packages+=("${bench_required[@]}")
@@ -43,9 +55,30 @@ optional=()
 for p in "${bench_optional[@]}"; do
   is_installed "$p" || optional+=("$p")
 done
-[ ${#missing[@]} -eq 0 ] && [ ${#optional[@]} -eq 0 ] && exit 0
 sudo_cmd=()
 [ "$(id -u)" -ne 0 ] && sudo_cmd=(sudo)
+
+# ONNX Runtime's library from its npm package (pack, not install: no package scripts run).
+install_onnxruntime() {
+  [ -f "$onnxruntime_dir/libonnxruntime.so.1" ] && return 0
+  echo "install-deps: installing ONNX Runtime ($onnxruntime_npm) into $onnxruntime_dir" >&2
+  # npm: nodejs (above) brings it on most systems; Debian's own nodejs needs the npm package.
+  command -v npm >/dev/null || "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends npm \
+    >/dev/null || true
+  local tmp
+  tmp=$(mktemp -d)
+  (cd "$tmp" && npm pack --silent "$onnxruntime_npm" >/dev/null &&
+    tar xzf ./*.tgz package/bin/napi-v6/linux/x64/libonnxruntime.so.1) &&
+    "${sudo_cmd[@]}" install -D -m 644 "$tmp/package/bin/napi-v6/linux/x64/libonnxruntime.so.1" \
+      "$onnxruntime_dir/libonnxruntime.so.1" ||
+    echo "install-deps: could not install ONNX Runtime; objmap detect uses OpenCV's dnn" >&2
+  rm -rf "$tmp"
+}
+
+if [ ${#missing[@]} -eq 0 ] && [ ${#optional[@]} -eq 0 ]; then
+  [ $onnxruntime -eq 1 ] && install_onnxruntime
+  exit 0
+fi
 export DEBIAN_FRONTEND=noninteractive
 updated=0
 if [ ${#missing[@]} -gt 0 ]; then
@@ -61,4 +94,5 @@ if [ ${#optional[@]} -gt 0 ]; then
     echo "install-deps: could not install ${optional[*]}; the Open3D mesh test skips and make" \
       "bench says n/a for Open3D" >&2
 fi
+[ $onnxruntime -eq 1 ] && install_onnxruntime
 exit 0

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -235,6 +236,32 @@ TEST(DetectCli, UnknownClassIsExit2) {
   expect_exit2(
       {"--model", (models / "yolo-fastest-1.1.weights").string(), "--classes", "chair,chiar"},
       "objmap: error: --classes: 'chiar' is not a class of the model", "80 names");
+}
+
+TEST(DetectCli, BadBackendIsExit2) {
+  OBJMAP_DATA_OR_SKIP(models, kCliModels);
+  OBJMAP_DATA_OR_SKIP(v8, "../models/yolov8n-seg_coco/yolov8n-seg_640x640.onnx");
+  const std::string darknet = (models / "yolo-fastest-1.1.weights").string();
+  expect_exit2({"--model", darknet, "--backend", "cuda"},
+               "objmap: error: --backend: 'cuda'; expected auto, onnxruntime or opencv", "");
+  expect_exit2({"--model", darknet, "--backend", "onnxruntime"},
+               "objmap: error: --backend: onnxruntime runs ONNX models only", darknet);
+  expect_exit2({"--model", v8.string(), "--input-width", "640", "--input-height", "480",
+                "--backend", "onnxruntime"},
+               "objmap: error: ", "input height is fixed at 640");
+  // ONNX Runtime absent (OBJMAP_ONNXRUNTIME names the only file tried): asked for, exit 2 saying
+  // how to install it; auto falls back to OpenCV's dnn.
+  setenv("OBJMAP_ONNXRUNTIME", "/nonexistent/libonnxruntime.so.1", 1);
+  expect_exit2({"--model", v8.string(), "--backend", "onnxruntime"},
+               "objmap: error: " + v8.string() + ": ONNX Runtime not found (",
+               "scripts/install-deps.sh");
+  OBJMAP_DATA_OR_SKIP(data, "tum/fr1_desk_9");
+  test::TempDir tmp;
+  const auto r = run_objmap({"detect", "--dataset", data.string(), "--model", v8.string(), "--out",
+                             (tmp / "seg").string()});
+  unsetenv("OBJMAP_ONNXRUNTIME");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("run by opencv"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "objmap/core/error.h"
 #include "objmap/io/dataset.h"
 #include "objmap/io/image.h"
+#include "objmap/segmentation/detect_compare.h"
 #include "support/test_support.h"
 
 namespace objmap::segmentation {
@@ -26,15 +27,6 @@ std::size_t area(const Mask& m) {
   std::size_t n = 0;
   for (auto b : m.data) n += b != 0;
   return n;
-}
-
-double mask_iou(const Mask& a, const Mask& b) {
-  std::size_t both = 0, either = 0;
-  for (std::size_t i = 0; i < a.data.size(); ++i) {
-    both += a.data[i] && b.data[i];
-    either += a.data[i] || b.data[i];
-  }
-  return either ? static_cast<double>(both) / either : 0.0;
 }
 
 const Instance* find(const std::vector<Instance>& found, const std::string& cls) {

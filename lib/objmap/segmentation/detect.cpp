@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <future>
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,6 +16,7 @@
 #include "objmap/io/text_lines.h"
 #include "objmap/segmentation/coco_classes.h"
 #include "objmap/segmentation/detect_internal.h"
+#include "objmap/segmentation/ort_session.h"
 #include "objmap/segmentation/yolo_seg.h"
 
 namespace objmap::segmentation {
@@ -233,6 +235,14 @@ cv::dnn::Net load_network(const ModelInfo& info) {
   return net;
 }
 
+// An instance-segmentation export has two outputs: the detections and the mask prototypes.
+void require_two_outputs(std::size_t outputs, const ModelInfo& info) {
+  require(outputs == 2, info.model.string(),
+          "has " + std::to_string(outputs) +
+              " output(s); expected 2, the detections and the mask prototypes of " + kOnnxExpected +
+              " (a detector without masks cannot give instance masks)");
+}
+
 // Step 3 of loading: the outputs to read, YOLO region layers or Mask R-CNN's two outputs (the
 // network must be a detector of its kind), and the input size (info.input_width/height).
 std::vector<std::string> detector_outputs(cv::dnn::Net& net, const DetectOptions& options,
@@ -256,10 +266,7 @@ std::vector<std::string> detector_outputs(cv::dnn::Net& net, const DetectOptions
     // An instance-segmentation export has two outputs (the detections, the mask prototypes); its
     // input is [1, 3, H, W] (or the size asked for).
     output_names = net.getUnconnectedOutLayersNames();
-    require(output_names.size() == 2, info.model.string(),
-            "has " + std::to_string(output_names.size()) +
-                " output(s); expected 2, the detections and the mask prototypes of " +
-                kOnnxExpected + " (a detector without masks cannot give instance masks)");
+    require_two_outputs(output_names.size(), info);
     const std::vector<std::int64_t> shape = onnx_input_shape(info.model);
     const bool known = shape.size() == 4 && shape[2] > 0 && shape[3] > 0;
     info.input_width =
@@ -278,6 +285,25 @@ std::vector<std::string> detector_outputs(cv::dnn::Net& net, const DetectOptions
     info.input_height = options.input_height > 0 ? options.input_height : 800;
   }
   return output_names;
+}
+
+// Steps 2-3 of loading with ONNX Runtime: two outputs (detections, prototypes); the input size is
+// the model's unless it takes any (a symbolic dimension).
+void onnx_runtime_outputs(const OnnxRuntimeSession& session, const DetectOptions& options,
+                          ModelInfo& info) {
+  require_two_outputs(session.output_count(), info);
+  const std::vector<std::int64_t>& shape = session.input_shape();
+  require(shape.size() == 4, info.model.string(),
+          "its input has " + std::to_string(shape.size()) + " dimensions; expected [1, 3, H, W]");
+  const auto size = [&](int asked, std::int64_t model, const char* what) {
+    require(asked == 0 || model <= 0 || asked == model, "DetectOptions.input_width/input_height",
+            std::string("the model's input ") + what + " is fixed at " + std::to_string(model) +
+                " in ONNX Runtime; expected 0 (the model's size)");
+    return asked > 0 ? asked : model > 0 ? static_cast<int>(model) : 640;
+  };
+  info.input_width = size(options.input_width, shape[3], "width");
+  info.input_height = size(options.input_height, shape[2], "height");
+  info.backend = "onnxruntime " + onnxruntime_status().version;
 }
 
 // Step 4 of loading: the class names (info.class_names: the classes file's, else the built-in
@@ -561,14 +587,21 @@ void DetectOptions::check() const {
   for (const auto& name : classes)
     require(!canonical_class(name).empty(), "DetectOptions.classes",
             "an empty class name; expected names");
+  require(backend == "auto" || backend == "onnxruntime" || backend == "opencv",
+          "DetectOptions.backend", "'" + backend + "'; expected auto, onnxruntime or opencv");
+  require(threads >= 0 && threads <= 64, "DetectOptions.threads",
+          "is " + std::to_string(threads) + "; expected 0 (the cores) to 64");
 }
 
 struct Detector::Impl {
   ModelInfo info;
   DetectOptions options;
-  cv::dnn::Net net;
+  cv::dnn::Net net;                         // OpenCV's dnn, or
+  std::unique_ptr<OnnxRuntimeSession> ort;  // ONNX Runtime (ONNX models)
   std::vector<std::string> output_names;
   std::string class_source;  // for messages: the classes file or "the built-in COCO-80 names"
+  cv::Mat canvas, blob;      // ONNX: the letterboxed frame and the network input, reused
+  std::vector<Instance> detect_onnx_seg(const cv::Mat& image_bgr, const std::string& where);
 };
 
 Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -585,11 +618,21 @@ Detector::Detector(const DetectOptions& options) : impl_(std::make_unique<Impl>(
   // 1. The kind, from the extensions.
   model_kind_and_files(options, info);
 
-  // 2. The network; OpenCV's parser errors become one line naming the file.
-  d.net = load_network(info);
-
-  // 3. It must be a detector of that kind: YOLO region outputs, or Mask R-CNN's two outputs.
-  d.output_names = detector_outputs(d.net, options, info);
+  // 2. The network; OpenCV's parser errors become one line naming the file. An ONNX model runs in
+  // ONNX Runtime when asked or (auto) when its library is there.
+  const bool onnx = info.kind == ModelKind::kOnnxYoloSeg;
+  require(
+      onnx || options.backend != "onnxruntime", "DetectOptions.backend",
+      "onnxruntime runs ONNX models only; expected auto or opencv for " + options.model.string());
+  if (onnx && (options.backend == "onnxruntime" ||
+               (options.backend == "auto" && onnxruntime_status().available))) {
+    d.ort = std::make_unique<OnnxRuntimeSession>(info.model, options.threads);
+    onnx_runtime_outputs(*d.ort, options, info);
+  } else {
+    d.net = load_network(info);
+    // 3. It must be a detector of that kind: YOLO region outputs, or Mask R-CNN's two outputs.
+    d.output_names = detector_outputs(d.net, options, info);
+  }
 
   // 4. Class names and the filter.
   d.class_source = class_names_and_filter(options, info);
@@ -601,19 +644,22 @@ const ModelInfo& Detector::info() const { return impl_->info; }
 
 const DetectOptions& Detector::options() const { return impl_->options; }
 
-namespace {
-
-// An Ultralytics segmentation export on one image: letterboxed into the input, run, decoded
-// (yolo_seg.h); the output with 4 dimensions is the prototypes, the other the detections.
-std::vector<Instance> detect_onnx_seg(cv::dnn::Net& net, const std::vector<std::string>& names,
-                                      const ModelInfo& info, const DetectOptions& options,
-                                      const cv::Mat& image_bgr, const std::string& where) {
+// An Ultralytics segmentation export on one image: letterboxed into the input (buffers reused),
+// run (ONNX Runtime or OpenCV), decoded (yolo_seg.h); the output with 4 dimensions is the
+// prototypes, the other the detections.
+std::vector<Instance> Detector::Impl::detect_onnx_seg(const cv::Mat& image_bgr,
+                                                      const std::string& where) {
   const Letterbox lb =
       make_letterbox(image_bgr.cols, image_bgr.rows, info.input_width, info.input_height);
   std::vector<cv::Mat> outputs;
   try {
-    net.setInput(letterbox_blob(image_bgr, lb));
-    net.forward(outputs, names);
+    letterbox_blob(image_bgr, lb, canvas, blob);
+    if (ort) {
+      outputs = ort->run(blob, where);
+    } else {
+      net.setInput(blob);
+      net.forward(outputs, output_names);
+    }
   } catch (const cv::Exception& e) {
     throw InputError(info.model.string(),
                      "OpenCV cannot run the network on " + where + " (" + one_line(e.err) + ")");
@@ -623,15 +669,12 @@ std::vector<Instance> detect_onnx_seg(cv::dnn::Net& net, const std::vector<std::
                          outputs[first_is_protos ? 0 : 1], lb);
 }
 
-}  // namespace
-
 std::vector<Instance> Detector::detect(const cv::Mat& image_bgr, const std::string& where) {
   Impl& d = *impl_;
   const ModelInfo& info = d.info;
   require(!image_bgr.empty() && image_bgr.type() == CV_8UC3, where,
           "not a colour image; expected 8-bit BGR");
-  if (info.kind == ModelKind::kOnnxYoloSeg)
-    return detect_onnx_seg(d.net, d.output_names, info, d.options, image_bgr, where);
+  if (info.kind == ModelKind::kOnnxYoloSeg) return d.detect_onnx_seg(image_bgr, where);
   const bool yolo = info.kind == ModelKind::kDarknetYolo;
 
   // 1. The blob: resized to the network's input (no crop), RGB; YOLO wants pixels in [0, 1].
@@ -704,9 +747,17 @@ DetectResult detect_frames(Detector& detector, const std::vector<DetectFrame>& f
   result.model = detector.info();
   result.segmentation.format = "json";
   result.segmentation.source = where;
+  // The next frame's image is read (decoded) on a second thread while the network runs on this
+  // one's: reading overlaps the inference, one image ahead at most.
+  const auto read = [&frames](std::size_t i) {
+    return frames[i].read ? frames[i].read() : io::read_rgb(frames[i].rgb_file, 0, 0);
+  };
+  std::future<cv::Mat> next;
+  if (!frames.empty()) next = std::async(std::launch::async, read, 0);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const DetectFrame& frame = frames[i];
-    const cv::Mat image = frame.read ? frame.read() : io::read_rgb(frame.rgb_file, 0, 0);
+    const cv::Mat image = next.get();
+    if (i + 1 < frames.size()) next = std::async(std::launch::async, read, i + 1);
     FrameSegmentation out;
     out.timestamp = frame.timestamp;
     out.source = frame.rgb_file.string();

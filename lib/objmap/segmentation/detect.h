@@ -73,6 +73,14 @@ struct DetectOptions {
   // Mask R-CNN and ONNX segmentation: a pixel of the box belongs to the object when its resized
   // mask value is > this (0.5 as the OpenCV sample and Ultralytics).
   double mask_threshold = 0.5;
+  // What runs an ONNX model: "auto" (the default: ONNX Runtime when its library is installed,
+  // else OpenCV's dnn; docs/benchmarks.md, "Speed of detect": ONNX Runtime runs YOLOv8n-seg about
+  // 3x faster), "onnxruntime" (required; an InputError saying how to install it when absent) or
+  // "opencv". Darknet and TensorFlow models always run in OpenCV's dnn.
+  std::string backend = "auto";
+  // Threads of the network: ONNX Runtime's intra-op threads (OpenCV's dnn takes
+  // cv::setNumThreads, set by the caller); 0: the backend's default (the cores).
+  int threads = 0;
   // Throws InputError naming the bad field.
   void check() const;
 };
@@ -84,6 +92,7 @@ struct ModelInfo {
   int input_width = 0, input_height = 0;  // the input size actually used
   std::vector<std::string> class_names;   // canonical, index = class id
   std::vector<int> kept_class_ids;        // the class filter as ids (all ids when no filter)
+  std::string backend = "opencv";         // what runs it: "opencv" or "onnxruntime 1.29.0"
 };
 
 // A loaded network (state: OpenCV's net), run frame by frame. Not copyable; one per thread.
@@ -147,7 +156,8 @@ struct DetectResult {
                        // the images and running the network on all frames
 };
 
-// Runs the detector on every frame (images read strictly with io::read_rgb). `progress(done,
+// Runs the detector on every frame (images read strictly with io::read_rgb, or DetectFrame::read;
+// the next frame's on a second thread while the network runs, one call at a time). `progress(done,
 // total)` is called after each frame when given. Throws InputError as Detector does, for an
 // unreadable image, and when no frame has any detection ("no detections in any of the N frames").
 DetectResult detect_frames(const std::vector<DetectFrame>& frames, const DetectOptions& options,

@@ -38,23 +38,44 @@ struct Rows {
   }
 };
 
+// Each row's best class and its score: row by row (v5), or class by class over the contiguous
+// columns of the transposed v8 layout (one pass through memory instead of a stride per value).
+void best_classes(const Rows& rows, int first_class, int classes, std::vector<int>& best,
+                  std::vector<float>& best_score) {
+  best.assign(static_cast<std::size_t>(rows.count), 0);
+  best_score.assign(static_cast<std::size_t>(rows.count), 0.f);
+  if (!rows.transposed) {
+    for (int r = 0; r < rows.count; ++r) {
+      const float* row = rows.data + static_cast<std::size_t>(r) * rows.width + first_class;
+      const float* top = std::max_element(row, row + classes);
+      best[r] = static_cast<int>(top - row);
+      best_score[r] = *top;
+    }
+    return;
+  }
+  const float* first = rows.data + static_cast<std::size_t>(first_class) * rows.count;
+  std::copy(first, first + rows.count, best_score.begin());
+  for (int c = 1; c < classes; ++c) {
+    const float* column = rows.data + static_cast<std::size_t>(first_class + c) * rows.count;
+    for (int r = 0; r < rows.count; ++r)
+      if (column[r] > best_score[r]) best_score[r] = column[r], best[r] = c;
+  }
+}
+
 // Step 1: the rows above the score threshold, of a kept class, boxes in the frame.
 std::vector<Candidate> seg_candidates(const ModelInfo& model, const DetectOptions& options,
                                       const Rows& rows, bool objectness, const Letterbox& lb) {
   const int classes = static_cast<int>(model.class_names.size());
-  const int first_class = objectness ? 5 : 4;
   std::vector<bool> kept_class(static_cast<std::size_t>(classes), false);
   for (int id : model.kept_class_ids)
     if (id >= 0 && id < classes) kept_class[static_cast<std::size_t>(id)] = true;
+  std::vector<int> best_class;
+  std::vector<float> best_score;
+  best_classes(rows, objectness ? 5 : 4, classes, best_class, best_score);
   std::vector<Candidate> out;
   for (int r = 0; r < rows.count; ++r) {
-    int best = 0;
-    float best_score = rows.at(r, first_class);
-    for (int c = 1; c < classes; ++c) {
-      const float s = rows.at(r, first_class + c);
-      if (s > best_score) best_score = s, best = c;
-    }
-    const float score = objectness ? rows.at(r, 4) * best_score : best_score;
+    const int best = best_class[r];
+    const float score = objectness ? rows.at(r, 4) * best_score[r] : best_score[r];
     if (score < options.score_threshold || score <= 0.f || !kept_class[best]) continue;
     const double cx = rows.at(r, 0), cy = rows.at(r, 1), w = rows.at(r, 2), h = rows.at(r, 3);
     const auto to_x = [&](double x) {
@@ -71,12 +92,88 @@ std::vector<Candidate> seg_candidates(const ModelInfo& model, const DetectOption
   return out;
 }
 
+// The box of candidate `c` at the prototypes' resolution: [x1, x2) × [y1, y2) in prototype pixels.
+struct ProtoBox {
+  double x1, x2, y1, y2;
+};
+ProtoBox proto_box(const Candidate& c, const Letterbox& lb, int pw, int ph) {
+  const double sx = static_cast<double>(pw) / lb.input_width;
+  const double sy = static_cast<double>(ph) / lb.input_height;
+  return {
+      (c.box.x * lb.scale + lb.pad_x) * sx, ((c.box.x + c.box.width) * lb.scale + lb.pad_x) * sx,
+      (c.box.y * lb.scale + lb.pad_y) * sy, ((c.box.y + c.box.height) * lb.scale + lb.pad_y) * sy};
+}
+
+// The mask's pixels inside the box (the frame's pixels u0..u1 × v0..v1) above the threshold, read
+// from `at(u, v)`; an empty mask when none.
+template <typename At>
+Mask threshold_in_box(const Candidate& c, const Letterbox& lb, double threshold, At at) {
+  Mask mask;
+  mask.width = lb.image_width;
+  mask.height = lb.image_height;
+  mask.data.assign(static_cast<std::size_t>(mask.width) * mask.height, 0);
+  const int u0 = std::max(0, static_cast<int>(std::floor(c.box.x)));
+  const int v0 = std::max(0, static_cast<int>(std::floor(c.box.y)));
+  const int u1 = std::min(mask.width, static_cast<int>(std::ceil(c.box.x + c.box.width)));
+  const int v1 = std::min(mask.height, static_cast<int>(std::ceil(c.box.y + c.box.height)));
+  std::size_t area = 0;
+  for (int v = v0; v < v1; ++v) {
+    const float* src = at(v);
+    std::uint8_t* dst = mask.data.data() + static_cast<std::size_t>(v) * mask.width;
+    for (int u = u0; u < u1; ++u)
+      if (src[u] > threshold) dst[u] = 1, ++area;
+  }
+  if (area == 0) mask.data.clear();
+  return mask;
+}
+
+// Step 3 when the frame is not scaled into the input (scale 1) and the input is a whole multiple
+// s of the prototypes on both axes (640 × 480 frames in 640 × 640 or 640 × 480 inputs, 160 × 160
+// or 160 × 120 prototypes): the same mask as instance_mask's, computed on the box alone. The
+// prototypes are combined, passed through the sigmoid and upsampled ×s (bilinear) on a patch of
+// the box plus 2 prototype pixels: the patch's border is outside the box (0, as in the whole
+// image), so its upsampled pixels are those of the whole image's.
+Mask instance_mask_in_box(const Rows& rows, int first_coefficient, const cv::Mat& protos,
+                          const Candidate& c, const Letterbox& lb, double threshold) {
+  const int ph = protos.size[2], pw = protos.size[3], s = lb.input_width / pw;
+  const ProtoBox b = proto_box(c, lb, pw, ph);
+  const int x0 = std::max(0, static_cast<int>(std::floor(b.x1)) - 2);
+  const int x1 = std::min(pw, static_cast<int>(std::ceil(b.x2)) + 2);
+  const int y0 = std::max(0, static_cast<int>(std::floor(b.y1)) - 2);
+  const int y1 = std::min(ph, static_cast<int>(std::ceil(b.y2)) + 2);
+  cv::Mat patch(y1 - y0, x1 - x0, CV_32F, cv::Scalar(0));
+  for (int k = 0; k < kMaskCoefficients; ++k) {
+    const float coefficient = rows.at(c.source, first_coefficient + k);
+    const float* plane = protos.ptr<float>() + static_cast<std::size_t>(k) * ph * pw;
+    for (int v = y0; v < y1; ++v) {
+      float* dst = patch.ptr<float>(v - y0);
+      const float* src = plane + static_cast<std::size_t>(v) * pw;
+      for (int u = x0; u < x1; ++u) dst[u - x0] += coefficient * src[u];
+    }
+  }
+  for (int v = y0; v < y1; ++v) {
+    float* row = patch.ptr<float>(v - y0);
+    for (int u = x0; u < x1; ++u) {
+      const bool inside = u >= b.x1 && u < b.x2 && v >= b.y1 && v < b.y2;
+      row[u - x0] = inside ? 1.f / (1.f + std::exp(-row[u - x0])) : 0.f;
+    }
+  }
+  cv::Mat up;
+  cv::resize(patch, up, cv::Size(patch.cols * s, patch.rows * s), 0, 0, cv::INTER_LINEAR);
+  // Frame pixel (u, v) = input pixel (u + pad_x, v + pad_y) = patch pixel (u + pad_x - x0 s, ...).
+  const int du = lb.pad_x - x0 * s, dv = lb.pad_y - y0 * s;
+  return threshold_in_box(c, lb, threshold, [&](int v) { return up.ptr<float>(v + dv) + du; });
+}
+
 // Step 3: one instance's mask in the frame: sigmoid(coefficients · prototypes) at the prototypes'
 // resolution, zero outside the box, upsampled to the input, the letterbox undone, thresholded and
 // kept inside the box. Empty when nothing passes the threshold.
 Mask instance_mask(const Rows& rows, int first_coefficient, const cv::Mat& protos,
-                   const Candidate& c, const Letterbox& lb, double threshold) {
+                   const Candidate& c, const Letterbox& lb, double threshold, bool in_box) {
   const int ph = protos.size[2], pw = protos.size[3];
+  if (in_box && lb.scale == 1.0 && lb.input_width % pw == 0 && lb.input_height % ph == 0 &&
+      lb.input_width / pw == lb.input_height / ph)
+    return instance_mask_in_box(rows, first_coefficient, protos, c, lb, threshold);
   const cv::Mat basis(kMaskCoefficients, ph * pw, CV_32F, const_cast<float*>(protos.ptr<float>()));
   cv::Mat coefficients(1, kMaskCoefficients, CV_32F);
   for (int k = 0; k < kMaskCoefficients; ++k)
@@ -84,16 +181,11 @@ Mask instance_mask(const Rows& rows, int first_coefficient, const cv::Mat& proto
   cv::Mat logits = coefficients * basis;  // 1 × (ph · pw)
   cv::Mat proto_mask = logits.reshape(1, ph);
   // The box at the prototypes' resolution (input pixels / stride); outside it, 0 (crop_mask).
-  const double sx = static_cast<double>(pw) / lb.input_width;
-  const double sy = static_cast<double>(ph) / lb.input_height;
-  const double bx1 = (c.box.x * lb.scale + lb.pad_x) * sx;
-  const double bx2 = ((c.box.x + c.box.width) * lb.scale + lb.pad_x) * sx;
-  const double by1 = (c.box.y * lb.scale + lb.pad_y) * sy;
-  const double by2 = ((c.box.y + c.box.height) * lb.scale + lb.pad_y) * sy;
+  const ProtoBox b = proto_box(c, lb, pw, ph);
   for (int v = 0; v < ph; ++v) {
     float* row = proto_mask.ptr<float>(v);
     for (int u = 0; u < pw; ++u) {
-      const bool inside = u >= bx1 && u < bx2 && v >= by1 && v < by2;
+      const bool inside = u >= b.x1 && u < b.x2 && v >= b.y1 && v < b.y2;
       row[u] = inside ? 1.f / (1.f + std::exp(-row[u])) : 0.f;
     }
   }
@@ -107,24 +199,7 @@ Mask instance_mask(const Rows& rows, int first_coefficient, const cv::Mat& proto
   if (frame_mask.cols != lb.image_width || frame_mask.rows != lb.image_height)
     cv::resize(frame_mask, frame_mask, cv::Size(lb.image_width, lb.image_height), 0, 0,
                cv::INTER_LINEAR);
-  Mask mask;
-  mask.width = lb.image_width;
-  mask.height = lb.image_height;
-  mask.data.assign(static_cast<std::size_t>(mask.width) * mask.height, 0);
-  const int u0 = static_cast<int>(std::floor(c.box.x)), v0 = static_cast<int>(std::floor(c.box.y));
-  const int u1 = std::min(mask.width, static_cast<int>(std::ceil(c.box.x + c.box.width)));
-  const int v1 = std::min(mask.height, static_cast<int>(std::ceil(c.box.y + c.box.height)));
-  std::size_t area = 0;
-  for (int v = std::max(0, v0); v < v1; ++v) {
-    const float* src = frame_mask.ptr<float>(v);
-    for (int u = std::max(0, u0); u < u1; ++u)
-      if (src[u] > threshold) {
-        mask.data[static_cast<std::size_t>(v) * mask.width + u] = 1;
-        ++area;
-      }
-  }
-  if (area == 0) mask.data.clear();
-  return mask;
+  return threshold_in_box(c, lb, threshold, [&](int v) { return frame_mask.ptr<float>(v); });
 }
 
 // Protobuf, as much as onnx_input_shape needs: varints and length-delimited fields.
@@ -197,16 +272,24 @@ Letterbox make_letterbox(int image_width, int image_height, int input_width, int
 }
 
 cv::Mat letterbox_blob(const cv::Mat& image_bgr, const Letterbox& lb) {
-  cv::Mat canvas(lb.input_height, lb.input_width, CV_8UC3, cv::Scalar(114, 114, 114));
+  cv::Mat canvas, blob;
+  letterbox_blob(image_bgr, lb, canvas, blob);
+  return blob;
+}
+
+void letterbox_blob(const cv::Mat& image_bgr, const Letterbox& lb, cv::Mat& canvas, cv::Mat& blob) {
+  canvas.create(lb.input_height, lb.input_width, CV_8UC3);
   const cv::Size size(static_cast<int>(std::lround(lb.image_width * lb.scale)),
                       static_cast<int>(std::lround(lb.image_height * lb.scale)));
-  cv::Mat roi = canvas(cv::Rect(cv::Point(lb.pad_x, lb.pad_y), size));
+  const cv::Rect content(cv::Point(lb.pad_x, lb.pad_y), size);
+  canvas.setTo(cv::Scalar(114, 114, 114));
+  cv::Mat roi = canvas(content);
   if (size == image_bgr.size())
     image_bgr.copyTo(roi);
   else
     cv::resize(image_bgr, roi, size, 0, 0, cv::INTER_LINEAR);
-  return cv::dnn::blobFromImage(canvas, 1.0 / 255.0, cv::Size(), cv::Scalar(), /*swapRB=*/true,
-                                /*crop=*/false);
+  cv::dnn::blobFromImage(canvas, blob, 1.0 / 255.0, cv::Size(), cv::Scalar(), /*swapRB=*/true,
+                         /*crop=*/false);
 }
 
 YoloSegLayout yolo_seg_layout(const cv::Mat& detections, const cv::Mat& protos,
@@ -232,7 +315,7 @@ YoloSegLayout yolo_seg_layout(const cv::Mat& detections, const cv::Mat& protos,
 
 std::vector<Instance> decode_yolo_seg(const ModelInfo& model, const DetectOptions& options,
                                       const cv::Mat& detections, const cv::Mat& protos,
-                                      const Letterbox& letterbox) {
+                                      const Letterbox& letterbox, MaskDecode decode) {
   const YoloSegLayout layout =
       yolo_seg_layout(detections, protos, model.class_names.size(), model.model.string());
   const bool v5 = layout == YoloSegLayout::kV5;
@@ -245,7 +328,8 @@ std::vector<Instance> decode_yolo_seg(const ModelInfo& model, const DetectOption
   std::vector<Instance> instances;
   for (const Candidate& c :
        detail::suppress_non_maxima(seg_candidates(model, options, rows, v5, letterbox), options)) {
-    Mask mask = instance_mask(rows, first_coefficient, p, c, letterbox, options.mask_threshold);
+    Mask mask = instance_mask(rows, first_coefficient, p, c, letterbox, options.mask_threshold,
+                              decode == MaskDecode::kInBox);
     if (mask.data.empty()) continue;  // nothing of the object survives the threshold
     Instance instance;
     instance.class_name = model.class_names[static_cast<std::size_t>(c.class_id)];

@@ -35,6 +35,10 @@ Letterbox make_letterbox(int image_width, int image_height, int input_width, int
 
 // The network's input blob (1 × 3 × input_height × input_width, RGB / 255) of a BGR image.
 cv::Mat letterbox_blob(const cv::Mat& image_bgr, const Letterbox& letterbox);
+// The same into `blob`, with `canvas` for the letterboxed image: both keep their memory from frame
+// to frame when the sizes stay.
+void letterbox_blob(const cv::Mat& image_bgr, const Letterbox& letterbox, cv::Mat& canvas,
+                    cv::Mat& blob);
 
 // The layout of `detections` (output0) for `class_count` classes, told from its shape. Throws
 // InputError(where, ...) naming both shapes when it is neither layout, or when `protos` (output1)
@@ -46,9 +50,15 @@ YoloSegLayout yolo_seg_layout(const cv::Mat& detections, const cv::Mat& protos,
 // class score (v8), the best class, score threshold and class filter, NMS (across classes or per
 // class, as options say), boxes in the frame's pixels, masks in the frame (empty masks dropped).
 // Sorted as Detector::detect sorts.
+// How the masks are computed: kInBox (what detect does) on the box alone where the frame is not
+// scaled into the input and the input is a whole multiple of the prototypes (else as
+// kWholeImage); kWholeImage, the reference: sigmoid and upsampling over the whole prototype image,
+// then cropped (Ultralytics' process_mask), for the tests and docs/benchmarks.md's figures.
+enum class MaskDecode { kInBox, kWholeImage };
 std::vector<Instance> decode_yolo_seg(const ModelInfo& model, const DetectOptions& options,
                                       const cv::Mat& detections, const cv::Mat& protos,
-                                      const Letterbox& letterbox);
+                                      const Letterbox& letterbox,
+                                      MaskDecode decode = MaskDecode::kInBox);
 
 // The shape of the first graph input of an ONNX file (ModelProto.graph.input[0], dims as written:
 // -1 for a symbolic one), read from the protobuf without an ONNX library. Throws InputError naming
