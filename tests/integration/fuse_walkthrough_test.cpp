@@ -16,13 +16,18 @@ namespace {
 
 class FuseWalkthrough : public ::testing::TestWithParam<int> {};
 
+// The walk-through of `seed`, 636 frames at half size (test cache).
+fs::path walkthrough_scene(const std::string& seed, RunResult* why) {
+  return cached_output("walk636-seed" + seed + "-scene",
+                       {"synth", "--out", "{OUT}", "--preset", "walkthrough", "--frames", "636",
+                        "--scale", "0.5", "--seed", seed},
+                       why);
+}
+
 TEST_P(FuseWalkthrough, EveryObjectOnceWithTheDefaultKeyframesAndWithEveryFrame) {
   const std::string seed = std::to_string(GetParam());
   RunResult why;
-  const fs::path scene = cached_output("walk636-seed" + seed + "-scene",
-                                       {"synth", "--out", "{OUT}", "--preset", "walkthrough",
-                                        "--frames", "636", "--scale", "0.5", "--seed", seed},
-                                       &why);
+  const fs::path scene = walkthrough_scene(seed, &why);
   ASSERT_TRUE(fs::exists(scene)) << why.err;
   const auto gt = read_gt_objects(scene / "objects_gt.json");
   std::map<std::string, int> gt_classes;
@@ -59,10 +64,7 @@ TEST_P(FuseWalkthrough, EveryObjectOnceWithTheDefaultKeyframesAndWithEveryFrame)
 TEST_P(FuseWalkthrough, OneFrameInEighteenSplitsNoObject) {
   const std::string seed = std::to_string(GetParam());
   RunResult why;
-  const fs::path scene = cached_output("walk636-seed" + seed + "-scene",
-                                       {"synth", "--out", "{OUT}", "--preset", "walkthrough",
-                                        "--frames", "636", "--scale", "0.5", "--seed", seed},
-                                       &why);
+  const fs::path scene = walkthrough_scene(seed, &why);
   ASSERT_TRUE(fs::exists(scene)) << why.err;
   const fs::path run = cached_output(
       "walk636-seed" + seed + "-fuse-stride18",
