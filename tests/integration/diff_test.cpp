@@ -139,6 +139,17 @@ TEST(DiffReal, TwoRecordingsOfOneOfficeReportNoChangeWhereBothSawIt) {
     EXPECT_NEAR(reg["registration"]["before_from_after"][k].get<double>(), 0.0, 0.05) << g.out;
   expect_no_unsupported_changes(reg);
   EXPECT_EQ(reg["counts"]["removed"].get<int>() + reg["counts"]["added"].get<int>(), 0) << g.out;
+  // The other order (the short visit first): the inverse transform, as close to the identity.
+  const RunResult back = run_objmap({"diff", "--before", desk.string(), "--after", rpy.string(),
+                                     "--out", (tmp / "reverse").string()});
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const json rev = json::parse(read_text(tmp / "reverse" / "diff.json"));
+  EXPECT_NEAR(rev["registration"]["yaw_deg"].get<double>(),
+              -reg["registration"]["yaw_deg"].get<double>(), 0.2)
+      << back.out;
+  for (int k : {3, 7, 11})
+    EXPECT_NEAR(rev["registration"]["before_from_after"][k].get<double>(), 0.0, 0.05) << back.out;
+  EXPECT_EQ(rev["counts"]["removed"].get<int>() + rev["counts"]["added"].get<int>(), 0) << back.out;
   // With the known identity, the same.
   write_text(tmp / "identity.json",
              R"({"before_from_after": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]})");
@@ -164,6 +175,8 @@ TEST(DiffReal, ARecordingAgainstItselfRegistersAtTheIdentityUnchanged) {
   ASSERT_EQ(d.exit_code, 0) << d.err;
   const json diff = json::parse(read_text(tmp / "diff" / "diff.json"));
   EXPECT_NEAR(diff["registration"]["yaw_deg"].get<double>(), 0.0, 0.01);
+  // Both shares: every point of either map lies on the other.
+  EXPECT_GT(diff["registration"]["fitness_both"].get<double>(), 0.99);
   EXPECT_EQ(diff["counts"]["unchanged"].get<int>(), static_cast<int>(diff["objects"].size()));
 }
 

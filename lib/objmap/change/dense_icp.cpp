@@ -137,6 +137,17 @@ class YawTranslationEstimation
   bool full_ = false;
 };
 
+// At most max_points of `points`, evenly spaced in input order (all when max_points is 0).
+std::vector<Vec3f> every_nth(const std::vector<Vec3f>& points, std::size_t max_points) {
+  if (max_points == 0 || points.size() <= max_points) return points;
+  std::vector<Vec3f> thinned;
+  thinned.reserve(max_points);
+  const double step = static_cast<double>(points.size()) / static_cast<double>(max_points);
+  for (std::size_t i = 0; i < max_points; ++i)
+    thinned.push_back(points[static_cast<std::size_t>(i * step)]);
+  return thinned;
+}
+
 Cloud::Ptr to_pcl(const std::vector<Vec3f>& points) {
   auto cloud = std::make_shared<Cloud>();
   cloud->reserve(points.size());
@@ -240,26 +251,27 @@ std::vector<Vec3f> thin_cloud(const std::vector<Vec3f>& points, double voxel_m,
     if (!flag) kept.push_back(p);
     flag = 1;
   }
-  if (max_points == 0 || kept.size() <= max_points) return kept;
-  std::vector<Vec3f> thinned;
-  const double step = static_cast<double>(kept.size()) / static_cast<double>(max_points);
-  for (std::size_t i = 0; i < max_points; ++i)
-    thinned.push_back(kept[static_cast<std::size_t>(i * step)]);
-  return thinned;
+  return every_nth(kept, max_points);
 }
 
-DenseFit align_dense(const std::vector<Vec3f>& target_points,
-                     const std::vector<Vec3f>& source_points, const Pose& guess,
-                     const RegistrationOptions& options, bool refine) {
+namespace {
+
+// align_dense with `source` the cloud moved: ICP on at most icp_max_points of it; the fitness's
+// backward share looks its target points up in the whole of it (a thinned one would miss them).
+DenseFit align_oriented(const std::vector<Vec3f>& target_points,
+                        const std::vector<Vec3f>& source_points, const Pose& guess,
+                        const RegistrationOptions& options, bool refine) {
   DenseFit fit;
   fit.target_from_source = guess;
   const Cloud::Ptr target = to_pcl(target_points);
-  const Cloud::Ptr source = to_pcl(source_points);
+  const Cloud::Ptr whole_source = to_pcl(source_points);
+  const Cloud::Ptr source =
+      to_pcl(thin_cloud(source_points, options.icp_voxel_m, options.icp_max_points));
   fit.source_points = source->size();
   if (target->size() < 10 || source->size() < 10) return fit;
   pcl::KdTreeFLANN<pcl::PointXYZ> target_tree, source_tree;
   target_tree.setInputCloud(target);
-  source_tree.setInputCloud(source);
+  source_tree.setInputCloud(whole_source);
   const LazyNormals normals(target_tree, *target);
   if (refine) {
     // ICP in three rounds of shrinking correspondence distance: a coarse guess some 10 cm off
@@ -295,16 +307,24 @@ DenseFit align_dense(const std::vector<Vec3f>& target_points,
   std::vector<std::pair<Vec3, int>> pairs;
   const double forward = inlier_share(target_tree, *source, fit.target_from_source,
                                       options.inlier_m, &fit.rms_m, &pairs);
-  // The other direction on as many target points as the source has (evenly thinned).
-  Cloud sampled;
-  const std::size_t every =
-      std::max<std::size_t>(1, target->size() / std::max<std::size_t>(1, source->size()));
-  for (std::size_t i = 0; i < target->size(); i += every) sampled.push_back((*target)[i]);
-  const double backward = inlier_share(source_tree, sampled, fit.target_from_source.inverse(),
+  // The other direction on as many target points as the ICP source has (evenly thinned).
+  const Cloud::Ptr sampled = to_pcl(every_nth(target_points, source->size()));
+  const double backward = inlier_share(source_tree, *sampled, fit.target_from_source.inverse(),
                                        options.inlier_m, nullptr, nullptr);
   fit.fitness = std::max(forward, backward);
   fit.fitness_both = std::min(forward, backward);
   uncertainty(*target, normals, pairs, fit);
+  return fit;
+}
+
+}  // namespace
+
+DenseFit align_dense(const std::vector<Vec3f>& target, const std::vector<Vec3f>& source,
+                     const Pose& guess, const RegistrationOptions& options, bool refine) {
+  if (!refine || source.size() <= 1.5 * target.size())
+    return align_oriented(target, source, guess, options, refine);
+  DenseFit fit = align_oriented(source, target, guess.inverse(), options, refine);
+  fit.target_from_source = fit.target_from_source.inverse();
   return fit;
 }
 

@@ -27,8 +27,12 @@ struct DenseFit {
   double sigma_yaw_deg = 0.0;
 };
 
-// Both clouds in their gravity frames (z up). refine: PCL ICP (yaw + translation only) from
-// `guess`, in rounds of shrinking correspondence distance; else `guess` is only scored.
+// Both clouds in their gravity frames (z up), each one point per voxel. refine: PCL ICP (yaw +
+// translation only) from `guess`, in rounds of shrinking correspondence distance, with at most
+// options.icp_max_points of `source` (evenly thinned); else `guess` is only scored. When `source`
+// has over 1.5 times the points of `target` (a short visit inside a long one), ICP moves `target`
+// instead: its points have a counterpart in the larger map, while the larger's extra surfaces
+// would pair with wrong ones; the result is turned back to target_from_source.
 DenseFit align_dense(const std::vector<Vec3f>& target, const std::vector<Vec3f>& source,
                      const Pose& guess, const RegistrationOptions& options, bool refine);
 

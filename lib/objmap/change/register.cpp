@@ -312,10 +312,8 @@ Registration register_visits(const Visit& before, const Visit& after,
   const std::vector<Vec3f> after_points = in_gravity(after, options);
   const auto align = [&](const Coarse& c, const RegistrationOptions& o) {
     const double radius = c.spread_m + o.icp_crop_margin_m;
-    return detail::align_dense(
-        crop(before_points, c.centre_a, radius),
-        detail::thin_cloud(crop(after_points, c.centre_b, radius), o.icp_voxel_m, o.icp_max_points),
-        c.gb_to_ga, o, true);
+    return detail::align_dense(crop(before_points, c.centre_a, radius),
+                               crop(after_points, c.centre_b, radius), c.gb_to_ga, o, true);
   };
   // With few objects (two agree at best) the true placement may have only one: add the best
   // placements of a yaw sweep about single same-kind correspondences, ranked by dense overlap.
@@ -374,8 +372,7 @@ Registration score_registration(const Visit& before, const Visit& after,
   options.check();
   const Pose gb_to_ga = gravity_pose(before) * before_from_after * gravity_pose(after).inverse();
   const std::vector<Vec3f> target = in_gravity(before, options);
-  const std::vector<Vec3f> source =
-      detail::thin_cloud(in_gravity(after, options), options.icp_voxel_m, options.icp_max_points);
+  const std::vector<Vec3f> source = in_gravity(after, options);
   const detail::DenseFit fit = detail::align_dense(target, source, gb_to_ga, options, false);
   Registration r = finish(before, after, gb_to_ga, fit);
   r.before_from_after = before_from_after;  // exactly as given

@@ -20,7 +20,7 @@ struct RegistrationOptions {
                                  // (two fix a yaw; the dense maps must then agree: fitness)
   std::size_t max_hypotheses = 200000;     // beyond this, a fixed-seed sample of the pairs of pairs
   double icp_voxel_m = 0.03;               // dense maps thinned to one point per voxel for ICP
-  std::size_t icp_max_points = 10000;      // the after map's ICP points, at most (evenly thinned)
+  std::size_t icp_max_points = 10000;      // ICP points of the map moved (the smaller), at most
   double icp_max_correspondence_m = 0.15;  // first rounds pair points closer than this ...
   double icp_final_correspondence_m = 0.04;  // ... shrinking to this
   int icp_max_iterations = 30;               // per round (three rounds)
@@ -47,7 +47,7 @@ struct Registration {
   double fitness = 0.0;        // the larger of the two maps' shares of points near the other
   double fitness_both = 0.0;   // the smaller of the two maps' shares (the fitness: the larger)
   double rms_m = 0.0;          // RMS distance of those inliers
-  std::size_t icp_points = 0;  // after map points used by ICP
+  std::size_t icp_points = 0;  // points of the map moved (the smaller) used by ICP
   // Uncertainty: standard deviations from rms² · H⁻¹ of the point-to-plane problem in the 4
   // unknowns at the end (the least constrained translation direction, and the yaw).
   double sigma_translation_m = 0.0;
