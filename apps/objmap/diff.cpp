@@ -25,9 +25,11 @@ void print_diff(const pipeline::DiffOptions& o, const pipeline::DiffResult& r) {
   std::printf("registration  %s: yaw %.2f deg, tilt %.2f deg, translation (%.3f, %.3f, %.3f) m\n",
               g.source.c_str(), g.yaw_deg, g.tilt_deg, t.x(), t.y(), t.z());
   std::printf(
-      "              %d common objects (rms %.3f m), ICP fitness %.3f (rms %.4f m), "
-      "sigma %.4f m / %.3f deg\n",
-      g.common_objects, g.coarse_rms_m, g.fitness, g.rms_m, g.sigma_translation_m, g.sigma_yaw_deg);
+      "              %d common objects (rms %.3f m), ICP fitness %.3f / both %.3f (rms %.4f m)\n",
+      g.common_objects, g.coarse_rms_m, g.fitness, g.fitness_both, g.rms_m);
+  std::printf(
+      "uncertainty   %.3f m at the objects, %.2f deg yaw (dense lower bound %.4f m / %.3f deg)\n",
+      g.uncertainty_at_objects_m, g.uncertainty_yaw_deg, g.sigma_translation_m, g.sigma_yaw_deg);
   std::printf("objects      ");
   for (change::Status s :
        {change::Status::kUnchanged, change::Status::kMoved, change::Status::kRemoved,

@@ -205,6 +205,30 @@ Registration finish(const Visit& before, const Visit& after, const Pose& gb_to_g
   return r;
 }
 
+// Registration::uncertainty_* from the objects that agree with `gb_to_ga` (gravity frames).
+void object_uncertainty(const std::vector<Landmark>& a, const std::vector<Landmark>& b,
+                        const Pose& gb_to_ga, const RegistrationOptions& o, Registration& r) {
+  const auto pairs = agreeing(a, b, gb_to_ga, o.object_match_m, nullptr);
+  const double n = static_cast<double>(pairs.size());
+  r.uncertainty_at_objects_m = r.uncertainty_yaw_deg = std::numeric_limits<double>::infinity();
+  if (pairs.size() < 2) return;
+  Vec3 centre = Vec3::Zero();
+  for (const auto& [i, k] : pairs) centre += a[i].p;
+  centre /= n;
+  double sum2 = 0.0, spread2 = 0.0;
+  for (const auto& [i, k] : pairs) {
+    sum2 += (a[i].p - gb_to_ga * b[k].p).squaredNorm();
+    spread2 += (a[i].p - centre).head<2>().squaredNorm();
+  }
+  const double sigma = std::sqrt(sum2 / std::max(1.0, 3.0 * n - 4.0));
+  const double spread = std::sqrt(spread2 / n);
+  const double sigma_yaw = spread > 1e-6 ? sigma / (std::sqrt(n) * spread) : 0.0;
+  r.uncertainty_yaw_deg =
+      spread > 1e-6 ? sigma_yaw * 180.0 / M_PI : std::numeric_limits<double>::infinity();
+  r.uncertainty_at_objects_m =
+      std::sqrt(3.0 * sigma * sigma / n + sigma_yaw * sigma_yaw * spread * spread);
+}
+
 // Placements from single same-kind correspondences (before object i ↔ after object k) at 24
 // yaws; the 3 whose thinned after map overlaps the before map most (within 10 cm).
 std::vector<Coarse> sweep(const Visit& before, const Visit& after,
@@ -351,6 +375,7 @@ Registration register_visits(const Visit& before, const Visit& after,
                                 options.object_match_m, &sum2)
                            .size());
   r.coarse_rms_m = r.common_objects ? std::sqrt(sum2 / r.common_objects) : 0.0;
+  object_uncertainty(landmarks(before), landmarks(after), fit.target_from_source, options, r);
   r.hypotheses = coarse.hypotheses;
   r.credible = (few ? r.fitness_both >= options.min_fitness_few_objects
                     : r.fitness >= options.min_fitness) &&
@@ -381,6 +406,7 @@ Registration score_registration(const Visit& before, const Visit& after,
       agreeing(landmarks(before), landmarks(after), gb_to_ga, options.object_match_m, &sum2)
           .size());
   r.coarse_rms_m = r.common_objects ? std::sqrt(sum2 / r.common_objects) : 0.0;
+  object_uncertainty(landmarks(before), landmarks(after), gb_to_ga, options, r);
   r.source = "given";
   r.credible = true;
   return r;

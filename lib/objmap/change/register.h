@@ -52,6 +52,12 @@ struct Registration {
   // unknowns at the end (the least constrained translation direction, and the yaw).
   double sigma_translation_m = 0.0;
   double sigma_yaw_deg = 0.0;
+  // A realistic uncertainty, from the common objects: their residuals after the registration give
+  // a per-axis σ (3n − 4 degrees of freedom); a 4-DoF fit to n of them spread r (RMS horizontal
+  // distance from their centroid) has σ/√n per translation axis and σ/(√n r) in yaw; at the
+  // objects, the expected RMS error sqrt(3σ²/n + (σ_yaw r)²). Infinite with fewer than 2 objects.
+  double uncertainty_at_objects_m = 0.0;
+  double uncertainty_yaw_deg = 0.0;
   std::string source = "objects+icp";  // "objects+icp", or "given" (--align)
   bool credible = false;
   std::string why;  // when not credible: "too few common objects (2 of 3 needed)" or the fitness

@@ -76,6 +76,8 @@ ordered_json side_json(const std::optional<int>& id, const std::string& cls,
   return j;
 }
 
+ordered_json finite_or_null(double v) { return std::isfinite(v) ? ordered_json(v) : nullptr; }
+
 ordered_json registration_json(const change::Registration& r) {
   return {{"source", r.source},
           {"before_from_after", matrix_json(r.before_from_after)},
@@ -89,11 +91,10 @@ ordered_json registration_json(const change::Registration& r) {
           {"fitness_both", r.fitness_both},
           {"rms_m", r.rms_m},
           {"icp_points", r.icp_points},
-          {"sigma_translation_m", std::isfinite(r.sigma_translation_m)
-                                      ? ordered_json(r.sigma_translation_m)
-                                      : ordered_json(nullptr)},
-          {"sigma_yaw_deg",
-           std::isfinite(r.sigma_yaw_deg) ? ordered_json(r.sigma_yaw_deg) : ordered_json(nullptr)}};
+          {"sigma_translation_m", finite_or_null(r.sigma_translation_m)},
+          {"sigma_yaw_deg", finite_or_null(r.sigma_yaw_deg)},
+          {"uncertainty_at_objects_m", finite_or_null(r.uncertainty_at_objects_m)},
+          {"uncertainty_yaw_deg", finite_or_null(r.uncertainty_yaw_deg)}};
 }
 
 }  // namespace
