@@ -5,6 +5,7 @@
 #include <pcl/point_types.h>
 #include <pcl/registration/icp.h>
 #include <pcl/registration/transformation_estimation.h>
+#include <flann/flann.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -328,17 +329,51 @@ DenseFit align_dense(const std::vector<Vec3f>& target, const std::vector<Vec3f>&
   return fit;
 }
 
+namespace {
+
+// FLANN's nearest-neighbour result for "the nearest point within a radius": the search prunes
+// every branch beyond the radius from the start, so a point far from the map (as under a wrong
+// placement) ends quickly where an unbounded nearest search walks much of the tree.
+class NearestWithin : public flann::ResultSet<float> {
+ public:
+  explicit NearestWithin(float radius2) : best_(radius2) {}
+  bool full() const override { return true; }
+  void addPoint(float dist2, std::size_t) override {
+    if (dist2 <= best_) best_ = dist2, found_ = true;
+  }
+  float worstDist() const override { return best_; }
+  bool found() const { return found_; }
+
+ private:
+  float best_;
+  bool found_ = false;
+};
+
+}  // namespace
+
 std::vector<double> overlap_shares(const std::vector<Vec3f>& target_points,
                                    const std::vector<Vec3f>& source_points,
                                    const std::vector<Pose>& guesses, double inlier_m) {
   std::vector<double> shares(guesses.size(), 0.0);
-  const Cloud::Ptr target = to_pcl(target_points);
-  const Cloud::Ptr source = to_pcl(source_points);
-  if (target->size() < 10 || source->empty()) return shares;
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  tree.setInputCloud(target);
-  for (std::size_t g = 0; g < guesses.size(); ++g)
-    shares[g] = inlier_share(tree, *source, guesses[g], inlier_m, nullptr, nullptr);
+  if (target_points.size() < 10 || source_points.empty()) return shares;
+  const flann::Matrix<float> data(const_cast<float*>(target_points.front().data()),
+                                  target_points.size(), 3, sizeof(Vec3f));
+  flann::KDTreeSingleIndex<flann::L2_Simple<float>> tree(data, flann::KDTreeSingleIndexParams(15));
+  tree.buildIndex();
+  const flann::SearchParams params;
+  const float radius2 = static_cast<float>(inlier_m * inlier_m);
+  for (std::size_t g = 0; g < guesses.size(); ++g) {
+    const Eigen::Matrix3f r = guesses[g].linear().cast<float>();
+    const Vec3f t = guesses[g].translation().cast<float>();
+    std::size_t inliers = 0;
+    for (const Vec3f& q : source_points) {
+      const Vec3f moved = r * q + t;
+      NearestWithin nearest(radius2);
+      tree.findNeighbors(nearest, moved.data(), params);
+      inliers += nearest.found();
+    }
+    shares[g] = static_cast<double>(inliers) / source_points.size();
+  }
   return shares;
 }
 
