@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "bench_data.h"
+#include "child_run.h"
 #include "objmap/pipeline/diff.h"
 #include "objmap/pipeline/fuse.h"
 
@@ -35,37 +36,6 @@ struct DiffRun {
   double fitness = 0.0;
 };
 
-// Runs `job` in a child process; it writes `n` doubles back through a pipe. False on failure.
-template <typename Job>
-bool in_child(Job job, double* out, int n, rusage& usage) {
-  int fd[2];
-  if (pipe(fd) != 0) return false;
-  const pid_t pid = fork();
-  if (pid < 0) return false;
-  if (pid == 0) {
-    close(fd[0]);
-    int code = 0;
-    try {
-      std::vector<double> values(n, 0.0);
-      job(values.data());
-      if (write(fd[1], values.data(), sizeof(double) * n) !=
-          static_cast<ssize_t>(sizeof(double) * n))
-        code = 1;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "bench_diff: %s\n", e.what());
-      code = 1;
-    }
-    close(fd[1]);
-    _exit(code);
-  }
-  close(fd[1]);
-  const ssize_t got = read(fd[0], out, sizeof(double) * n);
-  close(fd[0]);
-  int status = 0;
-  return wait4(pid, &status, 0, &usage) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0 &&
-         got == static_cast<ssize_t>(sizeof(double) * n);
-}
-
 bool fuse(const fs::path& dataset, const fs::path& out) {
   pipeline::FuseOptions options;
   options.dataset = dataset;
@@ -74,7 +44,7 @@ bool fuse(const fs::path& dataset, const fs::path& out) {
   options.out = out;
   double unused = 0.0;
   rusage usage{};
-  return in_child([&](double*) { pipeline::run_fuse(options); }, &unused, 1, usage);
+  return bench::in_child([&](double*) { pipeline::run_fuse(options); }, &unused, 1, usage);
 }
 
 bool diff(const fs::path& before, const fs::path& after, const fs::path& out, DiffRun& run) {
@@ -85,7 +55,7 @@ bool diff(const fs::path& before, const fs::path& after, const fs::path& out, Di
   double values[5] = {0, 0, 0, 0, 0};
   rusage usage{};
   const auto t0 = std::chrono::steady_clock::now();
-  const bool ok = in_child(
+  const bool ok = bench::in_child(
       [&](double* v) {
         const pipeline::DiffResult r = pipeline::run_diff(options);
         v[0] = r.seconds_read;

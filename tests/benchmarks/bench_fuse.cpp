@@ -23,6 +23,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "bench_data.h"
+#include "child_run.h"
 #include "objmap/core/version.h"
 #include "objmap/io/image.h"
 #include "objmap/io/tum_dataset.h"
@@ -38,8 +39,7 @@ constexpr double kOpen3dMsPerFrame = 214.0;  // Open3D 0.16 on this machine (iss
 
 using objmap::bench::data_dir;
 
-// One whole fuse in a child process, so that each run's peak RSS is its own (not that of earlier
-// runs or of this process). Returns false when the child failed.
+// One whole fuse in a child process (its peak RSS its own). False when the child failed.
 struct FuseRun {
   double seconds = 0.0;
   double scene[3] = {0.0, 0.0, 0.0};  // the scene step: up, surfaces, relations (wall seconds)
@@ -47,33 +47,15 @@ struct FuseRun {
   double peak_rss_mb = 0.0;
 };
 bool fuse_in_child(const pipeline::FuseOptions& options, FuseRun& run) {
-  int fd[2];
-  if (pipe(fd) != 0) return false;
-  const pid_t pid = fork();
-  if (pid < 0) return false;
-  if (pid == 0) {
-    close(fd[0]);
-    int code = 0;
-    try {
-      const pipeline::FuseResult r = pipeline::run_fuse(options);
-      const double s[4] = {r.seconds_total, r.scene.seconds_up, r.scene.seconds_surfaces,
-                           r.scene.seconds_relations};
-      code = write(fd[1], s, sizeof s) == static_cast<ssize_t>(sizeof s) ? 0 : 1;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "bench_fuse: %s\n", e.what());
-      code = 1;
-    }
-    _exit(code);
-  }
-  close(fd[1]);
   double s[4] = {0.0, 0.0, 0.0, 0.0};
-  const bool got = read(fd[0], s, sizeof s) == static_cast<ssize_t>(sizeof s);
-  close(fd[0]);
-  int status = 0;
   rusage usage{};
-  if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
-      !got)
-    return false;
+  const auto job = [&](double* out) {
+    const pipeline::FuseResult r = pipeline::run_fuse(options);
+    const double values[4] = {r.seconds_total, r.scene.seconds_up, r.scene.seconds_surfaces,
+                              r.scene.seconds_relations};
+    std::copy(values, values + 4, out);
+  };
+  if (!objmap::bench::in_child(job, s, 4, usage)) return false;
   run.seconds = s[0];
   for (int k = 0; k < 3; ++k) run.scene[k] = s[k + 1];
   run.peak_rss_mb = usage.ru_maxrss / 1024.0;
