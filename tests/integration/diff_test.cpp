@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "support/diff_pair.h"
 #include "support/schema_check.h"
 #include "support/test_support.h"
 
@@ -14,40 +15,6 @@ namespace objmap::test {
 namespace {
 
 using nlohmann::json;
-
-// A synthetic first visit, its second visit (2 moved, 1 removed, 1 added) and both fused with the
-// ground-truth trajectory and the noisy segmentation; small: 60 frames at half size, a full orbit.
-struct SynthPair {
-  fs::path first, second, run_a, run_b;
-  RunResult why;
-};
-
-SynthPair diff_synth_pair(const std::string& seed) {
-  SynthPair p;
-  const std::vector<std::string> common{"--frames",      "60",  "--scale", "0.5",
-                                        "--orbit-speed", "180", "--seed",  seed};
-  std::vector<std::string> a{"synth", "--out", "{OUT}"};
-  a.insert(a.end(), common.begin(), common.end());
-  p.first = cached_output("diff-first-" + seed, a, &p.why);
-  if (!fs::exists(p.first)) return p;
-  std::vector<std::string> b{
-      "synth", "--out", "{OUT}", "--second-visit-of", p.first.string(), "--move", "2", "--remove",
-      "1",     "--add", "1"};
-  b.insert(b.end(), common.begin(), common.end());
-  b.back() = std::to_string(std::stoi(seed) + 100);  // the second visit's own seed
-  p.second = cached_output("diff-second-" + seed, b, &p.why);
-  if (!fs::exists(p.second)) return p;
-  const auto fuse = [&](const fs::path& scene, const std::string& key) {
-    return cached_output(
-        key,
-        {"fuse", "--dataset", scene.string(), "--trajectory", (scene / "groundtruth.txt").string(),
-         "--segmentation", (scene / "segmentation").string(), "--out", "{OUT}"},
-        &p.why);
-  };
-  p.run_a = fuse(p.first, "diff-first-fuse-" + seed);
-  p.run_b = fuse(p.second, "diff-second-fuse-" + seed);
-  return p;
-}
 
 TEST(DiffSynthetic, ChangesFoundAndRegisteredOnASecondVisit) {
   const SynthPair p = diff_synth_pair("11");

@@ -238,6 +238,10 @@ span.swatch { display: inline-block; width: 10px; height: 10px; border-radius: 2
 footer { margin-top: 28px; font-size: 12px; color: #666; }
 )";
 
+}  // namespace
+
+std::string page_style() { return kStyle; }
+
 std::string image_tag(const PagePicture& p, const std::string& css_class, const std::string& alt) {
   std::string tag = "<img";
   if (!css_class.empty()) tag += " class=\"" + css_class + "\"";
@@ -247,8 +251,6 @@ std::string image_tag(const PagePicture& p, const std::string& css_class, const 
            "\"";
   return tag + "/>";
 }
-
-}  // namespace
 
 std::string summary_line(const PageContent& c) {
   std::string s;

@@ -77,6 +77,13 @@ struct PageContent {
   std::vector<std::string> inputs;  // "label: path" lines for the footer
 };
 
+// The pages' style sheet (the run report's and the diff report's).
+std::string page_style();
+
+// <img> of a PNG picture as a data URI, with its size when known; `alt` escaped.
+std::string image_tag(const PagePicture& picture, const std::string& css_class,
+                      const std::string& alt);
+
 // One line: keyframes, objects (per class), ATE when known.
 std::string summary_line(const PageContent& content);
 

@@ -54,8 +54,9 @@ std::vector<Vec3f> every_kth(const std::vector<Vec3f>& points, std::size_t max_p
   return out;
 }
 
-json map_json(const View3dContent& c, const View3dOptions& options) {
-  const PointCloud thin = thin_points(c.map, options.max_map_points);
+json map_json(const PointCloud& map, std::size_t total, double point_size_m,
+              const View3dOptions& options) {
+  const PointCloud thin = thin_points(map, options.max_map_points);
   json block = points_json(thin.points);
   std::string rgb;
   rgb.reserve(thin.size() * 3);
@@ -66,8 +67,8 @@ json map_json(const View3dContent& c, const View3dOptions& options) {
     rgb += static_cast<char>(col.b);
   }
   block["rgb"] = base64_encode(rgb);
-  block["of"] = std::max(c.map_points_total, c.map.size());
-  block["point_size_m"] = c.map_point_size_m;
+  block["of"] = std::max(total, map.size());
+  block["point_size_m"] = point_size_m;
   return block;
 }
 
@@ -86,6 +87,7 @@ json object_json(const View3dObject& o, const View3dOptions& options) {
             {"score", std::round(o.score * 1000.0) / 1000.0},
             {"points", points_json(every_kth(o.points, options.max_object_points))},
             {"relations", o.relations}};
+  if (!o.label.empty()) j["label"] = o.label;
   j["points"]["of"] = o.points.size();
   if (!o.mesh_triangles.empty()) {
     json mesh = points_json(o.mesh_vertices);
@@ -166,7 +168,18 @@ PointCloud thin_points(const PointCloud& cloud, std::size_t max_points) {
 std::string view3d_json(const View3dContent& c, const View3dOptions& options) {
   options.check();
   json doc;
-  doc["map"] = map_json(c, options);
+  doc["map"] = map_json(c.map, c.map_points_total, c.map_point_size_m, options);
+  if (!c.second_map.empty())
+    doc["second_map"] =
+        map_json(c.second_map, c.second_map_points_total, c.map_point_size_m, options);
+  if (!c.arrows.empty()) {
+    doc["arrows"] = json::array();
+    for (const View3dArrow& a : c.arrows)
+      doc["arrows"].push_back({{"from", vec_json(a.from)},
+                               {"to", vec_json(a.to)},
+                               {"color", hex_color(a.color)},
+                               {"label", a.label}});
+  }
   doc["objects"] = json::array();
   for (const View3dObject& o : c.objects) doc["objects"].push_back(object_json(o, options));
   doc["surfaces"] = json::array();
@@ -189,9 +202,14 @@ std::string view3d_html(const View3dContent& c, const View3dOptions& options) {
   std::string h = "<style>" + std::string(kStyle) + "</style>\n";
   h += "<div id=\"view3d\">\n<canvas></canvas>\n<div class=\"labels\"></div>\n";
   h += "<div class=\"toolbar\">\n";
-  for (const char* layer : {"map", "objects", "boxes", "labels", "surfaces", "path"})
-    h += std::string("<label><input type=\"checkbox\" data-layer=\"") + layer +
-         "\" checked=\"checked\"/> " + layer + "</label>\n";
+  std::vector<std::string> layers = {"map"};
+  if (!c.second_map.empty()) layers.push_back("second_map");
+  for (const char* layer : {"objects", "boxes", "labels", "surfaces", "path"})
+    layers.push_back(layer);
+  if (!c.arrows.empty()) layers.push_back("arrows");
+  for (const std::string& layer : layers)
+    h += "<label><input type=\"checkbox\" data-layer=\"" + layer + "\" checked=\"checked\"/> " +
+         (layer == "second_map" ? std::string("after map") : layer) + "</label>\n";
   h += "<input type=\"search\" placeholder=\"cup on table\" aria-label=\"search objects\"/>\n";
   h += "<span class=\"search-result\"></span>\n</div>\n";
   h += "<div class=\"panel\"></div>\n";
@@ -199,13 +217,17 @@ std::string view3d_html(const View3dContent& c, const View3dOptions& options) {
        "object or its label: details</div>\n</div>\n";
   const std::size_t drawn = std::min(c.map.size(), options.max_map_points);
   const std::size_t total = std::max(c.map_points_total, c.map.size());
-  h += "<p class=\"view3d-caption\">The run in its gravity frame (z up): the semantic map (" +
-       std::to_string(drawn) + " of its " + std::to_string(total) +
-       " points), each object's points in its class colour with its oriented box and label "
-       "(where labels crowd, the nearest; zoom in for the others), the support surfaces (floor "
-       "grey, tables brown, other surfaces violet) and the camera path in magenta. The search "
-       "takes objmap query's phrases: CLASS [on|near|above|under CLASS|floor|table|seat|"
-       "surface].</p>\n";
+  const std::string caption =
+      !c.caption.empty()
+          ? c.caption
+          : "The run in its gravity frame (z up): the semantic map (" + std::to_string(drawn) +
+                " of its " + std::to_string(total) +
+                " points), each object's points in its class colour with its oriented box and "
+                "label (where labels crowd, the nearest; zoom in for the others), the support "
+                "surfaces (floor grey, tables brown, other surfaces violet) and the camera path "
+                "in magenta. The search takes objmap query's phrases: CLASS "
+                "[on|near|above|under CLASS|floor|table|seat|surface].";
+  h += "<p class=\"view3d-caption\">" + xml_escape(caption) + "</p>\n";
   h += "<script type=\"application/json\" id=\"view3d-data\">" + view3d_json(c, options) +
        "</script>\n";
   // three.js (MIT, lib/objmap/report/three/LICENSE; its licence header is kept in the text) and the

@@ -17,8 +17,9 @@
 namespace objmap::report {
 
 struct View3dObject {
-  int id = -1;
+  int id = -1;  // unique in the view (the diff view gives the after run's objects ids < 0)
   std::string class_name;
+  std::string label;  // drawn above it and heading its panel; empty: "id class"
   Rgb color;
   Obb obb;               // in the gravity frame
   int observations = 0;  // objects.json observation_count
@@ -41,11 +42,25 @@ struct View3dSurface {
   std::vector<Vec3> outline;            // in the gravity frame, cyclic
 };
 
+// An arrow from one point to another (the diff view: a moved object's old and new place).
+struct View3dArrow {
+  Vec3 from = Vec3::Zero(), to = Vec3::Zero();  // gravity frame
+  Rgb color{220, 30, 30};
+  std::string label;  // e.g. "3 cup moved 0.42 m"
+};
+
 struct View3dContent {
   PointCloud map;  // the semantic map in the gravity frame, with colours (may be thinned already)
   std::size_t map_points_total = 0;  // the map's points before any thinning (0: map.size())
   std::vector<View3dObject> objects;
   std::vector<View3dSurface> surfaces;
+  // A second map drawn beside the first in a layer of its own ("after"; objmap report --diff: the
+  // after run's map registered into the before run's frame, tinted); empty: none.
+  PointCloud second_map;
+  std::size_t second_map_points_total = 0;
+  std::vector<View3dArrow> arrows;  // layer "arrows"; none: no such layer
+  // The caption under the view; empty: the run report's (the semantic map, objects, surfaces).
+  std::string caption;
   std::vector<Vec3> camera_path;   // gravity frame
   double map_point_size_m = 0.01;  // the map's voxel size
   // The search: every phrase "CLASS" and "CLASS RELATION TARGET" of this map (subject and target

@@ -47,7 +47,7 @@
   const camera = new THREE.PerspectiveCamera(50, 1, 0.01, 500);
   camera.up.set(0, 0, 1);
   const layers = {};
-  for (const name of ['map', 'objects', 'boxes', 'surfaces', 'path']) {
+  for (const name of ['map', 'second_map', 'objects', 'boxes', 'surfaces', 'path', 'arrows']) {
     layers[name] = new THREE.Group();
     scene.add(layers[name]);
   }
@@ -76,6 +76,20 @@
       hi.push(sample[Math.ceil(0.99 * (sample.length - 1))]);
     }
     bounds.set(new THREE.Vector3(lo[0], lo[1], lo[2]), new THREE.Vector3(hi[0], hi[1], hi[2]));
+  }
+
+  // A second map (objmap report --diff: the after run's, registered and tinted) and arrows (a
+  // moved object's old place to its new one).
+  if (data.second_map && data.second_map.count)
+    layers.second_map.add(pointCloud(positionsOf(data.second_map), bytesOf(data.second_map.rgb), 0,
+                                     data.second_map.point_size_m, false));
+  for (const a of data.arrows || []) {
+    const from = new THREE.Vector3(a.from[0], a.from[1], a.from[2]);
+    const dir = new THREE.Vector3(a.to[0], a.to[1], a.to[2]).sub(from);
+    const length = Math.max(dir.length(), 1e-3);
+    const head = Math.min(0.1, 0.3 * length);
+    layers.arrows.add(new THREE.ArrowHelper(dir.normalize(), from, length, a.color, head,
+                                            0.5 * head));
   }
 
   const BOX_EDGES = [0, 1, 1, 3, 3, 2, 2, 0, 4, 5, 5, 7, 7, 6, 6, 4, 0, 4, 1, 5, 2, 6, 3, 7];
@@ -117,7 +131,7 @@
     label.className = 'label';
     label.dataset.id = o.id;
     label.style.borderColor = o.color;
-    label.textContent = o.id + ' ' + o.class;
+    label.textContent = o.label || o.id + ' ' + o.class;
     labelsBox.appendChild(label);
     bounds.expandByPoint(top);
     return {data: o, body: body, box: box, label: label, top: top,
@@ -318,7 +332,7 @@
       img.alt = d.id + ' ' + d.class;
       panel.appendChild(img);
     }
-    panel.appendChild(text('h3', d.class + ' (id ' + d.id + ')'));
+    panel.appendChild(text('h3', d.label || d.class + ' (id ' + d.id + ')'));
     const cm = function (m) { return (200 * m).toFixed(0); };
     const lines = [
       'position ' + d.center.map(function (x) { return x.toFixed(3); }).join(', ') + ' m',

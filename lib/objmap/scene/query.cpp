@@ -48,6 +48,17 @@ std::string join(std::vector<std::string>::const_iterator begin,
   return out;
 }
 
+}  // namespace
+
+std::optional<std::string> class_named(const std::string& phrase,
+                                       const std::set<std::string>& known) {
+  for (const std::string& s : singulars(phrase))
+    if (known.count(segmentation::canonical_class(s))) return segmentation::canonical_class(s);
+  return std::nullopt;
+}
+
+namespace {
+
 // The canonical class or surface label (second: true) that `phrase` names, if any.
 std::optional<std::pair<std::string, bool>> lookup(const std::string& phrase, bool surface_ok,
                                                    const std::set<std::string>& known) {

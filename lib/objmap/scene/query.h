@@ -1,6 +1,7 @@
 #pragma once
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,11 @@ struct Query {
   std::string target;    // canonical class or a surface label
   bool target_is_surface = false;
 };
+
+// The canonical class (segmentation::canonical_class) that `phrase` names among `known` (canonical
+// names), plural allowed ("cups", "tv monitors", "mice"); none when it names none of them.
+std::optional<std::string> class_named(const std::string& phrase,
+                                       const std::set<std::string>& known);
 
 // Parses `text` with the known class names (COCO-80 and the map's own; compared as
 // segmentation::canonical_class spells them). Throws InputError("query", "...") naming the word it
