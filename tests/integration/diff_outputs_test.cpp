@@ -40,7 +40,8 @@ Vec3 vec(const json& v) { return {v[0].get<double>(), v[1].get<double>(), v[2].g
 // The true objects of a status in changes_gt.json.
 std::vector<json> truth(const DiffFixture& f, const std::string& status) {
   std::vector<json> out;
-  for (const json& o : json::parse(read_text(f.pair.second / "changes_gt.json"))["objects"])
+  const json gt = json::parse(read_text(f.pair.second / "changes_gt.json"));  // outlives the loop
+  for (const json& o : gt["objects"])
     if (o["status"] == status) out.push_back(o);
   return out;
 }

@@ -49,7 +49,9 @@ json valid_diff() {
             {"rms_m", 0.008},
             {"icp_points", 10000},
             {"sigma_translation_m", 0.0003},
-            {"sigma_yaw_deg", nullptr}}},
+            {"sigma_yaw_deg", nullptr},
+            {"uncertainty_at_objects_m", 0.03},
+            {"uncertainty_yaw_deg", nullptr}}},
           {"counts",
            {{"unchanged", 0},
             {"moved", 1},
@@ -103,6 +105,8 @@ TEST(DiffJson, ReadsWhatObjmapDiffWrites) {
   EXPECT_NEAR(d.registration.before_from_after.translation().x(), 1.0, 1e-12);
   EXPECT_NEAR(d.registration.sigma_translation_m.value(), 0.0003, 1e-12);
   EXPECT_FALSE(d.registration.sigma_yaw_deg.has_value());
+  EXPECT_NEAR(d.registration.uncertainty_at_objects_m.value(), 0.03, 1e-12);
+  EXPECT_FALSE(d.registration.uncertainty_yaw_deg.has_value());
   EXPECT_EQ(d.counts.at("moved"), 1);
   ASSERT_EQ(d.left_out.size(), 1u);
   EXPECT_EQ(d.left_out[0].second, 2);
@@ -148,6 +152,10 @@ TEST(DiffJson, EveryDamagedFieldIsOneLineNamingFileAndField) {
       {"registration: missing field 'icp_points'",
        [](json& d) { d["registration"].erase("icp_points"); }},
       {"registration.sigma_yaw_deg", [](json& d) { d["registration"]["sigma_yaw_deg"] = "x"; }},
+      {"registration: missing field 'uncertainty_at_objects_m'",
+       [](json& d) { d["registration"].erase("uncertainty_at_objects_m"); }},
+      {"registration.uncertainty_yaw_deg",
+       [](json& d) { d["registration"]["uncertainty_yaw_deg"] = -1.0; }},
       {"registration.rms_m", [](json& d) { d["registration"]["rms_m"] = nullptr; }},
       {"counts: missing field 'added'", [](json& d) { d["counts"].erase("added"); }},
       {"counts.moved", [](json& d) { d["counts"]["moved"] = -1; }},

@@ -109,6 +109,9 @@ DiffRegistration read_registration(const json& r, const Field& at) {
   g.icp_points = integer(get("icp_points"), at / "icp_points", true);
   g.sigma_translation_m = number_or_null(get("sigma_translation_m"), at / "sigma_translation_m");
   g.sigma_yaw_deg = number_or_null(get("sigma_yaw_deg"), at / "sigma_yaw_deg");
+  g.uncertainty_at_objects_m =
+      number_or_null(get("uncertainty_at_objects_m"), at / "uncertainty_at_objects_m");
+  g.uncertainty_yaw_deg = number_or_null(get("uncertainty_yaw_deg"), at / "uncertainty_yaw_deg");
   return g;
 }
 

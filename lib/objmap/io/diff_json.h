@@ -26,6 +26,8 @@ struct DiffRegistration {
   int common_objects = 0, hypotheses = 0, icp_points = 0;
   double coarse_rms_m = 0.0, fitness = 0.0, fitness_both = 0.0, rms_m = 0.0;
   std::optional<double> sigma_translation_m, sigma_yaw_deg;  // none: not constrained
+  // From the common objects' residuals; none: fewer than two common objects.
+  std::optional<double> uncertainty_at_objects_m, uncertainty_yaw_deg;
 };
 
 // One object as one visit saw it.
