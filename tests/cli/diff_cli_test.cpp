@@ -97,6 +97,16 @@ TEST(DiffCli, MissingRunBadAlignAndOutOverAnInputAreExit2) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(diff_cli_lines(r.err), 1) << r.err;
 
+  // A run without its dense map: the registration and the free-space evidence need it.
+  fs::copy(run, tmp / "no_dense", fs::copy_options::recursive);
+  fs::remove(tmp / "no_dense" / "map_dense.ply");
+  r = run_objmap({"diff", "--before", run.string(), "--after", (tmp / "no_dense").string(), "--out",
+                  (tmp / "out").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(diff_cli_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("map_dense.ply: missing"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(tmp / "out" / "diff.json"));
+
   r = run_objmap({"diff", "--before", run.string(), "--after", run.string(), "--out",
                   (tmp / "out").string(), "--min-fitness", "2"});
   EXPECT_EQ(r.exit_code, 2);
