@@ -80,7 +80,9 @@ void ClassSizes::update(const nlohmann::json& document, const std::string& where
     throw InputError(where,
                      "no \"sizes\" object; expected {\"sizes\": {\"<class>\": [min_m, "
                      "max_m], ...}}");
-  for (const auto& [name, value] : sizes->items()) {
+  for (const auto& item : sizes->items()) {
+    const std::string& name = item.key();
+    const nlohmann::json& value = item.value();  // not a structured binding: the lambda uses it
     const std::string field = "sizes." + name;
     const std::string canonical = canonical_class(name);
     if (canonical.empty()) throw InputError(where + ": " + field, "an empty class name");
