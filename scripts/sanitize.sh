@@ -29,6 +29,8 @@ echo "sanitize: built in $((built - start)) s"
 export CXXFLAGS="$flags" LDFLAGS="-fsanitize=address,undefined"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+# Leaks inside third-party libraries (scripts/lsan.supp names each and why).
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp}
 status=0
 (cd "$build" && OBJMAP_DATA="$data" ctest --output-on-failure -j"${JOBS:-2}") || status=$?
 echo "sanitize: tests in $(($(date +%s) - built)) s, $(($(date +%s) - start)) s in all"

@@ -84,7 +84,8 @@ TEST(DiffOutputs, QueryAnswersAreTheTrueChanges) {
     expect_answers_are_the_truth(answers, truth(f, status), status);
   }
   // Moved: the displacement is after − before in A's frame.
-  for (const json& m : query_json(f, "which objects moved?")["matches"]) {
+  const json which = query_json(f, "which objects moved?");  // outlives the loop
+  for (const json& m : which["matches"]) {
     const Vec3 d = vec(m["after"]["position_in_before"]) - vec(m["before"]["position"]);
     EXPECT_LT((vec(m["displacement_m"]) - d).norm(), 1e-6) << m.dump();
   }
@@ -92,8 +93,8 @@ TEST(DiffOutputs, QueryAnswersAreTheTrueChanges) {
   const json moved = query_json(f, "what moved");
   ASSERT_FALSE(moved["matches"].empty());
   const std::string cls = moved["matches"][0]["before"]["class"];
-  for (const json& m : query_json(f, "moved " + cls)["matches"])
-    EXPECT_EQ(m["before"]["class"], cls);
+  const json of_class = query_json(f, "moved " + cls);
+  for (const json& m : of_class["matches"]) EXPECT_EQ(m["before"]["class"], cls);
   // The text answer names each moved object with its displacement.
   const RunResult text = run_objmap({"query", "--diff", f.diff.string(), "what moved"});
   ASSERT_EQ(text.exit_code, 0) << text.err;
