@@ -3,6 +3,11 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -108,57 +113,97 @@ inline std::uint64_t mix_voxel_key(VoxelKey key) {
   return key;
 }
 
+// Zeroed memory mapped from the kernel, transparent huge pages asked for (nullptr on failure), and
+// its release (voxel_key.cpp).
+void* map_zeroed(std::size_t bytes);
+void unmap(void* p, std::size_t bytes);
+
 // Open addressing with linear probing, power-of-two capacity, at most 5/8 full. Keys and values sit
 // in one slot array (one cache line for a probe and the update). Entries leave only in bulk
 // (erase, the dense map's pruning). Iteration order depends on the insertion history; callers
 // that export sort by key.
+//
+// A slot stores its key XOR kNoVoxel, so that an empty slot (key kNoVoxel, value Value{}) is all
+// zero bits: the slot array is a zeroed allocation (calloc: a large one is fresh pages from the
+// kernel, written only where entries land), neither filled on allocation nor on growth. Value
+// must be trivially copyable and Value{} all zero bits (integers, floats, structs of them).
 template <typename Value>
 class VoxelHashTable {
+  static_assert(std::is_trivially_copyable<Value>::value,
+                "VoxelHashTable stores its slots in zeroed raw memory");
+
  public:
   struct Slot {
-    VoxelKey key = kNoVoxel;
-    Value value{};
+    VoxelKey stored;  // key ^ kNoVoxel: 0 for an empty slot
+    Value value;
+    VoxelKey key() const { return stored ^ kNoVoxel; }
+    bool empty() const { return stored == 0; }
   };
 
   VoxelHashTable() = default;
   explicit VoxelHashTable(std::size_t expected) { reserve(expected); }
+  VoxelHashTable(const VoxelHashTable& other) { *this = other; }
+  VoxelHashTable(VoxelHashTable&& other) noexcept { *this = std::move(other); }
+  VoxelHashTable& operator=(const VoxelHashTable& other) {
+    if (this == &other) return *this;
+    Slots copy;
+    if (other.capacity_ > 0) {
+      copy = allocate(other.capacity_, /*zeroed=*/false);
+      std::memcpy(static_cast<void*>(copy.get()), other.slots_.get(),
+                  other.capacity_ * sizeof(Slot));
+    }
+    slots_ = std::move(copy);
+    capacity_ = other.capacity_;
+    size_ = other.size_;
+    shift_ = other.shift_;
+    return *this;
+  }
+  VoxelHashTable& operator=(VoxelHashTable&& other) noexcept {
+    slots_ = std::move(other.slots_);
+    capacity_ = std::exchange(other.capacity_, 0);
+    size_ = std::exchange(other.size_, 0);
+    shift_ = std::exchange(other.shift_, 64);
+    return *this;
+  }
 
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
-  std::size_t capacity() const { return slots_.size(); }
-  std::size_t memory_bytes() const { return slots_.capacity() * sizeof(Slot); }
+  std::size_t capacity() const { return capacity_; }
+  std::size_t memory_bytes() const { return capacity_ * sizeof(Slot); }
 
   void reserve(std::size_t expected) {
     std::size_t cap = 16;
     while (cap * 5 < expected * 8) cap *= 2;
-    if (cap > slots_.size()) rehash(cap);
+    if (cap > capacity_) rehash(cap);
   }
 
   // Empties the table and keeps its slots (no allocation when refilled to the same size). An empty
-  // table's slots are all Slot{} already (entries are never erased one by one): nothing to write.
+  // table's slots are all zero already (entries are never erased one by one): nothing to write.
   void reset() {
     if (size_ == 0) return;
-    std::fill(slots_.begin(), slots_.end(), Slot{});
+    std::memset(static_cast<void*>(slots_.get()), 0, capacity_ * sizeof(Slot));
     size_ = 0;
   }
 
   void clear() {
-    slots_.clear();
-    slots_.shrink_to_fit();
+    slots_.reset();
+    capacity_ = 0;
     size_ = 0;
     shift_ = 64;
   }
 
   // The value of `key`, inserted value-initialised when absent (key must not be kNoVoxel).
   Value& operator[](VoxelKey key) {
-    if ((size_ + 1) * 8 > slots_.size() * 5) rehash(slots_.empty() ? 16 : slots_.size() * 2);
+    if ((size_ + 1) * 8 > capacity_ * 5) rehash(capacity_ == 0 ? 16 : capacity_ * 2);
+    const VoxelKey stored = key ^ kNoVoxel;
     std::size_t i = index(key);
-    const std::size_t m = slots_.size() - 1;
+    const std::size_t m = capacity_ - 1;
+    Slot* const slots = slots_.get();
     while (true) {
-      Slot& s = slots_[i];
-      if (s.key == key) return s.value;
-      if (s.key == kNoVoxel) {
-        s.key = key;
+      Slot& s = slots[i];
+      if (s.stored == stored) return s.value;
+      if (s.stored == 0) {
+        s.stored = stored;
         ++size_;
         return s.value;
       }
@@ -167,13 +212,15 @@ class VoxelHashTable {
   }
 
   const Value* find(VoxelKey key) const {
-    if (slots_.empty()) return nullptr;
+    if (capacity_ == 0) return nullptr;
+    const VoxelKey stored = key ^ kNoVoxel;
     std::size_t i = index(key);
-    const std::size_t m = slots_.size() - 1;
+    const std::size_t m = capacity_ - 1;
+    const Slot* const slots = slots_.get();
     while (true) {
-      const Slot& s = slots_[i];
-      if (s.key == key) return &s.value;
-      if (s.key == kNoVoxel) return nullptr;
+      const Slot& s = slots[i];
+      if (s.stored == stored) return &s.value;
+      if (s.stored == 0) return nullptr;
       i = (i + 1) & m;
     }
   }
@@ -184,14 +231,15 @@ class VoxelHashTable {
 
   // Hint: `key`'s home slot will be needed soon (hides the cache miss of a large table).
   void prefetch(VoxelKey key) const {
-    if (!slots_.empty()) __builtin_prefetch(&slots_[index(key)], 1);
+    if (capacity_ > 0) __builtin_prefetch(&slots_[index(key)], 1);
   }
 
   // f(key, value) for every entry, in slot order.
   template <typename F>
   void for_each(F&& f) const {
-    for (const Slot& s : slots_)
-      if (s.key != kNoVoxel) f(s.key, s.value);
+    const Slot* const slots = slots_.get();
+    for (std::size_t i = 0; i < capacity_; ++i)
+      if (!slots[i].empty()) f(slots[i].key(), slots[i].value);
   }
 
   // Removes `key`'s entry (false: there was none). The capacity stays; no tombstone is left
@@ -202,26 +250,52 @@ class VoxelHashTable {
   std::vector<VoxelKey> sorted_keys() const;
 
  private:
+  // Slot arrays of 2 MB and more are mapped from the kernel (zeroed pages) with transparent huge
+  // pages asked for: a large table is touched all over, and one fault per 2 MB instead of per 4 KB
+  // is most of what filling it costs. Smaller ones come from calloc / malloc.
+  static constexpr std::size_t kMapBytes = std::size_t{2} << 20;
+  struct Free {
+    std::size_t bytes = 0;
+    void operator()(Slot* p) const { free_slots(p, bytes); }
+  };
+  using Slots = std::unique_ptr<Slot[], Free>;
+  static Slots allocate(std::size_t cap, bool zeroed) {
+    const std::size_t bytes = cap * sizeof(Slot);
+    void* p = bytes >= kMapBytes ? map_zeroed(bytes)
+              : zeroed           ? std::calloc(cap, sizeof(Slot))
+                                 : std::malloc(bytes);
+    if (!p) throw std::bad_alloc();
+    return Slots(static_cast<Slot*>(p), Free{bytes});
+  }
+  static void free_slots(Slot* p, std::size_t bytes) {
+    if (bytes >= kMapBytes)
+      unmap(p, bytes);
+    else
+      std::free(p);
+  }
   std::size_t index(VoxelKey key) const {
     return static_cast<std::size_t>(mix_voxel_key(key) >> shift_);
   }
   void rehash(std::size_t cap) {
-    std::vector<Slot> old;
+    Slots old = allocate(cap, /*zeroed=*/true);
     old.swap(slots_);
-    slots_.assign(cap, Slot{});
+    const std::size_t old_capacity = std::exchange(capacity_, cap);
     int bits = 0;
     while ((std::size_t{1} << bits) < cap) ++bits;
     shift_ = 64 - bits;
     const std::size_t m = cap - 1;
-    for (Slot& s : old) {
-      if (s.key == kNoVoxel) continue;
-      std::size_t i = index(s.key);
-      while (slots_[i].key != kNoVoxel) i = (i + 1) & m;
-      slots_[i] = std::move(s);
+    Slot* const slots = slots_.get();
+    for (std::size_t k = 0; k < old_capacity; ++k) {
+      const Slot& s = old[k];
+      if (s.empty()) continue;
+      std::size_t i = index(s.key());
+      while (!slots[i].empty()) i = (i + 1) & m;
+      slots[i] = s;
     }
   }
 
-  std::vector<Slot> slots_;
+  Slots slots_;
+  std::size_t capacity_ = 0;
   std::size_t size_ = 0;
   int shift_ = 64;
 };
@@ -232,28 +306,29 @@ class VoxelHashTable {
 
 template <typename Value>
 bool objmap::geometry::VoxelHashTable<Value>::erase(VoxelKey key) {
-  if (slots_.empty()) return false;
-  const std::size_t m = slots_.size() - 1;
+  if (capacity_ == 0) return false;
+  const std::size_t m = capacity_ - 1;
+  const VoxelKey stored = key ^ kNoVoxel;
   std::size_t hole = index(key);
-  while (slots_[hole].key != key) {
-    if (slots_[hole].key == kNoVoxel) return false;
+  while (slots_[hole].stored != stored) {
+    if (slots_[hole].empty()) return false;
     hole = (hole + 1) & m;
   }
   // Backward-shift deletion (Knuth's Algorithm R): the hole takes the next entry of its cluster
   // whose home is not in (hole, j], and so on until the cluster ends.
   for (std::size_t j = hole;;) {
-    slots_[hole] = Slot{};
+    std::memset(static_cast<void*>(&slots_[hole]), 0, sizeof(Slot));
     while (true) {
       j = (j + 1) & m;
-      if (slots_[j].key == kNoVoxel) {
+      if (slots_[j].empty()) {
         --size_;
         return true;
       }
-      const std::size_t home = index(slots_[j].key);
+      const std::size_t home = index(slots_[j].key());
       const bool stays = hole <= j ? (hole < home && home <= j) : (hole < home || home <= j);
       if (!stays) break;
     }
-    slots_[hole] = std::move(slots_[j]);
+    slots_[hole] = slots_[j];
     hole = j;
   }
 }
@@ -263,8 +338,7 @@ std::vector<objmap::geometry::VoxelKey> objmap::geometry::VoxelHashTable<Value>:
     const {
   std::vector<VoxelKey> keys;
   keys.reserve(size_);
-  for (const Slot& s : slots_)
-    if (s.key != kNoVoxel) keys.push_back(s.key);
+  for_each([&](VoxelKey key, const Value&) { keys.push_back(key); });
   std::sort(keys.begin(), keys.end());
   return keys;
 }

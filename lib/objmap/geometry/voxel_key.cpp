@@ -1,0 +1,45 @@
+#include "objmap/geometry/voxel_key.h"
+
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cstdint>
+
+namespace objmap::geometry {
+
+namespace {
+
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+
+std::size_t page_rounded(std::size_t bytes) {
+  const std::size_t page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  return (bytes + page - 1) / page * page;
+}
+
+}  // namespace
+
+// The mapping starts on a 2 MB boundary (mapped with room to spare, the spare trimmed), so that
+// every whole 2 MB of it can be a huge page; its end stays where `bytes` ends (no page of memory
+// beyond the table).
+void* map_zeroed(std::size_t bytes) {
+  const std::size_t size = page_rounded(bytes);
+  const std::size_t room = size + kHugePage;
+  void* p = mmap(nullptr, room, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) return nullptr;
+  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(p);
+  const std::uintptr_t start = (at + kHugePage - 1) / kHugePage * kHugePage;
+  if (start > at) munmap(p, start - at);
+  if (at + room > start + size)
+    munmap(reinterpret_cast<void*>(start + size), at + room - (start + size));
+  void* table = reinterpret_cast<void*>(start);
+#ifdef MADV_HUGEPAGE
+  madvise(table, size, MADV_HUGEPAGE);  // a hint: without huge pages the table works the same
+#endif
+  return table;
+}
+
+void unmap(void* p, std::size_t bytes) {
+  if (p) munmap(p, page_rounded(bytes));
+}
+
+}  // namespace objmap::geometry
