@@ -27,13 +27,21 @@ void FollowOptions::check() const {
           "not a folder; expected the recording being written");
 }
 
-FollowStatus run_follow(const FollowOptions& options, const FollowEvents& events) {
-  FollowState s = start_follow(options);
-  write_status(s);
+namespace {
+
+// The recording gone: one line saying so, whichever step noticed it first.
+void require_recording(const FollowOptions& options) {
+  require(fs::exists(options.dataset), options.dataset.string(),
+          "the recording folder was removed while following; the last published map is kept in " +
+              (options.out / "map").string());
+}
+
+FollowStatus follow_loop(FollowState& s, const FollowOptions& options, const FollowEvents& events) {
   for (;;) {
+    require_recording(options);
     // The end is known before the recording is read, so that the last read sees all of it.
     const bool done = fs::exists(options.dataset / "done");
-    // 1. The recording as it is now (gone: exit 2, OUT/map keeps the last published map).
+    // 1. The recording as it is now (gone: exit 2 above, OUT/map keeps the last published map).
     if (read_recording(s, events)) s.last_news = Clock::now();
     const bool idle = options.idle_exit_s > 0 && seconds_since(s.last_news) >= options.idle_exit_s;
     const bool ending = done || idle;
@@ -53,6 +61,19 @@ FollowStatus run_follow(const FollowOptions& options, const FollowEvents& events
     else
       write_status(s);
     std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_s));
+  }
+}
+
+}  // namespace
+
+FollowStatus run_follow(const FollowOptions& options, const FollowEvents& events) {
+  FollowState s = start_follow(options);
+  write_status(s);
+  try {
+    return follow_loop(s, options, events);
+  } catch (const InputError&) {
+    require_recording(options);  // a file gone under a step: the folder's removal said as such
+    throw;
   }
 }
 

@@ -86,9 +86,6 @@ FollowState start_follow(const FollowOptions& options) {
 
 bool read_recording(FollowState& s, const FollowEvents& events) {
   const fs::path& root = s.options.dataset;
-  require(fs::exists(root), root.string(),
-          "the recording folder was removed while following; the last published map is kept in " +
-              (s.options.out / "map").string());
   bool news = false;
   try {
     io::Dataset dataset = io::read_dataset(

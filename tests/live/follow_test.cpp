@@ -1,0 +1,181 @@
+// objmap follow on a recording that objmap replay writes meanwhile: the final map is that of
+// objmap fuse on the finished recording, status.json says how far behind it was; a malformed
+// trajectory line is named and skipped, a line still being written is left for later; the
+// recording removed is exit 2 with the last map kept.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <thread>
+
+#include "live_scene.h"
+#include "support/schema_check.h"
+
+namespace objmap::test {
+namespace follow_live {
+
+nlohmann::json read_json_file(const fs::path& file) {
+  return nlohmann::json::parse(read_text(file));
+}
+
+// The reference objects matched by `objmap eval objects` (ids) and the map objects left unmatched.
+struct Matched {
+  std::set<std::string> reference;
+  std::size_t unmatched_map = 0;
+};
+
+Matched matched_objects(const fs::path& map, const fs::path& scene, const fs::path& json) {
+  const auto e =
+      run_objmap({"eval", "objects", "--map", (map / "objects.json").string(), "--gt-objects",
+                  (scene / "objects_gt.json").string(), "--json", json.string()});
+  EXPECT_EQ(e.exit_code, 0) << e.err;
+  Matched m;
+  if (e.exit_code != 0) return m;
+  const auto doc = read_json_file(json);
+  for (const auto& match : doc.at("matches")) m.reference.insert(match.at("reference_id").dump());
+  m.unmatched_map = doc.at("unmatched_map_ids").size();
+  return m;
+}
+
+// Waits up to `seconds` for `ready`.
+bool wait_for(const std::function<bool()>& ready, double seconds) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) {
+    if (ready()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return ready();
+}
+
+}  // namespace follow_live
+
+namespace {
+
+using follow_live::matched_objects;
+using follow_live::read_json_file;
+using follow_live::wait_for;
+
+TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
+  const fs::path scene = live_scene(60);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  const fs::path rec = tmp / "rec";
+  RunResult replay;
+  std::thread writer([&] {
+    replay = run_objmap({"replay", "--dataset", scene.string(), "--out", rec.string(),
+                         "--trajectory", (scene / "estimated.txt").string(), "--speed", "2"});
+  });
+  ASSERT_TRUE(wait_for([&] { return fs::exists(rec / "rgb.txt"); }, 20.0));
+  const auto follow = run_objmap(
+      {"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(), "--trajectory",
+       (rec / "estimated.txt").string(), "--publish-every", "0.3", "--idle-exit", "20"});
+  writer.join();
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  ASSERT_EQ(follow.exit_code, 0) << follow.err;
+
+  // status.json: valid, finished by the done file, every frame seen, the lag recorded.
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_TRUE(validate_json(status, load_schema("follow_status.schema.json")).empty()) << status;
+  EXPECT_EQ(status.at("state"), "finished");
+  EXPECT_EQ(status.at("ended_by"), "done file");
+  EXPECT_EQ(status.at("frames_seen").get<int>(), 60);
+  EXPECT_EQ(status.at("keyframes_waiting").get<int>(), 0);
+  EXPECT_GE(status.at("publishes").get<int>(), 2) << follow.err;
+  EXPECT_GT(status.at("lag_max_s").get<double>(), 0.0);
+  EXPECT_GE(status.at("lag_max_s").get<double>(), status.at("lag_last_s").get<double>());
+  EXPECT_GT(status.at("peak_rss_kb").get<long>(), 0);
+
+  // The final map against objmap fuse on the finished recording: the same keyframes, the object
+  // count within 10%, every true object fuse finds found once.
+  const auto fuse = run_objmap({"fuse", "--dataset", rec.string(), "--trajectory",
+                                (rec / "estimated.txt").string(), "--segmentation",
+                                (rec / "segmentation").string(), "--out", (tmp / "fuse").string()});
+  ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
+  const auto fused = read_json_file(tmp / "fuse/run.json");
+  const auto live = read_json_file(tmp / "live/map/run.json");
+  EXPECT_EQ(live.at("counts").at("keyframes"), fused.at("counts").at("keyframes"));
+  const double fuse_objects =
+      static_cast<double>(read_json_file(tmp / "fuse/objects.json").at("objects").size());
+  const double live_objects = status.at("objects").get<double>();
+  EXPECT_EQ(read_json_file(tmp / "live/map/objects.json").at("objects").size(), live_objects);
+  EXPECT_GT(fuse_objects, 0.0);
+  EXPECT_LE(std::abs(live_objects - fuse_objects), 0.1 * fuse_objects)
+      << live_objects << " vs " << fuse_objects;
+  const auto by_fuse = matched_objects(tmp / "fuse", scene, tmp / "eval_fuse.json");
+  const auto by_follow = matched_objects(tmp / "live/map", scene, tmp / "eval_live.json");
+  EXPECT_EQ(by_follow.reference, by_fuse.reference);
+  EXPECT_EQ(by_follow.unmatched_map, 0u);
+  // No staging folder is left beside the map.
+  for (const auto& e : fs::directory_iterator(tmp / "live"))
+    EXPECT_TRUE(e.path().filename() == "map" || e.path().filename() == "status.json") << e.path();
+}
+
+TEST(Follow, AMalformedTrajectoryLineIsNamedSkippedAndCountedALineBeingWrittenWaits) {
+  const fs::path scene = live_scene(30);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  copy_tree(scene, tmp / "rec");
+  // Line 6 of the trajectory broken, and a last line without its '\n' (still being written).
+  std::string text = read_text(scene / "estimated.txt");
+  std::size_t at = 0;
+  for (int line = 1; line < 6; ++line) at = text.find('\n', at) + 1;
+  text.replace(at, text.find('\n', at) - at, "1700000000.2 0.1 0.2 nan 0 0 0 1");
+  write_text(tmp / "traj.txt", text + "1700000099.0 0 0 0 0 0");
+  const auto r =
+      run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
+                  "--trajectory", (tmp / "traj.txt").string(), "--idle-exit", "0.5"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find((tmp / "traj.txt").string() + ":6: "), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(":6: "), r.err.rfind(":6: ")) << "named once: " << r.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_EQ(status.at("trajectory_malformed").get<int>(), 1);
+  EXPECT_EQ(status.at("ended_by"), "idle");
+  EXPECT_GT(status.at("objects").get<int>(), 0);
+  EXPECT_TRUE(fs::exists(tmp / "live/map/objects.json"));
+}
+
+TEST(Follow, TheRecordingRemovedIsExitTwoWithTheLastMapKept) {
+  const fs::path scene = live_scene(30);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  copy_tree(scene, tmp / "rec");
+  RunResult r;
+  std::thread follower([&] {
+    r = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
+                    "--trajectory", (tmp / "rec/estimated.txt").string(), "--publish-every",
+                    "0.2"});
+  });
+  const bool published = wait_for(
+      [&] {
+        return fs::exists(tmp / "live/status.json") &&
+               read_text(tmp / "live/status.json").find("\"publishes\": 0") == std::string::npos;
+      },
+      60.0);
+  fs::remove_all(tmp / "rec");
+  follower.join();
+  ASSERT_TRUE(published);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::string last = r.err.substr(r.err.rfind('\n', r.err.size() - 2) + 1);
+  EXPECT_NE(last.find("removed while following"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(tmp / "live/map/objects.json"));
+  EXPECT_TRUE(fs::exists(tmp / "live/map/map_semantic.ply"));
+}
+
+TEST(Follow, BadInputIsOneLineAndExitTwo) {
+  TempDir tmp;
+  const auto missing = run_objmap(
+      {"follow", "--dataset", (tmp / "nope").string(), "--out", (tmp / "live").string()});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
+  write_text(tmp / "other/notes.txt", "mine");
+  fs::create_directories(tmp / "rec");
+  const auto other = run_objmap(
+      {"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "other").string()});
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_EQ(read_text(tmp / "other/notes.txt"), "mine");
+}
+
+}  // namespace
+}  // namespace objmap::test
