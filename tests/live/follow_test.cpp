@@ -163,6 +163,42 @@ TEST(Follow, TheRecordingRemovedIsExitTwoWithTheLastMapKept) {
   EXPECT_TRUE(fs::exists(tmp / "live/map/map_semantic.ply"));
 }
 
+TEST(Follow, AFrameThatDoesNotDecodeYetIsRetriedAtTheNextPoll) {
+  const fs::path scene = live_scene(30);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  copy_tree(scene, tmp / "rec");
+  // The first frame's colour image half-written: read, failed, retried until it is whole.
+  const std::string listing = read_text(tmp / "rec/rgb.txt");
+  std::size_t at = 0;
+  while (listing[at] == '#') at = listing.find('\n', at) + 1;
+  const std::string line = listing.substr(at, listing.find('\n', at) - at);
+  const fs::path rgb = tmp / "rec" / line.substr(line.find(' ') + 1);
+  const std::string whole = read_text(rgb);
+  write_text(rgb, whole.substr(0, whole.size() / 3));
+  RunResult r;
+  std::thread follower([&] {
+    r = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
+                    "--trajectory", (tmp / "rec/estimated.txt").string(), "--idle-exit", "3",
+                    "--poll", "0.05"});
+  });
+  const bool retried = wait_for(
+      [&] {
+        return fs::exists(tmp / "live/status.json") &&
+               read_text(tmp / "live/status.json").find("\"frame_retries\": 0") ==
+                   std::string::npos;
+      },
+      30.0);
+  write_text(rgb, whole);
+  follower.join();
+  ASSERT_TRUE(retried) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("retried at the next poll"), std::string::npos) << r.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_EQ(status.at("keyframes_dropped").get<int>(), 0);
+  EXPECT_GT(status.at("keyframes_mapped").get<int>(), 0);
+}
+
 TEST(Follow, BadInputIsOneLineAndExitTwo) {
   TempDir tmp;
   const auto missing = run_objmap(

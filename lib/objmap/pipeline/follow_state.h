@@ -40,6 +40,7 @@ struct FollowState {
   FuseResult result;               // the camera, counts and keyframes fused so far
   std::optional<FuseMaps> maps;    // made once the camera is known
   std::optional<geometry::RayTable> rays;
+  double retried_timestamp = -1.0;             // the keyframe whose read failed last
   std::vector<WaitingKeyframe> waiting;        // selected, not yet fused, in order
   std::optional<Keyframe> last_keyframe;       // the motion rule's reference
   std::vector<Clock::time_point> unpublished;  // arrival of the keyframes fused since the publish

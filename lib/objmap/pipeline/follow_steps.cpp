@@ -174,7 +174,9 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
     } catch (const InputError& e) {
       if (!ending) {  // a file half-written or not there yet: the next poll reads it again
         ++s.status.frame_retries;
-        warn(events, std::string(e.what()) + "; retried at the next poll");
+        if (s.retried_timestamp != k.timestamp)  // named once, not at every poll
+          warn(events, std::string(e.what()) + "; retried at the next poll");
+        s.retried_timestamp = k.timestamp;
         break;
       }
       ++s.status.keyframes_dropped;
