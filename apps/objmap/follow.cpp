@@ -45,6 +45,10 @@ void setup_follow(CLI::App& app) {
   c->add_option("--trajectory", o->trajectory,
                 "a TUM trajectory (world_from_cam) that grows line by line as the SLAM writes it "
                 "(default: the recording's own poses)");
+  c->add_option("--model", o->model,
+                "an instance segmentation model as objmap detect takes (YOLOv5/v8-seg ONNX, ...), "
+                "run on the newest keyframe whenever it is free (the keyframes it cannot reach are "
+                "skipped and counted); default: the instances of DATASET/segmentation");
   c->add_option("--layout", o->layout, kLayoutHelp)->capture_default_str();
   c->add_option("--camera", o->camera, "preset, ORB-SLAM2 YAML or JSON (default as objmap fuse)");
   c->add_option("--publish-every", o->publish_every_s, "seconds between publishes")

@@ -199,6 +199,39 @@ TEST(Follow, AFrameThatDoesNotDecodeYetIsRetriedAtTheNextPoll) {
   EXPECT_GT(status.at("keyframes_mapped").get<int>(), 0);
 }
 
+// --model: the detector on the newest keyframe only, while replay writes faster than it detects:
+// the keyframes it cannot reach are skipped and counted, never queued; what it found is in
+// RUN/detect.
+TEST(Follow, WithAModelTheDetectorTakesTheNewestKeyframeAndSkipsTheRest) {
+  OBJMAP_DATA_OR_SKIP(model, "../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx");
+  const fs::path scene = live_scene(30);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  const fs::path rec = tmp / "rec";
+  RunResult replay;
+  std::thread writer([&] {
+    replay = run_objmap({"replay", "--dataset", scene.string(), "--out", rec.string(),
+                         "--trajectory", (scene / "estimated.txt").string(), "--speed", "4"});
+  });
+  ASSERT_TRUE(wait_for([&] { return fs::exists(rec / "rgb.txt"); }, 20.0));
+  const auto r = run_objmap({"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(),
+                             "--trajectory", (rec / "estimated.txt").string(), "--model",
+                             model.string(), "--idle-exit", "20"});
+  writer.join();
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_TRUE(validate_json(status, load_schema("follow_status.schema.json")).empty()) << status;
+  const auto skipped = status.at("frames_skipped_detect").get<std::size_t>();
+  const auto mapped = status.at("keyframes_mapped").get<std::size_t>();
+  std::size_t detected = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(tmp / "live/detect")) ++detected;
+  EXPECT_GT(skipped, 0u);
+  EXPECT_GT(detected, 0u);
+  EXPECT_EQ(skipped + detected, mapped);
+  EXPECT_TRUE(fs::exists(tmp / "live/map/objects.json"));
+}
+
 TEST(Follow, BadInputIsOneLineAndExitTwo) {
   TempDir tmp;
   const auto missing = run_objmap(

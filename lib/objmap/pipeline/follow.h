@@ -19,13 +19,16 @@ struct FollowOptions {
   std::filesystem::path dataset;     // the recording being written (any layout objmap reads)
   std::filesystem::path out;         // OUT: new, empty, or an earlier follow (status.json)
   std::filesystem::path trajectory;  // a TUM trajectory that grows; empty: the layout's poses
-  std::string layout = "auto";       // the recording's layout (io/dataset.h)
-  std::string camera;                // empty: camera.json, folder name or rgb.txt header
-  double publish_every_s = 2.0;      // seconds between publishes (when something is new)
-  double idle_exit_s = 0.0;          // > 0: ends after this long without a new frame or pose
-  double poll_s = 0.1;               // seconds between polls of the recording folder
-  FuseOptions fuse;                  // the fuse's options (dataset, out, trajectory set from above)
-  void check() const;                // throws InputError naming the bad field
+  // An instance segmentation model (objmap detect's): run on the newest keyframe whenever it is
+  // free. Empty: the instances are read from DATASET/segmentation as they are written.
+  std::filesystem::path model;
+  std::string layout = "auto";   // the recording's layout (io/dataset.h)
+  std::string camera;            // empty: camera.json, folder name or rgb.txt header
+  double publish_every_s = 2.0;  // seconds between publishes (when something is new)
+  double idle_exit_s = 0.0;      // > 0: ends after this long without a new frame or pose
+  double poll_s = 0.1;           // seconds between polls of the recording folder
+  FuseOptions fuse;              // the fuse's options (dataset, out, trajectory set from above)
+  void check() const;            // throws InputError naming the bad field
 };
 
 // OUT/status.json (schemas/follow_status.schema.json).

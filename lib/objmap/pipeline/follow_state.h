@@ -1,7 +1,9 @@
 #pragma once
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +13,7 @@
 #include "objmap/io/dataset.h"
 #include "objmap/io/trajectory_tail.h"
 #include "objmap/pipeline/follow.h"
+#include "objmap/pipeline/follow_detect.h"
 #include "objmap/pipeline/fuse_maps.h"
 #include "objmap/segmentation/class_sizes.h"
 #include "objmap/segmentation/read.h"
@@ -34,11 +37,14 @@ struct FollowState {
   Trajectory trajectory;                     // the poses as last read
   std::vector<Clock::time_point> arrived;    // each frame's first sighting
   std::vector<std::pair<double, std::filesystem::path>>
-      segmentation;                // DATASET/segmentation's frames, sorted
-  segmentation::ReadOptions read;  // how they are read (the camera's image size)
-  std::size_t with_seg = 0;        // keyframes fused with a segmentation frame
-  FuseResult result;               // the camera, counts and keyframes fused so far
-  std::optional<FuseMaps> maps;    // made once the camera is known
+      segmentation;                          // DATASET/segmentation's frames, sorted
+  segmentation::ReadOptions read;            // how they are read (the camera's image size)
+  std::size_t with_seg = 0;                  // keyframes fused with a segmentation frame
+  std::unique_ptr<LatestDetector> detector;  // --model
+  std::set<double> skipped;                  // keyframes the detector did not reach
+  std::map<double, segmentation::FrameSegmentation> detected;  // taken, not yet fused
+  FuseResult result;             // the camera, counts and keyframes fused so far
+  std::optional<FuseMaps> maps;  // made once the camera is known
   std::optional<geometry::RayTable> rays;
   double retried_timestamp = -1.0;             // the keyframe whose read failed last
   std::vector<WaitingKeyframe> waiting;        // selected, not yet fused, in order

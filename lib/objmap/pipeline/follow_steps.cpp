@@ -11,6 +11,7 @@
 #include "objmap/pipeline/follow_state.h"
 #include "objmap/pipeline/fuse_keyframes.h"
 #include "objmap/segmentation/read.h"
+#include "objmap/segmentation/write.h"
 
 namespace objmap::pipeline {
 
@@ -58,6 +59,34 @@ void warn(const FollowEvents& events, const std::string& line) {
   if (events.warning) events.warning(line);
 }
 
+enum class Instances { kWait, kNone, kRead };
+
+// Keyframe k's instances into `frame`: from the detector (--model), or its segmentation frame
+// (named by its rgb timestamp, within 1 ms) once written: a keyframe waits until its own or a
+// later frame's is there; with `ending` nothing waits.
+Instances keyframe_instances(FollowState& s, const Keyframe& k, bool ending,
+                             segmentation::FrameSegmentation& frame) {
+  if (s.detector) {
+    if (s.skipped.count(k.timestamp)) return Instances::kNone;
+    if (!s.detected.count(k.timestamp)) {
+      if (ending) s.detector->drain();
+      std::optional<segmentation::FrameSegmentation> taken = s.detector->take(k.timestamp);
+      if (!taken) return ending ? Instances::kNone : Instances::kWait;
+      segmentation::write_frame_json(
+          s.options.fuse.segmentation / segmentation::frame_file_name(k.timestamp), *taken);
+      s.detected[k.timestamp] = std::move(*taken);
+    }
+    frame = s.detected[k.timestamp];
+    return Instances::kRead;
+  }
+  const auto seg = std::lower_bound(s.segmentation.begin(), s.segmentation.end(),
+                                    std::make_pair(k.timestamp - 1e-3, fs::path()));
+  if (seg == s.segmentation.end()) return ending ? Instances::kNone : Instances::kWait;
+  if (seg->first > k.timestamp + 1e-3) return Instances::kNone;
+  frame = segmentation::read_frame_json(seg->second, s.read);
+  return Instances::kRead;
+}
+
 }  // namespace
 
 FollowState start_follow(const FollowOptions& options) {
@@ -80,7 +109,14 @@ FollowState start_follow(const FollowOptions& options) {
   s.class_sizes = segmentation::ClassSizes::from_spec(fuse.class_sizes);
   if (!options.trajectory.empty())
     s.tail = std::make_unique<io::TrajectoryTail>(options.trajectory);
+  if (!options.model.empty()) {
+    segmentation::DetectOptions detect;
+    detect.model = options.model;
+    s.detector = std::make_unique<LatestDetector>(detect);
+    fuse.segmentation = options.out / "detect";  // what the model found, frame by frame
+  }
   io::create_output_folders(options.out);
+  if (s.detector) io::create_output_folders(fuse.segmentation);
   return s;
 }
 
@@ -113,7 +149,7 @@ bool read_recording(FollowState& s, const FollowEvents& events) {
   } else {
     s.trajectory = s.dataset.poses;
   }
-  s.segmentation = list_segmentation(s.options.fuse.segmentation);
+  if (!s.detector) s.segmentation = list_segmentation(s.options.fuse.segmentation);
   if (!s.maps && !s.dataset.frames.empty()) start_maps(s);
   s.status.frames_seen = s.dataset.frames.size();
   if (s.status.state == "waiting" && s.maps) s.status.state = "following";
@@ -148,6 +184,11 @@ void select_new_keyframes(FollowState& s, bool ending) {
     if (!key) continue;
     s.last_keyframe = k;
     s.waiting.push_back({k, s.arrived[i]});
+    if (s.detector)  // the newest keyframe to the detector; one it had not reached is skipped
+      if (const std::optional<double> skipped = s.detector->submit(t, frames[i].rgb_file)) {
+        s.skipped.insert(*skipped);
+        ++s.status.frames_skipped_detect;
+      }
   }
   s.status.keyframes_waiting = s.waiting.size();
 }
@@ -156,17 +197,14 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
   std::size_t n = 0;
   for (; n < s.waiting.size(); ++n) {
     const Keyframe& k = s.waiting[n].keyframe;
-    // Its segmentation frame (named by its rgb timestamp, within 1 ms), once it is written: a
-    // keyframe waits until its own or a later frame's is there.
-    const auto seg = std::lower_bound(s.segmentation.begin(), s.segmentation.end(),
-                                      std::make_pair(k.timestamp - 1e-3, fs::path()));
-    if (seg == s.segmentation.end() && !ending) break;
-    const bool has_seg = seg != s.segmentation.end() && seg->first <= k.timestamp + 1e-3;
     FuseResult& r = s.result;
     LiveKeyframe live;
+    bool has_seg = false;
     try {
       segmentation::FrameSegmentation frame;
-      if (has_seg) frame = segmentation::read_frame_json(seg->second, s.read);
+      const Instances instances = keyframe_instances(s, k, ending, frame);
+      if (instances == Instances::kWait) break;
+      has_seg = instances == Instances::kRead;
       live = fuse_one_keyframe(
           s.options.fuse, r.camera, *s.rays, s.dataset, k,
           static_cast<int>(r.keyframes.keyframes.size()), has_seg ? &frame : nullptr,
@@ -183,6 +221,8 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
       warn(events, std::string(e.what()) + "; the keyframe is left out");
       continue;
     }
+    s.detected.erase(k.timestamp);
+    s.skipped.erase(k.timestamp);
     if (s.maps->view_log && !live.view_depth.empty())
       s.maps->view_log->add(k.timestamp, std::move(live.view_depth), k.world_from_cam);
     count_added(s.maps->objects.add_frame(live.observations), r);
@@ -191,6 +231,8 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
     s.unpublished.push_back(s.waiting[n].arrived);
   }
   s.waiting.erase(s.waiting.begin(), s.waiting.begin() + static_cast<std::ptrdiff_t>(n));
+  if (s.detector)
+    for (const std::string& line : s.detector->take_warnings()) warn(events, line);
   s.status.keyframes_mapped = s.result.keyframes.keyframes.size();
   s.status.keyframes_waiting = s.waiting.size();
 }
