@@ -49,12 +49,22 @@ bool wait_for(const std::function<bool()>& ready, double seconds) {
   return ready();
 }
 
+// objmap replay of `scene` into `rec` at `speed` on a thread of its own, its result into `result`.
+std::thread start_replay(const fs::path& scene, const fs::path& rec, const std::string& speed,
+                         RunResult& result) {
+  return std::thread([scene, rec, speed, &result] {
+    result = run_objmap({"replay", "--dataset", scene.string(), "--out", rec.string(),
+                         "--trajectory", (scene / "estimated.txt").string(), "--speed", speed});
+  });
+}
+
 }  // namespace follow_live
 
 namespace {
 
 using follow_live::matched_objects;
 using follow_live::read_json_file;
+using follow_live::start_replay;
 using follow_live::wait_for;
 
 TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
@@ -63,10 +73,7 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   TempDir tmp;
   const fs::path rec = tmp / "rec";
   RunResult replay;
-  std::thread writer([&] {
-    replay = run_objmap({"replay", "--dataset", scene.string(), "--out", rec.string(),
-                         "--trajectory", (scene / "estimated.txt").string(), "--speed", "2"});
-  });
+  std::thread writer = start_replay(scene, rec, "2", replay);
   ASSERT_TRUE(wait_for([&] { return fs::exists(rec / "rgb.txt"); }, 20.0));
   const auto follow = run_objmap(
       {"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(), "--trajectory",
@@ -209,10 +216,7 @@ TEST(Follow, WithAModelTheDetectorTakesTheNewestKeyframeAndSkipsTheRest) {
   TempDir tmp;
   const fs::path rec = tmp / "rec";
   RunResult replay;
-  std::thread writer([&] {
-    replay = run_objmap({"replay", "--dataset", scene.string(), "--out", rec.string(),
-                         "--trajectory", (scene / "estimated.txt").string(), "--speed", "4"});
-  });
+  std::thread writer = start_replay(scene, rec, "4", replay);
   ASSERT_TRUE(wait_for([&] { return fs::exists(rec / "rgb.txt"); }, 20.0));
   const auto r = run_objmap({"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(),
                              "--trajectory", (rec / "estimated.txt").string(), "--model",
