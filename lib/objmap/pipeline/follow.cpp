@@ -49,15 +49,18 @@ FollowStatus follow_loop(FollowState& s, const FollowOptions& options, const Fol
     select_new_keyframes(s, ending);
     // 3. Each into the live maps once its segmentation frame is there.
     fuse_waiting_keyframes(s, ending, events);
-    // 4. Published every publish_every_s seconds when something is new, and at the end.
+    // 4. Published every publish_every_s seconds when something is new (on a thread of its own),
+    //    and at the end.
+    finish_publish(s, events, false);
     if (ending) {
       s.status.state = "finished";
       s.status.ended_by = done ? "done file" : "idle";
       publish(s, events);
       return s.status;
     }
-    if (!s.unpublished.empty() && seconds_since(s.last_publish) >= options.publish_every_s)
-      publish(s, events);
+    if (!s.publishing.valid() && !s.unpublished.empty() &&
+        seconds_since(s.last_publish) >= options.publish_every_s)
+      start_publish(s);
     else
       write_status(s);
     std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_s));

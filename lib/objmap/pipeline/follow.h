@@ -48,10 +48,12 @@ struct FollowStatus {
   std::size_t trajectory_malformed = 0;   // of them malformed: named, skipped
   std::size_t trajectory_rewrites = 0;    // polls that found past lines changed
   std::size_t publishes = 0;
-  std::size_t objects = 0;  // in the last published map
-  double lag_last_s = 0.0;  // last publish: the longest wait of a keyframe it brought in
-  double lag_max_s = 0.0;   // the longest over all publishes
-  double seconds = 0.0;     // since the start
+  std::size_t objects = 0;            // in the last published map
+  double lag_last_s = 0.0;            // last publish: the longest wait of a keyframe it brought in
+  double lag_max_s = 0.0;             // the longest over all publishes
+  double fuse_seconds = 0.0;          // spent fusing keyframes into the live maps
+  double publish_seconds_last = 0.0;  // the last publish's time (finish and write the map)
+  double seconds = 0.0;               // since the start
   long peak_rss_kb = 0;
 };
 

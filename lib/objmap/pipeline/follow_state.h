@@ -1,5 +1,6 @@
 #pragma once
 #include <cstddef>
+#include <future>
 #include <map>
 #include <memory>
 #include <optional>
@@ -51,7 +52,10 @@ struct FollowState {
   std::optional<Keyframe> last_keyframe;       // the motion rule's reference
   std::vector<Clock::time_point> unpublished;  // arrival of the keyframes fused since the publish
   Clock::time_point last_news = Clock::now();  // last new frame or pose
-  Clock::time_point last_publish = Clock::now();
+  Clock::time_point last_publish = Clock::now();  // the last publish's start
+  std::future<std::size_t> publishing;  // the publish in flight: its objects when it is done
+  std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
+  Clock::time_point publish_started;
   FollowStatus status;
 };
 
@@ -73,7 +77,11 @@ void select_new_keyframes(FollowState& s, bool ending);
 void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& events);
 
 // 4. A copy of the maps finished as objmap fuse finishes them, written to OUT/map through a
-//    staging folder, then OUT/status.json, both atomically.
+//    staging folder, on a thread of its own while the keyframes go on (start_publish); when it is
+//    done (finish_publish, waiting for it with `wait`; false when none was done), OUT/status.json
+//    with the lag. publish: every keyframe published, to its end (the one in flight may do).
+void start_publish(FollowState& s);
+bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
 void publish(FollowState& s, const FollowEvents& events);
 
 // OUT/status.json from s.status (atomically), its time and peak memory updated.

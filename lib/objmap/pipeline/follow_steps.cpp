@@ -195,7 +195,12 @@ void select_new_keyframes(FollowState& s, bool ending) {
 
 void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& events) {
   std::size_t n = 0;
+  const Clock::time_point t0 = Clock::now();
   for (; n < s.waiting.size(); ++n) {
+    // A backlog does not hold back the publish that is due: the rest waits for the next poll.
+    if (!ending && n > 0 && !s.publishing.valid() &&
+        seconds_since(s.last_publish) >= s.options.publish_every_s)
+      break;
     const Keyframe& k = s.waiting[n].keyframe;
     FuseResult& r = s.result;
     LiveKeyframe live;
@@ -235,6 +240,7 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
     for (const std::string& line : s.detector->take_warnings()) warn(events, line);
   s.status.keyframes_mapped = s.result.keyframes.keyframes.size();
   s.status.keyframes_waiting = s.waiting.size();
+  s.status.fuse_seconds += seconds_since(t0);
 }
 
 }  // namespace objmap::pipeline
