@@ -47,8 +47,10 @@ FollowStatus follow_loop(FollowState& s, const FollowOptions& options, const Fol
     const bool ending = done || idle;
     // 2. Keyframes by fuse's rule as their poses arrive.
     select_new_keyframes(s, ending);
-    // 3. Each into the live maps once its segmentation frame is there.
+    // 3. Each into the live maps once its segmentation frame is there; after a loop closure the
+    //    objects are made again from the observations moved with the new poses.
     fuse_waiting_keyframes(s, ending, events);
+    replace_after_loop_closure(s);
     // 4. Published every publish_every_s seconds when something is new (on a thread of its own),
     //    and at the end.
     finish_publish(s, events, false);

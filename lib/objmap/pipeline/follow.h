@@ -47,6 +47,7 @@ struct FollowStatus {
   std::size_t trajectory_lines = 0;       // complete data lines of the trajectory
   std::size_t trajectory_malformed = 0;   // of them malformed: named, skipped
   std::size_t trajectory_rewrites = 0;    // polls that found past lines changed
+  std::size_t replacements = 0;           // object maps made again with moved observations
   std::size_t publishes = 0;
   std::size_t objects = 0;            // in the last published map
   double lag_last_s = 0.0;            // last publish: the longest wait of a keyframe it brought in

@@ -96,6 +96,7 @@ void write_status(FollowState& s) {
                                 {"trajectory_lines", st.trajectory_lines},
                                 {"trajectory_malformed", st.trajectory_malformed},
                                 {"trajectory_rewrites", st.trajectory_rewrites},
+                                {"replacements", st.replacements},
                                 {"publishes", st.publishes},
                                 {"objects", st.objects},
                                 {"lag_last_s", st.lag_last_s},

@@ -28,6 +28,14 @@ struct WaitingKeyframe {
   Clock::time_point arrived;
 };
 
+// A keyframe mapped, kept for a loop closure: its observations as they were added (points in the
+// world with the keyframe's pose) and its thinned depth for the view log.
+struct KeptKeyframe {
+  Keyframe keyframe;
+  std::vector<fusion::Observation> observations;
+  cv::Mat view_depth;
+};
+
 struct FollowState {
   FollowOptions options;  // options.fuse with dataset, out (OUT/map), trajectory, segmentation set
   FuseChoices choices;
@@ -47,9 +55,12 @@ struct FollowState {
   FuseResult result;             // the camera, counts and keyframes fused so far
   std::optional<FuseMaps> maps;  // made once the camera is known
   std::optional<geometry::RayTable> rays;
-  double retried_timestamp = -1.0;             // the keyframe whose read failed last
-  std::vector<WaitingKeyframe> waiting;        // selected, not yet fused, in order
-  std::optional<Keyframe> last_keyframe;       // the motion rule's reference
+  double retried_timestamp = -1.0;        // the keyframe whose read failed last
+  std::vector<KeptKeyframe> kept;         // every keyframe mapped (loop closures)
+  bool rewrite_pending = false;           // the trajectory's past poses changed since the last turn
+  std::size_t empty_by_add = 0;           // instances_empty counted by the association
+  std::vector<WaitingKeyframe> waiting;   // selected, not yet fused, in order
+  std::optional<Keyframe> last_keyframe;  // the motion rule's reference
   std::vector<Clock::time_point> unpublished;  // arrival of the keyframes fused since the publish
   Clock::time_point last_news = Clock::now();  // last new frame or pose
   Clock::time_point last_publish = Clock::now();  // the last publish's start
@@ -75,6 +86,15 @@ void select_new_keyframes(FollowState& s, bool ending);
 //    is there (or a later one is, or `ending`); a keyframe whose files do not decode yet is
 //    retried at the next poll (dropped with a warning when `ending`).
 void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& events);
+
+// 3b. A keyframe mapped kept for a loop closure (follow_replace.cpp).
+void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
+                        const std::vector<fusion::Observation>& observations,
+                        const cv::Mat& view_depth);
+
+// 3c. After a loop closure (the trajectory's past poses changed), the kept keyframes' observations
+//     moved with their new poses and the object map made again from them (no image read again).
+void replace_after_loop_closure(FollowState& s);
 
 // 4. A copy of the maps finished as objmap fuse finishes them, written to OUT/map through a
 //    staging folder, on a thread of its own while the keyframes go on (start_publish); when it is

@@ -137,10 +137,11 @@ bool read_recording(FollowState& s, const FollowEvents& events) {
   if (s.tail) {
     const io::TrajectoryTailPoll poll = s.tail->poll();
     for (const std::string& line : poll.malformed) warn(events, line);
-    if (poll.rewritten)
+    if (poll.rewritten) {
       warn(events, s.options.trajectory.string() +
-                       ": earlier poses changed (a loop closure); the keyframes already mapped "
-                       "keep the poses they were fused with");
+                       ": earlier poses changed (a loop closure); the objects are moved with them");
+      s.rewrite_pending = true;
+    }
     news = news || poll.new_poses > 0;
     s.trajectory = s.tail->trajectory();
     s.status.trajectory_lines = s.tail->lines();
@@ -228,9 +229,13 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
     }
     s.detected.erase(k.timestamp);
     s.skipped.erase(k.timestamp);
-    if (s.maps->view_log && !live.view_depth.empty())
-      s.maps->view_log->add(k.timestamp, std::move(live.view_depth), k.world_from_cam);
+    const cv::Mat view_depth = live.view_depth;  // shared, never written to: kept as well
+    if (s.maps->view_log && !view_depth.empty())
+      s.maps->view_log->add(k.timestamp, view_depth, k.world_from_cam);
+    const std::size_t empty_before = r.instances_empty;
     count_added(s.maps->objects.add_frame(live.observations), r);
+    s.empty_by_add += r.instances_empty - empty_before;
+    keep_for_replacing(s, k, live.observations, view_depth);
     if (has_seg) ++s.with_seg;
     r.keyframes.keyframes.push_back(k);
     s.unpublished.push_back(s.waiting[n].arrived);
