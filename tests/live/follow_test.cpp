@@ -65,10 +65,40 @@ std::thread start_replay(const fs::path& scene, const fs::path& rec, const std::
   return std::thread([args, &result] { result = run_objmap(args); });
 }
 
+// objmap follow started first on the empty folder `tmp`/rec (so that it sees the recording from
+// its first line), then objmap replay of `scene` into it at `speed`; both results.
+struct LiveRun {
+  RunResult follow, replay;
+};
+LiveRun follow_a_replay(const fs::path& scene, const TempDir& tmp, const std::string& speed,
+                        const std::vector<std::string>& replay_extra,
+                        const std::vector<std::string>& follow_extra) {
+  const fs::path rec = tmp / "rec";
+  fs::create_directories(rec);
+  LiveRun run;
+  std::vector<std::string> args{"follow",
+                                "--dataset",
+                                rec.string(),
+                                "--out",
+                                (tmp / "live").string(),
+                                "--trajectory",
+                                (rec / "estimated.txt").string(),
+                                "--idle-exit",
+                                "30"};
+  args.insert(args.end(), follow_extra.begin(), follow_extra.end());
+  std::thread follower([&] { run.follow = run_objmap(args); });
+  if (wait_for([&] { return fs::exists(tmp / "live/status.json"); }, 30.0))
+    start_replay(scene, rec, speed, run.replay, replay_extra).join();
+  follower.join();
+  return run;
+}
+
 }  // namespace follow_live
 
 namespace {
 
+using follow_live::follow_a_replay;
+using follow_live::LiveRun;
 using follow_live::matched_objects;
 using follow_live::read_json_file;
 using follow_live::start_replay;
@@ -79,14 +109,9 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   ASSERT_FALSE(scene.empty());
   TempDir tmp;
   const fs::path rec = tmp / "rec";
-  RunResult replay;
-  std::thread writer = start_replay(scene, rec, "2", replay);
-  ASSERT_TRUE(wait_for([&] { return fs::exists(rec / "rgb.txt"); }, 20.0));
-  const auto follow = run_objmap(
-      {"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(), "--trajectory",
-       (rec / "estimated.txt").string(), "--publish-every", "0.3", "--idle-exit", "20"});
-  writer.join();
-  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  const LiveRun run = follow_a_replay(scene, tmp, "1", {}, {"--publish-every", "0.3"});
+  const RunResult& follow = run.follow;
+  ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
   ASSERT_EQ(follow.exit_code, 0) << follow.err;
 
   // status.json: valid, finished by the done file, every frame seen, the lag recorded.
@@ -251,18 +276,9 @@ TEST(Follow, ALoopClosureMovesTheObjectsWhereFuseOnTheRewrittenTrajectoryPutsThe
   ASSERT_FALSE(scene.empty());
   TempDir tmp;
   const fs::path rec = tmp / "rec";
-  fs::create_directories(rec);  // follow first, on an empty folder: it sees the drifted poses
-  RunResult follow;
-  std::thread follower([&] {
-    follow = run_objmap({"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(),
-                         "--trajectory", (rec / "estimated.txt").string(), "--idle-exit", "20"});
-  });
-  ASSERT_TRUE(wait_for([&] { return fs::exists(tmp / "live/status.json"); }, 20.0));
-  RunResult replay;
-  start_replay(scene, rec, "1", replay, {"--rewrite-at", "0.5"}).join();
-  follower.join();
-  ASSERT_EQ(replay.exit_code, 0) << replay.err;
-  ASSERT_EQ(follow.exit_code, 0) << follow.err;
+  const LiveRun run = follow_a_replay(scene, tmp, "1", {"--rewrite-at", "0.5"}, {});
+  ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
+  ASSERT_EQ(run.follow.exit_code, 0) << run.follow.err;
   const auto status = read_json_file(tmp / "live/status.json");
   EXPECT_GE(status.at("trajectory_rewrites").get<int>(), 1);
   EXPECT_GE(status.at("replacements").get<int>(), 1);
