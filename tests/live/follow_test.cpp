@@ -49,6 +49,22 @@ bool wait_for(const std::function<bool()>& ready, double seconds) {
   return ready();
 }
 
+// Waits up to `seconds` for status.json at `file` to be there without `text` (such as
+// "\"publishes\": 0"): follow got that far.
+bool wait_for_status_past(const fs::path& file, const std::string& text, double seconds) {
+  return wait_for(
+      [&] { return fs::exists(file) && read_text(file).find(text) == std::string::npos; }, seconds);
+}
+
+// The live scene of `frames` frames copied whole into `tmp`/rec (a recording already written);
+// false (and a test failure) when the scene could not be made.
+bool copy_live_scene(int frames, const TempDir& tmp) {
+  const fs::path scene = live_scene(frames);
+  if (scene.empty()) return false;
+  copy_tree(scene, tmp / "rec");
+  return true;
+}
+
 // objmap replay of `scene` into `rec` at `speed` on a thread of its own, its result into `result`.
 std::thread start_replay(const fs::path& scene, const fs::path& rec, const std::string& speed,
                          RunResult& result, const std::vector<std::string>& extra = {}) {
@@ -97,12 +113,14 @@ LiveRun follow_a_replay(const fs::path& scene, const TempDir& tmp, const std::st
 
 namespace {
 
+using follow_live::copy_live_scene;
 using follow_live::follow_a_replay;
 using follow_live::LiveRun;
 using follow_live::matched_objects;
 using follow_live::read_json_file;
 using follow_live::start_replay;
 using follow_live::wait_for;
+using follow_live::wait_for_status_past;
 
 TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   const fs::path scene = live_scene(60);
@@ -152,12 +170,10 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
 }
 
 TEST(Follow, AMalformedTrajectoryLineIsNamedSkippedAndCountedALineBeingWrittenWaits) {
-  const fs::path scene = live_scene(30);
-  ASSERT_FALSE(scene.empty());
   TempDir tmp;
-  copy_tree(scene, tmp / "rec");
+  ASSERT_TRUE(copy_live_scene(30, tmp));
   // Line 6 of the trajectory broken, and a last line without its '\n' (still being written).
-  std::string text = read_text(scene / "estimated.txt");
+  std::string text = read_text(tmp / "rec/estimated.txt");
   std::size_t at = 0;
   for (int line = 1; line < 6; ++line) at = text.find('\n', at) + 1;
   text.replace(at, text.find('\n', at) - at, "1700000000.2 0.1 0.2 nan 0 0 0 1");
@@ -176,22 +192,15 @@ TEST(Follow, AMalformedTrajectoryLineIsNamedSkippedAndCountedALineBeingWrittenWa
 }
 
 TEST(Follow, TheRecordingRemovedIsExitTwoWithTheLastMapKept) {
-  const fs::path scene = live_scene(30);
-  ASSERT_FALSE(scene.empty());
   TempDir tmp;
-  copy_tree(scene, tmp / "rec");
+  ASSERT_TRUE(copy_live_scene(30, tmp));
   RunResult r;
   std::thread follower([&] {
     r = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
                     "--trajectory", (tmp / "rec/estimated.txt").string(), "--publish-every",
                     "0.2"});
   });
-  const bool published = wait_for(
-      [&] {
-        return fs::exists(tmp / "live/status.json") &&
-               read_text(tmp / "live/status.json").find("\"publishes\": 0") == std::string::npos;
-      },
-      60.0);
+  const bool published = wait_for_status_past(tmp / "live/status.json", "\"publishes\": 0", 60.0);
   fs::remove_all(tmp / "rec");
   follower.join();
   ASSERT_TRUE(published);
@@ -203,10 +212,8 @@ TEST(Follow, TheRecordingRemovedIsExitTwoWithTheLastMapKept) {
 }
 
 TEST(Follow, AFrameThatDoesNotDecodeYetIsRetriedAtTheNextPoll) {
-  const fs::path scene = live_scene(30);
-  ASSERT_FALSE(scene.empty());
   TempDir tmp;
-  copy_tree(scene, tmp / "rec");
+  ASSERT_TRUE(copy_live_scene(30, tmp));
   // The first frame's colour image half-written: read, failed, retried until it is whole.
   const std::string listing = read_text(tmp / "rec/rgb.txt");
   std::size_t at = 0;
@@ -221,13 +228,7 @@ TEST(Follow, AFrameThatDoesNotDecodeYetIsRetriedAtTheNextPoll) {
                     "--trajectory", (tmp / "rec/estimated.txt").string(), "--idle-exit", "3",
                     "--poll", "0.05"});
   });
-  const bool retried = wait_for(
-      [&] {
-        return fs::exists(tmp / "live/status.json") &&
-               read_text(tmp / "live/status.json").find("\"frame_retries\": 0") ==
-                   std::string::npos;
-      },
-      30.0);
+  const bool retried = wait_for_status_past(tmp / "live/status.json", "\"frame_retries\": 0", 30.0);
   write_text(rgb, whole);
   follower.join();
   ASSERT_TRUE(retried) << r.err;
