@@ -9,9 +9,11 @@
 // `objmap follow`: the map of a recording kept up to date while the recording is written
 // (docs/follow.md). The recording folder is polled; each new frame with a pose is a keyframe or
 // not by fuse's motion rule, each keyframe is fused into the live maps as it arrives (with its
-// segmentation frame from DATASET/segmentation), and every publish_every_s seconds a copy of the
-// maps is finished as `objmap fuse` finishes its maps (merges, filters, scene) and written to
-// OUT/map through a staging folder and a rename; OUT/status.json says how far it got. It ends on
+// segmentation frame from DATASET/segmentation, or the instances a detector thread found on the
+// newest keyframe with --model), and every publish_every_s seconds a copy of the maps is finished
+// as `objmap fuse` finishes its maps (merges, filters, scene) and written to OUT/map through a
+// staging folder and a rename; OUT/status.json says how far it got. When the trajectory's past
+// poses change (a loop closure) the mapped observations are moved with them. It ends on
 // DATASET/done or idle_exit_s without a new frame, with a last publish of everything.
 namespace objmap::pipeline {
 
