@@ -224,6 +224,15 @@ ObjectMap::ObjectMap(const ObjectMapOptions& options) : options_(options) { opti
 ObjectMap::~ObjectMap() = default;
 ObjectMap::ObjectMap(ObjectMap&&) noexcept = default;
 ObjectMap& ObjectMap::operator=(ObjectMap&&) noexcept = default;
+ObjectMap::ObjectMap(const ObjectMap& other)
+    : options_(other.options_), share_bar_(other.share_bar_) {
+  objects_.reserve(other.objects_.size());
+  for (const auto& o : other.objects_) objects_.push_back(std::make_unique<Object>(*o));
+}
+ObjectMap& ObjectMap::operator=(const ObjectMap& other) {
+  if (this != &other) *this = ObjectMap(other);
+  return *this;
+}
 
 std::string ObjectMap::voted_class(const Object& o) {
   // Score-weighted vote; ties: more observations, then the smaller name (deterministic).

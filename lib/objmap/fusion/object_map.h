@@ -385,6 +385,9 @@ class ObjectMap {
   ~ObjectMap();
   ObjectMap(ObjectMap&&) noexcept;
   ObjectMap& operator=(ObjectMap&&) noexcept;
+  // A deep copy (objmap follow finishes a copy of the live map at each publish).
+  ObjectMap(const ObjectMap& other);
+  ObjectMap& operator=(const ObjectMap& other);
 
   // Associates the observations of one keyframe together (all with the same timestamp) by eq 22,
   // and fuses each into its object or starts an object with it: the

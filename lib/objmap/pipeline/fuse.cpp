@@ -21,6 +21,7 @@
 #include "objmap/pipeline/dense_cloud.h"
 #include "objmap/pipeline/fuse_inputs.h"
 #include "objmap/pipeline/fuse_keyframes.h"
+#include "objmap/pipeline/fuse_maps.h"
 #include "objmap/pipeline/fuse_objects.h"
 #include "objmap/pipeline/fuse_scene.h"
 #include "objmap/pipeline/run_folder.h"
@@ -30,6 +31,23 @@ namespace objmap::pipeline {
 
 namespace fs = std::filesystem;
 using ordered_json = nlohmann::ordered_json;
+
+FuseMaps make_fuse_maps(const FuseOptions& options, const FuseChoices& choices,
+                        const FuseResult& result) {
+  FuseMaps maps{
+      dense_map_options(options, result.threads),
+      fusion::VoxelMap(dense_map_options(options, result.threads)),
+      fusion::ObjectMap(object_map_options(options, choices, result.keyframes.still_camera)),
+      std::nullopt,
+      std::nullopt,
+      std::nullopt};
+  if (choices.meshes.objects) maps.object_views.emplace();
+  if (choices.meshes.scene)
+    maps.scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,
+                             scene_tsdf_options(options.mesh));
+  if (maps.objects.options().min_detected_share > 0.0) maps.view_log.emplace(result.camera);
+  return maps;
+}
 
 FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   const FuseChoices choices = options.check();  // the option strings parsed, once
@@ -47,32 +65,30 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 3. Back-project and fuse, keyframe by keyframe, with the worker pipeline; the maps do not
   //    depend on the thread count.
-  auto t0 = Clock::now();
-  const fusion::VoxelMapOptions dense_options = dense_map_options(options, result.threads);
-  fusion::VoxelMap dense(dense_options);
-  const fusion::ObjectMapOptions object_options =
-      object_map_options(options, choices, result.keyframes.still_camera);
-  fusion::ObjectMap objects(object_options);
-  const mesh::MeshSelection& meshes = choices.meshes;
-  std::optional<ObjectViews> object_views;
-  if (meshes.objects) object_views.emplace();
-  std::optional<mesh::TsdfModel> scene_model;
-  if (meshes.scene)
-    scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,
-                        scene_tsdf_options(options.mesh));
-  std::optional<fusion::ViewLog> view_log;
-  if (object_options.min_detected_share > 0.0) view_log.emplace(result.camera);
-  fuse_keyframes(options, choices, progress, inputs, options.dense_map ? &dense : nullptr, objects,
-                 object_views ? &*object_views : nullptr, scene_model ? &*scene_model : nullptr,
-                 view_log ? &*view_log : nullptr, result);
+  const auto t0 = Clock::now();
+  FuseMaps maps = make_fuse_maps(options, choices, result);
+  fuse_keyframes(options, choices, progress, inputs, options.dense_map ? &maps.dense : nullptr,
+                 maps.objects, maps.object_views ? &*maps.object_views : nullptr,
+                 maps.scene_model ? &*maps.scene_model : nullptr,
+                 maps.view_log ? &*maps.view_log : nullptr, result);
   result.times.push_back({"back-project and fuse", seconds_since(t0)});
 
-  // 4-5. The run folder is written under a temporary name and renamed when complete. The dense
-  //      map's cloud, the up direction and the support surfaces (docs/scene.md) are made on a
-  //      second thread meanwhile the objects are merged and filtered (they do not depend on each
-  //      other).
+  // 4-5. The objects, the scene and the run folder's files, written under a temporary name and
+  //      renamed when complete.
   io::StagingDir staging(options.out, io::kRunFolder);
-  const fs::path dir = staging.path();
+  finish_fuse(options, choices, inputs, class_sizes, maps, staging.path(), t_start, result);
+  staging.commit();
+  return result;
+}
+
+void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const FuseInputs& inputs,
+                 const segmentation::ClassSizes& class_sizes, FuseMaps& maps, const fs::path& dir,
+                 Clock::time_point started, FuseResult& result) {
+  fusion::ObjectMap& objects = maps.objects;
+  const fusion::ViewLog* view_log = maps.view_log ? &*maps.view_log : nullptr;
+  // The dense map's cloud, the up direction and the support surfaces (docs/scene.md) are made on
+  // a second thread meanwhile the objects are merged and filtered (they do not depend on each
+  // other).
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();
   auto t_dense = Clock::now();
@@ -80,15 +96,16 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   std::vector<Pose> cameras;
   for (const Keyframe& k : result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
   std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
-    DenseCloud cloud = options.dense_map ? take_dense_cloud(dense, dense_options) : DenseCloud{};
+    DenseCloud cloud =
+        options.dense_map ? take_dense_cloud(maps.dense, maps.dense_options) : DenseCloud{};
     dense_seconds = seconds_since(t_dense);
     scene::find_up_and_surfaces(cameras, cloud.cloud.points, options.scene, result.scene);
     return cloud;
   });
 
   // 4. The final merge pass (ID-switch repair), then each confirmed object's filtered record.
-  t0 = Clock::now();
-  merge_and_filter_objects(options, objects, view_log ? &*view_log : nullptr, result);
+  auto t0 = Clock::now();
+  merge_and_filter_objects(options, objects, view_log, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
   DenseCloud dense_cloud = dense_future.get();
@@ -98,7 +115,7 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   for (const auto& w : result.scene.up.warnings) result.warnings.push_back("up direction: " + w);
 
   // 4a. Objects wider than their class allows are cut, now that the up is known.
-  cut_oversize_objects(options, class_sizes, objects, view_log ? &*view_log : nullptr, result);
+  cut_oversize_objects(options, class_sizes, objects, view_log, result);
 
   // 4b. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
   take_sightings(choices, result);
@@ -120,7 +137,8 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
 
   // 4e. The meshes: each object's TSDF model from the observations that joined it (merged objects
   //     union theirs), in its box; the scene's model, fused keyframe by keyframe, meshed.
-  make_meshes(options, objects, object_views ? &*object_views : nullptr, scene_model, result);
+  make_meshes(options, objects, maps.object_views ? &*maps.object_views : nullptr, maps.scene_model,
+              result);
 
   // 5. The maps (dense, semantic, objects, one PLY per object) and objects.json.
   t0 = Clock::now();
@@ -130,15 +148,13 @@ FuseResult run_fuse(const FuseOptions& options, const FuseProgress& progress) {
   dense_cloud = DenseCloud();
   write_objects_json(dir, objects_json, result.sightings, result.scene);
   result.times.push_back({"write outputs", seconds_since(t0)});
-  result.seconds_total = seconds_since(t_start);
+  result.seconds_total = seconds_since(started);
   result.peak_rss_kb = peak_rss_kb();
 
   // 5b. run.json: options, inputs with checksums, counts per stage, Table 6, time per stage,
   //     memory.
-  write_run_json(dir, options, inputs, object_options, map_points, result);
+  write_run_json(dir, options, inputs, objects.options(), map_points, result);
   if (options.trajectory.empty()) write_dataset_trajectory(dir, options, inputs, result);
-  staging.commit();
-  return result;
 }
 
 std::vector<fusion::Observation> remake_observations(const FuseOptions& options,

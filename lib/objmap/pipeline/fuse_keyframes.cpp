@@ -26,7 +26,8 @@ constexpr int kDenseShards = 16;
 // Who may merge into which shard of the dense map: shard s takes keyframe next[s] only.
 class ShardedMergeOrder {
  public:
-  explicit ShardedMergeOrder(std::size_t shards) : next_(shards, 0) {}
+  // `first`: the keyframe index each shard takes first.
+  explicit ShardedMergeOrder(std::size_t shards, std::size_t first = 0) : next_(shards, first) {}
 
   // Merges keyframe `index` into every shard with merge(shard), in any order of the shards, each
   // shard once every earlier keyframe has been merged into it. Returns false (nothing more merged)
@@ -394,14 +395,9 @@ void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
                       keyframes[done].world_from_cam);
       // The keyframe's observations are associated together, best match first.
       const std::vector<fusion::AddResult> added = objects.add_frame(work.observations);
+      count_added(added, result);
       for (std::size_t k = 0; k < added.size(); ++k) {
-        if (added[k].object_id < 0) {
-          ++(added[k].bleed      ? result.instances_bleed
-             : added[k].spanning ? result.instances_spanning
-                                 : result.instances_empty);
-          continue;
-        }
-        ++result.observations;
+        if (added[k].object_id < 0) continue;
         if (object_views)
           object_views->add(added[k].object_id, keyframes[done].timestamp,
                             keyframes[done].world_from_cam.translation(),
@@ -416,6 +412,36 @@ void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
     throw;
   }
   if (dense) result.dense_voxels_pruned = dense->voxels_pruned();
+}
+
+void count_added(const std::vector<fusion::AddResult>& added, FuseResult& result) {
+  for (const fusion::AddResult& a : added) {
+    if (a.object_id >= 0)
+      ++result.observations;
+    else
+      ++(a.bleed      ? result.instances_bleed
+         : a.spanning ? result.instances_spanning
+                      : result.instances_empty);
+  }
+}
+
+LiveKeyframe fuse_one_keyframe(const FuseOptions& options, const Camera& camera,
+                               const geometry::RayTable& rays, const io::Dataset& dataset,
+                               const Keyframe& keyframe, int keyframe_index,
+                               const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
+                               bool view_depth, FuseResult& result) {
+  const KeyframeContext ctx{
+      options,   camera, rays, dataset, instance_mask_options(options), mesh::MeshSelection{},
+      view_depth};
+  const std::size_t index = static_cast<std::size_t>(keyframe_index);
+  ShardedMergeOrder order(kDenseShards, index);  // one keyframe, on this thread: any shard order
+  FrameVoxelsPool pool;
+  std::optional<DenseMerge> merge;
+  if (dense) merge.emplace(DenseMerge{*dense, order, pool});
+  FrameWork work = process_keyframe(ctx, dataset.frames[keyframe.frame], keyframe, keyframe_index,
+                                    seg, merge ? &*merge : nullptr);
+  add_counts(work, result);
+  return {std::move(work.observations), std::move(work.view_depth)};
 }
 
 std::vector<fusion::Observation> keyframe_observations(

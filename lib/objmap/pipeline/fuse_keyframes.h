@@ -35,6 +35,23 @@ void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
                     fusion::ObjectMap& objects, ObjectViews* object_views, mesh::TsdfModel* scene,
                     fusion::ViewLog* view_log, FuseResult& result);
 
+// The association's outcome per observation into the run's counts (observations, bleed, spanning,
+// empty).
+void count_added(const std::vector<fusion::AddResult>& added, FuseResult& result);
+
+// One keyframe on the calling thread, made exactly as fuse_keyframes makes it (objmap follow): its
+// dense voxels into `dense` when given, its counts into `result`; its observations (not yet
+// associated) and, with `view_depth`, its thinned depth for the view log.
+struct LiveKeyframe {
+  std::vector<fusion::Observation> observations;
+  cv::Mat view_depth;
+};
+LiveKeyframe fuse_one_keyframe(const FuseOptions& options, const Camera& camera,
+                               const geometry::RayTable& rays, const io::Dataset& dataset,
+                               const Keyframe& keyframe, int keyframe_index,
+                               const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
+                               bool view_depth, FuseResult& result);
+
 // Keyframe i's instance observations alone (no map), made exactly as fuse_keyframes makes them.
 std::vector<fusion::Observation> keyframe_observations(
     const FuseOptions& options, const Camera& camera, const geometry::RayTable& rays,

@@ -1,0 +1,62 @@
+// objmap follow's loop closure: when the trajectory's past poses change, the observations of the
+// keyframes mapped so far are moved with them (each observation's points by the change of its
+// keyframe's pose, so that they stay where they were in their camera's frame) and the object map
+// is made again from them in keyframe order, as objmap fuse would make it with the new poses. No
+// image is read again. The dense map keeps the poses it was fused with.
+#include <utility>
+
+#include "objmap/io/trajectory.h"
+#include "objmap/pipeline/follow_state.h"
+#include "objmap/pipeline/fuse_keyframes.h"
+
+namespace objmap::pipeline {
+
+void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
+                        const std::vector<fusion::Observation>& observations,
+                        const cv::Mat& view_depth) {
+  s.kept.push_back({keyframe, observations, view_depth});
+}
+
+void replace_after_loop_closure(FollowState& s) {
+  if (!s.rewrite_pending || !s.maps) return;
+  s.rewrite_pending = false;
+  io::PoseLookupOptions lookup;
+  lookup.max_diff_s = s.options.fuse.max_diff_s;
+  lookup.interpolate = true;
+  // 1. Each kept keyframe's new pose; its observations moved by the change.
+  for (std::size_t i = 0; i < s.kept.size(); ++i) {
+    KeptKeyframe& k = s.kept[i];
+    const std::optional<Pose> pose = io::lookup_pose(s.trajectory, k.keyframe.timestamp, lookup);
+    if (!pose) continue;  // its pose went away: it stays where it was
+    const Pose new_from_old = *pose * k.keyframe.world_from_cam.inverse();
+    for (fusion::Observation& o : k.observations) {
+      for (Vec3f& p : o.points_in_world.points) p = (new_from_old * p.cast<double>()).cast<float>();
+      o.world_from_cam = *pose;
+    }
+    k.keyframe.world_from_cam = *pose;
+    s.result.keyframes.keyframes[i].world_from_cam = *pose;
+  }
+  // 2. The object map (and the view log) made again from them, in keyframe order; the counts of
+  //    the association replaced by the new ones.
+  FuseResult& r = s.result;
+  FuseResult counts;
+  fusion::ObjectMap objects(s.maps->objects.options());
+  std::optional<fusion::ViewLog> view_log;
+  if (s.maps->view_log) view_log.emplace(r.camera);
+  for (const KeptKeyframe& k : s.kept) {
+    if (view_log && !k.view_depth.empty())
+      view_log->add(k.keyframe.timestamp, k.view_depth.clone(), k.keyframe.world_from_cam);
+    count_added(objects.add_frame(k.observations), counts);
+  }
+  s.maps->objects = std::move(objects);
+  s.maps->view_log = std::move(view_log);
+  r.observations = counts.observations;
+  r.instances_bleed = counts.instances_bleed;
+  r.instances_spanning = counts.instances_spanning;
+  r.instances_empty = r.instances_empty - s.empty_by_add + counts.instances_empty;
+  s.empty_by_add = counts.instances_empty;
+  ++s.status.replacements;
+  s.unpublished.push_back(Clock::now());  // the moved map is published at the next turn
+}
+
+}  // namespace objmap::pipeline

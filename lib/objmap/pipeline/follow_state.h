@@ -1,0 +1,110 @@
+#pragma once
+#include <cstddef>
+#include <future>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "objmap/core/clock.h"
+#include "objmap/geometry/backproject.h"
+#include "objmap/io/dataset.h"
+#include "objmap/io/trajectory_tail.h"
+#include "objmap/pipeline/follow.h"
+#include "objmap/pipeline/follow_detect.h"
+#include "objmap/pipeline/fuse_maps.h"
+#include "objmap/segmentation/class_sizes.h"
+#include "objmap/segmentation/read.h"
+
+// The steps of objmap follow (follow.cpp is their outline) and what carries from poll to poll.
+namespace objmap::pipeline {
+
+// A keyframe selected and not yet fused, with the time its frame was first seen.
+struct WaitingKeyframe {
+  Keyframe keyframe;
+  Clock::time_point arrived;
+};
+
+// A keyframe mapped, kept for a loop closure: its observations as they were added (points in the
+// world with the keyframe's pose) and its thinned depth for the view log.
+struct KeptKeyframe {
+  Keyframe keyframe;
+  std::vector<fusion::Observation> observations;
+  cv::Mat view_depth;
+};
+
+struct FollowState {
+  FollowOptions options;  // options.fuse with dataset, out (OUT/map), trajectory, segmentation set
+  FuseChoices choices;
+  segmentation::ClassSizes class_sizes;
+  Clock::time_point started = Clock::now();
+  io::Dataset dataset;                       // the recording as last read
+  std::unique_ptr<io::TrajectoryTail> tail;  // --trajectory; null: the layout's own poses
+  Trajectory trajectory;                     // the poses as last read
+  std::vector<Clock::time_point> arrived;    // each frame's first sighting
+  std::vector<std::pair<double, std::filesystem::path>>
+      segmentation;                          // DATASET/segmentation's frames, sorted
+  segmentation::ReadOptions read;            // how they are read (the camera's image size)
+  std::size_t with_seg = 0;                  // keyframes fused with a segmentation frame
+  std::unique_ptr<LatestDetector> detector;  // --model
+  std::set<double> skipped;                  // keyframes the detector did not reach
+  std::map<double, segmentation::FrameSegmentation> detected;  // taken, not yet fused
+  FuseResult result;             // the camera, counts and keyframes fused so far
+  std::optional<FuseMaps> maps;  // made once the camera is known
+  std::optional<geometry::RayTable> rays;
+  double retried_timestamp = -1.0;        // the keyframe whose read failed last
+  std::vector<KeptKeyframe> kept;         // every keyframe mapped (loop closures)
+  bool rewrite_pending = false;           // the trajectory's past poses changed since the last turn
+  std::size_t empty_by_add = 0;           // instances_empty counted by the association
+  std::vector<WaitingKeyframe> waiting;   // selected, not yet fused, in order
+  std::optional<Keyframe> last_keyframe;  // the motion rule's reference
+  std::vector<Clock::time_point> unpublished;  // arrival of the keyframes fused since the publish
+  Clock::time_point last_news = Clock::now();  // last new frame or pose
+  Clock::time_point last_publish = Clock::now();  // the last publish's start
+  std::future<std::size_t> publishing;  // the publish in flight: its objects when it is done
+  std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
+  Clock::time_point publish_started;
+  FollowStatus status;
+};
+
+// 0. The options checked, OUT made ready, the state's fuse options and trajectory source set.
+FollowState start_follow(const FollowOptions& options);
+
+// 1. The recording read again: its frames (new ones stamped with their arrival), the trajectory,
+//    the segmentation's frame list. Returns true when something is new. Throws InputError when
+//    the recording folder is gone.
+bool read_recording(FollowState& s, const FollowEvents& events);
+
+// 2. The frames whose pose is now known (or, with `ending`, every frame) decided: posed or not,
+//    keyframe or not (fuse's motion rule, keyframe by keyframe).
+void select_new_keyframes(FollowState& s, bool ending);
+
+// 3. The waiting keyframes fused in order into the live maps, each once its segmentation frame
+//    is there (or a later one is, or `ending`); a keyframe whose files do not decode yet is
+//    retried at the next poll (dropped with a warning when `ending`).
+void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& events);
+
+// 3b. A keyframe mapped kept for a loop closure (follow_replace.cpp).
+void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
+                        const std::vector<fusion::Observation>& observations,
+                        const cv::Mat& view_depth);
+
+// 3c. After a loop closure (the trajectory's past poses changed), the kept keyframes' observations
+//     moved with their new poses and the object map made again from them (no image read again).
+void replace_after_loop_closure(FollowState& s);
+
+// 4. A copy of the maps finished as objmap fuse finishes them, written to OUT/map through a
+//    staging folder, on a thread of its own while the keyframes go on (start_publish); when it is
+//    done (finish_publish, waiting for it with `wait`; false when none was done), OUT/status.json
+//    with the lag. publish: every keyframe published, to its end (the one in flight may do).
+void start_publish(FollowState& s);
+bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
+void publish(FollowState& s, const FollowEvents& events);
+
+// OUT/status.json from s.status (atomically), its time and peak memory updated.
+void write_status(FollowState& s);
+
+}  // namespace objmap::pipeline

@@ -1,0 +1,322 @@
+// objmap follow on a recording that objmap replay writes meanwhile: the final map is that of
+// objmap fuse on the finished recording, status.json says how far behind it was; a malformed
+// trajectory line is named and skipped, a line still being written is left for later; the
+// recording removed is exit 2 with the last map kept.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <thread>
+
+#include "live_scene.h"
+#include "support/schema_check.h"
+
+namespace objmap::test {
+namespace follow_live {
+
+nlohmann::json read_json_file(const fs::path& file) {
+  return nlohmann::json::parse(read_text(file));
+}
+
+// The reference objects matched by `objmap eval objects` (ids) and the map objects left unmatched.
+struct Matched {
+  std::set<std::string> reference;
+  std::size_t unmatched_map = 0;
+};
+
+Matched matched_objects(const fs::path& map, const fs::path& scene, const fs::path& json) {
+  const auto e =
+      run_objmap({"eval", "objects", "--map", (map / "objects.json").string(), "--gt-objects",
+                  (scene / "objects_gt.json").string(), "--json", json.string()});
+  EXPECT_EQ(e.exit_code, 0) << e.err;
+  Matched m;
+  if (e.exit_code != 0) return m;
+  const auto doc = read_json_file(json);
+  for (const auto& match : doc.at("matches")) m.reference.insert(match.at("reference_id").dump());
+  m.unmatched_map = doc.at("unmatched_map_ids").size();
+  return m;
+}
+
+// Waits up to `seconds` for `ready`.
+bool wait_for(const std::function<bool()>& ready, double seconds) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) {
+    if (ready()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return ready();
+}
+
+// Waits up to `seconds` for status.json at `file` to be there without `text` (such as
+// "\"publishes\": 0"): follow got that far.
+bool wait_for_status_past(const fs::path& file, const std::string& text, double seconds) {
+  return wait_for(
+      [&] { return fs::exists(file) && read_text(file).find(text) == std::string::npos; }, seconds);
+}
+
+// The live scene of `frames` frames copied whole into `tmp`/rec (a recording already written);
+// false (and a test failure) when the scene could not be made.
+bool copy_live_scene(int frames, const TempDir& tmp) {
+  const fs::path scene = live_scene(frames);
+  if (scene.empty()) return false;
+  copy_tree(scene, tmp / "rec");
+  return true;
+}
+
+// objmap replay of `scene` into `rec` at `speed` on a thread of its own, its result into `result`.
+std::thread start_replay(const fs::path& scene, const fs::path& rec, const std::string& speed,
+                         RunResult& result, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args{"replay",
+                                "--dataset",
+                                scene.string(),
+                                "--out",
+                                rec.string(),
+                                "--trajectory",
+                                (scene / "estimated.txt").string(),
+                                "--speed",
+                                speed};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return std::thread([args, &result] { result = run_objmap(args); });
+}
+
+// objmap follow started first on the empty folder `tmp`/rec (so that it sees the recording from
+// its first line), then objmap replay of `scene` into it at `speed`; both results.
+struct LiveRun {
+  RunResult follow, replay;
+};
+LiveRun follow_a_replay(const fs::path& scene, const TempDir& tmp, const std::string& speed,
+                        const std::vector<std::string>& replay_extra,
+                        const std::vector<std::string>& follow_extra) {
+  const fs::path rec = tmp / "rec";
+  fs::create_directories(rec);
+  LiveRun run;
+  std::vector<std::string> args{"follow",
+                                "--dataset",
+                                rec.string(),
+                                "--out",
+                                (tmp / "live").string(),
+                                "--trajectory",
+                                (rec / "estimated.txt").string(),
+                                "--idle-exit",
+                                "30"};
+  args.insert(args.end(), follow_extra.begin(), follow_extra.end());
+  std::thread follower([&] { run.follow = run_objmap(args); });
+  if (wait_for([&] { return fs::exists(tmp / "live/status.json"); }, 30.0))
+    start_replay(scene, rec, speed, run.replay, replay_extra).join();
+  follower.join();
+  return run;
+}
+
+}  // namespace follow_live
+
+namespace {
+
+using follow_live::copy_live_scene;
+using follow_live::follow_a_replay;
+using follow_live::LiveRun;
+using follow_live::matched_objects;
+using follow_live::read_json_file;
+using follow_live::start_replay;
+using follow_live::wait_for;
+using follow_live::wait_for_status_past;
+
+TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
+  const fs::path scene = live_scene(60);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  const fs::path rec = tmp / "rec";
+  const LiveRun run = follow_a_replay(scene, tmp, "1", {}, {"--publish-every", "0.3"});
+  const RunResult& follow = run.follow;
+  ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
+  ASSERT_EQ(follow.exit_code, 0) << follow.err;
+
+  // status.json: valid, finished by the done file, every frame seen, the lag recorded.
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_TRUE(validate_json(status, load_schema("follow_status.schema.json")).empty()) << status;
+  EXPECT_EQ(status.at("state"), "finished");
+  EXPECT_EQ(status.at("ended_by"), "done file");
+  EXPECT_EQ(status.at("frames_seen").get<int>(), 60);
+  EXPECT_EQ(status.at("keyframes_waiting").get<int>(), 0);
+  EXPECT_GE(status.at("publishes").get<int>(), 2) << follow.err;
+  EXPECT_GT(status.at("lag_max_s").get<double>(), 0.0);
+  EXPECT_GE(status.at("lag_max_s").get<double>(), status.at("lag_last_s").get<double>());
+  EXPECT_GT(status.at("peak_rss_kb").get<long>(), 0);
+
+  // The final map against objmap fuse on the finished recording: the same keyframes, the object
+  // count within 10%, every true object fuse finds found once.
+  const auto fuse = run_objmap({"fuse", "--dataset", rec.string(), "--trajectory",
+                                (rec / "estimated.txt").string(), "--segmentation",
+                                (rec / "segmentation").string(), "--out", (tmp / "fuse").string()});
+  ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
+  const auto fused = read_json_file(tmp / "fuse/run.json");
+  const auto live = read_json_file(tmp / "live/map/run.json");
+  EXPECT_EQ(live.at("counts").at("keyframes"), fused.at("counts").at("keyframes"));
+  const double fuse_objects =
+      static_cast<double>(read_json_file(tmp / "fuse/objects.json").at("objects").size());
+  const double live_objects = status.at("objects").get<double>();
+  EXPECT_EQ(read_json_file(tmp / "live/map/objects.json").at("objects").size(), live_objects);
+  EXPECT_GT(fuse_objects, 0.0);
+  EXPECT_LE(std::abs(live_objects - fuse_objects), 0.1 * fuse_objects)
+      << live_objects << " vs " << fuse_objects;
+  const auto by_fuse = matched_objects(tmp / "fuse", scene, tmp / "eval_fuse.json");
+  const auto by_follow = matched_objects(tmp / "live/map", scene, tmp / "eval_live.json");
+  EXPECT_EQ(by_follow.reference, by_fuse.reference);
+  EXPECT_EQ(by_follow.unmatched_map, 0u);
+  // No staging folder is left beside the map.
+  for (const auto& e : fs::directory_iterator(tmp / "live"))
+    EXPECT_TRUE(e.path().filename() == "map" || e.path().filename() == "status.json") << e.path();
+}
+
+TEST(Follow, AMalformedTrajectoryLineIsNamedSkippedAndCountedALineBeingWrittenWaits) {
+  TempDir tmp;
+  ASSERT_TRUE(copy_live_scene(30, tmp));
+  // Line 6 of the trajectory broken, and a last line without its '\n' (still being written).
+  std::string text = read_text(tmp / "rec/estimated.txt");
+  std::size_t at = 0;
+  for (int line = 1; line < 6; ++line) at = text.find('\n', at) + 1;
+  text.replace(at, text.find('\n', at) - at, "1700000000.2 0.1 0.2 nan 0 0 0 1");
+  write_text(tmp / "traj.txt", text + "1700000099.0 0 0 0 0 0");
+  const auto r =
+      run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
+                  "--trajectory", (tmp / "traj.txt").string(), "--idle-exit", "0.5"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find((tmp / "traj.txt").string() + ":6: "), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(":6: "), r.err.rfind(":6: ")) << "named once: " << r.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_EQ(status.at("trajectory_malformed").get<int>(), 1);
+  EXPECT_EQ(status.at("ended_by"), "idle");
+  EXPECT_GT(status.at("objects").get<int>(), 0);
+  EXPECT_TRUE(fs::exists(tmp / "live/map/objects.json"));
+}
+
+TEST(Follow, TheRecordingRemovedIsExitTwoWithTheLastMapKept) {
+  TempDir tmp;
+  ASSERT_TRUE(copy_live_scene(30, tmp));
+  RunResult r;
+  std::thread follower([&] {
+    r = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
+                    "--trajectory", (tmp / "rec/estimated.txt").string(), "--publish-every",
+                    "0.2"});
+  });
+  const bool published = wait_for_status_past(tmp / "live/status.json", "\"publishes\": 0", 60.0);
+  fs::remove_all(tmp / "rec");
+  follower.join();
+  ASSERT_TRUE(published);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::string last = r.err.substr(r.err.rfind('\n', r.err.size() - 2) + 1);
+  EXPECT_NE(last.find("removed while following"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(tmp / "live/map/objects.json"));
+  EXPECT_TRUE(fs::exists(tmp / "live/map/map_semantic.ply"));
+}
+
+TEST(Follow, AFrameThatDoesNotDecodeYetIsRetriedAtTheNextPoll) {
+  TempDir tmp;
+  ASSERT_TRUE(copy_live_scene(30, tmp));
+  // The first frame's colour image half-written: read, failed, retried until it is whole.
+  const std::string listing = read_text(tmp / "rec/rgb.txt");
+  std::size_t at = 0;
+  while (listing[at] == '#') at = listing.find('\n', at) + 1;
+  const std::string line = listing.substr(at, listing.find('\n', at) - at);
+  const fs::path rgb = tmp / "rec" / line.substr(line.find(' ') + 1);
+  const std::string whole = read_text(rgb);
+  write_text(rgb, whole.substr(0, whole.size() / 3));
+  RunResult r;
+  std::thread follower([&] {
+    r = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "live").string(),
+                    "--trajectory", (tmp / "rec/estimated.txt").string(), "--idle-exit", "3",
+                    "--poll", "0.05"});
+  });
+  const bool retried = wait_for_status_past(tmp / "live/status.json", "\"frame_retries\": 0", 30.0);
+  write_text(rgb, whole);
+  follower.join();
+  ASSERT_TRUE(retried) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("retried at the next poll"), std::string::npos) << r.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_EQ(status.at("keyframes_dropped").get<int>(), 0);
+  EXPECT_GT(status.at("keyframes_mapped").get<int>(), 0);
+}
+
+// --model: the detector on the newest keyframe only, while replay writes faster than it detects:
+// the keyframes it cannot reach are skipped and counted, never queued; what it found is in
+// RUN/detect.
+TEST(Follow, WithAModelTheDetectorTakesTheNewestKeyframeAndSkipsTheRest) {
+  OBJMAP_DATA_OR_SKIP(model, "../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx");
+  const fs::path scene = live_scene(30);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  const fs::path rec = tmp / "rec";
+  RunResult replay;
+  std::thread writer = start_replay(scene, rec, "4", replay);
+  ASSERT_TRUE(wait_for([&] { return fs::exists(rec / "rgb.txt"); }, 20.0));
+  const auto r = run_objmap({"follow", "--dataset", rec.string(), "--out", (tmp / "live").string(),
+                             "--trajectory", (rec / "estimated.txt").string(), "--model",
+                             model.string(), "--idle-exit", "20"});
+  writer.join();
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_TRUE(validate_json(status, load_schema("follow_status.schema.json")).empty()) << status;
+  const auto skipped = status.at("frames_skipped_detect").get<std::size_t>();
+  const auto mapped = status.at("keyframes_mapped").get<std::size_t>();
+  std::size_t detected = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(tmp / "live/detect")) ++detected;
+  EXPECT_GT(skipped, 0u);
+  EXPECT_GT(detected, 0u);
+  EXPECT_EQ(skipped + detected, mapped);
+  EXPECT_TRUE(fs::exists(tmp / "live/map/objects.json"));
+}
+
+// A loop closure: the trajectory drifted until half-way, then rewritten with the true poses. The
+// objects mapped before it are moved with the new poses (no image read again): the final objects
+// lie where objmap fuse on the rewritten trajectory puts them (within 2 cm).
+TEST(Follow, ALoopClosureMovesTheObjectsWhereFuseOnTheRewrittenTrajectoryPutsThem) {
+  const fs::path scene = live_scene(60);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  const fs::path rec = tmp / "rec";
+  const LiveRun run = follow_a_replay(scene, tmp, "1", {"--rewrite-at", "0.5"}, {});
+  ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
+  ASSERT_EQ(run.follow.exit_code, 0) << run.follow.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_GE(status.at("trajectory_rewrites").get<int>(), 1);
+  EXPECT_GE(status.at("replacements").get<int>(), 1);
+  const auto fuse = run_objmap({"fuse", "--dataset", rec.string(), "--trajectory",
+                                (rec / "estimated.txt").string(), "--segmentation",
+                                (rec / "segmentation").string(), "--out", (tmp / "fuse").string()});
+  ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
+  const auto live = read_json_file(tmp / "live/map/objects.json").at("objects");
+  const auto fused = read_json_file(tmp / "fuse/objects.json").at("objects");
+  EXPECT_LE(std::abs(static_cast<double>(live.size()) - static_cast<double>(fused.size())),
+            0.1 * static_cast<double>(fused.size()));
+  for (const auto& o : live) {
+    const Eigen::Vector3d p(o.at("position")[0], o.at("position")[1], o.at("position")[2]);
+    double nearest = 1e9;
+    for (const auto& f : fused)
+      if (f.at("class") == o.at("class"))
+        nearest = std::min(
+            nearest,
+            (Eigen::Vector3d(f.at("position")[0], f.at("position")[1], f.at("position")[2]) - p)
+                .norm());
+    EXPECT_LE(nearest, 0.02) << o.at("class") << " " << o.at("id");
+  }
+}
+
+TEST(Follow, BadInputIsOneLineAndExitTwo) {
+  TempDir tmp;
+  const auto missing = run_objmap(
+      {"follow", "--dataset", (tmp / "nope").string(), "--out", (tmp / "live").string()});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
+  write_text(tmp / "other/notes.txt", "mine");
+  fs::create_directories(tmp / "rec");
+  const auto other = run_objmap(
+      {"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "other").string()});
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_EQ(read_text(tmp / "other/notes.txt"), "mine");
+}
+
+}  // namespace
+}  // namespace objmap::test
