@@ -23,7 +23,8 @@ void follow_and_print(const pipeline::FollowOptions& options) {
   std::printf("ended by      %s after %.1f s, %zu publishes\n", s.ended_by.c_str(), s.seconds,
               s.publishes);
   std::printf("objects       %zu\n", s.objects);
-  std::printf("lag           last %.2f s, max %.2f s\n", s.lag_last_s, s.lag_max_s);
+  std::printf("lag           last %.2f s, median %.2f s, max %.2f s\n", s.lag_last_s,
+              s.lag_median_s, s.lag_max_s);
   std::printf("trajectory    %zu lines, %zu malformed (skipped), %zu rewrites\n",
               s.trajectory_lines, s.trajectory_malformed, s.trajectory_rewrites);
   std::printf("skipped       %zu frames by detect, %zu frame reads retried\n",

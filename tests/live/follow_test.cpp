@@ -142,6 +142,8 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   EXPECT_GE(status.at("publishes").get<int>(), 2) << follow.err;
   EXPECT_GT(status.at("lag_max_s").get<double>(), 0.0);
   EXPECT_GE(status.at("lag_max_s").get<double>(), status.at("lag_last_s").get<double>());
+  EXPECT_GT(status.at("lag_median_s").get<double>(), 0.0);
+  EXPECT_GE(status.at("lag_max_s").get<double>(), status.at("lag_median_s").get<double>());
   EXPECT_GT(status.at("peak_rss_kb").get<long>(), 0);
 
   // The final map against objmap fuse on the finished recording: the same keyframes, the object

@@ -54,6 +54,7 @@ struct FollowStatus {
   std::size_t objects = 0;            // in the last published map
   double lag_last_s = 0.0;            // last publish: the longest wait of a keyframe it brought in
   double lag_max_s = 0.0;             // the longest over all publishes
+  double lag_median_s = 0.0;          // the median over every keyframe published so far
   double fuse_seconds = 0.0;          // spent fusing keyframes into the live maps
   double publish_seconds_last = 0.0;  // the last publish's time (finish and write the map)
   double seconds = 0.0;               // since the start

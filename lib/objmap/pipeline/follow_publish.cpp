@@ -57,9 +57,16 @@ bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
   const Clock::time_point now = Clock::now();
   s.status.publish_seconds_last = std::chrono::duration<double>(now - s.publish_started).count();
   s.status.lag_last_s = 0.0;
-  for (const Clock::time_point& arrived : s.publishing_arrivals)
-    s.status.lag_last_s =
-        std::max(s.status.lag_last_s, std::chrono::duration<double>(now - arrived).count());
+  for (const Clock::time_point& arrived : s.publishing_arrivals) {
+    s.lags.push_back(std::chrono::duration<double>(now - arrived).count());
+    s.status.lag_last_s = std::max(s.status.lag_last_s, s.lags.back());
+  }
+  if (!s.lags.empty()) {
+    std::vector<double> sorted = s.lags;
+    const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    s.status.lag_median_s = *mid;
+  }
   s.status.lag_max_s = std::max(s.status.lag_max_s, s.status.lag_last_s);
   s.publishing_arrivals.clear();
   ++s.status.publishes;
@@ -101,6 +108,7 @@ void write_status(FollowState& s) {
                                 {"objects", st.objects},
                                 {"lag_last_s", st.lag_last_s},
                                 {"lag_max_s", st.lag_max_s},
+                                {"lag_median_s", st.lag_median_s},
                                 {"fuse_seconds", st.fuse_seconds},
                                 {"publish_seconds_last", st.publish_seconds_last},
                                 {"seconds", st.seconds},

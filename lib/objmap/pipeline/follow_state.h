@@ -66,6 +66,7 @@ struct FollowState {
   Clock::time_point last_publish = Clock::now();  // the last publish's start
   std::future<std::size_t> publishing;  // the publish in flight: its objects when it is done
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
+  std::vector<double> lags;  // every published keyframe's lag (s), for the median
   Clock::time_point publish_started;
   FollowStatus status;
 };
