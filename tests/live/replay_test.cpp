@@ -1,6 +1,9 @@
 // objmap replay: the recording written again as it was (listings, trajectory, per-frame files), the
 // loop closure's rewrite ending on the source's poses, and the folders it refuses.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -29,6 +32,30 @@ TEST(Replay, WritesTheRecordingAsItWasAndDoneAtTheEnd) {
   // No temporary file is left behind.
   for (const auto& e : fs::recursive_directory_iterator(tmp / "r"))
     EXPECT_EQ(e.path().filename().string().find(".replay-tmp"), std::string::npos) << e.path();
+}
+
+// A follower may watch the folder from before the replay starts: the folder itself is kept (its
+// removal ends objmap follow), an earlier replay's files in it are replaced.
+TEST(Replay, KeepsTheFolderItWritesIntoAndReplacesAnEarlierReplay) {
+  const fs::path scene = live_scene(30);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  fs::create_directories(tmp / "r");
+  // An open handle on the folder: a removed folder shows no link left.
+  const int fd = ::open((tmp / "r").c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(fd, 0);
+  const std::vector<std::string> args{
+      "replay", "--dataset", scene.string(), "--out", (tmp / "r").string(), "--speed", "20"};
+  ASSERT_EQ(run_objmap(args).exit_code, 0);
+  write_text(tmp / "r/rgb/stale.png", "an earlier replay's leftover");
+  const auto again = run_objmap(args);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  struct stat after {};
+  ASSERT_EQ(::fstat(fd, &after), 0);
+  ::close(fd);
+  EXPECT_GT(after.st_nlink, 0u) << "the folder was removed and made again";
+  EXPECT_FALSE(fs::exists(tmp / "r/rgb/stale.png"));
+  EXPECT_EQ(read_text(tmp / "r/rgb.txt"), read_text(scene / "rgb.txt"));
 }
 
 TEST(Replay, TheLoopClosureRewriteEndsOnTheSourcesPoses) {

@@ -76,8 +76,12 @@ bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
 }
 
 void publish(FollowState& s, const FollowEvents& events) {
-  // The one in flight is enough when it holds every keyframe.
-  if (finish_publish(s, events, true) && s.unpublished.empty()) return;
+  // The one in flight, or the last one done, is enough when it holds every keyframe.
+  finish_publish(s, events, true);
+  if (s.unpublished.empty() && s.status.publishes > 0) {
+    write_status(s);
+    return;
+  }
   start_publish(s);
   finish_publish(s, events, true);
 }

@@ -251,7 +251,13 @@ ReplayResult run_replay(const ReplayOptions& o, const ReplayProgress& progress) 
   });
 
   // 2. The folder, the listings' headers and the files that are not frames, at once.
-  if (fs::exists(o.out)) fs::remove_all(o.out);
+  // The folder itself is kept (a follower may already watch it: its removal ends objmap follow);
+  // an earlier replay's files in it are removed.
+  if (fs::exists(o.out)) {
+    std::vector<fs::path> earlier;
+    for (const auto& e : fs::directory_iterator(o.out)) earlier.push_back(e.path());
+    for (const fs::path& p : earlier) fs::remove_all(p);
+  }
   fs::create_directories(o.out);
   nlohmann::ordered_json doc = {
       {"source", o.dataset.string()},      {"layout", dataset.layout},
