@@ -7,8 +7,9 @@
 # recording: the recording's length, when follow ended (seconds after the replay started), its
 # publishes, its lag (median and max over the keyframes, RUN/status.json; "—" where a build's
 # status.json has no lag_median_s), the keyframes the detector did not reach, the objects of its
-# last map against the reference's, and its peak resident memory; then the ratio of the peak memory
-# of the longest synthetic walk-through to the shortest.
+# last map against the reference's, and its peak resident memory beside that of the reference's fuse
+# (its run.json); then the ratio of follow's peak memory on the longest synthetic walk-through to
+# the shortest.
 #   bash scripts/bench_follow.sh OBJMAP DATA [OUT]        (make bench-follow; end of make bench)
 # Recordings:
 #   fr1_rpy_every4  DATA/tum/fr1_rpy_every4, its groundtruth.txt as the trajectory the SLAM writes,
@@ -34,7 +35,6 @@ objmap=$(realpath "$objmap")
 mkdir -p "$out"
 
 now() { date +%s.%N; }
-json() { python3 -c "import json, sys; d = json.load(open(sys.argv[1])); print(d$2)" "$1"; }
 
 # follow_one NAME SRC TRAJ MODEL [CAMERA]: follow on OUT/NAME/rec while replay writes SRC into it
 # (TRAJ: the trajectory file name the replay streams, "" for the layout's own poses; MODEL: "" for
@@ -78,7 +78,7 @@ follow_one() {
     return 1
   fi
   # The reference: objmap run (with the model) or objmap fuse on the finished recording.
-  local ref_objects
+  local ref ref_name
   if [ -n "$model" ]; then
     local ref_args=(run --dataset "$dir/rec" --model "$model" --out "$dir/run" "${cam_args[@]}")
     [ -z "$traj" ] || ref_args+=(--trajectory "$dir/rec/$traj")
@@ -86,32 +86,34 @@ follow_one() {
       echo "bench_follow: $name: objmap run failed: $(tail -1 "$dir/run.log")" >&2
       return 1
     }
-    ref_objects="$(json "$dir/run/map/objects.json" "['objects'].__len__()") (run)"
+    ref=$dir/run/map ref_name=run
   else
     "$objmap" fuse --dataset "$dir/rec" --trajectory "$dir/rec/$traj" --segmentation \
       "$dir/rec/segmentation" --out "$dir/fuse" "${cam_args[@]}" >"$dir/fuse.log" 2>&1 || {
       echo "bench_follow: $name: objmap fuse failed: $(tail -1 "$dir/fuse.log")" >&2
       return 1
     }
-    ref_objects="$(json "$dir/fuse/objects.json" "['objects'].__len__()") (fuse)"
+    ref=$dir/fuse ref_name=fuse
   fi
-  python3 - "$dir/live/status.json" "$dir/rec/replay.json" "$name" "$t0" "$t1" "$t2" \
-    "$ref_objects" "$(sed -n 's/^replayed *\([0-9]*\) frames.*/\1/p' "$dir/replay.log")" <<'EOF'
+  python3 - "$dir/live/status.json" "$ref" "$ref_name" "$name" "$t0" "$t1" "$t2" \
+    "$(sed -n 's/^replayed *\([0-9]*\) frames.*/\1/p' "$dir/replay.log")" <<'EOF'
 import json, sys
 status = json.load(open(sys.argv[1]))
-name, t0, t1, t2, ref, frames = sys.argv[3], float(sys.argv[4]), float(sys.argv[5]), \
-    float(sys.argv[6]), sys.argv[7], sys.argv[8]
+ref, ref_name, name, frames = sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[8]
+t0, t1, t2 = (float(t) for t in sys.argv[5:8])
+ref_objects = len(json.load(open(ref + "/objects.json"))["objects"])
+ref_mb = json.load(open(ref + "/run.json"))["performance"]["peak_rss_mb"]
 median = status.get("lag_median_s")
 median = "—" if median is None else "%.2f" % median
-print("| %s | %s | %.1f s | %.1f s | %d | %s / %.2f s | %d of %d | %d vs %s | %d MB |" % (
-    name, frames, t1 - t0, t2 - t0, status["publishes"], median, status["lag_max_s"],
-    status["frames_skipped_detect"], status["keyframes_mapped"], status["objects"], ref,
-    status["peak_rss_kb"] // 1024))
+print("| %s | %s | %.1f s | %.1f s | %d | %s / %.2f s | %d of %d | %d vs %d (%s) | %d MB (%d MB) |"
+      % (name, frames, t1 - t0, t2 - t0, status["publishes"], median, status["lag_max_s"],
+         status["frames_skipped_detect"], status["keyframes_mapped"], status["objects"],
+         ref_objects, ref_name, status["peak_rss_kb"] // 1024, ref_mb))
 EOF
 }
 
 echo "bench_follow: $(uptime)" >&2
-echo "| recording | frames | recording | follow ends after | publishes | lag median / max | skipped by detect (of keyframes) | objects: follow vs reference | peak memory |"
+echo "| recording | frames | recording | follow ends after | publishes | lag median / max | skipped by detect (of keyframes) | objects: follow vs reference | peak memory: follow (reference's fuse) |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for c in $cases; do
   case $c in
