@@ -7,7 +7,7 @@ OBJMAP := $(BUILD)/bin/objmap
 
 FUZZ_SECONDS ?= 60
 
-.PHONY: all deps configure build test test-slurm demo bench bench-detect bench-memory ablation fuzz sanitize format clean
+.PHONY: all deps configure build test test-slurm demo bench bench-detect bench-follow bench-memory ablation fuzz sanitize format clean
 
 all: build
 
@@ -43,13 +43,15 @@ demo: deps configure
 # make bench [DATA=DIR]: every table of docs/benchmarks.md on the sequences under DATA plus three
 # synthetic scenes (scripts/bench.sh; about 10 minutes on 2 cores), then the ablation (below,
 # about 20 minutes more; BENCH_ABLATION=0 leaves it out); writes the generated sections of
-# docs/benchmarks.md and docs/fusion.md and out/bench/. Installs python3-open3d for the Open3D
-# baseline if it can.
+# docs/benchmarks.md and docs/fusion.md and out/bench/; then bench-detect and bench-follow (below;
+# BENCH_DETECT=0, BENCH_FOLLOW=0 leave them out). Installs python3-open3d for the Open3D baseline if
+# it can.
 bench: deps build
 	@bash scripts/install-deps.sh --bench
 	@BENCH_COMMAND="make bench$(if $(filter command line,$(origin DATA)), DATA=$(DATA))" \
 	  bash scripts/bench.sh $(OBJMAP) $(DATA)
 	@[ "$(BENCH_DETECT)" = 0 ] || bash scripts/bench_detect.sh $(OBJMAP) $(DATA) out/bench/detect
+	@[ "$(BENCH_FOLLOW)" = 0 ] || bash scripts/bench_follow.sh $(OBJMAP) $(DATA) out/bench/follow
 
 # make bench-detect [DATA=DIR]: objmap detect's frames/s per backend (OpenCV's dnn, ONNX Runtime)
 # and thread count on the first 40 frames of fr1_rpy_every4, interleaved rounds, medians, and the
@@ -57,6 +59,16 @@ bench: deps build
 # the end of make bench, BENCH_DETECT=0 leaves it out). docs/benchmarks.md, "Speed of detect".
 bench-detect: deps build
 	@bash scripts/bench_detect.sh $(OBJMAP) $(DATA) out/bench_detect
+
+# make bench-follow [DATA=DIR]: objmap follow while objmap replay writes a recording at 1x speed:
+# fr1_rpy_every4 and the 7-Scenes clip (detect with YOLOv5n-seg; against objmap run with the same
+# model) and the synthetic walk-through at 300 and 1200 frames (against objmap fuse): lag median and
+# max, keyframes skipped by detect, objects, peak memory and its ratio 1200 vs 300 frames
+# (scripts/bench_follow.sh; about 6 minutes on 2 cores the first time, the scenes are kept in
+# out/bench_follow/; also the end of make bench, BENCH_FOLLOW=0 leaves it out).
+# docs/benchmarks.md, "Following a recording".
+bench-follow: build
+	@bash scripts/bench_follow.sh $(OBJMAP) $(DATA) out/bench_follow
 
 # make bench-memory: peak memory and dense-map voxels of objmap fuse on a synthetic scene circled
 # for 300 and 1200 frames, with and without the dense map's pruning, then the peak memory of objmap
@@ -75,7 +87,7 @@ ablation: deps configure
 
 # make fuzz [FUZZ_SECONDS=60] [FUZZ_TARGETS="png ply"]: each fuzz target of tests/fuzz/ (every reader of
 # outside data) for FUZZ_SECONDS under libFuzzer + ASan + UBSan, built with clang in build-fuzz/
-# (scripts/fuzz.sh; 23 targets: ~24 minutes at the default). docs/testing.md.
+# (scripts/fuzz.sh; 25 targets: ~26 minutes at the default). docs/testing.md.
 fuzz:
 	@bash scripts/install-deps.sh --fuzz
 	@FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash scripts/fuzz.sh $(DATA)

@@ -2,7 +2,10 @@
 # make sanitize: the unit, CLI and integration tests (ctest) on a build with AddressSanitizer and
 # UndefinedBehaviorSanitizer (g++, -O1, ccache) in build-asan/: the library, the objmap binary and
 # the test programs, no benchmarks. Any sanitizer report fails the test that triggers it.
-#   scripts/sanitize.sh [DATA]   env: JOBS (default 2)
+#   scripts/sanitize.sh [DATA]   env: JOBS (default 2), SANITIZE_TESTS (a ctest -R regex: only the
+#   tests it matches), SANITIZE_TARGETS (build only these targets, e.g. "objmap_app test_live
+#   test_io": the programs those tests run; default all)
+# e.g. SANITIZE_TESTS="live/|TrajectoryTail" SANITIZE_TARGETS="objmap_app test_live test_io" make sanitize
 set -euo pipefail
 cd "$(dirname "$0")/.."
 data=${1:-${OBJMAP_DATA:-$(cd .. && pwd)/shared/data}}
@@ -19,7 +22,9 @@ start=$(date +%s)
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=None "-DCMAKE_CXX_FLAGS=$flags" \
   -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined -DOBJMAP_BUILD_TESTS=ON \
   -DOBJMAP_BUILD_BENCHMARKS=OFF >/dev/null
-if ! cmake --build "$build" -j"${JOBS:-2}" >"$build/build.log" 2>&1; then
+read -r -a targets <<<"${SANITIZE_TARGETS:-}"
+[ ${#targets[@]} -eq 0 ] || targets=(--target "${targets[@]}")
+if ! cmake --build "$build" -j"${JOBS:-2}" "${targets[@]}" >"$build/build.log" 2>&1; then
   tail -30 "$build/build.log" >&2
   exit 1
 fi
@@ -32,6 +37,9 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 # Leaks inside third-party libraries (scripts/lsan.supp names each and why).
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp}
 status=0
-(cd "$build" && OBJMAP_DATA="$data" ctest --output-on-failure -j"${JOBS:-2}") || status=$?
+selection=()
+[ -z "${SANITIZE_TESTS:-}" ] || selection=(-R "$SANITIZE_TESTS")
+(cd "$build" && OBJMAP_DATA="$data" ctest --output-on-failure -j"${JOBS:-2}" "${selection[@]}") ||
+  status=$?
 echo "sanitize: tests in $(($(date +%s) - built)) s, $(($(date +%s) - start)) s in all"
 exit $status

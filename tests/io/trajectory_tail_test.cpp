@@ -2,6 +2,7 @@
 // malformed line is named once and skipped, a rewritten past is reported.
 #include <gtest/gtest.h>
 
+#include "objmap/io/trajectory.h"
 #include "objmap/io/trajectory_tail.h"
 #include "support/test_support.h"
 
@@ -56,6 +57,22 @@ TEST(TrajectoryTail, ARewrittenPastIsReported) {
   EXPECT_TRUE(poll.rewritten);
   EXPECT_EQ(poll.new_poses, 1u);
   EXPECT_EQ(tail.rewrites(), 1u);
+}
+
+// Found by fuzz_trajectory_tail: a line of separators only (",,,") and a comment after a vertical
+// tab were named malformed, while read_trajectory, which fuse uses, skips them.
+TEST(TrajectoryTail, SkipsTheLinesReadTrajectorySkips) {
+  TempDir tmp;
+  const fs::path file = tmp / "t.txt";
+  write_text(file, "1.0 0 0 0 0 0 0 1\n,,,\n\v# comment\n \f\n\r \n2.0 0 0 0 0 0 0 1\n");
+  io::TrajectoryTail tail(file);
+  const auto poll = tail.poll();
+  EXPECT_TRUE(poll.malformed.empty()) << poll.malformed.front();
+  EXPECT_EQ(tail.malformed(), 0u);
+  EXPECT_EQ(tail.lines(), 2u);
+  ASSERT_EQ(tail.trajectory().size(), 2u);
+  EXPECT_EQ(tail.trajectory().poses[1].line, 6u);
+  EXPECT_EQ(io::read_trajectory(file).size(), 2u);
 }
 
 }  // namespace

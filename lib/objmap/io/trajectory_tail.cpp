@@ -33,9 +33,8 @@ std::vector<std::string> complete_lines(const fs::path& file) {
   return lines;
 }
 
-// One data line as a pose; throws InputError(where, reason) when it is malformed.
-StampedPose parse_pose_line(const std::string& line, const std::string& where) {
-  const std::vector<std::string> fields = split_fields(line);
+// One data line's fields as a pose; throws InputError(where, reason) when it is malformed.
+StampedPose parse_pose_line(const std::vector<std::string>& fields, const std::string& where) {
   require(fields.size() == 8, where,
           std::to_string(fields.size()) + " fields; expected 8: timestamp tx ty tz qx qy qz qw");
   static const char* names[] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
@@ -67,12 +66,17 @@ TrajectoryTailPoll TrajectoryTail::poll() {
   const std::vector<std::string> lines = complete_lines(file_);
   lines_ = 0;
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    const auto first = lines[i].find_first_not_of(" \t");
+    // Blank lines, comments and lines of separators only (",,,") are skipped as read_trajectory
+    // (io/text_lines.cpp, LineReader) skips them, so that a file fuse reads whole is read here
+    // without a line named malformed.
+    const auto first = lines[i].find_first_not_of(" \t\v\f");
     if (first == std::string::npos || lines[i][first] == '#') continue;
+    const std::vector<std::string> fields = split_fields(lines[i]);
+    if (fields.empty()) continue;
     ++lines_;
     const std::string where = file_.string() + ":" + std::to_string(i + 1);
     try {
-      StampedPose pose = parse_pose_line(lines[i], where);
+      StampedPose pose = parse_pose_line(fields, where);
       pose.line = i + 1;
       require(next.poses.empty() || pose.timestamp > next.poses.back().timestamp, where,
               "timestamp not after the previous pose's");
