@@ -1,6 +1,4 @@
 // Support surfaces: horizontal patches of the dense map (docs/scene.md, "Surfaces").
-#include <pcl/search/kdtree.h>
-#include <pcl/segmentation/extract_clusters.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -67,31 +65,21 @@ void fit_plane(Patch& p, double max_tilt_deg) {
   if (p.slope.norm() > max_slope) p.slope *= max_slope / p.slope.norm();
 }
 
-// Step 2: the horizontal points split into patches by Euclidean clustering (PCL) at most
-// cluster_gap_m apart. A patch follows its surface wherever it goes: a table top that the
-// estimated up sees tilted by a few degrees stays one patch (its level is its median height).
+// Step 2: the horizontal points split into patches by Euclidean clustering at most cluster_gap_m
+// apart (PCL's clusters, on a grid: euclidean_clusters). A patch follows its surface wherever it
+// goes: a table top that the estimated up sees tilted by a few degrees stays one patch (its level
+// is its median height).
 std::vector<Patch> horizontal_patches(const std::vector<Vec3f>& g, const SurfaceOptions& o,
                                       std::size_t min_points) {
   std::vector<Patch> out;
   if (g.size() < min_points) return out;
-  detail::Cloud::Ptr cloud(new detail::Cloud);
-  cloud->reserve(g.size());
-  for (const Vec3f& p : g) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
-  tree->setInputCloud(cloud);
-  pcl::EuclideanClusterExtraction<pcl::PointXYZ> extract;
-  extract.setClusterTolerance(o.cluster_gap_m);
-  extract.setMinClusterSize(static_cast<int>(min_points));
-  extract.setMaxClusterSize(std::numeric_limits<int>::max());
-  extract.setSearchMethod(tree);
-  extract.setInputCloud(cloud);
-  std::vector<pcl::PointIndices> clusters;
-  extract.extract(clusters);
+  const std::vector<std::vector<int>> clusters =
+      detail::euclidean_clusters(g, o.cluster_gap_m, min_points);
   for (const auto& c : clusters) {
     Patch p;
     std::vector<float> z;
-    z.reserve(c.indices.size());
-    for (int k : c.indices) {
+    z.reserve(c.size());
+    for (int k : c) {
       p.add(g[static_cast<std::size_t>(k)], o.sample_voxel_m);
       z.push_back(g[static_cast<std::size_t>(k)].z());
     }
