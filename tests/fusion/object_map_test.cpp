@@ -8,6 +8,7 @@
 #include "fusion_test_util.h"
 #include "objmap/core/error.h"
 #include "objmap/fusion/palette.h"
+#include "objmap/fusion/record_cache.h"
 
 namespace objmap::fusion {
 namespace {
@@ -238,6 +239,54 @@ TEST(ObjectMap, DeterministicRecords) {
     EXPECT_EQ(a[i].points_filtered, b[i].points_filtered);
     EXPECT_EQ(a[i].observations, 12);
   }
+}
+
+// A record cache (objmap follow's publishes) gives the records a map without one gives, as the
+// objects grow and merge; an object unchanged since the last records() is taken from it.
+TEST(ObjectMap, RecordsFromTheCacheAreThoseMadeAfresh) {
+  const std::vector<Observation> seq = noisy_sequence();
+  auto cache = std::make_shared<RecordCache>();
+  ObjectMap live;
+  live.set_record_cache(cache);
+  const auto expect_same = [](const std::vector<ObjectRecord>& a,
+                              const std::vector<ObjectRecord>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].id, b[i].id);
+      EXPECT_EQ(a[i].cloud.points, b[i].cloud.points);
+      EXPECT_EQ(a[i].cloud.colors, b[i].cloud.colors);
+      EXPECT_EQ(a[i].position, b[i].position);
+      EXPECT_EQ(a[i].centroid, b[i].centroid);
+      EXPECT_EQ(a[i].obb.center, b[i].obb.center);
+      EXPECT_EQ(a[i].points_voxel, b[i].points_voxel);
+      EXPECT_EQ(a[i].points_filtered, b[i].points_filtered);
+      EXPECT_EQ(a[i].outlier_threshold, b[i].outlier_threshold);
+      EXPECT_EQ(a[i].observations, b[i].observations);
+    }
+  };
+  for (std::size_t n = 0; n < seq.size(); ++n) {
+    add_one(live, seq[n]);
+    if (n % 6 != 5) continue;
+    ObjectMap published = live;  // shares the cache
+    ObjectMap plain = live;
+    plain.set_record_cache(nullptr);
+    published.merge_pass();
+    plain.merge_pass();
+    expect_same(published.records(), plain.records());
+  }
+  const std::size_t misses = cache->misses();
+  ObjectMap again = live;
+  again.merge_pass();
+  const auto records = again.records();  // nothing changed since the last: every record cached
+  EXPECT_EQ(cache->misses(), misses);
+  EXPECT_GE(cache->hits(), records.size());
+  Observation later = seq.front();  // the first object seen once more; the others unchanged
+  later.timestamp = 100.0;
+  add_one(live, later);
+  ObjectMap changed = live;
+  changed.merge_pass();
+  changed.records();
+  EXPECT_EQ(cache->misses(), misses + 1);
 }
 
 TEST(ObjectMap, SemanticMapsPaintObjectVoxelsByClass) {

@@ -379,6 +379,8 @@ struct AddResult {
   double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
 };
 
+class RecordCache;
+
 class ObjectMap {
  public:
   explicit ObjectMap(const ObjectMapOptions& options = {});
@@ -397,6 +399,11 @@ class ObjectMap {
   // first. Ties: the earlier observation, then the lower id. The observations that match nothing
   // start objects, in their order. Results in the order of `observations`.
   std::vector<AddResult> add_frame(const std::vector<Observation>& observations);
+
+  // records() reuses the filtered clouds `cache` holds for objects whose content has not changed
+  // and puts the ones it makes there (objmap follow's publishes; copies of this map share it).
+  // Not with ObjectMapOptions::keep_points. Null: none.
+  void set_record_cache(std::shared_ptr<RecordCache> cache) { record_cache_ = std::move(cache); }
 
   // The final merge pass (ID-switch repair): repeatedly joins the pair of objects with the highest
   // P > merge_threshold (P_ID = the two share a track id; D and M between the two objects), the
@@ -498,6 +505,8 @@ class ObjectMap {
   bool confirmed(const Object& object) const;
   // records(): the object's filtered cloud in `r` (points_voxel, points_filtered, cloud, t).
   void filter_record(const Object& object, const RecordOptions& options, ObjectRecord& r) const;
+  // A 64-bit hash of what filter_record reads of `object` under `options` (record_cache_'s key).
+  std::uint64_t record_content(const Object& object, const RecordOptions& options) const;
   // add_frame(): fuses the observation into `target` (nullptr: a new object).
   AddResult fuse(const Observation& obs, const Prepared& prep, Object* target, const Scores& s);
   // Joins `absorbed` into `into` (voxels, votes, provenance, merges); `absorbed` dies.
@@ -531,6 +540,7 @@ class ObjectMap {
   std::vector<Vec3> surface_points(const Object& object, double share) const;
 
   ObjectMapOptions options_;
+  std::shared_ptr<RecordCache> record_cache_;  // set_record_cache; shared by copies
   double share_bar_ = 0.0;  // judge_visibility(): the detected share an object needs
   std::vector<std::unique_ptr<Object>>
       objects_;  // index = id; absorbed objects stay (alive = false)

@@ -2,15 +2,18 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <set>
 #include <string>
 
 #include "objmap/core/error.h"
 #include "objmap/fusion/object_map_object.h"
 #include "objmap/fusion/palette.h"
+#include "objmap/fusion/record_cache.h"
 #include "objmap/fusion/split.h"
 #include "objmap/geometry/bounds.h"
 #include "objmap/segmentation/coco_classes.h"
@@ -70,6 +73,51 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
   r.points_filtered = r.cloud.size();
 }
 
+namespace {
+
+std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+template <typename T>
+std::uint64_t bits(T value) {
+  static_assert(sizeof(T) <= sizeof(std::uint64_t));
+  std::uint64_t b = 0;
+  std::memcpy(&b, &value, sizeof(T));
+  return b;
+}
+
+}  // namespace
+
+std::uint64_t ObjectMap::record_content(const Object& o, const RecordOptions& options) const {
+  // Order-free over the voxels (a sum and an xor of each voxel's hash): the table's order depends
+  // on its history, not its content.
+  const bool support = options.min_voxel_support > 0.0;
+  std::uint64_t sum = 0, xr = 0;
+  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+    std::uint64_t h = mix(key);
+    for (int a = 0; a < 3; ++a) h = mix(h ^ bits(v.offset_sum[a]) ^ (bits(v.color_sum[a]) << 32));
+    h = mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
+    if (support) {
+      const std::uint8_t* hits = o.near.find(key);
+      h = mix(h ^ (hits ? *hits : 0u));
+    }
+    sum += h;
+    xr ^= mix(h);
+  });
+  std::uint64_t h = mix(sum) ^ mix(xr ^ o.voxels.size());
+  for (const std::uint64_t field :
+       {bits(o.observations), bits(options.min_voxel_support), bits(options.outlier_filter),
+        bits(options.outlier.neighbours), bits(options.outlier.std_ratio),
+        bits(options.position_percentile), bits(options.position_is_centroid),
+        bits(options.outlier_on_points), bits(options.voxel_nearest_centre)})
+    h = mix(h ^ field);
+  return h | 1;  // never 0 (0: no cache)
+}
+
 std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options) const {
   std::set<int> all;
   for (const auto& op : objects_)
@@ -103,13 +151,37 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options,
     r.provenance = o.provenance;
     r.merges = o.merges;
     r.points_raw = o.voxels.points_inserted();
-    filter_record(o, options, r);
-    r.centroid = geometry::centroid(r.cloud);  // eq 16: the mean of the points
-    r.position = options.position_is_centroid
-                     ? r.centroid
-                     : geometry::percentile_box_centre(r.cloud, options.position_percentile);
-    r.aabb = geometry::compute_aabb(r.cloud);
-    r.obb = geometry::compute_obb(r.cloud);
+    const std::uint64_t content =
+        record_cache_ && !options_.keep_points ? record_content(o, options) : 0;
+    std::optional<RecordCache::Filtered> made;
+    if (content) made = record_cache_->find(o.id, content);
+    if (!made) {
+      made.emplace();
+      filter_record(o, options, r);
+      made->content = content;
+      made->points_voxel = r.points_voxel;
+      made->points_filtered = r.points_filtered;
+      made->outlier_threshold = r.outlier_threshold;
+      made->centroid = geometry::centroid(r.cloud);  // eq 16: the mean of the points
+      made->position = options.position_is_centroid
+                           ? made->centroid
+                           : geometry::percentile_box_centre(r.cloud, options.position_percentile);
+      made->aabb = geometry::compute_aabb(r.cloud);
+      made->obb = geometry::compute_obb(r.cloud);
+      if (content) {
+        made->cloud = r.cloud;
+        record_cache_->put(o.id, *made);
+      }
+      made->cloud = std::move(r.cloud);
+    }
+    r.cloud = std::move(made->cloud);
+    r.points_voxel = made->points_voxel;
+    r.points_filtered = made->points_filtered;
+    r.outlier_threshold = made->outlier_threshold;
+    r.centroid = made->centroid;
+    r.position = made->position;
+    r.aabb = made->aabb;
+    r.obb = made->obb;
     out.push_back(std::move(r));
   }
   return out;

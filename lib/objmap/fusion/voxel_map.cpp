@@ -297,6 +297,20 @@ void VoxelMap::reset() {
   voxels_pruned_ = 0;
 }
 
+void VoxelMap::track_touched() { touched_.resize(shards_.size()); }
+
+std::vector<VoxelKey> VoxelMap::take_touched() {
+  std::vector<VoxelKey> out;
+  std::size_t n = 0;
+  for (const auto& keys : touched_) n += keys.size();
+  out.reserve(n);
+  for (auto& keys : touched_) {
+    out.insert(out.end(), keys.begin(), keys.end());
+    keys.clear();
+  }
+  return out;
+}
+
 void VoxelMap::remember_new_voxels(int rejudge) {
   require(rejudge >= 0 && rejudge <= 16, "VoxelMap::remember_new_voxels",
           "rejudge must be in [0, 16], got " + std::to_string(rejudge));
@@ -354,6 +368,7 @@ std::size_t VoxelMap::prune_remembered(const Judge& judge) {
   for (std::size_t s = 0; s < n; ++s) dropped += drop[s].size();
   parallel_for(n, static_cast<int>(threads_), [&](std::size_t s) {
     for (VoxelKey key : drop[s]) shards_[s].erase(key);
+    if (!touched_.empty()) touched_[s].insert(touched_[s].end(), drop[s].begin(), drop[s].end());
     aging_[s].swap(young_[s]);
     young_[s].clear();
   });
@@ -463,6 +478,7 @@ void VoxelMap::insert(const PointCloud& cloud) {
 inline bool VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
   VoxelData& v = table[key];
   const bool opened = v.count == 0;  // an entry has points once added
+  if (!touched_.empty()) touched_[shard_of(key)].push_back(key);
   for (int a = 0; a < 3; ++a) {
     v.offset_sum[a] += src.offset_sum[a];
     v.color_sum[a] += src.color_sum[a];
@@ -636,9 +652,7 @@ VoxelMap::VoxelPoints VoxelMap::sorted_points_impl(bool release) {
     std::vector<std::size_t>& mine = at[t];
     for (std::size_t s = t; s < shards_.size(); s += threads) {
       shards_[s].for_each([&](VoxelKey key, const VoxelData& v) {
-        const Rgb c = v.mean_color();
-        out[mine[(key >> 42) - x.x0]++] =
-            VoxelPoint{key, mean_position(key, v).cast<float>(), c.r, c.g, c.b};
+        out[mine[(key >> 42) - x.x0]++] = voxel_point(key, v);
       });
       if (release) shards_[s].clear();  // this shard is read: free its memory
     }

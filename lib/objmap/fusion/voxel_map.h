@@ -94,6 +94,13 @@ class VoxelMap {
   std::size_t prune_remembered(const Judge& judge);
   std::uint64_t voxels_pruned() const { return voxels_pruned_; }  // by prune_remembered, in all
 
+  // Change tracking (a live map's cloud kept up to date, pipeline/dense_snapshot.h): from now on
+  // every voxel a call adds to, opens or prunes is remembered (a key once per touch, in shard
+  // order; not what reset() or take_sorted_points() empty); take_touched() hands them over and
+  // starts afresh.
+  void track_touched();
+  std::vector<VoxelKey> take_touched();
+
   // Room for this many voxels without rehashing (e.g. a per-frame map: ~1/4 of the pixels).
   void reserve(std::size_t voxels);
 
@@ -151,6 +158,11 @@ class VoxelMap {
   };
   using VoxelPoints = std::vector<VoxelPoint, DefaultInitAllocator<VoxelPoint>>;
   VoxelPoints sorted_points() const;
+  // The point sorted_points() gives for a voxel.
+  VoxelPoint voxel_point(VoxelKey key, const VoxelData& voxel) const {
+    const Rgb c = voxel.mean_color();
+    return VoxelPoint{key, mean_position(key, voxel).cast<float>(), c.r, c.g, c.b};
+  }
   // sorted_points() that frees each table once read: the map is left empty, and its memory and the
   // list's are not both held at their full size.
   VoxelPoints take_sorted_points();
@@ -196,6 +208,7 @@ class VoxelMap {
   std::size_t prunes_ = 0;  // calls of prune_remembered()
   std::map<std::pair<std::size_t, int>, std::vector<std::vector<VoxelKey>>> survivors_;
   std::uint64_t voxels_pruned_ = 0;
+  std::vector<std::vector<VoxelKey>> touched_;  // per shard (track_touched; empty: not tracked)
 };
 
 // Number of voxels present in both maps (same voxel size), |A ∩ B| of eq 21.

@@ -22,8 +22,9 @@ void start_publish(FollowState& s) {
               " with a pose; expected frames with poses (--trajectory) while following");
   s.publish_started = Clock::now();
   s.last_publish = s.publish_started;
-  // What a fuse of the keyframes so far would have read, and a deep copy of the maps: the live
-  // maps go on growing meanwhile (follow makes no meshes: no mesh model to copy).
+  // What a fuse of the keyframes so far would have read, the dense map's cloud and a deep copy of
+  // the object map: the live maps go on growing meanwhile (follow makes no meshes: no mesh model
+  // to copy).
   auto inputs = std::make_shared<FuseInputs>();
   inputs->dataset = s.dataset;
   inputs->trajectory = s.trajectory;
@@ -32,9 +33,11 @@ void start_publish(FollowState& s) {
   auto result = std::make_shared<FuseResult>(s.result);
   result->frames = s.dataset.frames.size();
   result->keyframes.frames_with_pose = s.status.frames_with_pose;
-  auto maps =
-      std::make_shared<FuseMaps>(FuseMaps{s.maps->dense_options, s.maps->dense, s.maps->objects,
-                                          std::nullopt, std::nullopt, s.maps->view_log});
+  std::shared_ptr<const DenseCloud> dense_cloud =
+      s.dense_snapshot ? s.dense_snapshot->update(s.maps->dense) : nullptr;
+  auto maps = std::make_shared<FuseMaps>(
+      FuseMaps{s.maps->dense_options, fusion::VoxelMap(s.maps->dense_options), s.maps->objects,
+               std::nullopt, std::nullopt, s.maps->view_log, std::move(dense_cloud)});
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
   const FollowState* state = &s;  // its options, choices and class sizes do not change

@@ -10,9 +10,11 @@
 #include <vector>
 
 #include "objmap/core/clock.h"
+#include "objmap/fusion/record_cache.h"
 #include "objmap/geometry/backproject.h"
 #include "objmap/io/dataset.h"
 #include "objmap/io/trajectory_tail.h"
+#include "objmap/pipeline/dense_snapshot.h"
 #include "objmap/pipeline/follow.h"
 #include "objmap/pipeline/follow_detect.h"
 #include "objmap/pipeline/fuse_maps.h"
@@ -52,8 +54,11 @@ struct FollowState {
   std::unique_ptr<LatestDetector> detector;  // --model
   std::set<double> skipped;                  // keyframes the detector did not reach
   std::map<double, segmentation::FrameSegmentation> detected;  // taken, not yet fused
-  FuseResult result;             // the camera, counts and keyframes fused so far
-  std::optional<FuseMaps> maps;  // made once the camera is known
+  FuseResult result;                            // the camera, counts and keyframes fused so far
+  std::optional<FuseMaps> maps;                 // made once the camera is known
+  std::optional<DenseSnapshot> dense_snapshot;  // maps->dense's cloud, kept up to date
+  // The records of the objects unchanged since a publish, for the next (maps->objects's).
+  std::shared_ptr<fusion::RecordCache> record_cache = std::make_shared<fusion::RecordCache>();
   std::optional<geometry::RayTable> rays;
   double retried_timestamp = -1.0;        // the keyframe whose read failed last
   std::vector<KeptKeyframe> kept;         // every keyframe mapped (loop closures)

@@ -39,6 +39,8 @@ void start_maps(FollowState& s) {
   s.read.default_class = s.options.fuse.default_class;
   s.rays.emplace(geometry::make_ray_table(r.camera, r.threads));
   s.maps.emplace(make_fuse_maps(s.options.fuse, s.choices, r));
+  if (s.options.fuse.dense_map) s.dense_snapshot.emplace(s.maps->dense);
+  s.maps->objects.set_record_cache(s.record_cache);
 }
 
 // DATASET/segmentation's canonical JSON frames, sorted by timestamp.

@@ -40,7 +40,8 @@ FuseMaps make_fuse_maps(const FuseOptions& options, const FuseChoices& choices,
       fusion::ObjectMap(object_map_options(options, choices, result.keyframes.still_camera)),
       std::nullopt,
       std::nullopt,
-      std::nullopt};
+      std::nullopt,
+      nullptr};
   if (choices.meshes.objects) maps.object_views.emplace();
   if (choices.meshes.scene)
     maps.scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,
@@ -88,7 +89,7 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   const fusion::ViewLog* view_log = maps.view_log ? &*maps.view_log : nullptr;
   // The dense map's cloud, the up direction and the support surfaces (docs/scene.md) are made on
   // a second thread meanwhile the objects are merged and filtered (they do not depend on each
-  // other).
+  // other); objmap follow hands the cloud in made (maps.dense_cloud).
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();
   auto t_dense = Clock::now();
@@ -96,10 +97,12 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   std::vector<Pose> cameras;
   for (const Keyframe& k : result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
   std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
-    DenseCloud cloud =
-        options.dense_map ? take_dense_cloud(maps.dense, maps.dense_options) : DenseCloud{};
+    DenseCloud cloud = options.dense_map && !maps.dense_cloud
+                           ? take_dense_cloud(maps.dense, maps.dense_options)
+                           : DenseCloud{};
     dense_seconds = seconds_since(t_dense);
-    scene::find_up_and_surfaces(cameras, cloud.cloud.points, options.scene, result.scene);
+    const DenseCloud& made = maps.dense_cloud ? *maps.dense_cloud : cloud;
+    scene::find_up_and_surfaces(cameras, made.cloud.points, options.scene, result.scene);
     return cloud;
   });
 
@@ -108,7 +111,7 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   merge_and_filter_objects(options, objects, view_log, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  DenseCloud dense_cloud = dense_future.get();
+  DenseCloud own_dense_cloud = dense_future.get();  // empty when maps.dense_cloud was made
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
   result.times.push_back({"up and surfaces (parallel to the objects)",
                           result.scene.seconds_up + result.scene.seconds_surfaces});
@@ -119,8 +122,11 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
 
   // 4b. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
   take_sightings(choices, result);
+  if (maps.dense_cloud && !result.sightings.empty()) own_dense_cloud = *maps.dense_cloud;
+  const DenseCloud& dense_cloud =
+      maps.dense_cloud && result.sightings.empty() ? *maps.dense_cloud : own_dense_cloud;
   result.dense_voxels_of_sightings =
-      drop_sighting_voxels(dense_cloud, result.sightings, result.objects, options.map_voxel_m);
+      drop_sighting_voxels(own_dense_cloud, result.sightings, result.objects, options.map_voxel_m);
 
   // 4c. Suspected duplicates: confirmed objects of one class that overlap or touch, with the merge
   //     pass's reason for keeping them apart (no ground truth needed), on the boxes of
@@ -145,7 +151,7 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   result.dense_points_map = dense_cloud.cloud.size();
   MapPoints map_points;
   const ordered_json objects_json = write_maps(options, dir, ply, dense_cloud, result, map_points);
-  dense_cloud = DenseCloud();
+  own_dense_cloud = DenseCloud();
   write_objects_json(dir, objects_json, result.sightings, result.scene);
   result.times.push_back({"write outputs", seconds_since(t0)});
   result.seconds_total = seconds_since(started);

@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <memory>
 #include <optional>
 
 #include "objmap/core/clock.h"
@@ -7,6 +8,7 @@
 #include "objmap/fusion/visibility.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/mesh/tsdf.h"
+#include "objmap/pipeline/dense_cloud.h"
 #include "objmap/pipeline/fuse.h"
 #include "objmap/pipeline/fuse_inputs.h"
 #include "objmap/pipeline/fuse_mesh.h"
@@ -24,6 +26,9 @@ struct FuseMaps {
   std::optional<ObjectViews> object_views;     // the objects' meshes' views (--mesh objects|all)
   std::optional<mesh::TsdfModel> scene_model;  // the scene's model (--mesh scene|all)
   std::optional<fusion::ViewLog> view_log;     // where each keyframe looked (the detected share)
+  // The dense map's cloud made already (objmap follow's DenseSnapshot; `dense` is then left
+  // empty); null: finish_fuse takes it from `dense`.
+  std::shared_ptr<const DenseCloud> dense_cloud;
 };
 
 // The empty maps of a fuse with these options (result.camera, result.threads and

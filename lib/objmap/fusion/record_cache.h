@@ -1,0 +1,40 @@
+#pragma once
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <optional>
+
+#include "objmap/core/types.h"
+#include "objmap/geometry/bounds.h"
+
+// The filtered part of records already made (ObjectMap::records), by object and content: objmap
+// follow makes the record of every object at each publish, most of them unchanged since the last
+// (an object out of view takes no observation). A record is reused only for the same object id,
+// the same content (its voxels, their sums and support, its observation count: a 64-bit hash) and
+// the same record options; anything else is made again. One entry per object (the latest).
+namespace objmap::fusion {
+
+class RecordCache {
+ public:
+  // What filter_record and the position and boxes make of an object's voxels.
+  struct Filtered {
+    std::uint64_t content = 0;
+    PointCloud cloud;
+    std::size_t points_voxel = 0, points_filtered = 0;
+    double outlier_threshold = 0.0;
+    Vec3 centroid = Vec3::Zero(), position = Vec3::Zero();
+    Aabb aabb;
+    Obb obb;
+  };
+  std::optional<Filtered> find(int id, std::uint64_t content) const;
+  void put(int id, Filtered filtered);
+  std::size_t hits() const;
+  std::size_t misses() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<int, Filtered> by_id_;
+  mutable std::size_t hits_ = 0, misses_ = 0;
+};
+
+}  // namespace objmap::fusion

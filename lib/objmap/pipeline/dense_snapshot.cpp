@@ -1,0 +1,104 @@
+#include "objmap/pipeline/dense_snapshot.h"
+
+#include <algorithm>
+
+#include "objmap/core/error.h"
+#include "objmap/fusion/voxel_map.h"
+
+namespace objmap::pipeline {
+
+namespace {
+
+using fusion::VoxelKey;
+using VoxelPoint = fusion::VoxelMap::VoxelPoint;
+
+// The touched voxels' points now, in key order; `gone`: touched voxels no longer in the map.
+std::vector<VoxelPoint> touched_points(const fusion::VoxelMap& map,
+                                       const std::vector<VoxelKey>& touched,
+                                       std::vector<VoxelKey>& gone) {
+  std::vector<VoxelPoint> points;
+  points.reserve(touched.size());
+  constexpr std::size_t kAhead = 8;  // the slots of later keys prefetched (cache misses overlap)
+  for (std::size_t i = 0; i < touched.size(); ++i) {
+    if (i + kAhead < touched.size()) map.prefetch(touched[i + kAhead]);
+    const fusion::VoxelData* voxel = map.find(touched[i]);
+    if (voxel)
+      points.push_back(map.voxel_point(touched[i], *voxel));
+    else
+      gone.push_back(touched[i]);
+  }
+  return points;
+}
+
+void put(DenseCloud& c, std::size_t at, const VoxelPoint& p) {
+  c.keys[at] = p.key;
+  c.cloud.points[at] = p.point;
+  c.cloud.colors[at] = p.color();
+}
+
+// The cloud without the `gone` keys (sorted).
+void drop_gone(DenseCloud& c, const std::vector<VoxelKey>& gone) {
+  std::size_t kept = 0, g = 0;
+  for (std::size_t i = 0; i < c.keys.size(); ++i) {
+    while (g < gone.size() && gone[g] < c.keys[i]) ++g;
+    if (g < gone.size() && gone[g] == c.keys[i]) continue;
+    c.keys[kept] = c.keys[i];
+    c.cloud.points[kept] = c.cloud.points[i];
+    c.cloud.colors[kept] = c.cloud.colors[i];
+    ++kept;
+  }
+  c.keys.resize(kept);
+  c.cloud.points.resize(kept);
+  c.cloud.colors.resize(kept);
+}
+
+}  // namespace
+
+DenseSnapshot::DenseSnapshot(fusion::VoxelMap& map) : cloud_(std::make_shared<DenseCloud>()) {
+  require(map.size() == 0, "DenseSnapshot", "the map has voxels; expected an empty map to follow");
+  map.track_touched();
+}
+
+std::shared_ptr<const DenseCloud> DenseSnapshot::update(fusion::VoxelMap& map) {
+  // 1. The voxels touched since the last update, once each, in key order, with their points now.
+  std::vector<VoxelKey> touched = map.take_touched();
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  last_touched_ = touched.size();
+  if (touched.empty()) return cloud_;
+  std::vector<VoxelKey> gone;
+  const std::vector<VoxelPoint> points = touched_points(map, touched, gone);
+  // 2. The cloud changed in place, unless a publish still reads it.
+  if (cloud_.use_count() > 1) cloud_ = std::make_shared<DenseCloud>(*cloud_);
+  DenseCloud& c = *cloud_;
+  if (!gone.empty()) drop_gone(c, gone);
+  // 3. The voxels the cloud has take their points now; the new ones are merged in from the back
+  //    (one pass, no second copy of the cloud).
+  const std::size_t n = c.keys.size();
+  std::vector<std::size_t> fresh;  // indices into `points` of keys the cloud lacks
+  std::size_t i = 0;
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    while (i < n && c.keys[i] < points[j].key) ++i;
+    if (i < n && c.keys[i] == points[j].key)
+      put(c, i, points[j]);
+    else
+      fresh.push_back(j);
+  }
+  if (fresh.empty()) return cloud_;
+  c.keys.resize(n + fresh.size());
+  c.cloud.points.resize(n + fresh.size());
+  c.cloud.colors.resize(n + fresh.size());
+  std::size_t old = n, w = n + fresh.size();
+  for (std::size_t f = fresh.size(); f-- > 0;) {
+    const VoxelPoint& p = points[fresh[f]];
+    for (; old > 0 && c.keys[old - 1] > p.key; --w, --old) {
+      c.keys[w - 1] = c.keys[old - 1];
+      c.cloud.points[w - 1] = c.cloud.points[old - 1];
+      c.cloud.colors[w - 1] = c.cloud.colors[old - 1];
+    }
+    put(c, --w, p);
+  }
+  return cloud_;
+}
+
+}  // namespace objmap::pipeline
