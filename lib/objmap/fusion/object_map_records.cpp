@@ -59,11 +59,17 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
   // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
   PointCloud voxel_cloud;
   if (support) {
-    const auto voxels = o.voxels.sorted_voxels();
+    // The supported voxels, sorted by key (fewer to sort than all of them).
+    std::vector<std::pair<VoxelKey, const VoxelData*>> voxels;
+    voxels.reserve(o.voxels.size());
+    o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+      if (supported(key)) voxels.emplace_back(key, &v);
+    });
+    std::sort(voxels.begin(), voxels.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
     voxel_cloud.reserve(voxels.size());
     for (const auto& [key, v] : voxels)
-      if (supported(key))
-        voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
+      voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
   } else {
     voxel_cloud = o.voxels.to_cloud();
   }
