@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <map>
 #include <optional>
 
 #include "objmap/fusion/object_map_object.h"
@@ -52,6 +53,23 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
     v.confirmed = confirmed(*object);
     return v;
   };
+  // The fit of a pair (smaller a, larger b) that may join; none when it may not.
+  const auto fit_of = [&](const PartView& a, const PartView& b) -> std::optional<PartsFit> {
+    if (far_apart(*a.object, *b.object)) return std::nullopt;
+    std::vector<double> shared;
+    std::set_intersection(a.object->frames.begin(), a.object->frames.end(),
+                          b.object->frames.begin(), b.object->frames.end(),
+                          std::back_inserter(shared));
+    const std::size_t fewer = std::min(a.object->frames.size(), b.object->frames.size());
+    if (shared.size() > options_.merge_max_shared_frames * fewer) return std::nullopt;
+    const PartsFit fit = fit_parts(a.surface, b.surface, b.box, up, o.percentile, o.join_grow_m);
+    if (fit.gap_m > o.join_gap_m || fit.union_extent_m > b.limit_m) return std::nullopt;
+    if (fit.inside_share < o.join_min_inside && !share_a_track(*a.object, *b.object))
+      return std::nullopt;
+    return fit;
+  };
+  // The pairs judged so far, by (a id, b id): after a join only the pairs of the two change.
+  std::map<std::pair<int, int>, std::optional<PartsFit>> fits;
   std::vector<PartView> views;
   for (const auto& object : objects_)
     if (object->alive && object->observations > 0) {
@@ -70,17 +88,11 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
         if (ia == ib || a.cls != b.cls || a.area > b.area) continue;
         if (a.area == b.area && a.object->id > b.object->id) continue;
         if (!b.confirmed) continue;  // fragments join an object; they do not make one
-        if (far_apart(*a.object, *b.object)) continue;
-        std::vector<double> shared;
-        std::set_intersection(a.object->frames.begin(), a.object->frames.end(),
-                              b.object->frames.begin(), b.object->frames.end(),
-                              std::back_inserter(shared));
-        const std::size_t fewer = std::min(a.object->frames.size(), b.object->frames.size());
-        if (shared.size() > options_.merge_max_shared_frames * fewer) continue;
-        const PartsFit fit =
-            fit_parts(a.surface, b.surface, b.box, up, o.percentile, o.join_grow_m);
-        if (fit.gap_m > o.join_gap_m || fit.union_extent_m > b.limit_m) continue;
-        if (fit.inside_share < o.join_min_inside && !share_a_track(*a.object, *b.object)) continue;
+        const auto key = std::make_pair(a.object->id, b.object->id);
+        auto judged = fits.find(key);
+        if (judged == fits.end()) judged = fits.emplace(key, fit_of(a, b)).first;
+        if (!judged->second) continue;
+        const PartsFit& fit = *judged->second;
         if (best && (fit.gap_m > best->gap_m ||
                      (fit.gap_m == best->gap_m && fit.inside_share <= best->inside_share)))
           continue;
@@ -97,6 +109,11 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
     absorb(large, small, link);
     large.frames_in_view = -1;  // judged again (judge_visibility's only_unjudged)
     made.push_back(link);
+    for (auto it = fits.begin(); it != fits.end();) {
+      const bool touched = it->first.first == large.id || it->first.second == large.id ||
+                           it->first.first == small.id || it->first.second == small.id;
+      it = touched ? fits.erase(it) : std::next(it);
+    }
     views[best_large] = view_of(&large);
     views.erase(views.begin() + static_cast<std::ptrdiff_t>(best_small));
   }
