@@ -26,7 +26,7 @@ struct FollowOptions {
   std::filesystem::path model;
   std::string layout = "auto";   // the recording's layout (io/dataset.h)
   std::string camera;            // empty: camera.json, folder name or rgb.txt header
-  double publish_every_s = 2.0;  // seconds between publishes (when something is new)
+  double publish_every_s = 0.5;  // seconds between publish starts (when something is new)
   double idle_exit_s = 0.0;      // > 0: ends after this long without a new frame or pose
   double poll_s = 0.1;           // seconds between polls of the recording folder
   FuseOptions fuse;              // the fuse's options (dataset, out, trajectory set from above)
