@@ -289,6 +289,42 @@ TEST(ObjectMap, RecordsFromTheCacheAreThoseMadeAfresh) {
   EXPECT_EQ(cache->misses(), misses + 1);
 }
 
+// A pair cache (objmap follow's publishes) gives the merges of a map without one: the same links
+// with the same scores, as the objects grow (every track switches id half-way: the pass joins).
+TEST(ObjectMap, MergesWithThePairCacheAreThoseMadeAfresh) {
+  // Three boxes seen with noise, and a tv seen in halves by two tracks, then whole by the second:
+  // the final merge joins its two objects (FinalMergePassRepairsAnIdSwitchTheOnlineStepMissed).
+  std::vector<Observation> seq = noisy_sequence();
+  const Vec3 c(2.005, 0.105, 0.905);
+  for (int f = 0; f < 7; ++f) {
+    const int half = f < 3 ? (1 | 4 | 16) : f < 6 ? (2 | 8 | 32) : 0;
+    seq.push_back(obs(100 + f, f < 3 ? 1 : 2, "tv", 0.7, half ? box(c, 10, half) : box(c, 10)));
+  }
+  auto cache = std::make_shared<PairCache>();
+  ObjectMap live;
+  live.set_pair_cache(cache);
+  std::size_t merges = 0;
+  for (std::size_t n = 0; n < seq.size(); ++n) {
+    add_one(live, seq[n]);
+    ObjectMap published = live;  // shares the cache
+    ObjectMap plain = live;
+    plain.set_pair_cache(nullptr);
+    const std::vector<MergeLink> a = published.merge_pass(), b = plain.merge_pass();
+    ASSERT_EQ(a.size(), b.size()) << n;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].into, b[i].into);
+      EXPECT_EQ(a[i].absorbed, b[i].absorbed);
+      EXPECT_EQ(a[i].score_p, b[i].score_p);
+      EXPECT_EQ(a[i].overlap, b[i].overlap);
+      EXPECT_EQ(a[i].distance_m, b[i].distance_m);
+    }
+    merges += a.size();
+  }
+  EXPECT_GT(merges, 0u);
+  EXPECT_GT(cache->hits(), 0u);  // the pairs of objects a keyframe did not change
+  EXPECT_GT(cache->misses(), 0u);
+}
+
 TEST(ObjectMap, SemanticMapsPaintObjectVoxelsByClass) {
   ObjectMap map;
   VoxelMap dense;

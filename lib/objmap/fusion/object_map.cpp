@@ -225,7 +225,10 @@ ObjectMap::~ObjectMap() = default;
 ObjectMap::ObjectMap(ObjectMap&&) noexcept = default;
 ObjectMap& ObjectMap::operator=(ObjectMap&&) noexcept = default;
 ObjectMap::ObjectMap(const ObjectMap& other)
-    : options_(other.options_), record_cache_(other.record_cache_), share_bar_(other.share_bar_) {
+    : options_(other.options_),
+      record_cache_(other.record_cache_),
+      pair_cache_(other.pair_cache_),
+      share_bar_(other.share_bar_) {
   objects_.reserve(other.objects_.size());
   for (const auto& o : other.objects_) objects_.push_back(std::make_unique<Object>(*o));
 }

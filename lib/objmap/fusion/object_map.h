@@ -380,6 +380,7 @@ struct AddResult {
 };
 
 class RecordCache;
+class PairCache;
 
 class ObjectMap {
  public:
@@ -404,6 +405,9 @@ class ObjectMap {
   // and puts the ones it makes there (objmap follow's publishes; copies of this map share it).
   // Not with ObjectMapOptions::keep_points. Null: none.
   void set_record_cache(std::shared_ptr<RecordCache> cache) { record_cache_ = std::move(cache); }
+  // merge_pass() takes the pair rule's scores of two objects from `cache` when both are as they
+  // were when it scored them, and puts the ones it makes there. Null: none.
+  void set_pair_cache(std::shared_ptr<PairCache> cache) { pair_cache_ = std::move(cache); }
 
   // The final merge pass (ID-switch repair): repeatedly joins the pair of objects with the highest
   // P > merge_threshold (P_ID = the two share a track id; D and M between the two objects), the
@@ -507,6 +511,8 @@ class ObjectMap {
   void filter_record(const Object& object, const RecordOptions& options, ObjectRecord& r) const;
   // A 64-bit hash of what filter_record reads of `object` under `options` (record_cache_'s key).
   std::uint64_t record_content(const Object& object, const RecordOptions& options) const;
+  // A 64-bit hash of everything judge_pair reads of `object` (pair_cache_'s key).
+  static std::uint64_t pair_content(const Object& object);
   // add_frame(): fuses the observation into `target` (nullptr: a new object).
   AddResult fuse(const Observation& obs, const Prepared& prep, Object* target, const Scores& s);
   // Joins `absorbed` into `into` (voxels, votes, provenance, merges); `absorbed` dies.
@@ -541,6 +547,7 @@ class ObjectMap {
 
   ObjectMapOptions options_;
   std::shared_ptr<RecordCache> record_cache_;  // set_record_cache; shared by copies
+  std::shared_ptr<PairCache> pair_cache_;      // set_pair_cache; shared by copies
   double share_bar_ = 0.0;  // judge_visibility(): the detected share an object needs
   std::vector<std::unique_ptr<Object>>
       objects_;  // index = id; absorbed objects stay (alive = false)

@@ -6,12 +6,14 @@
 #include <deque>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <set>
 #include <string>
 
 #include "objmap/core/error.h"
 #include "objmap/fusion/object_map_object.h"
 #include "objmap/fusion/palette.h"
+#include "objmap/fusion/record_cache.h"
 #include "objmap/fusion/split.h"
 #include "objmap/geometry/bounds.h"
 #include "objmap/segmentation/coco_classes.h"
@@ -30,6 +32,49 @@ std::vector<double> class_frames(const ObjectT& o, const std::string& canonical)
   return t;
 }
 }  // namespace
+
+std::uint64_t ObjectMap::pair_content(const Object& o) {
+  // Order-free over the voxels and the dilated support table (sums and xors of per-entry hashes:
+  // a table's order depends on its history, not its content); in order over the rest.
+  std::uint64_t sum = 0, xr = 0;
+  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+    std::uint64_t h = content_mix(key);
+    for (int a = 0; a < 3; ++a)
+      h = content_mix(h ^ content_bits(v.offset_sum[a]) ^ (content_bits(v.color_sum[a]) << 32));
+    h = content_mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
+    sum += h;
+    xr ^= content_mix(h);
+  });
+  std::uint64_t near_sum = 0, near_xr = 0;
+  o.near.for_each([&](VoxelKey key, std::uint8_t hits) {
+    const std::uint64_t h = content_mix(content_mix(key) ^ hits);
+    near_sum += h;
+    near_xr ^= content_mix(h);
+  });
+  std::uint64_t h = content_mix(sum) ^ content_mix(xr ^ o.voxels.size());
+  const auto add = [&h](std::uint64_t field) { h = content_mix(h ^ field); };
+  add(near_sum);
+  add(near_xr ^ o.near.size());
+  for (int k = 0; k < 3; ++k) {
+    add(content_bits(o.centroid[k]));
+    add(content_bits(o.lo[k]) ^ (content_bits(o.hi[k]) << 32));
+  }
+  add(content_bits(o.radius));
+  add(content_bits(o.observations));
+  for (const auto& [name, vote] : o.histogram) {
+    add(std::hash<std::string>{}(name));
+    add(content_bits(vote.score_sum));
+    add(content_bits(vote.count));
+  }
+  for (const ObservationLink& l : o.provenance) {
+    add(content_bits(l.timestamp));
+    add(std::hash<std::string>{}(l.class_name));
+    add(l.track_id ? content_bits(*l.track_id) + 1 : 0);
+  }
+  for (double t : o.frames) add(content_bits(t));
+  for (int t : o.track_ids) add(content_bits(t));
+  return h;
+}
 
 void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const MergeLink& link) {
   Object* into = &into_object;
@@ -155,6 +200,7 @@ MergeVerdict ObjectMap::merge_verdict(int a, int b) const {
 
 std::vector<MergeLink> ObjectMap::merge_pass() {
   std::vector<MergeLink> made;
+  if (pair_cache_) pair_cache_->begin_pass();
   // The pair rule, then the rules for class confusions and fragments, until none joins anything:
   // an object that absorbed a fragment is larger, and a pair that the score refused before may now
   // pass (one chair seen from its two sides, its views apart joined by a fragment's).
@@ -174,10 +220,28 @@ void ObjectMap::merge_scored_pairs(std::vector<MergeLink>& made) {
     int i, j;
     Scores s;
   };
+  // Each object's content hash (pair_cache_), made when first needed and again when it grew.
+  std::vector<std::optional<std::uint64_t>> content(objects_.size());
+  const auto content_of = [&](const Object& o) {
+    std::optional<std::uint64_t>& c = content[static_cast<std::size_t>(o.id)];
+    if (!c) c = pair_content(o);
+    return *c;
+  };
   auto pair_score = [&](const Object& a, const Object& b, Scores& s) {
+    std::uint64_t ca = 0, cb = 0;
+    if (pair_cache_) {
+      ca = content_of(a);
+      cb = content_of(b);
+      if (const std::optional<PairCache::Verdict> v = pair_cache_->find(ca, cb)) {
+        s = Scores{v->p_id, v->distance_m, v->overlap, v->score_p};
+        return v->passes;
+      }
+    }
     const MergeVerdict v = judge_pair(a, b, /*full=*/false);
     s = Scores{v.p_id, v.distance_m, v.overlap, v.score_p};
-    return v.refused == MergeRefusal::kNone;
+    const bool passes = v.refused == MergeRefusal::kNone;
+    if (pair_cache_) pair_cache_->put(ca, cb, {v.p_id, v.distance_m, v.overlap, v.score_p, passes});
+    return passes;
   };
   std::vector<Pair> pairs;  // only pairs above the threshold, in (i, j) order
   for (std::size_t i = 0; i < objects_.size() && options_.final_merge; ++i) {
@@ -206,6 +270,7 @@ void ObjectMap::merge_scored_pairs(std::vector<MergeLink>& made) {
     MergeLink link{into->id, absorbed->id, best.p_id, best.distance_m, best.overlap, best.score_p};
     absorb(*into, *absorbed, link);
     made.push_back(link);
+    content[static_cast<std::size_t>(into->id)].reset();
 
     // The pairs of `into` change, those of `absorbed` are gone.
     const int a = into->id, b = absorbed->id;

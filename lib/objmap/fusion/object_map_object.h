@@ -4,6 +4,8 @@
 // else.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <map>
 #include <set>
 #include <string>
@@ -14,6 +16,23 @@
 #include "objmap/geometry/voxel_key.h"
 
 namespace objmap::fusion {
+
+// Content hashes (ObjectMap::record_content, pair_content): splitmix64's finaliser, and a value's
+// bits.
+inline std::uint64_t content_mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+template <typename T>
+std::uint64_t content_bits(T value) {
+  static_assert(sizeof(T) <= sizeof(std::uint64_t));
+  std::uint64_t b = 0;
+  std::memcpy(&b, &value, sizeof(T));
+  return b;
+}
 
 struct ObjectMap::Object {
   int id = -1;

@@ -79,48 +79,31 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
   r.points_filtered = r.cloud.size();
 }
 
-namespace {
-
-std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
-template <typename T>
-std::uint64_t bits(T value) {
-  static_assert(sizeof(T) <= sizeof(std::uint64_t));
-  std::uint64_t b = 0;
-  std::memcpy(&b, &value, sizeof(T));
-  return b;
-}
-
-}  // namespace
-
 std::uint64_t ObjectMap::record_content(const Object& o, const RecordOptions& options) const {
   // Order-free over the voxels (a sum and an xor of each voxel's hash): the table's order depends
   // on its history, not its content.
   const bool support = options.min_voxel_support > 0.0;
   std::uint64_t sum = 0, xr = 0;
   o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-    std::uint64_t h = mix(key);
-    for (int a = 0; a < 3; ++a) h = mix(h ^ bits(v.offset_sum[a]) ^ (bits(v.color_sum[a]) << 32));
-    h = mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
+    std::uint64_t h = content_mix(key);
+    for (int a = 0; a < 3; ++a)
+      h = content_mix(h ^ content_bits(v.offset_sum[a]) ^ (content_bits(v.color_sum[a]) << 32));
+    h = content_mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
     if (support) {
       const std::uint8_t* hits = o.near.find(key);
-      h = mix(h ^ (hits ? *hits : 0u));
+      h = content_mix(h ^ (hits ? *hits : 0u));
     }
     sum += h;
-    xr ^= mix(h);
+    xr ^= content_mix(h);
   });
-  std::uint64_t h = mix(sum) ^ mix(xr ^ o.voxels.size());
+  std::uint64_t h = content_mix(sum) ^ content_mix(xr ^ o.voxels.size());
   for (const std::uint64_t field :
-       {bits(o.observations), bits(options.min_voxel_support), bits(options.outlier_filter),
-        bits(options.outlier.neighbours), bits(options.outlier.std_ratio),
-        bits(options.position_percentile), bits(options.position_is_centroid),
-        bits(options.outlier_on_points), bits(options.voxel_nearest_centre)})
-    h = mix(h ^ field);
+       {content_bits(o.observations), content_bits(options.min_voxel_support),
+        content_bits(options.outlier_filter), content_bits(options.outlier.neighbours),
+        content_bits(options.outlier.std_ratio), content_bits(options.position_percentile),
+        content_bits(options.position_is_centroid), content_bits(options.outlier_on_points),
+        content_bits(options.voxel_nearest_centre)})
+    h = content_mix(h ^ field);
   return h | 1;  // never 0 (0: no cache)
 }
 

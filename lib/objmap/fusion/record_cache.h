@@ -3,6 +3,8 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <unordered_map>
+#include <utility>
 
 #include "objmap/core/types.h"
 #include "objmap/geometry/bounds.h"
@@ -35,6 +37,34 @@ class RecordCache {
   mutable std::mutex mutex_;
   std::map<int, Filtered> by_id_;
   mutable std::size_t hits_ = 0, misses_ = 0;
+};
+
+// The merge pass's pair scores (ObjectMap::merge_pass, its pair rule) by the content of the two
+// objects (a 64-bit hash of everything the score reads of each: voxels, their sums, the dilated
+// support table, bounds, centroid, radius, class votes, observations' timestamps, classes and track
+// ids). begin_pass() starts a pass: the entries no pass used since the one before are dropped.
+class PairCache {
+ public:
+  struct Verdict {
+    double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
+    bool passes = false;  // no refusal
+  };
+  void begin_pass();
+  std::optional<Verdict> find(std::uint64_t a, std::uint64_t b);
+  void put(std::uint64_t a, std::uint64_t b, const Verdict& verdict);
+  std::size_t hits() const;
+  std::size_t misses() const;
+
+ private:
+  struct Hash {
+    std::size_t operator()(const std::pair<std::uint64_t, std::uint64_t>& k) const {
+      return static_cast<std::size_t>(k.first ^ (k.second * 0x9e3779b97f4a7c15ull));
+    }
+  };
+  using Table = std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, Verdict, Hash>;
+  mutable std::mutex mutex_;
+  Table now_, before_;  // used in this pass; in the one before
+  std::size_t hits_ = 0, misses_ = 0;
 };
 
 }  // namespace objmap::fusion

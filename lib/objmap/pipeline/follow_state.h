@@ -57,8 +57,10 @@ struct FollowState {
   FuseResult result;                            // the camera, counts and keyframes fused so far
   std::optional<FuseMaps> maps;                 // made once the camera is known
   std::optional<DenseSnapshot> dense_snapshot;  // maps->dense's cloud, kept up to date
-  // The records of the objects unchanged since a publish, for the next (maps->objects's).
+  // The records of the objects unchanged since a publish (maps->objects's).
   std::shared_ptr<fusion::RecordCache> record_cache = std::make_shared<fusion::RecordCache>();
+  // The merge pass's pair scores of objects unchanged since a publish (maps->objects's).
+  std::shared_ptr<fusion::PairCache> pair_cache = std::make_shared<fusion::PairCache>();
   std::optional<geometry::RayTable> rays;
   double retried_timestamp = -1.0;        // the keyframe whose read failed last
   std::vector<KeptKeyframe> kept;         // every keyframe mapped (loop closures)

@@ -41,6 +41,7 @@ void start_maps(FollowState& s) {
   s.maps.emplace(make_fuse_maps(s.options.fuse, s.choices, r));
   if (s.options.fuse.dense_map) s.dense_snapshot.emplace(s.maps->dense);
   s.maps->objects.set_record_cache(s.record_cache);
+  s.maps->objects.set_pair_cache(s.pair_cache);
 }
 
 // DATASET/segmentation's canonical JSON frames, sorted by timestamp.
