@@ -33,11 +33,12 @@ void start_publish(FollowState& s) {
   auto result = std::make_shared<FuseResult>(s.result);
   result->frames = s.dataset.frames.size();
   result->keyframes.frames_with_pose = s.status.frames_with_pose;
-  std::shared_ptr<const DenseCloud> dense_cloud =
-      s.dense_snapshot ? s.dense_snapshot->update(s.maps->dense) : nullptr;
+  std::promise<std::shared_ptr<const DenseCloud>> dense_cloud;
   auto maps = std::make_shared<FuseMaps>(
       FuseMaps{s.maps->dense_options, fusion::VoxelMap(s.maps->dense_options), s.maps->objects,
-               std::nullopt, std::nullopt, s.maps->view_log, std::move(dense_cloud)});
+               std::nullopt, std::nullopt, s.maps->view_log,
+               s.dense_snapshot ? dense_cloud.get_future().share()
+                                : std::shared_future<std::shared_ptr<const DenseCloud>>()});
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
   const FollowState* state = &s;  // its options, choices and class sizes do not change
@@ -49,6 +50,14 @@ void start_publish(FollowState& s) {
     staging.commit();
     return result->objects.size();
   });
+  // The dense map's cloud brought up to date while the publish's thread starts on the objects.
+  if (!s.dense_snapshot) return;
+  try {
+    dense_cloud.set_value(s.dense_snapshot->update(s.maps->dense));
+  } catch (...) {
+    dense_cloud.set_exception(std::current_exception());
+    throw;
+  }
 }
 
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {

@@ -41,7 +41,7 @@ FuseMaps make_fuse_maps(const FuseOptions& options, const FuseChoices& choices,
       std::nullopt,
       std::nullopt,
       std::nullopt,
-      nullptr};
+      {}};
   if (choices.meshes.objects) maps.object_views.emplace();
   if (choices.meshes.scene)
     maps.scene_model.emplace(unbounded_box(), options.mesh.scene_voxel_m,
@@ -96,12 +96,14 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   double dense_seconds = 0.0;
   std::vector<Pose> cameras;
   for (const Keyframe& k : result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
+  std::shared_ptr<const DenseCloud> handed;  // maps.dense_cloud's, once made
   std::future<DenseCloud> dense_future = std::async(std::launch::async, [&] {
-    DenseCloud cloud = options.dense_map && !maps.dense_cloud
+    if (maps.dense_cloud.valid()) handed = maps.dense_cloud.get();
+    DenseCloud cloud = options.dense_map && !handed
                            ? take_dense_cloud(maps.dense, maps.dense_options)
                            : DenseCloud{};
     dense_seconds = seconds_since(t_dense);
-    const DenseCloud& made = maps.dense_cloud ? *maps.dense_cloud : cloud;
+    const DenseCloud& made = handed ? *handed : cloud;
     scene::find_up_and_surfaces(cameras, made.cloud.points, options.scene, result.scene);
     return cloud;
   });
@@ -111,7 +113,7 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   merge_and_filter_objects(options, objects, view_log, result);
   result.times.push_back({"merge and filter objects", seconds_since(t0)});
 
-  DenseCloud own_dense_cloud = dense_future.get();  // empty when maps.dense_cloud was made
+  DenseCloud own_dense_cloud = dense_future.get();  // empty when the cloud was handed in
   result.times.push_back({"dense map (parallel to the objects)", dense_seconds});
   result.times.push_back({"up and surfaces (parallel to the objects)",
                           result.scene.seconds_up + result.scene.seconds_surfaces});
@@ -122,9 +124,8 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
 
   // 4b. What moves is not the map: the objects of a mover class (a person, a dog) are sightings.
   take_sightings(choices, result);
-  if (maps.dense_cloud && !result.sightings.empty()) own_dense_cloud = *maps.dense_cloud;
-  const DenseCloud& dense_cloud =
-      maps.dense_cloud && result.sightings.empty() ? *maps.dense_cloud : own_dense_cloud;
+  if (handed && !result.sightings.empty()) own_dense_cloud = *handed;
+  const DenseCloud& dense_cloud = handed && result.sightings.empty() ? *handed : own_dense_cloud;
   result.dense_voxels_of_sightings =
       drop_sighting_voxels(own_dense_cloud, result.sightings, result.objects, options.map_voxel_m);
 

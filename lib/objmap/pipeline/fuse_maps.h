@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <optional>
 
@@ -26,9 +27,9 @@ struct FuseMaps {
   std::optional<ObjectViews> object_views;     // the objects' meshes' views (--mesh objects|all)
   std::optional<mesh::TsdfModel> scene_model;  // the scene's model (--mesh scene|all)
   std::optional<fusion::ViewLog> view_log;     // where each keyframe looked (the detected share)
-  // The dense map's cloud made already (objmap follow's DenseSnapshot; `dense` is then left
-  // empty); null: finish_fuse takes it from `dense`.
-  std::shared_ptr<const DenseCloud> dense_cloud;
+  // The dense map's cloud, made beside finish_fuse (objmap follow's DenseSnapshot; `dense` is then
+  // left empty: the objects' steps start meanwhile); not valid: finish_fuse takes it from `dense`.
+  std::shared_future<std::shared_ptr<const DenseCloud>> dense_cloud;
 };
 
 // The empty maps of a fuse with these options (result.camera, result.threads and
