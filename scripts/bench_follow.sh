@@ -18,7 +18,10 @@
 #   7scenes         DATA/7scenes_redkitchen_3dmatch_50f (its own per-frame poses), --model as above
 #   walk<N>         `objmap synth --preset walkthrough --frames N --seed 5` (640x480, its noisy
 #                   segmentation/ and drifting estimated.txt), N in BENCH_FOLLOW_FRAMES
-# Environment: BENCH_FOLLOW_CASES ("fr1_rpy_every4 7scenes walk"), BENCH_FOLLOW_FRAMES ("300 1200"),
+#   walkhalf954     the same at 954 frames and half size (--scale 0.5, 320x240): the recording of
+#                   the live issue's lag bar, its drifting estimated.txt streamed
+#   walkhalf954_gt  the same with its groundtruth.txt streamed (case walkhalfgt)
+# Environment: BENCH_FOLLOW_CASES ("fr1_rpy_every4 7scenes walk walkhalf walkhalfgt"), BENCH_FOLLOW_FRAMES ("300 1200"),
 # BENCH_FOLLOW_MODEL (DATA/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx, as objmap run takes
 # it), BENCH_FOLLOW_ARGS (more follow options, e.g. "--publish-every 1"). The synthetic scenes are
 # kept in OUT/walkthrough_s5_f<N>/ and made only when missing (1200 frames: ~3 minutes, 1.2 GB).
@@ -26,7 +29,7 @@ set -euo pipefail
 objmap=${1:?usage: bench_follow.sh OBJMAP DATA [OUT]}
 data=${2:?usage: bench_follow.sh OBJMAP DATA [OUT]}
 out=${3:-out/bench_follow}
-cases=${BENCH_FOLLOW_CASES-fr1_rpy_every4 7scenes walk}
+cases=${BENCH_FOLLOW_CASES-fr1_rpy_every4 7scenes walk walkhalf walkhalfgt}
 frames=${BENCH_FOLLOW_FRAMES-300 1200}
 model=${BENCH_FOLLOW_MODEL:-$data/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx}
 read -r -a follow_args <<<"${BENCH_FOLLOW_ARGS:-}"
@@ -131,6 +134,18 @@ for c in $cases; do
         fi
         follow_one "walk$n" "$scene" estimated.txt "" || true
       done ;;
+    walkhalf | walkhalfgt)  # the live issue's recording: 954 frames at half size (320x240)
+      scene=$out/walkthrough_s5_f954_half
+      if [ ! -f "$scene/synth.json" ]; then
+        echo "bench_follow: objmap synth --preset walkthrough --frames 954 --seed 5 --scale 0.5" >&2
+        "$objmap" synth --preset walkthrough --frames 954 --seed 5 --scale 0.5 --threads 2 \
+          --out "$scene" >"$out/synth_f954_half.log" 2>&1
+      fi
+      if [ "$c" = walkhalf ]; then
+        follow_one walkhalf954 "$scene" estimated.txt "" || true
+      else
+        follow_one walkhalf954_gt "$scene" groundtruth.txt "" || true
+      fi ;;
     *) echo "bench_follow: unknown recording $c" >&2; exit 2 ;;
   esac
 done

@@ -6,10 +6,12 @@
 #include <benchmark/benchmark.h>
 #include <pcl/features/normal_3d.h>
 #include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 #include "bench_data.h"
 #include "objmap/io/ply.h"
@@ -101,11 +103,49 @@ void BM_SurfacesOnSample(benchmark::State& state) {
         scene::detail::find_surfaces(map.sample, normals, Vec3::UnitZ(), o).size());
 }
 
+// The surfaces' patches: Euclidean clusters (6 cm, at least 10 points) of the sample's points, by
+// objmap's grid of cells (what the scene step uses) and by PCL's EuclideanClusterExtraction with a
+// kd-tree (what it replaced; the same clusters, tests/scene/clusters_test.cpp).
+std::vector<Vec3f> sample_points(const Map& map) {
+  std::vector<Vec3f> points;
+  for (const auto& p : *map.sample) points.emplace_back(p.x, p.y, p.z);
+  return points;
+}
+
+void BM_ClustersGrid(benchmark::State& state) {
+  NEED_MAP(state);
+  const std::vector<Vec3f> points = sample_points(map);
+  std::size_t clusters = 0;
+  for (auto _ : state) clusters = scene::detail::euclidean_clusters(points, 0.06, 10).size();
+  state.counters["clusters"] = static_cast<double>(clusters);
+}
+
+void BM_ClustersPclKdTree(benchmark::State& state) {
+  NEED_MAP(state);
+  std::size_t clusters = 0;
+  for (auto _ : state) {
+    pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+    tree->setInputCloud(map.sample);
+    pcl::EuclideanClusterExtraction<pcl::PointXYZ> extract;
+    extract.setClusterTolerance(0.06);
+    extract.setMinClusterSize(10);
+    extract.setMaxClusterSize(std::numeric_limits<int>::max());
+    extract.setSearchMethod(tree);
+    extract.setInputCloud(map.sample);
+    std::vector<pcl::PointIndices> found;
+    extract.extract(found);
+    clusters = found.size();
+  }
+  state.counters["clusters"] = static_cast<double>(clusters);
+}
+
 BENCHMARK(BM_SampleOnGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NormalsGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NormalsPclKnn12)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_UpFromNormals)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SurfacesOnSample)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ClustersGrid)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ClustersPclKdTree)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace objmap::bench
