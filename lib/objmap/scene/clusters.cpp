@@ -1,7 +1,7 @@
 // Euclidean clustering on a grid of hashed cells (detail::euclidean_clusters): the clusters of
 // PCL's EuclideanClusterExtraction without its kd-tree (docs/benchmarks.md, "The scene step").
-#include <pcl/segmentation/extract_clusters.h>
 #include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
 
 #include <algorithm>
 
@@ -98,8 +98,9 @@ std::vector<std::vector<int>> euclidean_clusters(const std::vector<Vec3f>& point
     clusters.push_back(queue);
   }
   // 4. Largest first, sorted as EuclideanClusterExtraction sorts them.
-  std::sort(clusters.rbegin(), clusters.rend(),
-            [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() < b.size(); });
+  std::sort(
+      clusters.rbegin(), clusters.rend(),
+      [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() < b.size(); });
   return clusters;
 }
 
