@@ -6,12 +6,10 @@
 #include <benchmark/benchmark.h>
 #include <pcl/features/normal_3d.h>
 #include <pcl/search/kdtree.h>
-#include <pcl/segmentation/extract_clusters.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
-#include <limits>
 
 #include "bench_data.h"
 #include "objmap/io/ply.h"
@@ -122,20 +120,9 @@ void BM_ClustersGrid(benchmark::State& state) {
 
 void BM_ClustersPclKdTree(benchmark::State& state) {
   NEED_MAP(state);
+  const std::vector<Vec3f> points = sample_points(map);
   std::size_t clusters = 0;
-  for (auto _ : state) {
-    pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
-    tree->setInputCloud(map.sample);
-    pcl::EuclideanClusterExtraction<pcl::PointXYZ> extract;
-    extract.setClusterTolerance(0.06);
-    extract.setMinClusterSize(10);
-    extract.setMaxClusterSize(std::numeric_limits<int>::max());
-    extract.setSearchMethod(tree);
-    extract.setInputCloud(map.sample);
-    std::vector<pcl::PointIndices> found;
-    extract.extract(found);
-    clusters = found.size();
-  }
+  for (auto _ : state) clusters = scene::detail::pcl_euclidean_clusters(points, 0.06, 10).size();
   state.counters["clusters"] = static_cast<double>(clusters);
 }
 

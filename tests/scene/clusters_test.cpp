@@ -1,8 +1,6 @@
 // scene::detail::euclidean_clusters (private to lib/objmap/scene): PCL's Euclidean clusters on a
-// grid, compared with PCL's EuclideanClusterExtraction itself.
+// grid, compared with PCL's EuclideanClusterExtraction itself (pcl_euclidean_clusters).
 #include <gtest/gtest.h>
-#include <pcl/search/kdtree.h>
-#include <pcl/segmentation/extract_clusters.h>
 
 #include <cmath>
 #include <random>
@@ -11,25 +9,6 @@
 
 namespace objmap::scene::detail {
 namespace {
-
-std::vector<std::vector<int>> pcl_reference(const std::vector<Vec3f>& points, double gap_m,
-                                            std::size_t min_points) {
-  Cloud::Ptr cloud(new Cloud);
-  for (const Vec3f& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
-  tree->setInputCloud(cloud);
-  pcl::EuclideanClusterExtraction<pcl::PointXYZ> extract;
-  extract.setClusterTolerance(gap_m);
-  extract.setMinClusterSize(static_cast<int>(min_points));
-  extract.setMaxClusterSize(std::numeric_limits<int>::max());
-  extract.setSearchMethod(tree);
-  extract.setInputCloud(cloud);
-  std::vector<pcl::PointIndices> found;
-  extract.extract(found);
-  std::vector<std::vector<int>> out;
-  for (const auto& c : found) out.push_back(c.indices);
-  return out;
-}
 
 // Patches of a table-top sample: points on a jittered 4 cm grid in a few rectangles (some closer
 // than the gap, some not), with stray points between them, shuffled.
@@ -55,7 +34,7 @@ TEST(EuclideanClusters, AreThoseOfPclsEuclideanClusterExtraction) {
     for (const double gap : {0.03, 0.06, 0.1})
       for (const std::size_t min_points : {std::size_t{1}, std::size_t{10}, std::size_t{25}}) {
         const auto ours = euclidean_clusters(points, gap, min_points);
-        EXPECT_EQ(ours, pcl_reference(points, gap, min_points))
+        EXPECT_EQ(ours, pcl_euclidean_clusters(points, gap, min_points))
             << "seed " << seed << ", gap " << gap << ", min " << min_points;
         if (gap > 0.05) {  // below the grid's 4 cm every point is alone
           EXPECT_GE(ours.size(), 2u);
@@ -69,16 +48,16 @@ TEST(EuclideanClusters, PointsExactlyTheGapApartAreApartAsInPcl) {
   // radius only, so each point is its own cluster; at 5.01 cm the chain is one.
   std::vector<Vec3f> chain;
   for (int i = 0; i < 20; ++i) chain.emplace_back(0.05f * static_cast<float>(i), 0.f, 0.f);
-  EXPECT_EQ(euclidean_clusters(chain, 0.05, 1), pcl_reference(chain, 0.05, 1));
+  EXPECT_EQ(euclidean_clusters(chain, 0.05, 1), pcl_euclidean_clusters(chain, 0.05, 1));
   EXPECT_EQ(euclidean_clusters(chain, 0.0501, 1).size(), 1u);
-  EXPECT_EQ(euclidean_clusters(chain, 0.0501, 1), pcl_reference(chain, 0.0501, 1));
+  EXPECT_EQ(euclidean_clusters(chain, 0.0501, 1), pcl_euclidean_clusters(chain, 0.0501, 1));
 }
 
 TEST(EuclideanClusters, PointsBeyondTheGridAreClusteredAsPclDoes) {
   std::mt19937 rng(7);
   std::vector<Vec3f> points = patches(rng);
   points.emplace_back(1e9f, 0.f, 0.f);  // outside the grid's key range
-  EXPECT_EQ(euclidean_clusters(points, 0.06, 5), pcl_reference(points, 0.06, 5));
+  EXPECT_EQ(euclidean_clusters(points, 0.06, 5), pcl_euclidean_clusters(points, 0.06, 5));
   EXPECT_TRUE(euclidean_clusters({}, 0.06, 1).empty());
 }
 

@@ -604,18 +604,11 @@ std::size_t ObjectMap::confirmed_count() const {
 
 std::vector<Vec3> ObjectMap::surface_points(const Object& o, double share) const {
   const double need = std::min(255.0, std::max(1.0, share * o.observations));
-  // The voxels seen that often, sorted by key (fewer to sort than all of them).
-  std::vector<std::pair<VoxelKey, const VoxelData*>> seen;
-  seen.reserve(o.voxels.size());
-  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+  auto seen = o.voxels.sorted_voxels([&](VoxelKey key) {
     const std::uint8_t* hits = o.near.find(key);
-    if (hits && *hits >= need) seen.emplace_back(key, &v);
+    return hits && *hits >= need;
   });
-  if (seen.empty())
-    seen = o.voxels.sorted_voxels();
-  else
-    std::sort(seen.begin(), seen.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
+  if (seen.empty()) seen = o.voxels.sorted_voxels();
   std::vector<Vec3> surface;
   surface.reserve(seen.size());
   for (const auto& [key, v] : seen) surface.push_back(o.voxels.mean_position(key, *v));

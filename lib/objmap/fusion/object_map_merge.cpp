@@ -34,27 +34,14 @@ std::vector<double> class_frames(const ObjectT& o, const std::string& canonical)
 }  // namespace
 
 std::uint64_t ObjectMap::pair_content(const Object& o) {
-  // Order-free over the voxels and the dilated support table (sums and xors of per-entry hashes:
-  // a table's order depends on its history, not its content); in order over the rest.
-  std::uint64_t sum = 0, xr = 0;
-  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-    std::uint64_t h = content_mix(key);
-    for (int a = 0; a < 3; ++a)
-      h = content_mix(h ^ content_bits(v.offset_sum[a]) ^ (content_bits(v.color_sum[a]) << 32));
-    h = content_mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
-    sum += h;
-    xr ^= content_mix(h);
-  });
-  std::uint64_t near_sum = 0, near_xr = 0;
-  o.near.for_each([&](VoxelKey key, std::uint8_t hits) {
-    const std::uint64_t h = content_mix(content_mix(key) ^ hits);
-    near_sum += h;
-    near_xr ^= content_mix(h);
-  });
-  std::uint64_t h = content_mix(sum) ^ content_mix(xr ^ o.voxels.size());
+  // Order-free over the voxels and the dilated support table; in order over the rest.
+  OrderFreeHash voxels, near;
+  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) { voxels.add(voxel_content(key, v)); });
+  o.near.for_each(
+      [&](VoxelKey key, std::uint8_t hits) { near.add(content_mix(content_mix(key) ^ hits)); });
+  std::uint64_t h = voxels.value(o.voxels.size());
   const auto add = [&h](std::uint64_t field) { h = content_mix(h ^ field); };
-  add(near_sum);
-  add(near_xr ^ o.near.size());
+  add(near.value(o.near.size()));
   for (int k = 0; k < 3; ++k) {
     add(content_bits(o.centroid[k]));
     add(content_bits(o.lo[k]) ^ (content_bits(o.hi[k]) << 32));

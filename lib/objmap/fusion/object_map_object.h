@@ -34,6 +34,27 @@ std::uint64_t content_bits(T value) {
   return b;
 }
 
+// An order-free hash of a table's entries (a sum and an xor of their hashes): a hash table's order
+// depends on its history, not its content.
+struct OrderFreeHash {
+  std::uint64_t sum = 0, xr = 0;
+  void add(std::uint64_t h) {
+    sum += h;
+    xr ^= content_mix(h);
+  }
+  std::uint64_t value(std::size_t entries) const {
+    return content_mix(sum) ^ content_mix(xr ^ entries);
+  }
+};
+
+// The hash of one voxel: its key and sums.
+inline std::uint64_t voxel_content(VoxelKey key, const VoxelData& v) {
+  std::uint64_t h = content_mix(key);
+  for (int a = 0; a < 3; ++a)
+    h = content_mix(h ^ content_bits(v.offset_sum[a]) ^ (content_bits(v.color_sum[a]) << 32));
+  return content_mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
+}
+
 struct ObjectMap::Object {
   int id = -1;
   bool alive = true;

@@ -59,14 +59,7 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
   // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
   PointCloud voxel_cloud;
   if (support) {
-    // The supported voxels, sorted by key (fewer to sort than all of them).
-    std::vector<std::pair<VoxelKey, const VoxelData*>> voxels;
-    voxels.reserve(o.voxels.size());
-    o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-      if (supported(key)) voxels.emplace_back(key, &v);
-    });
-    std::sort(voxels.begin(), voxels.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
+    const auto voxels = o.voxels.sorted_voxels(supported);
     voxel_cloud.reserve(voxels.size());
     for (const auto& [key, v] : voxels)
       voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
@@ -80,23 +73,17 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
 }
 
 std::uint64_t ObjectMap::record_content(const Object& o, const RecordOptions& options) const {
-  // Order-free over the voxels (a sum and an xor of each voxel's hash): the table's order depends
-  // on its history, not its content.
   const bool support = options.min_voxel_support > 0.0;
-  std::uint64_t sum = 0, xr = 0;
+  OrderFreeHash voxels;
   o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
-    std::uint64_t h = content_mix(key);
-    for (int a = 0; a < 3; ++a)
-      h = content_mix(h ^ content_bits(v.offset_sum[a]) ^ (content_bits(v.color_sum[a]) << 32));
-    h = content_mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
+    std::uint64_t h = voxel_content(key, v);
     if (support) {
       const std::uint8_t* hits = o.near.find(key);
       h = content_mix(h ^ (hits ? *hits : 0u));
     }
-    sum += h;
-    xr ^= content_mix(h);
+    voxels.add(h);
   });
-  std::uint64_t h = content_mix(sum) ^ content_mix(xr ^ o.voxels.size());
+  std::uint64_t h = voxels.value(o.voxels.size());
   for (const std::uint64_t field :
        {content_bits(o.observations), content_bits(options.min_voxel_support),
         content_bits(options.outlier_filter), content_bits(options.outlier.neighbours),
@@ -157,11 +144,8 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options,
                            : geometry::percentile_box_centre(r.cloud, options.position_percentile);
       made->aabb = geometry::compute_aabb(r.cloud);
       made->obb = geometry::compute_obb(r.cloud);
-      if (content) {
-        made->cloud = r.cloud;
-        record_cache_->put(o.id, *made);
-      }
       made->cloud = std::move(r.cloud);
+      if (content) record_cache_->put(o.id, *made);
     }
     r.cloud = std::move(made->cloud);
     r.points_voxel = made->points_voxel;

@@ -2,6 +2,16 @@
 
 namespace objmap::fusion {
 
+std::size_t CacheCounts::hits() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return hits_;
+}
+
+std::size_t CacheCounts::misses() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return misses_;
+}
+
 std::optional<RecordCache::Filtered> RecordCache::find(int id, std::uint64_t content) const {
   const std::lock_guard<std::mutex> lock(mutex_);
   const auto it = by_id_.find(id);
@@ -13,19 +23,9 @@ std::optional<RecordCache::Filtered> RecordCache::find(int id, std::uint64_t con
   return it->second;
 }
 
-void RecordCache::put(int id, Filtered filtered) {
+void RecordCache::put(int id, const Filtered& filtered) {
   const std::lock_guard<std::mutex> lock(mutex_);
-  by_id_[id] = std::move(filtered);
-}
-
-std::size_t RecordCache::hits() const {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  return hits_;
-}
-
-std::size_t RecordCache::misses() const {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  return misses_;
+  by_id_[id] = filtered;
 }
 
 void PairCache::begin_pass() {
@@ -53,16 +53,6 @@ std::optional<PairCache::Verdict> PairCache::find(std::uint64_t a, std::uint64_t
 void PairCache::put(std::uint64_t a, std::uint64_t b, const Verdict& verdict) {
   const std::lock_guard<std::mutex> lock(mutex_);
   now_[std::make_pair(a, b)] = verdict;
-}
-
-std::size_t PairCache::hits() const {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  return hits_;
-}
-
-std::size_t PairCache::misses() const {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  return misses_;
 }
 
 }  // namespace objmap::fusion

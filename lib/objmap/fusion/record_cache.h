@@ -16,7 +16,18 @@
 // the same record options; anything else is made again. One entry per object (the latest).
 namespace objmap::fusion {
 
-class RecordCache {
+// A cache's lookups that found an entry and that did not; its lock.
+class CacheCounts {
+ public:
+  std::size_t hits() const;
+  std::size_t misses() const;
+
+ protected:
+  mutable std::mutex mutex_;
+  mutable std::size_t hits_ = 0, misses_ = 0;
+};
+
+class RecordCache : public CacheCounts {
  public:
   // What filter_record and the position and boxes make of an object's voxels.
   struct Filtered {
@@ -29,21 +40,17 @@ class RecordCache {
     Obb obb;
   };
   std::optional<Filtered> find(int id, std::uint64_t content) const;
-  void put(int id, Filtered filtered);
-  std::size_t hits() const;
-  std::size_t misses() const;
+  void put(int id, const Filtered& filtered);
 
  private:
-  mutable std::mutex mutex_;
   std::map<int, Filtered> by_id_;
-  mutable std::size_t hits_ = 0, misses_ = 0;
 };
 
 // The merge pass's pair scores (ObjectMap::merge_pass, its pair rule) by the content of the two
 // objects (a 64-bit hash of everything the score reads of each: voxels, their sums, the dilated
 // support table, bounds, centroid, radius, class votes, observations' timestamps, classes and track
 // ids). begin_pass() starts a pass: the entries no pass used since the one before are dropped.
-class PairCache {
+class PairCache : public CacheCounts {
  public:
   struct Verdict {
     double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
@@ -52,8 +59,6 @@ class PairCache {
   void begin_pass();
   std::optional<Verdict> find(std::uint64_t a, std::uint64_t b);
   void put(std::uint64_t a, std::uint64_t b, const Verdict& verdict);
-  std::size_t hits() const;
-  std::size_t misses() const;
 
  private:
   struct Hash {
@@ -62,9 +67,7 @@ class PairCache {
     }
   };
   using Table = std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, Verdict, Hash>;
-  mutable std::mutex mutex_;
   Table now_, before_;  // used in this pass; in the one before
-  std::size_t hits_ = 0, misses_ = 0;
 };
 
 }  // namespace objmap::fusion

@@ -471,6 +471,10 @@ void VoxelMap::insert(const PointCloud& cloud) {
   if (n == 0) return;
   // One pass; a sharded map gets each run routed to its shard.
   const std::size_t dropped = insert_shard(shards_.size() == 1 ? 0 : kAllShards, cloud);
+  if (!touched_.empty())  // the points' voxels, out of the hot loop (tracking is rare)
+    for (const Vec3f& p : cloud.points)
+      if (const VoxelKey key = key_of(p); key != geometry::kNoVoxel)
+        touched_[shard_of(key)].push_back(key);
   points_inserted_ += n - dropped;
   points_dropped_ += dropped;
 }
@@ -478,7 +482,6 @@ void VoxelMap::insert(const PointCloud& cloud) {
 inline bool VoxelMap::add_voxel(Table& table, VoxelKey key, const VoxelData& src) {
   VoxelData& v = table[key];
   const bool opened = v.count == 0;  // an entry has points once added
-  if (!touched_.empty()) touched_[shard_of(key)].push_back(key);
   for (int a = 0; a < 3; ++a) {
     v.offset_sum[a] += src.offset_sum[a];
     v.color_sum[a] += src.color_sum[a];
@@ -544,6 +547,8 @@ void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
   const std::size_t n = static_cast<std::size_t>(frame.shard_end(shard) - first);
   Table& dst = shards_[shard];
   dst.reserve(dst.size() + n);
+  if (!touched_.empty())
+    for (std::size_t r = 0; r < n; ++r) touched_[shard].push_back(first[r].key);
   if (young_.empty()) {
     add_in_order(
         n, [&](std::size_t r) { dst.prefetch(first[r].key); },
@@ -579,13 +584,17 @@ bool VoxelMap::key_bounds(Eigen::Vector3i& lo, Eigen::Vector3i& hi) const {
   return any;
 }
 
-std::vector<std::pair<VoxelKey, const VoxelData*>> VoxelMap::sorted_voxels() const {
+std::vector<std::pair<VoxelKey, const VoxelData*>> VoxelMap::sorted_voxels(
+    const std::function<bool(VoxelKey)>& keep) const {
   using Entry = std::pair<VoxelKey, const VoxelData*>;
   const auto by_key = [](const Entry& a, const Entry& b) { return a.first < b.first; };
   std::vector<Entry> out;
   out.reserve(size());
-  if (shards_.size() == 1) {
-    shards_[0].for_each([&](VoxelKey key, const VoxelData& v) { out.emplace_back(key, &v); });
+  if (shards_.size() == 1 || keep) {
+    for (const Table& t : shards_)
+      t.for_each([&](VoxelKey key, const VoxelData& v) {
+        if (!keep || keep(key)) out.emplace_back(key, &v);
+      });
     std::sort(out.begin(), out.end(), by_key);
     return out;
   }

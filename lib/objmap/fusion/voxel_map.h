@@ -95,9 +95,9 @@ class VoxelMap {
   std::uint64_t voxels_pruned() const { return voxels_pruned_; }  // by prune_remembered, in all
 
   // Change tracking (a live map's cloud kept up to date, pipeline/dense_snapshot.h): from now on
-  // every voxel a call adds to, opens or prunes is remembered (a key once per touch, in shard
-  // order; not what reset() or take_sorted_points() empty); take_touched() hands them over and
-  // starts afresh.
+  // every voxel insert(), add(), add_shard() or prune_remembered() adds to, opens or drops is
+  // remembered (a key once per touch, in shard order; not what merge(), reset() or
+  // take_sorted_points() change); take_touched() hands them over and starts afresh.
   void track_touched();
   std::vector<VoxelKey> take_touched();
 
@@ -127,7 +127,9 @@ class VoxelMap {
   }
 
   // Every occupied voxel as (key, data), sorted by key.
-  std::vector<std::pair<VoxelKey, const VoxelData*>> sorted_voxels() const;
+  // With `keep`: only the voxels it takes (filtered before they are sorted).
+  std::vector<std::pair<VoxelKey, const VoxelData*>> sorted_voxels(
+      const std::function<bool(VoxelKey)>& keep = {}) const;
 
   // One point per voxel at the voxel's mean position (mean_position, as float) with its mean
   // colour, sorted by voxel key: what to_cloud() holds, with the keys. Made in sequential passes

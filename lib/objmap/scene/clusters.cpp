@@ -10,11 +10,8 @@
 
 namespace objmap::scene::detail {
 
-namespace {
-
-// PCL's clusters, for points the grid cannot key (not finite, or beyond its range).
-std::vector<std::vector<int>> pcl_clusters(const std::vector<Vec3f>& points, double gap_m,
-                                           std::size_t min_points) {
+std::vector<std::vector<int>> pcl_euclidean_clusters(const std::vector<Vec3f>& points, double gap_m,
+                                                     std::size_t min_points) {
   Cloud::Ptr cloud(new Cloud);
   cloud->reserve(points.size());
   for (const Vec3f& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
@@ -33,8 +30,6 @@ std::vector<std::vector<int>> pcl_clusters(const std::vector<Vec3f>& points, dou
   return out;
 }
 
-}  // namespace
-
 std::vector<std::vector<int>> euclidean_clusters(const std::vector<Vec3f>& points, double gap_m,
                                                  std::size_t min_points) {
   const std::size_t n = points.size();
@@ -44,7 +39,7 @@ std::vector<std::vector<int>> euclidean_clusters(const std::vector<Vec3f>& point
   std::vector<geometry::VoxelKey> keys(n);
   for (std::size_t i = 0; i < n; ++i) {
     keys[i] = geometry::voxel_key(points[i], inv_cell);
-    if (keys[i] == geometry::kNoVoxel) return pcl_clusters(points, gap_m, min_points);
+    if (keys[i] == geometry::kNoVoxel) return pcl_euclidean_clusters(points, gap_m, min_points);
   }
   // 2. The points by cell (then index), and where each cell's run starts.
   std::vector<std::uint32_t> order(n);

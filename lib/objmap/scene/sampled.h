@@ -34,6 +34,10 @@ std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_
 // docs/benchmarks.md, "The scene step").
 std::vector<std::vector<int>> euclidean_clusters(const std::vector<Vec3f>& points, double gap_m,
                                                  std::size_t min_points);
+// The same by PCL's EuclideanClusterExtraction with a kd-tree (what euclidean_clusters falls back
+// on for points its grid cannot key: not finite, or beyond its range; the tests' reference).
+std::vector<std::vector<int>> pcl_euclidean_clusters(const std::vector<Vec3f>& points, double gap_m,
+                                                     std::size_t min_points);
 
 // find_surfaces with the dense map sampled on options.sample_voxel_m (sample_on_grid, not thinned)
 // and the sample's normals (grid_normals(sample, options.sample_voxel_m)).
