@@ -30,7 +30,7 @@ std::vector<Eigen::Vector3f> grid_normals(const Cloud::Ptr& sample, double cell_
 // The clusters of `points` whose members are closer than gap_m to another member (connected
 // components), each of at least min_points: each cluster's indices ascending, the clusters largest
 // first, exactly as PCL's EuclideanClusterExtraction gives them (cluster tolerance gap_m), found on
-// a grid of cells rather than with a kd-tree (6.7x faster on a map sample of 108k points;
+// a grid of cells rather than with a kd-tree (6.5x faster on a map sample of 108k points;
 // docs/benchmarks.md, "The scene step").
 std::vector<std::vector<int>> euclidean_clusters(const std::vector<Vec3f>& points, double gap_m,
                                                  std::size_t min_points);
