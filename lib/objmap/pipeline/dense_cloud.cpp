@@ -50,6 +50,10 @@ std::size_t drop_sighting_voxels(DenseCloud& dense,
     if (it != dense.keys.end() && *it == key)
       drop[static_cast<std::size_t>(it - dense.keys.begin())] = 1;
   });
+  return drop_points(dense, drop);
+}
+
+std::size_t drop_points(DenseCloud& dense, const std::vector<char>& drop) {
   std::size_t kept = 0;
   for (std::size_t i = 0; i < dense.keys.size(); ++i) {
     if (drop[i]) continue;

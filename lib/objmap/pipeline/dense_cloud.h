@@ -25,6 +25,9 @@ std::vector<Rgb> semantic_colors(const DenseCloud& dense, double voxel_m,
                                  const std::vector<fusion::ObjectRecord>& records,
                                  const std::vector<Rgb>& record_color);
 
+// Removes the points whose `drop` flag is set (one per point), keeping the order; returns how many.
+std::size_t drop_points(DenseCloud& dense, const std::vector<char>& drop);
+
 // Leaves out of the dense map (and so of the semantic map) the voxels that hold a point of a
 // sighting and of no map object: what moved is not the map. Its voxels of the keyframes where it
 // was not detected stay. Returns the voxels left out.

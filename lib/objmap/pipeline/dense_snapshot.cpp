@@ -38,18 +38,13 @@ void put(DenseCloud& c, std::size_t at, const VoxelPoint& p) {
 
 // The cloud without the `gone` keys (sorted).
 void drop_gone(DenseCloud& c, const std::vector<VoxelKey>& gone) {
-  std::size_t kept = 0, g = 0;
+  std::vector<char> drop(c.keys.size(), 0);
+  std::size_t g = 0;
   for (std::size_t i = 0; i < c.keys.size(); ++i) {
     while (g < gone.size() && gone[g] < c.keys[i]) ++g;
-    if (g < gone.size() && gone[g] == c.keys[i]) continue;
-    c.keys[kept] = c.keys[i];
-    c.cloud.points[kept] = c.cloud.points[i];
-    c.cloud.colors[kept] = c.cloud.colors[i];
-    ++kept;
+    drop[i] = g < gone.size() && gone[g] == c.keys[i];
   }
-  c.keys.resize(kept);
-  c.cloud.points.resize(kept);
-  c.cloud.colors.resize(kept);
+  drop_points(c, drop);
 }
 
 }  // namespace
