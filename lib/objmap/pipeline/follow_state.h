@@ -17,6 +17,7 @@
 #include "objmap/pipeline/dense_snapshot.h"
 #include "objmap/pipeline/follow.h"
 #include "objmap/pipeline/follow_detect.h"
+#include "objmap/pipeline/fuse_keyframes.h"
 #include "objmap/pipeline/fuse_maps.h"
 #include "objmap/segmentation/class_sizes.h"
 #include "objmap/segmentation/read.h"
@@ -62,6 +63,9 @@ struct FollowState {
   // The merge pass's pair scores of objects unchanged since a publish (maps->objects's).
   std::shared_ptr<fusion::PairCache> pair_cache = std::make_shared<fusion::PairCache>();
   std::optional<geometry::RayTable> rays;
+  // The keyframes decoding ahead (on s.options.fuse, result.camera, rays, maps->dense): declared
+  // after them, so that its workers stop before they go.
+  std::unique_ptr<LiveKeyframes> live;
   double retried_timestamp = -1.0;        // the keyframe whose read failed last
   std::vector<KeptKeyframe> kept;         // every keyframe mapped (loop closures)
   bool rewrite_pending = false;           // the trajectory's past poses changed since the last turn

@@ -2,7 +2,10 @@
 // keyframes selected as their poses arrive, fused as their segmentation arrives.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <memory>
+#include <optional>
 
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
@@ -42,6 +45,9 @@ void start_maps(FollowState& s) {
   if (s.options.fuse.dense_map) s.dense_snapshot.emplace(s.maps->dense);
   s.maps->objects.set_record_cache(s.record_cache);
   s.maps->objects.set_pair_cache(s.pair_cache);
+  s.live = std::make_unique<LiveKeyframes>(s.options.fuse, r.camera, *s.rays,
+                                           s.options.fuse.dense_map ? &s.maps->dense : nullptr,
+                                           s.maps->view_log.has_value(), r.threads);
 }
 
 // DATASET/segmentation's canonical JSON frames, sorted by timestamp.
@@ -62,32 +68,56 @@ void warn(const FollowEvents& events, const std::string& line) {
   if (events.warning) events.warning(line);
 }
 
-enum class Instances { kWait, kNone, kRead };
+// A keyframe's instances, read on a worker: its segmentation frame, or none.
+using InstancesReader = std::function<std::optional<segmentation::FrameSegmentation>()>;
 
-// Keyframe k's instances into `frame`: from the detector (--model), or its segmentation frame
-// (named by its rgb timestamp, within 1 ms) once written: a keyframe waits until its own or a
-// later frame's is there; with `ending` nothing waits.
-Instances keyframe_instances(FollowState& s, const Keyframe& k, bool ending,
-                             segmentation::FrameSegmentation& frame) {
+// Keyframe k's instances (nullopt: it waits): from the detector (--model), or its segmentation
+// frame (named by its rgb timestamp, within 1 ms) once written, read by the reader returned: a
+// keyframe waits until its own or a later frame's is there; with `ending` nothing waits.
+std::optional<InstancesReader> keyframe_instances(FollowState& s, const Keyframe& k, bool ending) {
+  const InstancesReader none = [] { return std::optional<segmentation::FrameSegmentation>(); };
   if (s.detector) {
-    if (s.skipped.count(k.timestamp)) return Instances::kNone;
+    if (s.skipped.count(k.timestamp)) return none;
     if (!s.detected.count(k.timestamp)) {
       if (ending) s.detector->drain();
       std::optional<segmentation::FrameSegmentation> taken = s.detector->take(k.timestamp);
-      if (!taken) return ending ? Instances::kNone : Instances::kWait;
+      if (!taken) return ending ? std::optional<InstancesReader>(none) : std::nullopt;
       segmentation::write_frame_json(
           s.options.fuse.segmentation / segmentation::frame_file_name(k.timestamp), *taken);
       s.detected[k.timestamp] = std::move(*taken);
     }
-    frame = s.detected[k.timestamp];
-    return Instances::kRead;
+    auto frame = std::make_shared<const segmentation::FrameSegmentation>(s.detected[k.timestamp]);
+    return [frame] { return std::optional<segmentation::FrameSegmentation>(*frame); };
   }
   const auto seg = std::lower_bound(s.segmentation.begin(), s.segmentation.end(),
                                     std::make_pair(k.timestamp - 1e-3, fs::path()));
-  if (seg == s.segmentation.end()) return ending ? Instances::kNone : Instances::kWait;
-  if (seg->first > k.timestamp + 1e-3) return Instances::kNone;
-  frame = segmentation::read_frame_json(seg->second, s.read);
-  return Instances::kRead;
+  if (seg == s.segmentation.end())
+    return ending ? std::optional<InstancesReader>(none) : std::nullopt;
+  if (seg->first > k.timestamp + 1e-3) return none;
+  return [file = seg->second, read = s.read] {
+    return std::optional<segmentation::FrameSegmentation>(
+        segmentation::read_frame_json(file, read));
+  };
+}
+
+// The waiting keyframes from s.waiting[from] on queued on the workers (their instances read
+// there) while fewer than `window` are, as the map's next keyframes (`taken` of the waiting ones
+// are mapped in this turn). Returns false once no more may be queued in this turn: one waits for
+// its segmentation, or the publish is due.
+bool queue_keyframes(FollowState& s, bool ending, std::size_t& from, std::size_t taken,
+                     std::size_t window) {
+  for (; from < s.waiting.size() && s.live->queued() < window; ++from) {
+    // A backlog does not hold back the publish that is due: the rest waits for the next poll.
+    if (!ending && from > 0 && !s.publishing.valid() &&
+        seconds_since(s.last_publish) >= s.options.publish_every_s)
+      return false;
+    const Keyframe& k = s.waiting[from].keyframe;
+    std::optional<InstancesReader> instances = keyframe_instances(s, k, ending);
+    if (!instances) return false;
+    const std::size_t index = s.result.keyframes.keyframes.size() + (from - taken);
+    s.live->submit(s.dataset, k, static_cast<int>(index), std::move(*instances));
+  }
+  return true;
 }
 
 }  // namespace
@@ -198,28 +228,23 @@ void select_new_keyframes(FollowState& s, bool ending) {
 }
 
 void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& events) {
-  std::size_t n = 0;
+  if (!s.live) return;  // no frame yet: no camera, no maps, no keyframe
   const Clock::time_point t0 = Clock::now();
-  for (; n < s.waiting.size(); ++n) {
-    // A backlog does not hold back the publish that is due: the rest waits for the next poll.
-    if (!ending && n > 0 && !s.publishing.valid() &&
-        seconds_since(s.last_publish) >= s.options.publish_every_s)
-      break;
+  FuseResult& r = s.result;
+  // Keyframes decode and back-project ahead on the workers while this thread maps the oldest.
+  const std::size_t window = static_cast<std::size_t>(r.threads);
+  std::size_t n = 0, queued_to = 0;
+  bool more = true;
+  for (;;) {
+    if (more) more = queue_keyframes(s, ending, queued_to, n, window);
+    if (s.live->queued() == 0) break;
     const Keyframe& k = s.waiting[n].keyframe;
-    FuseResult& r = s.result;
     LiveKeyframe live;
-    bool has_seg = false;
     try {
-      segmentation::FrameSegmentation frame;
-      const Instances instances = keyframe_instances(s, k, ending, frame);
-      if (instances == Instances::kWait) break;
-      has_seg = instances == Instances::kRead;
-      live = fuse_one_keyframe(
-          s.options.fuse, r.camera, *s.rays, s.dataset, k,
-          static_cast<int>(r.keyframes.keyframes.size()), has_seg ? &frame : nullptr,
-          s.options.fuse.dense_map ? &s.maps->dense : nullptr, s.maps->view_log.has_value(), r);
+      live = s.live->take(r);
     } catch (const InputError& e) {
-      if (!ending) {  // a file half-written or not there yet: the next poll reads it again
+      s.live->drop();  // the keyframes after it are queued again, in their places
+      if (!ending) {   // a file half-written or not there yet: the next poll reads it again
         ++s.status.frame_retries;
         if (s.retried_timestamp != k.timestamp)  // named once, not at every poll
           warn(events, std::string(e.what()) + "; retried at the next poll");
@@ -228,6 +253,8 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
       }
       ++s.status.keyframes_dropped;
       warn(events, std::string(e.what()) + "; the keyframe is left out");
+      queued_to = ++n;
+      more = true;
       continue;
     }
     s.detected.erase(k.timestamp);
@@ -239,9 +266,10 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
     count_added(s.maps->objects.add_frame(live.observations), r);
     s.empty_by_add += r.instances_empty - empty_before;
     keep_for_replacing(s, k, live.observations, view_depth);
-    if (has_seg) ++s.with_seg;
+    if (live.segmented) ++s.with_seg;
     r.keyframes.keyframes.push_back(k);
     s.unpublished.push_back(s.waiting[n].arrived);
+    ++n;
   }
   s.waiting.erase(s.waiting.begin(), s.waiting.begin() + static_cast<std::ptrdiff_t>(n));
   if (s.detector)

@@ -9,6 +9,7 @@
 #include <optional>
 #include <thread>
 
+#include "objmap/core/job_threads.h"
 #include "objmap/core/parallel.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/io/image.h"
@@ -107,61 +108,6 @@ class FrameVoxelsPool {
   std::vector<std::unique_ptr<fusion::FrameVoxels>> free_;
 };
 
-// Worker threads that live as long as the keyframe loop and run its jobs in the order given, one
-// thread per job in flight: the thread-local scratch of the PNG decoder, the box masks and the
-// depth gate stays allocated from one keyframe to the next, where a thread per keyframe
-// (std::async) starts cold and page-faults it in again every time.
-template <typename Result>
-class JobThreads {
- public:
-  explicit JobThreads(std::size_t threads) {
-    for (std::size_t t = 0; t < threads; ++t) threads_.emplace_back([this] { run(); });
-  }
-  ~JobThreads() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-    for (std::thread& t : threads_) t.join();
-  }
-  JobThreads(const JobThreads&) = delete;
-  JobThreads& operator=(const JobThreads&) = delete;
-
-  // Queues `job`; its result or exception comes through the future.
-  std::future<Result> submit(std::function<Result()> job) {
-    std::packaged_task<Result()> task(std::move(job));
-    std::future<Result> result = task.get_future();
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      queue_.push_back(std::move(task));
-    }
-    cv_.notify_one();
-    return result;
-  }
-
- private:
-  void run() {
-    for (;;) {
-      std::packaged_task<Result()> task;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
-        if (queue_.empty()) return;  // stopped, every queued job run
-        task = std::move(queue_.front());
-        queue_.pop_front();
-      }
-      task();
-    }
-  }
-
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  std::deque<std::packaged_task<Result()>> queue_;
-  bool stop_ = false;
-  std::vector<std::thread> threads_;
-};
-
 // What a worker hands back for one keyframe (its dense voxels are already in the dense map).
 struct FrameWork {
   std::vector<fusion::Observation> observations;
@@ -169,6 +115,8 @@ struct FrameWork {
   std::vector<PointCloud> model_points;  // per observation, its object model's (--mesh objects)
   cv::Mat depth;       // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   cv::Mat view_depth;  // its thinned copy for the view log (fusion/visibility.h)
+  std::unique_ptr<fusion::FrameVoxels> dense_voxels;  // summed, not yet in the dense map
+  bool segmented = false;  // made with a segmentation frame (none: the dense map only)
   std::uint64_t dense_points = 0;
   segmentation::InstanceMaskCounts masks;  // what the mask cleaning did to the instances
   std::size_t without_points = 0;          // kept instances with too few points in depth range
@@ -203,10 +151,11 @@ struct KeyframeContext {
 };
 
 // Where a keyframe's dense voxels go: the dense map, shard by shard in keyframe order, through a
-// pooled frame buffer.
+// pooled frame buffer. Without an order, the worker only sums them (FrameWork::dense_voxels) and
+// the caller adds them.
 struct DenseMerge {
   fusion::VoxelMap& map;
-  ShardedMergeOrder& order;
+  ShardedMergeOrder* order;
   FrameVoxelsPool& pool;
 };
 
@@ -235,10 +184,14 @@ FrameWork process_keyframe(const KeyframeContext& ctx, const io::FramePair& fram
     std::unique_ptr<fusion::FrameVoxels> frame_voxels = dense->pool.take();
     fusion::frame_voxels(rays, dense_frame, dense_options, dense->map, *frame_voxels);
     work.dense_points = frame_voxels->points();
-    dense->order.merge_in_order(static_cast<std::size_t>(keyframe_index), [&](std::size_t shard) {
-      dense->map.add_shard(*frame_voxels, shard);
-    });
-    dense->pool.give_back(std::move(frame_voxels));
+    if (dense->order) {
+      dense->order->merge_in_order(
+          static_cast<std::size_t>(keyframe_index),
+          [&](std::size_t shard) { dense->map.add_shard(*frame_voxels, shard); });
+      dense->pool.give_back(std::move(frame_voxels));
+    } else {
+      work.dense_voxels = std::move(frame_voxels);
+    }
   }
 
   // 2b. The scene model's rays: every valid pixel, averaged per scene-model voxel (in a fuse
@@ -328,7 +281,7 @@ void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
   ShardedMergeOrder merge_order(kDenseShards);
   FrameVoxelsPool frame_voxels;
   std::optional<DenseMerge> dense_merge;
-  if (dense) dense_merge.emplace(DenseMerge{*dense, merge_order, frame_voxels});
+  if (dense) dense_merge.emplace(DenseMerge{*dense, &merge_order, frame_voxels});
   const std::size_t window = static_cast<std::size_t>(result.threads);
   const std::size_t prune_every =
       dense ? static_cast<std::size_t>(options.dense_prune.every_keyframes) : 0;
@@ -425,23 +378,75 @@ void count_added(const std::vector<fusion::AddResult>& added, FuseResult& result
   }
 }
 
-LiveKeyframe fuse_one_keyframe(const FuseOptions& options, const Camera& camera,
-                               const geometry::RayTable& rays, const io::Dataset& dataset,
-                               const Keyframe& keyframe, int keyframe_index,
-                               const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
-                               bool view_depth, FuseResult& result) {
-  const KeyframeContext ctx{
-      options,   camera, rays, dataset, instance_mask_options(options), mesh::MeshSelection{},
-      view_depth};
-  const std::size_t index = static_cast<std::size_t>(keyframe_index);
-  ShardedMergeOrder order(kDenseShards, index);  // one keyframe, on this thread: any shard order
+struct LiveKeyframes::Impl {
+  Impl(const FuseOptions& options, const Camera& camera, const geometry::RayTable& rays,
+       fusion::VoxelMap* dense, bool view_depth, int threads)
+      : options(options),
+        camera(camera),
+        rays(rays),
+        masks(instance_mask_options(options)),
+        view_depth(view_depth),
+        dense(dense),
+        workers(static_cast<std::size_t>(std::max(1, threads))) {}
+  const FuseOptions& options;
+  const Camera& camera;
+  const geometry::RayTable& rays;
+  const segmentation::InstanceMaskOptions masks;
+  const bool view_depth;
+  fusion::VoxelMap* dense;
   FrameVoxelsPool pool;
-  std::optional<DenseMerge> merge;
-  if (dense) merge.emplace(DenseMerge{*dense, order, pool});
-  FrameWork work = process_keyframe(ctx, dataset.frames[keyframe.frame], keyframe, keyframe_index,
-                                    seg, merge ? &*merge : nullptr);
+  std::deque<std::future<FrameWork>> queued;
+  JobThreads<FrameWork> workers;  // last: joined first, while the rest is still there
+};
+
+LiveKeyframes::LiveKeyframes(const FuseOptions& options, const Camera& camera,
+                             const geometry::RayTable& rays, fusion::VoxelMap* dense,
+                             bool view_depth, int threads)
+    : impl_(std::make_unique<Impl>(options, camera, rays, dense, view_depth, threads)) {}
+
+LiveKeyframes::~LiveKeyframes() { drop(); }
+
+std::size_t LiveKeyframes::queued() const { return impl_->queued.size(); }
+
+void LiveKeyframes::submit(const io::Dataset& dataset, const Keyframe& keyframe, int index,
+                           std::function<std::optional<segmentation::FrameSegmentation>()> seg) {
+  Impl& m = *impl_;
+  m.queued.push_back(m.workers.submit([&m, &dataset, keyframe, index, seg = std::move(seg)] {
+    const std::optional<segmentation::FrameSegmentation> instances = seg();
+    const KeyframeContext ctx{
+        m.options, m.camera, m.rays, dataset, m.masks, mesh::MeshSelection{}, m.view_depth};
+    std::optional<DenseMerge> merge;  // summed here, added by take() in keyframe order
+    if (m.dense) merge.emplace(DenseMerge{*m.dense, nullptr, m.pool});
+    FrameWork work = process_keyframe(ctx, dataset.frames[keyframe.frame], keyframe, index,
+                                      instances ? &*instances : nullptr, merge ? &*merge : nullptr);
+    work.segmented = instances.has_value();
+    return work;
+  }));
+}
+
+LiveKeyframe LiveKeyframes::take(FuseResult& result) {
+  Impl& m = *impl_;
+  std::future<FrameWork> next = std::move(m.queued.front());
+  m.queued.pop_front();
+  FrameWork work = next.get();
+  if (work.dense_voxels) {
+    for (std::size_t shard = 0; shard < work.dense_voxels->shard_count(); ++shard)
+      m.dense->add_shard(*work.dense_voxels, shard);
+    m.pool.give_back(std::move(work.dense_voxels));
+  }
   add_counts(work, result);
-  return {std::move(work.observations), std::move(work.view_depth)};
+  return {std::move(work.observations), std::move(work.view_depth), work.segmented};
+}
+
+void LiveKeyframes::drop() {
+  for (std::future<FrameWork>& f : impl_->queued) {
+    try {
+      FrameWork work = f.get();
+      if (work.dense_voxels) impl_->pool.give_back(std::move(work.dense_voxels));
+    } catch (const std::exception&) {  // a keyframe dropped unread: its error with it
+    }
+  }
+  impl_->queued.clear();
 }
 
 std::vector<fusion::Observation> keyframe_observations(

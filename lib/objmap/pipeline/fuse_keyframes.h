@@ -1,5 +1,8 @@
 #pragma once
 #include <cstddef>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "objmap/fusion/object_map.h"
@@ -39,18 +42,41 @@ void fuse_keyframes(const FuseOptions& options, const FuseChoices& choices,
 // empty).
 void count_added(const std::vector<fusion::AddResult>& added, FuseResult& result);
 
-// One keyframe on the calling thread, made exactly as fuse_keyframes makes it (objmap follow): its
-// dense voxels into `dense` when given, its counts into `result`; its observations (not yet
-// associated) and, with `view_depth`, its thinned depth for the view log.
+// objmap follow's keyframes, each made exactly as fuse_keyframes makes it: decoded and
+// back-projected ahead on worker threads (submit), taken back in the order submitted on the calling
+// thread (take), which adds their dense voxels to the dense map, so that it sums its keyframes in
+// fuse's order. The options, camera, rays and dense map given must outlive it.
 struct LiveKeyframe {
-  std::vector<fusion::Observation> observations;
-  cv::Mat view_depth;
+  std::vector<fusion::Observation> observations;  // not yet associated
+  cv::Mat view_depth;                             // the thinned depth, for the view log
+  bool segmented = false;                         // made with a segmentation frame
 };
-LiveKeyframe fuse_one_keyframe(const FuseOptions& options, const Camera& camera,
-                               const geometry::RayTable& rays, const io::Dataset& dataset,
-                               const Keyframe& keyframe, int keyframe_index,
-                               const segmentation::FrameSegmentation* seg, fusion::VoxelMap* dense,
-                               bool view_depth, FuseResult& result);
+class LiveKeyframes {
+ public:
+  // `dense`: the dense map (null: none); `view_depth`: keep the thinned depths; `threads` workers.
+  LiveKeyframes(const FuseOptions& options, const Camera& camera, const geometry::RayTable& rays,
+                fusion::VoxelMap* dense, bool view_depth, int threads);
+  ~LiveKeyframes();
+  LiveKeyframes(const LiveKeyframes&) = delete;
+  LiveKeyframes& operator=(const LiveKeyframes&) = delete;
+
+  // Queues `keyframe` of `dataset` as the map's keyframe `index`. `instances` runs on the worker:
+  // the keyframe's segmentation frame, or none. `dataset` must stay as it is until the keyframe is
+  // taken or dropped.
+  void submit(const io::Dataset& dataset, const Keyframe& keyframe, int index,
+              std::function<std::optional<segmentation::FrameSegmentation>()> instances);
+  std::size_t queued() const;
+  // The oldest queued keyframe (one must be queued): its dense voxels added to the dense map, its
+  // counts to `result`. Rethrows what its worker threw (InputError: a file not readable), nothing
+  // added.
+  LiveKeyframe take(FuseResult& result);
+  // Every queued keyframe waited for and dropped, nothing added.
+  void drop();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // Keyframe i's instance observations alone (no map), made exactly as fuse_keyframes makes them.
 std::vector<fusion::Observation> keyframe_observations(
