@@ -210,6 +210,29 @@ TEST(VoxelMap, ShardedMapsMergeShardByShardLikeOneMap) {
   }
 }
 
+TEST(VoxelMap, TrackingListsEveryTouchedVoxelAndAVoxelTouchedAgainMostlyOnce) {
+  // Ten frames over the same voxels between two takes: every voxel listed, each mostly once
+  // (a key listed again only when another key took its hash slot meanwhile).
+  VoxelMap map({0.01, 1, 16});
+  map.track_touched();
+  const PointCloud c = frame(0);
+  for (int f = 0; f < 10; ++f) map.insert(c);
+  auto unique_keys = [](std::vector<VoxelKey> keys) {
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    return keys;
+  };
+  std::vector<VoxelKey> in_map;
+  for (const auto& [key, voxel] : map.sorted_voxels()) in_map.push_back(key);
+  const std::vector<VoxelKey> touched = map.take_touched();
+  EXPECT_EQ(unique_keys(touched), in_map);
+  EXPECT_LT(touched.size(), 2 * in_map.size()) << "ten frames, " << in_map.size() << " voxels";
+  // After a take, the same voxels touched again are listed again, each at least once.
+  map.insert(c);
+  EXPECT_EQ(unique_keys(map.take_touched()), in_map);
+  EXPECT_TRUE(map.take_touched().empty());
+}
+
 TEST(Palette, CocoNamesAndFixedColours) {
   const auto& names = segmentation::coco80_names();
   ASSERT_EQ(names.size(), 80u);

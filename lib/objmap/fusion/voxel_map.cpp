@@ -302,11 +302,12 @@ void VoxelMap::track_touched() { touched_.resize(shards_.size()); }
 std::vector<VoxelKey> VoxelMap::take_touched() {
   std::vector<VoxelKey> out;
   std::size_t n = 0;
-  for (const auto& keys : touched_) n += keys.size();
+  for (const Touched& t : touched_) n += t.keys.size();
   out.reserve(n);
-  for (auto& keys : touched_) {
-    out.insert(out.end(), keys.begin(), keys.end());
-    keys.clear();
+  for (Touched& t : touched_) {
+    out.insert(out.end(), t.keys.begin(), t.keys.end());
+    t.keys.clear();
+    std::fill(t.recent.begin(), t.recent.end(), geometry::kNoVoxel);  // the next touch listed again
   }
   return out;
 }
@@ -368,7 +369,8 @@ std::size_t VoxelMap::prune_remembered(const Judge& judge) {
   for (std::size_t s = 0; s < n; ++s) dropped += drop[s].size();
   parallel_for(n, static_cast<int>(threads_), [&](std::size_t s) {
     for (VoxelKey key : drop[s]) shards_[s].erase(key);
-    if (!touched_.empty()) touched_[s].insert(touched_[s].end(), drop[s].begin(), drop[s].end());
+    if (!touched_.empty())
+      for (const VoxelKey key : drop[s]) touched_[s].add(key);
     aging_[s].swap(young_[s]);
     young_[s].clear();
   });
@@ -474,7 +476,7 @@ void VoxelMap::insert(const PointCloud& cloud) {
   if (!touched_.empty())  // the points' voxels, out of the hot loop (tracking is rare)
     for (const Vec3f& p : cloud.points)
       if (const VoxelKey key = key_of(p); key != geometry::kNoVoxel)
-        touched_[shard_of(key)].push_back(key);
+        touched_[shard_of(key)].add(key);
   points_inserted_ += n - dropped;
   points_dropped_ += dropped;
 }
@@ -548,7 +550,7 @@ void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
   Table& dst = shards_[shard];
   dst.reserve(dst.size() + n);
   if (!touched_.empty())
-    for (std::size_t r = 0; r < n; ++r) touched_[shard].push_back(first[r].key);
+    for (std::size_t r = 0; r < n; ++r) touched_[shard].add(first[r].key);
   if (young_.empty()) {
     add_in_order(
         n, [&](std::size_t r) { dst.prefetch(first[r].key); },

@@ -96,7 +96,7 @@ class VoxelMap {
 
   // Change tracking (a live map's cloud kept up to date, pipeline/dense_snapshot.h): from now on
   // every voxel insert(), add(), add_shard() or prune_remembered() adds to, opens or drops is
-  // remembered (a key once per touch, in shard order; not what merge(), reset() or
+  // remembered (a key at least once, in shard order, mostly once; not what merge(), reset() or
   // take_sorted_points() change); take_touched() hands them over and starts afresh.
   void track_touched();
   std::vector<VoxelKey> take_touched();
@@ -210,7 +210,22 @@ class VoxelMap {
   std::size_t prunes_ = 0;  // calls of prune_remembered()
   std::map<std::pair<std::size_t, int>, std::vector<std::vector<VoxelKey>>> survivors_;
   std::uint64_t voxels_pruned_ = 0;
-  std::vector<std::vector<VoxelKey>> touched_;  // per shard (track_touched; empty: not tracked)
+  // A shard's touched keys; a key touched again soon after is mostly not listed again (the slot of
+  // its hash remembers it), so that a voxel seen by every keyframe between two takes is not listed
+  // once per keyframe.
+  struct Touched {
+    static constexpr int kBits = 13;  // 8192 slots, 64 KB
+    std::vector<VoxelKey> keys;
+    std::vector<VoxelKey> recent =
+        std::vector<VoxelKey>(std::size_t{1} << kBits, geometry::kNoVoxel);
+    void add(VoxelKey key) {
+      VoxelKey& slot = recent[(key * 0x9E3779B97F4A7C15ULL) >> (64 - kBits)];
+      if (slot == key) return;
+      slot = key;
+      keys.push_back(key);
+    }
+  };
+  std::vector<Touched> touched_;  // per shard (track_touched; empty: not tracked)
 };
 
 // Number of voxels present in both maps (same voxel size), |A ∩ B| of eq 21.

@@ -12,9 +12,8 @@
 namespace objmap::pipeline {
 
 void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
-                        const std::vector<fusion::Observation>& observations,
-                        const cv::Mat& view_depth) {
-  s.kept.push_back({keyframe, observations, view_depth});
+                        std::vector<fusion::Observation> observations, const cv::Mat& view_depth) {
+  s.kept.push_back({keyframe, std::move(observations), view_depth});
 }
 
 void replace_after_loop_closure(FollowState& s) {

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstddef>
+#include <deque>
 #include <future>
 #include <map>
 #include <memory>
@@ -67,7 +68,7 @@ struct FollowState {
   // after them, so that its workers stop before they go.
   std::unique_ptr<LiveKeyframes> live;
   double retried_timestamp = -1.0;        // the keyframe whose read failed last
-  std::vector<KeptKeyframe> kept;         // every keyframe mapped (loop closures)
+  std::deque<KeptKeyframe> kept;          // every keyframe mapped (loop closures; never copied)
   bool rewrite_pending = false;           // the trajectory's past poses changed since the last turn
   std::size_t empty_by_add = 0;           // instances_empty counted by the association
   std::vector<WaitingKeyframe> waiting;   // selected, not yet fused, in order
@@ -101,8 +102,7 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
 
 // 3b. A keyframe mapped kept for a loop closure (follow_replace.cpp).
 void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
-                        const std::vector<fusion::Observation>& observations,
-                        const cv::Mat& view_depth);
+                        std::vector<fusion::Observation> observations, const cv::Mat& view_depth);
 
 // 3c. After a loop closure (the trajectory's past poses changed), the kept keyframes' observations
 //     moved with their new poses and the object map made again from them (no image read again).
