@@ -4,6 +4,7 @@
 
 #include "fusion_test_util.h"
 #include "objmap/core/error.h"
+#include "objmap/fusion/record_cache.h"
 
 namespace objmap::fusion {
 namespace {
@@ -274,6 +275,52 @@ TEST(Duplicates, OptionsAreChecked) {
   bad.obb_samples_per_axis = 0;
   EXPECT_THROW(bad.check(), InputError);
   EXPECT_NO_THROW(DuplicateOptions{}.check());
+}
+
+TEST(Duplicates, TheContactCacheGivesTheFiguresMadeAfreshAndMissesAChangedCloud) {
+  // Three chairs: the whole, its half (touching) and one far away (boxes apart: no contact asked).
+  ObjectMap map;
+  const PointCloud whole = brick(kBoxCentre, kHalf);
+  for (int f = 0; f < 4; ++f)
+    map.add_frame({seen(f, 1, "chair", whole), seen(f, 2, "chair", keep_if(whole, kBoxCentre.x())),
+                   seen(f, 3, "chair", brick(kBoxCentre + Vec3(0.0, 0.5, 0.0), kHalf))});
+  std::vector<ObjectRecord> records = records_of(map);
+  ASSERT_EQ(records.size(), 3u);
+  const DuplicateReport fresh = find_duplicates(records, map);
+  auto cache = std::make_shared<ContactCache>();
+  map.set_contact_cache(cache);
+  auto expect_same = [&](const DuplicateReport& got, const DuplicateReport& want) {
+    ASSERT_EQ(got.pairs_checked, want.pairs_checked);
+    ASSERT_EQ(got.pairs.size(), want.pairs.size());
+    for (std::size_t i = 0; i < got.pairs.size(); ++i) {
+      EXPECT_EQ(got.pairs[i].a, want.pairs[i].a);
+      EXPECT_EQ(got.pairs[i].surface_distance_m, want.pairs[i].surface_distance_m);  // exact
+      EXPECT_EQ(got.pairs[i].touching_share, want.pairs[i].touching_share);
+    }
+  };
+  expect_same(find_duplicates(records, map), fresh);  // made and put
+  EXPECT_EQ(cache->hits(), 0u);
+  const std::size_t made = cache->misses();
+  EXPECT_GE(made, 1u);
+  expect_same(find_duplicates(records, map), fresh);  // every contact from the cache
+  EXPECT_EQ(cache->hits(), made);
+  EXPECT_EQ(cache->misses(), made);
+  const ObjectMap copy(map);  // a publish's copy shares the cache
+  expect_same(find_duplicates(records, copy), fresh);
+  EXPECT_EQ(cache->hits(), 2 * made);
+  // The half moved by 1 cm: its contacts are made again, and they are the fresh figures.
+  ObjectRecord& half = records[0].cloud.size() < records[1].cloud.size() ? records[0] : records[1];
+  for (Vec3f& p : half.cloud.points) p.y() += 0.01f;
+  map.set_contact_cache(nullptr);
+  const DuplicateReport moved = find_duplicates(records, map);
+  map.set_contact_cache(cache);
+  expect_same(find_duplicates(records, map), moved);
+  EXPECT_EQ(cache->misses(), 2 * made);
+  // Another touch distance is another contact.
+  DuplicateOptions wider;
+  wider.touch_distance_m = 0.05;
+  find_duplicates(records, map, wider);
+  EXPECT_EQ(cache->misses(), 3 * made);
 }
 
 }  // namespace

@@ -6,10 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "objmap/core/error.h"
+#include "objmap/fusion/record_cache.h"
 #include "objmap/segmentation/coco_classes.h"
 
 namespace objmap::fusion {
@@ -88,6 +91,19 @@ Contact surface_contact(const PointCloud& query, KdIndex& tree, double touch_m) 
   return c;
 }
 
+// A 64-bit hash of a cloud's points (their float bits, in order), seeded with `seed`.
+std::uint64_t cloud_hash(const PointCloud& cloud, std::uint64_t seed) {
+  std::uint64_t h = seed ^ (cloud.size() * 0x9E3779B97F4A7C15ULL);
+  for (const Vec3f& p : cloud.points)
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t bits;
+      std::memcpy(&bits, &p[k], sizeof bits);
+      h = (h ^ bits) * 0x100000001B3ULL;
+      h ^= h >> 29;
+    }
+  return h;
+}
+
 // Distance between two axis-aligned boxes (0 when they overlap).
 double aabb_gap(const Aabb& x, const Aabb& y) {
   const Vec3 gap = (x.min - y.max).cwiseMax(y.min - x.max).cwiseMax(Vec3::Zero());
@@ -109,6 +125,30 @@ DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const 
   const auto tree_of = [&](std::size_t i) -> KdIndex& {
     if (!trees[i]) trees[i] = make_tree(records[i].cloud);
     return *trees[i];
+  };
+  // With the map's contact cache, each cloud's hash (the touch distance folded into the query's).
+  ContactCache* const cache = map.contact_cache();
+  if (cache) cache->begin_pass();
+  std::vector<std::optional<std::uint64_t>> hashes(records.size());
+  const auto hash_of = [&](std::size_t i) {
+    if (!hashes[i]) hashes[i] = cloud_hash(records[i].cloud, 0);
+    return *hashes[i];
+  };
+  const auto contact_of = [&](std::size_t query, std::size_t other) {
+    std::uint64_t hq = 0, ht = 0;
+    if (cache) {
+      const double touch = options.touch_distance_m;
+      std::uint64_t touch_bits;
+      std::memcpy(&touch_bits, &touch, sizeof touch_bits);
+      hq = hash_of(query) ^ (touch_bits * 0xC2B2AE3D27D4EB4FULL);
+      ht = hash_of(other);
+      if (const std::optional<ContactCache::Contact> c = cache->find(hq, ht))
+        return Contact{c->distance_m, c->share};
+    }
+    const Contact c =
+        surface_contact(records[query].cloud, tree_of(other), options.touch_distance_m);
+    if (cache) cache->put(hq, ht, {c.distance_m, c.share});
+    return c;
   };
   std::vector<std::size_t> order(records.size());  // by id, so that pairs come out as (a < b)
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -133,8 +173,7 @@ DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const 
       // 2. Surface contact: the smaller cloud (fewer points; ties: the lower id) against the
       //    larger's kd-tree.
       const bool a_fewer = ra.cloud.size() <= rb.cloud.size();
-      const Contact contact = surface_contact(a_fewer ? ra.cloud : rb.cloud,
-                                              tree_of(a_fewer ? j : i), options.touch_distance_m);
+      const Contact contact = a_fewer ? contact_of(i, j) : contact_of(j, i);
       if (!boxes_overlap && contact.distance_m > options.touch_distance_m) continue;
       DuplicatePair p;
       p.a = ra.id;

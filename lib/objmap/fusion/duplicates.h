@@ -46,7 +46,9 @@ struct DuplicateReport {
 
 // Every pair of confirmed records of one canonical class with obb_overlap >= min_obb_overlap (and
 // > 0) or surface_distance_m <= touch_distance_m. `records` are those of `map` after its merge pass
-// (ObjectMap::records: ids are the map's); the verdict is taken from `map`. No output, no IO.
+// (ObjectMap::records: ids are the map's); the verdict is taken from `map`, and the surface
+// contact of two clouds from its contact cache when it has one (ObjectMap::set_contact_cache).
+// No output, no IO.
 DuplicateReport find_duplicates(const std::vector<ObjectRecord>& records, const ObjectMap& map,
                                 const DuplicateOptions& options = {});
 

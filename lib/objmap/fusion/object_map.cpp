@@ -228,6 +228,7 @@ ObjectMap::ObjectMap(const ObjectMap& other)
     : options_(other.options_),
       record_cache_(other.record_cache_),
       pair_cache_(other.pair_cache_),
+      contact_cache_(other.contact_cache_),
       share_bar_(other.share_bar_) {
   objects_.reserve(other.objects_.size());
   for (const auto& o : other.objects_) objects_.push_back(std::make_unique<Object>(*o));

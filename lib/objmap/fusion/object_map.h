@@ -381,6 +381,7 @@ struct AddResult {
 
 class RecordCache;
 class PairCache;
+class ContactCache;
 
 class ObjectMap {
  public:
@@ -408,6 +409,10 @@ class ObjectMap {
   // merge_pass() takes the pair rule's scores of two objects from `cache` when both are as they
   // were when it scored them, and puts the ones it makes there. Null: none.
   void set_pair_cache(std::shared_ptr<PairCache> cache) { pair_cache_ = std::move(cache); }
+  // The duplicate check of this map's records (find_duplicates) takes the surface contact of two
+  // clouds from `cache` when both are as they were, and puts the ones it makes there. Null: none.
+  void set_contact_cache(std::shared_ptr<ContactCache> cache) { contact_cache_ = std::move(cache); }
+  ContactCache* contact_cache() const { return contact_cache_.get(); }
 
   // The final merge pass (ID-switch repair): repeatedly joins the pair of objects with the highest
   // P > merge_threshold (P_ID = the two share a track id; D and M between the two objects), the
@@ -546,8 +551,9 @@ class ObjectMap {
   std::vector<Vec3> surface_points(const Object& object, double share) const;
 
   ObjectMapOptions options_;
-  std::shared_ptr<RecordCache> record_cache_;  // set_record_cache; shared by copies
-  std::shared_ptr<PairCache> pair_cache_;      // set_pair_cache; shared by copies
+  std::shared_ptr<RecordCache> record_cache_;    // set_record_cache; shared by copies
+  std::shared_ptr<PairCache> pair_cache_;        // set_pair_cache; shared by copies
+  std::shared_ptr<ContactCache> contact_cache_;  // set_contact_cache; shared by copies
   double share_bar_ = 0.0;  // judge_visibility(): the detected share an object needs
   std::vector<std::unique_ptr<Object>>
       objects_;  // index = id; absorbed objects stay (alive = false)

@@ -46,19 +46,35 @@ class RecordCache : public CacheCounts {
   std::map<int, Filtered> by_id_;
 };
 
-// The merge pass's pair scores (ObjectMap::merge_pass, its pair rule) by the content of the two
-// objects (a 64-bit hash of everything the score reads of each: voxels, their sums, the dilated
-// support table, bounds, centroid, radius, class votes, observations' timestamps, classes and track
-// ids). begin_pass() starts a pass: the entries no pass used since the one before are dropped.
-class PairCache : public CacheCounts {
+// Values by the contents of two things (two 64-bit hashes), kept from one pass over them to the
+// next: begin_pass() starts a pass, and the entries no pass used since the one before are dropped.
+template <typename Value>
+class PassCache : public CacheCounts {
  public:
-  struct Verdict {
-    double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
-    bool passes = false;  // no refusal
-  };
-  void begin_pass();
-  std::optional<Verdict> find(std::uint64_t a, std::uint64_t b);
-  void put(std::uint64_t a, std::uint64_t b, const Verdict& verdict);
+  void begin_pass() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    before_ = std::move(now_);
+    now_.clear();
+  }
+  std::optional<Value> find(std::uint64_t a, std::uint64_t b) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto key = std::make_pair(a, b);
+    if (const auto it = now_.find(key); it != now_.end()) {
+      ++hits_;
+      return it->second;
+    }
+    if (const auto it = before_.find(key); it != before_.end()) {
+      ++hits_;
+      now_.emplace(key, it->second);
+      return it->second;
+    }
+    ++misses_;
+    return std::nullopt;
+  }
+  void put(std::uint64_t a, std::uint64_t b, const Value& value) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    now_[std::make_pair(a, b)] = value;
+  }
 
  private:
   struct Hash {
@@ -66,8 +82,33 @@ class PairCache : public CacheCounts {
       return static_cast<std::size_t>(k.first ^ (k.second * 0x9e3779b97f4a7c15ull));
     }
   };
-  using Table = std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, Verdict, Hash>;
+  using Table = std::unordered_map<std::pair<std::uint64_t, std::uint64_t>, Value, Hash>;
   Table now_, before_;  // used in this pass; in the one before
+};
+
+// The merge pass's pair scores (ObjectMap::merge_pass, its pair rule) by the content of the two
+// objects (a 64-bit hash of everything the score reads of each: voxels, their sums, the dilated
+// support table, bounds, centroid, radius, class votes, observations' timestamps, classes and track
+// ids).
+struct PairVerdict {
+  double p_id = 0.0, distance_m = 0.0, overlap = 0.0, score_p = 0.0;
+  bool passes = false;  // no refusal
+};
+class PairCache : public PassCache<PairVerdict> {
+ public:
+  using Verdict = PairVerdict;
+};
+
+// The duplicate check's surface contact of two clouds (fusion/duplicates.h) by their content (a
+// 64-bit hash of each cloud's points; the query's with the touch distance folded in): objmap follow
+// checks every pair at each publish, most of them unchanged since the last.
+struct CloudContact {
+  double distance_m = 0.0;  // shortest distance from the query cloud's points to the other's
+  double share = 0.0;       // of the query cloud's points within the touch distance
+};
+class ContactCache : public PassCache<CloudContact> {
+ public:
+  using Contact = CloudContact;
 };
 
 }  // namespace objmap::fusion

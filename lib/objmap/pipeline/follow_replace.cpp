@@ -42,6 +42,7 @@ void replace_after_loop_closure(FollowState& s) {
   fusion::ObjectMap objects(s.maps->objects.options());
   objects.set_record_cache(s.record_cache);
   objects.set_pair_cache(s.pair_cache);
+  objects.set_contact_cache(s.contact_cache);
   std::optional<fusion::ViewLog> view_log;
   if (s.maps->view_log) view_log.emplace(r.camera);
   for (const KeptKeyframe& k : s.kept) {

@@ -63,6 +63,8 @@ struct FollowState {
   std::shared_ptr<fusion::RecordCache> record_cache = std::make_shared<fusion::RecordCache>();
   // The merge pass's pair scores of objects unchanged since a publish (maps->objects's).
   std::shared_ptr<fusion::PairCache> pair_cache = std::make_shared<fusion::PairCache>();
+  // The duplicate check's surface contacts of clouds unchanged since a publish.
+  std::shared_ptr<fusion::ContactCache> contact_cache = std::make_shared<fusion::ContactCache>();
   std::optional<geometry::RayTable> rays;
   // The keyframes decoding ahead (on s.options.fuse, result.camera, rays, maps->dense): declared
   // after them, so that its workers stop before they go.

@@ -45,6 +45,7 @@ void start_maps(FollowState& s) {
   if (s.options.fuse.dense_map) s.dense_snapshot.emplace(s.maps->dense);
   s.maps->objects.set_record_cache(s.record_cache);
   s.maps->objects.set_pair_cache(s.pair_cache);
+  s.maps->objects.set_contact_cache(s.contact_cache);
   s.live = std::make_unique<LiveKeyframes>(s.options.fuse, r.camera, *s.rays,
                                            s.options.fuse.dense_map ? &s.maps->dense : nullptr,
                                            s.maps->view_log.has_value(), r.threads);
