@@ -87,6 +87,29 @@ TEST(DenseSnapshot, VoxelsPrunedFromTheMapLeaveTheCloud) {
   expect_cloud_of(map, *snapshot.update(map));
 }
 
+TEST(DenseSnapshot, ChangesTakenAndAppliedLaterInTheirOrderGiveEachTakesCloud) {
+  // A publish takes the changes on the map's thread and applies them on its own, while the map
+  // goes on growing; the next take may come before that apply.
+  std::mt19937 rng(7);
+  fusion::VoxelMap map({0.02, 1, 4});
+  DenseSnapshot snapshot(map);
+  map.insert(chunk(Vec3f(0.f, 0.f, 1.f), rng));
+  map.insert(chunk(Vec3f(0.05f, 0.f, 1.f), rng));  // voxels touched twice: listed once or twice
+  const fusion::VoxelMap::VoxelPoints at_first = map.sorted_points();
+  DenseChanges first = snapshot.take(map);
+  map.insert(chunk(Vec3f(0.1f, 0.05f, 1.05f), rng));
+  DenseChanges second = snapshot.take(map);
+  EXPECT_TRUE(snapshot.take(map).points.empty());  // nothing since
+  const std::shared_ptr<const DenseCloud> one = snapshot.apply(std::move(first));
+  ASSERT_EQ(one->keys.size(), at_first.size());
+  for (std::size_t i = 0; i < at_first.size(); ++i) {
+    ASSERT_EQ(one->keys[i], at_first[i].key) << i;
+    ASSERT_EQ(one->cloud.points[i], at_first[i].point) << i;
+  }
+  expect_cloud_of(map, *snapshot.apply(std::move(second)));
+  EXPECT_EQ(one->keys.size(), at_first.size());  // the first cloud handed out stays as it was
+}
+
 TEST(DenseSnapshot, NeedsAnEmptyMap) {
   fusion::VoxelMap map;
   map.insert(PointCloud{{Vec3f(0.f, 0.f, 1.f)}, {}});

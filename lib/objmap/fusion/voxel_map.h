@@ -214,7 +214,7 @@ class VoxelMap {
   // its hash remembers it), so that a voxel seen by every keyframe between two takes is not listed
   // once per keyframe.
   struct Touched {
-    static constexpr int kBits = 13;  // 8192 slots, 64 KB
+    static constexpr int kBits = 16;  // 65536 slots, 512 KB
     std::vector<VoxelKey> keys;
     std::vector<VoxelKey> recent =
         std::vector<VoxelKey>(std::size_t{1} << kBits, geometry::kNoVoxel);

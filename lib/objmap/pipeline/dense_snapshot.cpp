@@ -12,24 +12,6 @@ namespace {
 using fusion::VoxelKey;
 using VoxelPoint = fusion::VoxelMap::VoxelPoint;
 
-// The touched voxels' points now, in key order; `gone`: touched voxels no longer in the map.
-std::vector<VoxelPoint> touched_points(const fusion::VoxelMap& map,
-                                       const std::vector<VoxelKey>& touched,
-                                       std::vector<VoxelKey>& gone) {
-  std::vector<VoxelPoint> points;
-  points.reserve(touched.size());
-  constexpr std::size_t kAhead = 8;  // the slots of later keys prefetched (cache misses overlap)
-  for (std::size_t i = 0; i < touched.size(); ++i) {
-    if (i + kAhead < touched.size()) map.prefetch(touched[i + kAhead]);
-    const fusion::VoxelData* voxel = map.find(touched[i]);
-    if (voxel)
-      points.push_back(map.voxel_point(touched[i], *voxel));
-    else
-      gone.push_back(touched[i]);
-  }
-  return points;
-}
-
 void put(DenseCloud& c, std::size_t at, const VoxelPoint& p) {
   c.keys[at] = p.key;
   c.cloud.points[at] = p.point;
@@ -55,14 +37,39 @@ DenseSnapshot::DenseSnapshot(fusion::VoxelMap& map) : cloud_(std::make_shared<De
 }
 
 std::shared_ptr<const DenseCloud> DenseSnapshot::update(fusion::VoxelMap& map) {
-  // 1. The voxels touched since the last update, once each, in key order, with their points now.
-  std::vector<VoxelKey> touched = map.take_touched();
-  std::sort(touched.begin(), touched.end());
-  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-  last_touched_ = touched.size();
-  if (touched.empty()) return cloud_;
-  std::vector<VoxelKey> gone;
-  const std::vector<VoxelPoint> points = touched_points(map, touched, gone);
+  return apply(take(map));
+}
+
+DenseChanges DenseSnapshot::take(fusion::VoxelMap& map) const {
+  // The voxels touched since the last take (mostly once each), with their points now.
+  const std::vector<VoxelKey> touched = map.take_touched();
+  DenseChanges changes;
+  changes.points.reserve(touched.size());
+  constexpr std::size_t kAhead = 8;  // the slots of later keys prefetched (cache misses overlap)
+  for (std::size_t i = 0; i < touched.size(); ++i) {
+    if (i + kAhead < touched.size()) map.prefetch(touched[i + kAhead]);
+    const fusion::VoxelData* voxel = map.find(touched[i]);
+    if (voxel)
+      changes.points.push_back(map.voxel_point(touched[i], *voxel));
+    else
+      changes.gone.push_back(touched[i]);
+  }
+  return changes;
+}
+
+std::shared_ptr<const DenseCloud> DenseSnapshot::apply(DenseChanges changes) {
+  // 1. The changed voxels once each, in key order (a voxel listed twice has one point).
+  std::vector<VoxelPoint>& points = changes.points;
+  std::sort(points.begin(), points.end(),
+            [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; });
+  points.erase(std::unique(points.begin(), points.end(),
+                           [](const VoxelPoint& a, const VoxelPoint& b) { return a.key == b.key; }),
+               points.end());
+  std::vector<VoxelKey>& gone = changes.gone;
+  std::sort(gone.begin(), gone.end());
+  gone.erase(std::unique(gone.begin(), gone.end()), gone.end());
+  last_touched_ = points.size() + gone.size();
+  if (last_touched_ == 0) return cloud_;
   // 2. The cloud changed in place, unless a publish still reads it.
   if (cloud_.use_count() > 1) cloud_ = std::make_shared<DenseCloud>(*cloud_);
   DenseCloud& c = *cloud_;

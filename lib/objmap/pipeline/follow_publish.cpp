@@ -33,12 +33,18 @@ void start_publish(FollowState& s) {
   auto result = std::make_shared<FuseResult>(s.result);
   result->frames = s.dataset.frames.size();
   result->keyframes.frames_with_pose = s.status.frames_with_pose;
-  std::promise<std::shared_ptr<const DenseCloud>> dense_cloud;
+  // The dense map's changes taken here; its cloud brought up to date on a thread of its own, beside
+  // the publish's objects (the one publish in flight applies them: one apply at a time).
+  std::shared_future<std::shared_ptr<const DenseCloud>> dense_cloud;
+  if (s.dense_snapshot)
+    dense_cloud =
+        std::async(std::launch::async, [snapshot = &*s.dense_snapshot,
+                                        changes = s.dense_snapshot->take(s.maps->dense)]() mutable {
+          return snapshot->apply(std::move(changes));
+        }).share();
   auto maps = std::make_shared<FuseMaps>(
       FuseMaps{s.maps->dense_options, fusion::VoxelMap(s.maps->dense_options), s.maps->objects,
-               std::nullopt, std::nullopt, s.maps->view_log,
-               s.dense_snapshot ? dense_cloud.get_future().share()
-                                : std::shared_future<std::shared_ptr<const DenseCloud>>()});
+               std::nullopt, std::nullopt, s.maps->view_log, std::move(dense_cloud)});
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
   const FollowState* state = &s;  // its options, choices and class sizes do not change
@@ -50,14 +56,6 @@ void start_publish(FollowState& s) {
     staging.commit();
     return result->objects.size();
   });
-  // The dense map's cloud brought up to date while the publish's thread starts on the objects.
-  if (!s.dense_snapshot) return;
-  try {
-    dense_cloud.set_value(s.dense_snapshot->update(s.maps->dense));
-  } catch (...) {
-    dense_cloud.set_exception(std::current_exception());
-    throw;
-  }
 }
 
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
