@@ -21,7 +21,10 @@
 #   walkhalf954     the same at 954 frames and half size (--scale 0.5, 320x240): the recording of
 #                   the live issue's lag bar, its drifting estimated.txt streamed
 #   walkhalf954_gt  the same with its groundtruth.txt streamed (case walkhalfgt)
-# Environment: BENCH_FOLLOW_CASES ("fr1_rpy_every4 7scenes walk walkhalf walkhalfgt"), BENCH_FOLLOW_FRAMES ("300 1200"),
+#   walk954_gt      the live issue's recording at the preset's own 640x480, its groundtruth.txt
+#                   streamed (case walkgt)
+# Environment: BENCH_FOLLOW_CASES ("fr1_rpy_every4 7scenes walk walkhalf walkhalfgt walkgt"),
+# BENCH_FOLLOW_FRAMES ("300 1200"),
 # BENCH_FOLLOW_MODEL (DATA/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx, as objmap run takes
 # it), BENCH_FOLLOW_ARGS (more follow options, e.g. "--publish-every 1"). The synthetic scenes are
 # kept in OUT/walkthrough_s5_f<N>/ and made only when missing (1200 frames: ~3 minutes, 1.2 GB).
@@ -29,7 +32,7 @@ set -euo pipefail
 objmap=${1:?usage: bench_follow.sh OBJMAP DATA [OUT]}
 data=${2:?usage: bench_follow.sh OBJMAP DATA [OUT]}
 out=${3:-out/bench_follow}
-cases=${BENCH_FOLLOW_CASES-fr1_rpy_every4 7scenes walk walkhalf walkhalfgt}
+cases=${BENCH_FOLLOW_CASES-fr1_rpy_every4 7scenes walk walkhalf walkhalfgt walkgt}
 frames=${BENCH_FOLLOW_FRAMES-300 1200}
 model=${BENCH_FOLLOW_MODEL:-$data/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx}
 read -r -a follow_args <<<"${BENCH_FOLLOW_ARGS:-}"
@@ -146,6 +149,14 @@ for c in $cases; do
       else
         follow_one walkhalf954_gt "$scene" groundtruth.txt "" || true
       fi ;;
+    walkgt)  # the live issue's recording at 640x480, its true poses streamed
+      scene=$out/walkthrough_s5_f954
+      if [ ! -f "$scene/synth.json" ] || ! grep -q '"frames": 954,' "$scene/synth.json"; then
+        echo "bench_follow: objmap synth --preset walkthrough --frames 954 --seed 5 --out $scene" >&2
+        "$objmap" synth --preset walkthrough --frames 954 --seed 5 --threads 2 --out "$scene" \
+          >"$out/synth_f954.log" 2>&1
+      fi
+      follow_one walk954_gt "$scene" groundtruth.txt "" || true ;;
     *) echo "bench_follow: unknown recording $c" >&2; exit 2 ;;
   esac
 done
