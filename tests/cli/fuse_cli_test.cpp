@@ -177,6 +177,25 @@ TEST(FuseCli, ThreadCountOutOfRangeIsNamed) {
   EXPECT_FALSE(fs::exists(dir / "o"));
 }
 
+// Meshes asked for without the OpenVDB module (OBJMAP_VDB_MODULE names the only file tried): exit 2
+// before any work, one line naming what was tried and how to get it, nothing written.
+TEST(FuseCli, MeshesWithoutTheOpenVdbModuleAreRefusedBeforeAnyWork) {
+  TempDir dir;
+  setenv("OBJMAP_VDB_MODULE", "/nonexistent/libobjmap_vdb.so", 1);
+  const auto r = run_objmap({"fuse", "--dataset", "x", "--trajectory", "t", "--segmentation", "s",
+                             "--out", (dir / "o").string(), "--mesh", "objects"});
+  unsetenv("OBJMAP_VDB_MODULE");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("objmap: error: meshes: the OpenVDB module libobjmap_vdb.so is not found "
+                        "(/nonexistent/libobjmap_vdb.so: cannot open shared object file",
+                        0),
+            0u)
+      << r.err;
+  EXPECT_NE(r.err.find("OBJMAP_VDB_MODULE"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "o"));
+}
+
 // An option of a part of fuse (the object map, the depth range) is named as the user wrote it: its
 // config key and flag, not the library struct's member.
 TEST(FuseCli, BadOptionNamesItsKeyAndFlag) {

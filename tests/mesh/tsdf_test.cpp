@@ -2,8 +2,10 @@
 #include "objmap/mesh/tsdf.h"
 
 #include <gtest/gtest.h>
+#include <link.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "objmap/core/error.h"
@@ -148,6 +150,36 @@ TEST(Tsdf, NoViewsNoMesh) {
   const ModelResult r = fuse_model({}, box_around_sphere(0.0), 0.004, {});
   EXPECT_TRUE(r.mesh.empty());
   EXPECT_EQ(r.voxels, 0u);
+}
+
+// Whether a shared object whose path contains `name` is loaded in this process.
+bool loaded(const std::string& name) {
+  struct Query {
+    std::string name;
+    bool found = false;
+  } query{name};
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, std::size_t, void* data) {
+        auto* q = static_cast<Query*>(data);
+        if (info->dlpi_name && std::string(info->dlpi_name).find(q->name) != std::string::npos)
+          q->found = true;
+        return 0;
+      },
+      &query);
+  return query.found;
+}
+
+// OpenVDB is not linked into the programs (its libraries cost ~50 ms at every start): the first
+// model loads it through libobjmap_vdb.so. Run alone (as ctest runs each test), nothing has loaded
+// it before.
+TEST(Tsdf, OpenVdbIsLoadedOnlyWhenTheFirstModelIsMade) {
+  if (loaded("libobjmap_vdb")) GTEST_SKIP() << "an earlier test of this process made a model";
+  EXPECT_FALSE(loaded("libopenvdb")) << "OpenVDB is linked into the program";
+  TsdfOptions options;
+  TsdfModel model(Aabb{Vec3(-0.1, -0.1, 0.9), Vec3(0.1, 0.1, 1.1)}, 0.01, options);
+  EXPECT_TRUE(loaded("libobjmap_vdb"));
+  EXPECT_TRUE(loaded("libopenvdb"));
+  EXPECT_TRUE(model.mesh().mesh.empty());
 }
 
 }  // namespace

@@ -100,6 +100,11 @@ class TsdfModel {
   std::unique_ptr<Impl> impl_;
 };
 
+// Loads the OpenVDB module that TsdfModel uses (libobjmap_vdb.so, loaded once, the first time a
+// model is made); throws InputError naming the places tried when it cannot. A command that will
+// make meshes calls it before it writes anything.
+void require_meshes();
+
 // A TsdfModel of `views` in their order, meshed. Empty views give an empty mesh.
 ModelResult fuse_model(const std::vector<DepthView>& views, const Aabb& box, double voxel_m,
                        const TsdfOptions& options);

@@ -473,6 +473,7 @@ FuseChoices FuseOptions::check() const {
               {"near_max_m", "scene.near_max_m"}});
   mesh.check();
   choices.meshes = mesh::parse_mesh_selection(mesh.select, "mesh.select");
+  if (choices.meshes.objects || choices.meshes.scene) mesh::require_meshes();  // before any work
   require(threads >= 0 && threads <= 64, "threads",
           "must be in [0, 64] (0: the cores, at most 8), got " + std::to_string(threads));
   return choices;

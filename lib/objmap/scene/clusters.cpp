@@ -2,6 +2,9 @@
 // PCL's EuclideanClusterExtraction without its kd-tree (docs/benchmarks.md, "The scene step").
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
+// The template's code, instantiated here: objmap links no libpcl_segmentation, whose load (with
+// libpcl_features) cost ~75 ms at the start of every command (docs/architecture.md, "Start-up").
+#include <pcl/segmentation/impl/extract_clusters.hpp>
 
 #include <algorithm>
 
