@@ -496,6 +496,7 @@ def parse_bench_fuse(text):
             ("decode1_ms", r"^decode, 1 thread\s+([\d.]+) ms"),
             ("decoden_ms", r"^decode, (\d+) threads\s+([\d.]+) ms"),
             ("imread1_ms", r"^OpenCV imread, 1 thr\s+([\d.]+) ms"),
+            ("startup_ms", r"^objmap start-up\s+([\d.]+) ms"),
             ("rss_mb", r"^peak RSS\s+([\d.]+) MB"),
             ("keyframes", r"\((\d+) keyframes"),
     ):
@@ -506,8 +507,96 @@ def parse_bench_fuse(text):
                 out[key + "_threads"] = int(m.group(1))
     return out
 
+STEPS_HEADER = ["step of `objmap fuse` (run.json of the best run)", "ms per keyframe",
+                "last committed", "change"]
+GREW_SHARE, GREW_MS = 0.10, 0.25  # a step grew: by more than 10% and 0.25 ms per keyframe
 
-def performance(bench):
+
+def fuse_steps(best, bf):
+    """(name, ms per keyframe) of each step of the best fuse run (run.json performance.seconds),
+    then the whole command, the start-up and the ratio to cv::imread's decoding (bench_fuse)."""
+    measured, rj = best
+    kf = rj["counts"]["keyframes"]
+    rows = [(name, 1000.0 * sec / kf)
+            for name, sec in rj.get("performance", {}).get("seconds", {}).items()]
+    whole = 1000.0 * measured["seconds"] / kf
+    rows.append(("whole command (wall)", whole))
+    if "startup_ms" in bf:
+        rows.append(("objmap start-up (once per command, per keyframe here)",
+                     bf["startup_ms"] / kf))
+    if "imread1_ms" in bf:
+        rows.append(("whole command / cv::imread of its PNGs (ratio, not ms)",
+                     whole / bf["imread1_ms"]))
+    return rows
+
+
+def committed_steps(doc):
+    """The step figures of the fuse-steps table of `doc` as last committed (git show HEAD:doc),
+    else as the file is now; ({name: value}, where they come from)."""
+    text, origin = "", ""
+    if doc:
+        folder = os.path.dirname(os.path.abspath(doc))
+        try:
+            root = subprocess.run(["git", "-C", folder, "rev-parse", "--show-toplevel"],
+                                  capture_output=True, text=True, timeout=10).stdout.strip()
+            if root:
+                rel = os.path.relpath(os.path.abspath(doc), root)
+                got = subprocess.run(["git", "-C", root, "show", "HEAD:" + rel],
+                                     capture_output=True, text=True, timeout=10)
+                head = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"],
+                                      capture_output=True, text=True, timeout=10).stdout.strip()
+                if got.returncode == 0:
+                    text, origin = got.stdout, "%s as committed in git %s" % (rel, head)
+        except (OSError, subprocess.SubprocessError):
+            pass
+        if not text:
+            try:
+                with open(doc) as f:
+                    text, origin = f.read(), doc
+            except OSError:
+                pass
+    header = "| " + " | ".join(STEPS_HEADER) + " |"
+    if header not in text:
+        return {}, origin
+    values = {}
+    for line in text[text.index(header):].splitlines()[2:]:
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if not line.startswith("|") or len(cells) < 2:
+            break
+        try:
+            values[cells[0]] = float(cells[1])
+        except ValueError:
+            pass
+    return values, origin
+
+
+def compare_steps(rows, previous, origin):
+    """The fuse-steps table with the last committed figures beside, and a sentence naming the
+    steps that grew (GREW_SHARE and GREW_MS)."""
+    table, grew = [], []
+    for name, now in rows:
+        before = previous.get(name)
+        change = ""
+        if before is not None:
+            change = "%+.2f" % (now - before)
+            if before > 0:
+                change += " (%+.0f%%)" % (100.0 * (now - before) / before)
+            if "ratio" not in name and now - before > max(GREW_MS, GREW_SHARE * before):
+                grew.append("%s (%+.2f ms per keyframe, %+.0f%%)" %
+                            (name, now - before, 100.0 * (now - before) / before))
+        table.append([name, "%.2f" % now, "" if before is None else "%.2f" % before, change])
+    if not previous:
+        verdict = ("No earlier figures to compare with (%s)." %
+                   (origin + " has no fuse-steps table" if origin else "no document given"))
+    elif grew:
+        verdict = "Grew since the last committed figures (%s): %s." % (origin, "; ".join(grew))
+    else:
+        verdict = ("No step grew by more than %d%% and %.2f ms per keyframe since the last "
+                   "committed figures (%s)." % (100 * GREW_SHARE, GREW_MS, origin))
+    return md_table(STEPS_HEADER, table), verdict
+
+
+def performance(bench, doc=""):
     perf = os.path.join(bench, "perf")
     meta = read_meta(os.path.join(perf, "meta.txt"))
     if not meta.get("dataset"):
@@ -593,7 +682,15 @@ def performance(bench):
                            "costs %.2f× the decoding." %
                            (bf["imread1_ms"] / bf["decode1_ms"], fuse_ms / bf["imread1_ms"]))
     summary.append("Reference for the Open3D job on this machine: ~214 ms/frame, 2.7 GB.")
-    return table + "\n\n" + " ".join(summary), meta["dataset"]
+    steps = ""
+    if runs:
+        steps_table, verdict = compare_steps(fuse_steps(best, bf), *committed_steps(doc))
+        print("fuse steps: " + verdict, file=sys.stderr)
+        steps = ("\n\nEach step of that run, per keyframe, against the figures of this table as "
+                 "last committed (the steps \"parallel to the objects\" run beside the merge and "
+                 "filter, so the steps do not add up to the whole):\n\n" + steps_table +
+                 "\n\n" + verdict)
+    return table + "\n\n" + " ".join(summary) + steps, meta["dataset"]
 
 
 def network_chain(bench):
@@ -627,7 +724,7 @@ def render(args):
     cpu, version, commit = machine(args.objmap)
     date = features.get("date") or datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M UTC")
     took = " in %.0f min" % (args.seconds / 60.0) if args.seconds else ""
-    perf_text, _ = performance(bench)
+    perf_text, _ = performance(bench, args.doc)
 
     parts = [
         BEGIN,

@@ -290,6 +290,67 @@ TEST(BenchTables, RenderReplacesOnlyTheGeneratedSection) {
   EXPECT_LT(doc2.find("<!-- bench:end -->"), doc2.find("## Analysis\n\nkept\n")) << doc2;
 }
 
+// make bench's fuse steps: each step of run.json per keyframe, beside the figures of the table as
+// last committed (here: the document as it is, outside git), naming the step that grew.
+TEST(BenchTables, FuseStepsAreComparedWithTheLastCommittedFiguresNamingTheStepThatGrew) {
+  if (!has_python3()) GTEST_SKIP() << "no python3";
+  TempDir dir;
+  const fs::path bench = dir / "bench";
+  write_fake_bench(bench);
+  write_text(bench / "perf" / "meta.txt", "dataset=/x/fr1_rpy_every4\n");
+  write_text(bench / "perf" / "objmap_1.json",
+             R"({"exit_code": 0, "seconds": 2.0, "cpu_seconds": 3.5, "peak_rss_mb": 300})");
+  write_text(bench / "perf" / "objmap_run_1.json",
+             R"({"counts": {"keyframes": 100}, "performance": {"seconds": {
+                 "back-project and fuse": 1.2, "merge and filter objects": 0.4,
+                 "write outputs": 0.05, "total": 1.9}}})");
+  write_text(bench / "perf" / "bench_fuse.txt",
+             "fuse, 2 threads         18.00 ms/keyframe  (1.80 s total, best of 3)\n"
+             "decode, 1 thread         4.00 ms/keyframe\n"
+             "OpenCV imread, 1 thr     8.00 ms/keyframe  (the same PNGs, libpng + zlib)\n"
+             "objmap start-up          70.0 ms  (objmap --version, median of 11)\n");
+  const std::string args = "render --bench " + bench.string() + " --doc " +
+                           (dir / "doc.md").string() + " --command 'make bench'";
+  ASSERT_EQ(bench_tables(args, dir / "log"), 0) << read_text(dir / "log");
+  std::string doc = read_text(dir / "doc.md");
+  // 1.2 s over 100 keyframes: 12 ms; the whole command 20 ms, 2.5x cv::imread's 8 ms.
+  EXPECT_NE(doc.find("| back-project and fuse | 12.00 |  |  |"), std::string::npos) << doc;
+  EXPECT_NE(doc.find("| merge and filter objects | 4.00 |"), std::string::npos) << doc;
+  EXPECT_NE(doc.find("| whole command (wall) | 20.00 |"), std::string::npos) << doc;
+  EXPECT_NE(doc.find("| objmap start-up (once per command, per keyframe here) | 0.70 |"),
+            std::string::npos)
+      << doc;
+  EXPECT_NE(doc.find("| whole command / cv::imread of its PNGs (ratio, not ms) | 2.50 |"),
+            std::string::npos)
+      << doc;
+  EXPECT_NE(doc.find("No earlier figures to compare with"), std::string::npos) << doc;
+
+  // The committed figures said merge and filter took 3 ms and the fuse 12.1: the merge grew by
+  // 1 ms (33%), the fuse's 0.1 ms is noise.
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    const auto at = doc.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    doc.replace(at, from.size(), to);
+  };
+  replace("| merge and filter objects | 4.00 |", "| merge and filter objects | 3.00 |");
+  replace("| back-project and fuse | 12.00 |", "| back-project and fuse | 11.90 |");
+  write_text(dir / "doc.md", doc);
+  ASSERT_EQ(bench_tables(args, dir / "log"), 0) << read_text(dir / "log");
+  const std::string again = read_text(dir / "doc.md");
+  EXPECT_NE(again.find("| merge and filter objects | 4.00 | 3.00 | +1.00 (+33%) |"),
+            std::string::npos)
+      << again;
+  EXPECT_NE(again.find("| back-project and fuse | 12.00 | 11.90 | +0.10 (+1%) |"),
+            std::string::npos)
+      << again;
+  EXPECT_NE(again.find("Grew since the last committed figures (" + (dir / "doc.md").string() +
+                       "): merge and filter objects (+1.00 ms per keyframe, +33%)."),
+            std::string::npos)
+      << again;
+  EXPECT_EQ(again.find("back-project and fuse (+"), std::string::npos) << again;
+  EXPECT_NE(read_text(dir / "log").find("fuse steps: Grew since"), std::string::npos);
+}
+
 TEST(BenchTables, PrepareMovesASlamEstimateOntoTheGroundTruth) {
   if (!has_python3()) GTEST_SKIP() << "no python3";
   TempDir dir;
