@@ -19,8 +19,8 @@ struct SynthCommand {
   std::string out;
   bool noise_free = false;
   std::optional<double> confusion_rate;  // unset: keep the per-pair defaults
-  std::optional<int> new_track_after;    // unset: the preset's (walkthrough 30 frames, else never)
-  std::optional<double> merge_touching;  // unset: the preset's (walkthrough 0.3, else 0)
+  std::optional<int> new_track_after;    // unset: the preset's (walks 30 frames, else never)
+  std::optional<double> merge_touching;  // unset: the preset's (walks 0.3, else 0)
   std::string second_visit_of;           // empty: a first visit
   sim::SynthOptions options;
 };
@@ -29,10 +29,9 @@ void run_synth(SynthCommand& cmd) {
   sim::SynthOptions& o = cmd.options;
   if (cmd.confusion_rate)
     for (auto& c : o.seg_noise.confusions) c.probability = *cmd.confusion_rate;
-  o.seg_noise.new_track_after_frames =
-      cmd.new_track_after.value_or(o.preset == "walkthrough" ? 30 : 0);
-  o.seg_noise.merge_touching_prob =
-      cmd.merge_touching.value_or(o.preset == "walkthrough" ? 0.3 : 0);
+  const bool walk = o.preset == "walkthrough" || o.preset == "apartment";
+  o.seg_noise.new_track_after_frames = cmd.new_track_after.value_or(walk ? 30 : 0);
+  o.seg_noise.merge_touching_prob = cmd.merge_touching.value_or(walk ? 0.3 : 0);
   if (cmd.noise_free) o.set_noise_free();
   if (!cmd.second_visit_of.empty()) {  // the first visit's scene: its preset and seed
     io::require_not_an_input({"--out", cmd.out}, {{"--second-visit-of", cmd.second_visit_of}});
@@ -63,6 +62,9 @@ void run_synth(SynthCommand& cmd) {
   std::printf("frames        %zu at %.0f Hz, %dx%d, depth %s\n", seq.groundtruth.size(),
               o.frame_rate_hz, seq.camera.width, seq.camera.height,
               o.depth_noise.enabled ? "with Kinect-like noise" : "exact");
+  if (o.keep_every > 1)
+    std::printf("written       %zu of them, one in %d, each instance with a track id of its own\n",
+                (seq.groundtruth.size() + o.keep_every - 1) / o.keep_every, o.keep_every);
   std::printf("path          %.3f m; estimate ends %.3f m off (%.2f%% of the path)\n", length,
               end_error, length > 0 ? 100.0 * end_error / length : 0.0);
   const auto& st = seq.seg_stats;
@@ -112,6 +114,11 @@ void setup_synth(CLI::App& app) {
       })
       ->capture_default_str();
   c->add_option("--frames", o.frames, "number of frames (30 Hz)")->capture_default_str();
+  c->add_option("--keep-every", o.keep_every,
+                "a sparse export, as scans exported for 3D detection are (one frame in ~18): "
+                "write only frames 0, K, 2K, ..., each instance with a track id of its own (no "
+                "tracker carries an id across such gaps)")
+      ->capture_default_str();
   c->add_option("--orbit-speed", o.orbit_speed_deg_per_s,
                 "camera azimuth rate around the table, deg/s (0: the preset's, 20 for tabletop)")
       ->capture_default_str();

@@ -78,6 +78,43 @@ TEST(Oversize, OneInstanceWhosePartBeyondTheCutIsTallIsNotCut) {
   EXPECT_FALSE(plan_oversize_cut(screen, Vec3::UnitZ(), 0.25, 0.5, OversizeOptions{}).has_value());
 }
 
+// Parts of one instance seen apart (ObjectMap::join_parts, join_continuous): a 2 m couch's two
+// views, each its nearer 1.2 m, overlap in the middle, where each saw it aslant (half the density):
+// one surface. Two chairs 6 cm apart: an empty band between them. Two halves of a couch with a
+// 5 cm band cut out of the middle: two objects side by side.
+TEST(Oversize, PartsAreOneSurfaceUnlessAnEmptyBandLiesBetweenThem) {
+  const auto strip = [](double x0, double x1, double every_m, double y = 0.0) {
+    std::vector<Vec3> out;
+    for (double x = x0; x <= x1 + 1e-9; x += every_m)
+      for (int k = 0; k <= 40; ++k) out.push_back(Vec3(x, y, 0.01 * k));
+    return out;
+  };
+  std::vector<Vec3> left = strip(0.0, 0.8, 0.01), right = strip(1.2, 2.0, 0.01);
+  for (const Vec3& p : strip(0.8, 1.2, 0.02)) {  // the middle, seen aslant by both
+    left.push_back(p);
+    right.push_back(p);
+  }
+  OversizeOptions options;
+  EXPECT_TRUE(continuous_parts(left, right, Vec3::UnitZ(), options));
+  EXPECT_TRUE(continuous_parts(right, left, Vec3::UnitZ(), options));
+  // A 5 cm empty band at x 0.975-1.025: two couches side by side.
+  const auto without_band = [](std::vector<Vec3> part) {
+    part.erase(std::remove_if(part.begin(), part.end(),
+                              [](const Vec3& p) { return p.x() > 0.975 && p.x() < 1.025; }),
+               part.end());
+    return part;
+  };
+  EXPECT_FALSE(continuous_parts(without_band(left), without_band(right), Vec3::UnitZ(), options));
+  // Two chairs (0.41 m boxes) 6 cm apart.
+  const std::vector<Vec3> a = oversize_points(box(Vec3(0.505, 0.105, 0.505), 20));
+  std::vector<Vec3> b;
+  for (const Vec3& p : a) b.push_back(p + Vec3(0.47, 0, 0));
+  EXPECT_FALSE(continuous_parts(a, b, Vec3::UnitZ(), options));
+  // With a valley ratio of 0.6 the aslant middle is a gap too.
+  options.join_valley_ratio = 0.6;
+  EXPECT_FALSE(continuous_parts(left, right, Vec3::UnitZ(), options));
+}
+
 TEST(Oversize, OptionsAreChecked) {
   OversizeOptions o;
   o.margin = -0.1;
@@ -87,6 +124,9 @@ TEST(Oversize, OptionsAreChecked) {
   EXPECT_THROW(o.check(), InputError);
   o = {};
   o.percentile = 0.5;
+  EXPECT_THROW(o.check(), InputError);
+  o = {};
+  o.join_valley_ratio = 1.5;
   EXPECT_THROW(o.check(), InputError);
 }
 

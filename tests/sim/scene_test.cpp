@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -191,6 +193,25 @@ TEST(Scene, WalkthroughRoomHasTwelveChairsSomePackedSideBySide) {
   EXPECT_GE(packed, 8);
 }
 
+TEST(Scene, ApartmentHasItsLargeFurnitureAtTheSizesOfItsClasses) {
+  const Scene scene = make_scene("apartment", 2);
+  EXPECT_EQ(scene.objects.size(), 10u);
+  std::map<std::string, double> widest;  // the larger horizontal side of each class's box
+  for (const auto& o : scene.objects)
+    widest[o.class_name] = std::max(widest[o.class_name],
+                                    2.0 * std::max(o.obb.half_extent.x(), o.obb.half_extent.y()));
+  EXPECT_NEAR(widest["couch"], 2.0, 0.02);
+  EXPECT_NEAR(widest["bed"], 2.0, 0.02);
+  EXPECT_NEAR(widest["refrigerator"], 0.73, 0.02);
+  EXPECT_NEAR(widest["toilet"], 0.68, 0.05);
+  // Within the room (8 x 6 m) and standing on the floor, or on the bed (the teddy bear).
+  for (const auto& o : scene.objects) {
+    const Vec3 c = o.world_from_object.translation();
+    EXPECT_LT(std::abs(c.x()) + 0.5 * widest[o.class_name], 4.0 + 1e-6) << o.class_name;
+    EXPECT_LT(std::abs(c.y()), 3.0) << o.class_name;
+  }
+}
+
 TEST(Scene, UnknownPresetIsAnInputError) {
   try {
     make_scene("garden", 1);
@@ -198,7 +219,7 @@ TEST(Scene, UnknownPresetIsAnInputError) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), "--preset");
     EXPECT_NE(std::string(e.what()).find("garden"), std::string::npos);
-    EXPECT_NE(std::string(e.what()).find("tabletop, office, edge or walkthrough"),
+    EXPECT_NE(std::string(e.what()).find("tabletop, office, edge, walkthrough or apartment"),
               std::string::npos);
   }
 }

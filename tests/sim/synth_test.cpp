@@ -1,4 +1,7 @@
 #include <gtest/gtest.h>
+#include <algorithm>
+#include <nlohmann/json.hpp>
+#include <set>
 
 #include <cstdio>
 #include <cstdlib>
@@ -175,6 +178,33 @@ TEST(Synth, StreamingWriterWritesTheSameFilesAsTheInMemoryOne) {
     EXPECT_EQ(cv::norm(rgb, f.rgb, cv::NORM_INF), 0.0) << f.index;
     EXPECT_EQ(cv::norm(depth, f.depth, cv::NORM_INF), 0.0) << f.index;
   }
+}
+
+// A sparse export (--keep-every): frames 0, K, 2K written, each instance its own track id, alike
+// from both writers.
+TEST(Synth, KeepEveryWritesOneFrameInKEachInstanceWithATrackIdOfItsOwn) {
+  SynthOptions o = small(4, 2);
+  o.frames = 7;
+  o.keep_every = 3;
+  o.resolution_scale = 0.15;
+  o.seg_noise.min_area_px = 5;
+  test::TempDir tmp;
+  write_sequence(tmp / "memory", synthesize(o), 1);
+  write_synthetic_sequence(tmp / "streamed", o);
+  EXPECT_EQ(expect_same_files(tmp / "memory", tmp / "streamed"), 3 * 4 + 8);  // frames 0, 3, 6
+  const std::string rgb = test::read_text(tmp / "streamed" / "rgb.txt");
+  EXPECT_EQ(std::count(rgb.begin(), rgb.end(), '\n'), 3 + 3);  // 3 comment lines
+  std::set<int> ids;
+  int instances = 0;
+  for (const auto& e : test::fs::directory_iterator(tmp / "streamed" / "segmentation"))
+    for (const auto& i : nlohmann::json::parse(test::read_text(e.path()))["instances"]) {
+      ++instances;
+      ids.insert(i["track_id"].get<int>());
+    }
+  EXPECT_GT(instances, 10);
+  EXPECT_EQ(static_cast<int>(ids.size()), instances);
+  o.keep_every = 0;
+  EXPECT_THROW(o.check(), InputError);
 }
 
 TEST(Synth, StreamingWriterBleedsTheMasksAsTheInMemoryOne) {

@@ -64,7 +64,8 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
     if (shared.size() > options_.merge_max_shared_frames * fewer) return std::nullopt;
     const PartsFit fit = fit_parts(a.surface, b.surface, b.box, up, o.percentile, o.join_grow_m);
     if (fit.gap_m > o.join_gap_m || fit.union_extent_m > b.limit_m) return std::nullopt;
-    if (fit.inside_share < o.join_min_inside && !share_a_track(*a.object, *b.object))
+    if (fit.inside_share < o.join_min_inside && !share_a_track(*a.object, *b.object) &&
+        !(o.join_continuous && continuous_parts(a.surface, b.surface, up, o)))
       return std::nullopt;
     return fit;
   };

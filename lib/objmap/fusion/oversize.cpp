@@ -26,6 +26,60 @@ double quantile(const std::vector<double>& sorted, double q) {
   return sorted[std::min(k, sorted.size() - 1)];
 }
 
+// The profile of sorted values `along` between lo and hi, in bins of about bin_m (smoothed over
+// ±smooth_bins), and its emptiest bin whose centre lies in [from, to] (the one nearest the middle
+// among equals; the middle bin when none does): where it lies, which side holds more, and whether
+// it parts two instances (each side at least min_side_share of the values, the bin at most
+// valley_ratio × the sparser side's mean).
+struct Valley {
+  double at = 0.0;
+  int keep = 0;
+  bool apart = false;
+};
+Valley emptiest_place(const std::vector<double>& along, double lo, double hi, double from,
+                      double to, double valley_ratio, const OversizeOptions& o) {
+  const int bins = std::max(3, static_cast<int>(std::ceil((hi - lo) / o.bin_m)));
+  const double bin = (hi - lo) / bins;
+  std::vector<double> count(bins, 0.0);
+  for (double a : along)
+    if (a >= lo && a <= hi) ++count[std::min(bins - 1, static_cast<int>((a - lo) / bin))];
+  std::vector<double> smooth(bins, 0.0);
+  for (int b = 0; b < bins; ++b) {
+    int n = 0;
+    for (int k = std::max(0, b - o.smooth_bins); k <= std::min(bins - 1, b + o.smooth_bins); ++k) {
+      smooth[b] += count[k];
+      ++n;
+    }
+    smooth[b] /= n;
+  }
+  int best = -1;
+  for (int b = 0; b < bins; ++b) {
+    const double at = lo + (b + 0.5) * bin;
+    if (at < from - 0.5 * bin || at > to + 0.5 * bin) continue;
+    const double middle = std::fabs(b + 0.5 - 0.5 * bins);
+    if (best < 0 || smooth[b] < smooth[best] ||
+        (smooth[b] == smooth[best] && middle < std::fabs(best + 0.5 - 0.5 * bins)))
+      best = b;
+  }
+  if (best < 0) best = bins / 2;
+  Valley v;
+  v.at = lo + (best + 0.5) * bin;
+  // The sides' shares of the values and mean densities (the bin itself on neither side).
+  std::array<double, 2> mass{0.0, 0.0}, width{0.0, 0.0};
+  for (int b = 0; b < bins; ++b) {
+    if (b == best) continue;
+    mass[b < best ? 0 : 1] += count[b];
+    width[b < best ? 0 : 1] += 1.0;
+  }
+  const double total = mass[0] + mass[1] + count[best];
+  const double weaker_density =
+      std::min(mass[0] / std::max(1.0, width[0]), mass[1] / std::max(1.0, width[1]));
+  v.keep = mass[1] > mass[0] ? 1 : 0;
+  v.apart = total > 0.0 && std::min(mass[0], mass[1]) >= o.min_side_share * total &&
+            count[best] <= valley_ratio * weaker_density;
+  return v;
+}
+
 }  // namespace
 
 void OversizeOptions::check() const {
@@ -45,6 +99,8 @@ void OversizeOptions::check() const {
   require(join_grow_m >= 0.0 && join_grow_m <= 10.0, "OversizeOptions.join_grow_m",
           "must be in [0, 10] m");
   require(join_min_inside >= 0.0 && join_min_inside <= 1.0, "OversizeOptions.join_min_inside",
+          "must be in [0, 1]");
+  require(join_valley_ratio >= 0.0 && join_valley_ratio <= 1.0, "OversizeOptions.join_valley_ratio",
           "must be in [0, 1]");
 }
 
@@ -83,53 +139,17 @@ std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, c
   cut.extent_m = horizontal_extent(surface, up, o.percentile, &cut.axis);
   cut.limit_m = max_m * (1.0 + o.margin);
   if (cut.extent_m <= cut.limit_m) return std::nullopt;
-  // 1. The profile along the long axis between the quantiles, in bins.
+  // 1-3. The emptiest place of the profile along the long axis where both sides are at least
+  //      min_m wide (half the extent at most), and whether it parts two instances.
   std::vector<double> along;
   for (const Vec3& p : surface) along.push_back(cut.axis.dot(p));
   std::sort(along.begin(), along.end());
   const double lo = quantile(along, o.percentile), hi = quantile(along, 1.0 - o.percentile);
-  const int bins = std::max(3, static_cast<int>(std::ceil((hi - lo) / o.bin_m)));
-  const double bin = (hi - lo) / bins;
-  std::vector<double> count(bins, 0.0);
-  for (double a : along)
-    if (a >= lo && a <= hi) ++count[std::min(bins - 1, static_cast<int>((a - lo) / bin))];
-  std::vector<double> smooth(bins, 0.0);
-  for (int b = 0; b < bins; ++b) {
-    int n = 0;
-    for (int k = std::max(0, b - o.smooth_bins); k <= std::min(bins - 1, b + o.smooth_bins); ++k) {
-      smooth[b] += count[k];
-      ++n;
-    }
-    smooth[b] /= n;
-  }
-  // 2. The emptiest bin where both sides are at least min_m wide (half the extent at most), the
-  //    one nearest the middle among equals; the cut at its centre.
   const double side = std::min(min_m, 0.5 * (hi - lo));
-  int best = -1;
-  for (int b = 0; b < bins; ++b) {
-    const double at = lo + (b + 0.5) * bin;
-    if (at - lo < side - 0.5 * bin || hi - at < side - 0.5 * bin) continue;
-    const double middle = std::fabs(b + 0.5 - 0.5 * bins);
-    if (best < 0 || smooth[b] < smooth[best] ||
-        (smooth[b] == smooth[best] && middle < std::fabs(best + 0.5 - 0.5 * bins)))
-      best = b;
-  }
-  if (best < 0) best = bins / 2;
-  cut.cut = lo + (best + 0.5) * bin;
-  // 3. Two instances, or one with something attached: the sides' shares of the surface and mean
-  //    densities (the cut's bin on neither side).
-  std::array<double, 2> mass{0.0, 0.0}, width{0.0, 0.0};
-  for (int b = 0; b < bins; ++b) {
-    if (b == best) continue;
-    mass[b < best ? 0 : 1] += count[b];
-    width[b < best ? 0 : 1] += 1.0;
-  }
-  const double total = mass[0] + mass[1] + count[best];
-  const double weaker_density =
-      std::min(mass[0] / std::max(1.0, width[0]), mass[1] / std::max(1.0, width[1]));
-  cut.keep = mass[1] > mass[0] ? 1 : 0;
-  cut.apart = total > 0.0 && std::min(mass[0], mass[1]) >= o.min_side_share * total &&
-              count[best] <= o.valley_ratio * weaker_density;
+  const Valley valley = emptiest_place(along, lo, hi, lo + side, hi - side, o.valley_ratio, o);
+  cut.cut = valley.at;
+  cut.keep = valley.keep;
+  cut.apart = valley.apart;
   if (cut.apart) return cut;
   // 4. One instance: what is cut off must be a flat strip (the table or floor its masks held),
   //    its heights within max(flat_m, flat_share × the kept side's); anything taller is part of
@@ -193,6 +213,28 @@ PartsFit fit_parts(const std::vector<Vec3>& small, const std::vector<Vec3>& larg
   both.insert(both.end(), small.begin(), small.end());
   fit.union_extent_m = horizontal_extent(both, up, percentile);
   return fit;
+}
+
+bool continuous_parts(const std::vector<Vec3>& a, const std::vector<Vec3>& b, const Vec3& up,
+                      const OversizeOptions& o) {
+  if (a.size() < 10 || b.size() < 10) return false;
+  std::vector<Vec3> both = b;
+  both.insert(both.end(), a.begin(), a.end());
+  Vec3 axis;
+  horizontal_extent(both, up, o.percentile, &axis);
+  const auto middle = [&](const std::vector<Vec3>& part) {
+    std::vector<double> at;
+    for (const Vec3& p : part) at.push_back(axis.dot(p));
+    std::nth_element(at.begin(), at.begin() + static_cast<std::ptrdiff_t>(at.size() / 2), at.end());
+    return at[at.size() / 2];
+  };
+  const double ma = middle(a), mb = middle(b);
+  std::vector<double> along;
+  for (const Vec3& p : both) along.push_back(axis.dot(p));
+  std::sort(along.begin(), along.end());
+  const double lo = quantile(along, o.percentile), hi = quantile(along, 1.0 - o.percentile);
+  return !emptiest_place(along, lo, hi, std::min(ma, mb), std::max(ma, mb), o.join_valley_ratio, o)
+              .apart;
 }
 
 }  // namespace objmap::fusion

@@ -28,11 +28,18 @@ struct OversizeOptions {
   // Parts of one instance (ObjectMap::join_parts): two objects of one class, rarely seen in the
   // same keyframes, whose union is no wider than the class allows, at most join_gap_m apart, and
   // either the smaller's surface at least join_min_inside within the larger's footprint (grown by
-  // join_grow_m) or one track id in common: a chair's back seen over a table, its legs seen below.
+  // join_grow_m: a chair's back seen over a table, its legs seen below), or with join_continuous
+  // both one surface where they meet (continuous_parts: a couch seen from two places one frame in
+  // 18 apart, each part its nearer half), or one track id in common.
   bool join_parts = true;
   double join_gap_m = 0.10;
   double join_grow_m = 0.03;
   double join_min_inside = 0.8;
+  bool join_continuous = true;
+  // continuous_parts: a gap where two parts meet is a place of the profile holding at most this ×
+  // the sparser side's mean (an empty band between two objects; a couch's middle, seen aslant
+  // from both sides, holds 0.4-0.5 of it).
+  double join_valley_ratio = 0.2;
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -89,5 +96,13 @@ struct PartsFit {
 PartsFit fit_parts(const std::vector<Vec3>& small, const std::vector<Vec3>& large,
                    const Footprint& large_footprint, const Vec3& up, double percentile,
                    double grow_m);
+
+// Whether two surfaces are one where they meet: along the long horizontal axis of both together,
+// the profile between the two parts' medians has no gap (the cut's test of two instances,
+// plan_oversize_cut, with join_valley_ratio for valley_ratio). Two chairs side by side have an
+// empty band between them; the halves of a couch, each seen from its own side, overlap in the
+// middle and have none.
+bool continuous_parts(const std::vector<Vec3>& a, const std::vector<Vec3>& b, const Vec3& up,
+                      const OversizeOptions& options);
 
 }  // namespace objmap::fusion

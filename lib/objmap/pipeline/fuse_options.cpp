@@ -169,9 +169,14 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
       {"objects.join_parts", "--join-parts",
        "with --split-oversize: two objects of one class, rarely seen together, whose union is no "
        "wider than the class allows and whose boxes are at most 10 cm apart, are one instance when "
-       "the smaller lies over the larger's footprint or they share a track id (a chair's back seen "
-       "over a table, its legs below it)",
+       "the smaller lies over the larger's footprint, both are one surface where they meet "
+       "(--join-continuous), or they share a track id (a chair's back seen over a table, its legs "
+       "below it; a couch seen from two places)",
        &m.oversize.join_parts},
+      {"objects.join_continuous", "--join-continuous",
+       "with --join-parts: two parts whose surfaces run on without a gap where they meet are one "
+       "instance (a large object seen from two places, frames apart, each part its nearer side)",
+       &m.oversize.join_continuous},
       {"objects.class_sizes", "--class-sizes",
        "builtin (the COCO classes' usual sizes, docs/fusion.md), none, or a JSON file "
        "{\"sizes\": {\"chair\": [0.4, 0.7]}} of sizes in metres added to the built-in table",

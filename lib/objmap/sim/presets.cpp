@@ -263,6 +263,81 @@ void walkthrough_room(Builder& b) {
   add_bottle(b, -1.3, 2.1, 0.0);
 }
 
+void add_couch(Builder& b, double x, double y, double yaw_deg) {
+  // 2.0 m long (y of its frame), 0.9 m deep, seat at 0.45 m; faces +x before the yaw.
+  auto& o = b.object("couch", x, y, 0.0, yaw_deg, 0.03, 4.0);
+  const Material fabric = b.mat({120, 60, 55}, {85, 40, 35}, Pattern::kNoise, 0.05, 0.12);
+  const Material cushion = b.mat({150, 85, 70}, {110, 60, 50}, Pattern::kChecker, 0.12, 0.1);
+  o.parts.push_back(part(Shape::kBox, Vec3(0.45, 1.0, 0.19), at(0, 0, 0.19), fabric));  // base
+  o.parts.push_back(part(Shape::kBox, Vec3(0.33, 0.85, 0.04), at(0.08, 0, 0.42), cushion));
+  o.parts.push_back(part(Shape::kBox, Vec3(0.11, 1.0, 0.23), at(-0.34, 0, 0.61), fabric));  // back
+  for (double sy : {-1.0, 1.0})                                                             // arms
+    o.parts.push_back(part(Shape::kBox, Vec3(0.34, 0.075, 0.12), at(0.1, sy * 0.925, 0.5), fabric));
+}
+
+void add_bed(Builder& b, double x, double y, double yaw_deg) {
+  // 2.0 m long (x of its frame), 1.6 m wide, mattress top at 0.54 m, headboard on the -x side.
+  auto& o = b.object("bed", x, y, 0.0, yaw_deg, 0.03, 3.0);
+  const Material wood = b.mat({120, 85, 55}, {85, 60, 35}, Pattern::kNoise, 0.06, 0.1);
+  const Material linen = b.mat({205, 210, 225}, {150, 160, 190}, Pattern::kStripes, 0.08, 0.06);
+  const Material pillow = b.mat({235, 230, 215}, {200, 195, 180}, Pattern::kNoise, 0.03, 0.05);
+  o.parts.push_back(part(Shape::kBox, Vec3(1.0, 0.8, 0.15), at(0, 0, 0.15), wood));
+  o.parts.push_back(part(Shape::kBox, Vec3(0.97, 0.78, 0.12), at(0.02, 0, 0.42), linen));
+  o.parts.push_back(part(Shape::kBox, Vec3(0.03, 0.8, 0.5), at(-0.97, 0, 0.5), wood));
+  for (double sy : {-1.0, 1.0})
+    o.parts.push_back(
+        part(Shape::kEllipsoid, Vec3(0.16, 0.3, 0.06), at(-0.75, sy * 0.38, 0.59), pillow));
+}
+
+void add_refrigerator(Builder& b, double x, double y, double yaw_deg) {
+  // 0.7 x 0.7 x 1.8 m, door on +x of its frame before the yaw.
+  auto& o = b.object("refrigerator", x, y, 0.0, yaw_deg, 0.02, 3.0);
+  const Material body = b.mat({225, 228, 230}, {190, 195, 200}, Pattern::kNoise, 0.1, 0.04);
+  const Material metal = b.mat({120, 125, 130}, {90, 95, 100}, Pattern::kSolid, 0.05, 0.05);
+  o.parts.push_back(part(Shape::kBox, Vec3(0.35, 0.35, 0.9), at(0, 0, 0.9), body));
+  o.parts.push_back(part(Shape::kBox, Vec3(0.015, 0.02, 0.25), at(0.365, 0.26, 1.15), metal));
+  o.parts.push_back(part(Shape::kBox, Vec3(0.004, 0.34, 0.004), at(0.352, 0, 1.2), metal));
+}
+
+void add_toilet(Builder& b, double x, double y, double yaw_deg) {
+  // Bowl in front (+x of its frame), tank behind: 0.38 x 0.68 m, 0.78 m high.
+  auto& o = b.object("toilet", x, y, 0.0, yaw_deg, 0.02, 5.0);
+  const Material china = b.mat({240, 240, 238}, {215, 215, 212}, Pattern::kNoise, 0.05, 0.03);
+  o.parts.push_back(part(Shape::kCylinder, Vec3(0.12, 0.12, 0.19), at(0.05, 0, 0.19), china));
+  o.parts.push_back(part(Shape::kEllipsoid, Vec3(0.24, 0.18, 0.08), at(0.08, 0, 0.36), china));
+  o.parts.push_back(part(Shape::kBox, Vec3(0.1, 0.19, 0.2), at(-0.24, 0, 0.58), china));
+}
+
+// The "apartment" room (8 x 6 m): a bed with a teddy bear on it, a couch facing a television on a
+// low table, a refrigerator in a corner, a dining table with two chairs, a cup and a bottle, and a
+// toilet: the large furniture of a scan exported for 3D detection (issue #39 §5), 10 objects.
+void apartment_room(Builder& b) {
+  add_room(b, 4.0, 3.0, 2.6);
+  add_bed(b, -2.6, 1.7, 0.0);
+  add_teddy(b, -2.2, 1.5, -60.0, 0.54);
+  add_couch(b, 1.0, 2.45, -90.0);
+  add_table(b, 1.0, 0.9, 0.45, 0.2);
+  add_monitor(b, 1.0, 0.95, 180.0);
+  add_refrigerator(b, 3.55, 2.55, 180.0);
+  add_table(b, 2.4, -1.6, 0.6, 0.4);
+  add_chair(b, 2.4, -2.25, 90.0);
+  add_chair(b, 2.4, -0.95, -90.0);
+  add_cup(b, 2.2, -1.5, {200, 40, 40});
+  add_bottle(b, 2.65, -1.75);
+  add_toilet(b, -3.55, -2.5, 0.0);
+}
+
+// The walk through the apartment, each stretch looking at the furniture beside it: the bed, the
+// couch, the refrigerator, the dining table, the toilet (9.9 m a loop).
+std::vector<Waypoint> apartment_path() {
+  const double eye_z = 1.5;
+  auto w = [&](double ex, double ey, double tx, double ty, double tz) {
+    return Waypoint{Vec3(ex, ey, eye_z), Vec3(tx, ty, tz)};
+  };
+  return {w(-1.0, -0.2, -2.6, 1.7, 0.5), w(0.6, -0.3, 1.0, 2.45, 0.5), w(2.6, 0.6, 3.55, 2.55, 0.9),
+          w(2.6, 0.0, 2.4, -1.6, 0.6), w(-1.6, -1.2, -3.55, -2.5, 0.4)};
+}
+
 // The walk round the room: past desk A, along the dining table B, round its east end, past the
 // chair row to desk C and back; 12.7 m a loop, looking at the table beside the way.
 std::vector<Waypoint> walkthrough_path() {
@@ -298,7 +373,8 @@ const std::vector<std::string>& paper_classes() {
 }
 
 const std::vector<std::string>& scene_presets() {
-  static const std::vector<std::string> names{"tabletop", "office", "edge", "walkthrough"};
+  static const std::vector<std::string> names{"tabletop", "office", "edge", "walkthrough",
+                                              "apartment"};
   return names;
 }
 
@@ -323,6 +399,8 @@ Scene make_scene(const std::string& preset, std::uint64_t seed) {
     add_chair(b, 0.0, 0.8, -90.0);
   } else if (preset == "walkthrough") {
     walkthrough_room(b);
+  } else if (preset == "apartment") {
+    apartment_room(b);
   } else {  // "edge"
     add_room(b, 2.5, 2.5, 2.6);
     edge_table_with_objects(b);
@@ -345,6 +423,9 @@ CameraPathOptions preset_camera_path(const std::string& preset) {
   } else if (preset == "walkthrough") {
     path.waypoints = walkthrough_path();
     path.walk_speed_m_per_s = 1.2;  // a loop in 10.6 s: 318 frames at 30 Hz
+  } else if (preset == "apartment") {
+    path.waypoints = apartment_path();
+    path.walk_speed_m_per_s = 1.2;
   } else if (preset == "office") {
     path.radius_m = 2.3;
     path.height_m = 1.55;

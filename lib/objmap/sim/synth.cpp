@@ -20,6 +20,8 @@ void SynthOptions::check() const {
   check_scene_preset(preset);
   require(frames >= 1 && frames <= 100000, "--frames",
           "must be in [1, 100000], got " + std::to_string(frames));
+  require(keep_every >= 1 && keep_every <= 1000, "--keep-every",
+          "must be in [1, 1000], got " + std::to_string(keep_every));
   require(std::isfinite(frame_rate_hz) && frame_rate_hz > 0.0 && frame_rate_hz <= 1000.0,
           "SynthOptions.frame_rate_hz", "must be in (0, 1000], got " + num(frame_rate_hz));
   require(std::isfinite(start_time_s) && start_time_s >= 0.0 && start_time_s < 1e10,

@@ -25,6 +25,10 @@ struct SynthOptions {
   std::string preset = "tabletop";  // scene: "tabletop", "office", "edge", "walkthrough"
   std::uint64_t seed = 1;           // everything random derives from it
   int frames = 90;                  // 3 s at 30 Hz
+  // A sparse export (scans exported for 3D detection keep one frame in ~18): only frames 0, K,
+  // 2K, ... are written, and each written instance gets a track id of its own (no tracker carries
+  // an id across such gaps). The segmentation noise still runs over every frame.
+  int keep_every = 1;
   double frame_rate_hz = 30.0;
   double start_time_s = 1700000000.1;  // timestamp of the first rgb frame
   double depth_time_offset_s = 0.005;  // depth timestamps = rgb + this (exercises association)

@@ -136,6 +136,7 @@ std::string synth_json(const SynthSequence& s) {
               {"preset", o.preset},
               {"seed", o.seed},
               {"frames", o.frames},
+              {"keep_every", o.keep_every},
               {"orbit_speed_deg_per_s", o.orbit_speed_deg_per_s},
               {"frame_rate_hz", o.frame_rate_hz},
               {"depth_time_offset_s", o.depth_time_offset_s},
@@ -206,13 +207,27 @@ void write_segmentation(const fs::path& dir, const char* sub,
 }
 
 // Everything but the frames: lists, camera, trajectories, objects, synth.json.
+// Whether frame i is written (SynthOptions::keep_every).
+bool kept(const SynthOptions& o, std::size_t i) {
+  return i % static_cast<std::size_t>(o.keep_every) == 0;
+}
+
+// A sparse export's ids: each instance of a written frame its own, counted in frame order.
+segmentation::FrameSegmentation sparse_ids(segmentation::FrameSegmentation frame,
+                                           const SynthOptions& o, int& next_id) {
+  if (o.keep_every > 1)
+    for (auto& instance : frame.instances) instance.track_id = next_id++;
+  return frame;
+}
+
 void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
   const std::string what = describe(s.options);
   std::ostringstream rgb_txt, depth_txt;
   rgb_txt << "# color images\n# file: '" << what << "'\n# timestamp filename\n";
   depth_txt << "# depth maps\n# file: '" << what << "'\n# timestamp filename\n";
-  for (const auto& pose : s.groundtruth.poses) {
-    const double t = pose.timestamp;
+  for (std::size_t i = 0; i < s.groundtruth.poses.size(); ++i) {
+    if (!kept(s.options, i)) continue;
+    const double t = s.groundtruth.poses[i].timestamp;
     const double td = std::round((t + s.options.depth_time_offset_s) * 1e6) / 1e6;
     rgb_txt << timestamp_name(t) << " rgb/" << timestamp_name(t) << ".png\n";
     depth_txt << timestamp_name(td) << " depth/" << timestamp_name(td) << ".png\n";
@@ -243,10 +258,15 @@ void write_sequence_files(const fs::path& dir, const SynthSequence& s) {
 void write_sequence(const fs::path& out, const SynthSequence& s, int threads) {
   io::StagingDir staging(out, io::kSyntheticSequence);
   make_folders(staging.path());
+  std::vector<segmentation::FrameSegmentation> noisy(s.frames.size());
+  int next_id = 1;
+  for (std::size_t i = 0; i < s.frames.size(); ++i)
+    if (kept(s.options, i)) noisy[i] = sparse_ids(s.frames[i].segmentation, s.options, next_id);
   parallel_for(s.frames.size(), threads, [&](std::size_t i) {
+    if (!kept(s.options, i)) return;
     const SynthFrame& f = s.frames[i];
     write_images(staging.path(), f);
-    write_segmentation(staging.path(), "segmentation", f.segmentation);
+    write_segmentation(staging.path(), "segmentation", noisy[i]);
     write_segmentation(staging.path(), "segmentation_gt", f.segmentation_gt);
   });
   write_sequence_files(staging.path(), s);
@@ -276,21 +296,25 @@ SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& 
   std::mutex pending_mutex;       // guards `pending` and `next_in_chain`
   std::mutex chain_mutex;         // held by the thread advancing the chain (uses `noise`)
   std::size_t next_in_chain = 0;  // frames whose noisy segmentation is written
+  int next_id = 1;                // a sparse export's next track id (the chain's)
   auto advance_chain = [&] {
     for (;;) {
       std::unique_lock<std::mutex> chain(chain_mutex, std::try_to_lock);
       if (!chain.owns_lock()) return;  // the owner will see our frame (it re-checks below)
       for (;;) {
         std::optional<Pending> ready;
+        std::size_t index = 0;
         {
           std::lock_guard<std::mutex> lock(pending_mutex);
           if (next_in_chain >= total || !pending[next_in_chain]) break;
-          ready = std::move(pending[next_in_chain]);
-          pending[next_in_chain].reset();
+          index = next_in_chain;
+          ready = std::move(pending[index]);
+          pending[index].reset();
         }
-        write_segmentation(
-            dir, "segmentation",
-            noise.apply(ready->exact, seq.camera.width, seq.camera.height, ready->depth_exact_m));
+        segmentation::FrameSegmentation noisy =
+            noise.apply(ready->exact, seq.camera.width, seq.camera.height, ready->depth_exact_m);
+        if (kept(options, index))
+          write_segmentation(dir, "segmentation", sparse_ids(std::move(noisy), options, next_id));
         std::size_t done = 0;
         {
           std::lock_guard<std::mutex> lock(pending_mutex);
@@ -307,8 +331,10 @@ SynthSequence write_synthetic_sequence(const fs::path& out, const SynthOptions& 
   };
   parallel_for(total, options.threads, [&](std::size_t i) {
     SynthFrame f = render_synth_frame(seq, static_cast<int>(i));
-    write_images(dir, f);
-    write_segmentation(dir, "segmentation_gt", f.segmentation_gt);
+    if (kept(options, i)) {
+      write_images(dir, f);
+      write_segmentation(dir, "segmentation_gt", f.segmentation_gt);
+    }
     {
       std::lock_guard<std::mutex> lock(pending_mutex);
       pending[i] = Pending{std::move(f.segmentation_gt),
