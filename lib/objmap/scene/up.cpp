@@ -353,7 +353,12 @@ UpEstimate detail::estimate_up(const std::vector<Pose>& cameras, const Cloud::Pt
                            fixed_text(e.camera_agreement, 2) +
                            " < 0.5: a camera not held upright, e.g. on a ceiling?); the up "
                            "direction rests on the map's planes alone; give --up if it is known");
-    if (!planes_up)
+    if (!planes_up && sample->empty())
+      e.warnings.push_back(
+          "no dense map to find the floor and tables in (--dense-map false): up is the cameras' "
+          "(the mean of their -y axes), and with it the objects' upright boxes, positions and "
+          "relations; give --up if the world's up is known");
+    else if (!planes_up)
       e.warnings.push_back(
           "no plane of the dense map lies within " + fixed_text(options.max_prior_angle_deg, 0) +
           " deg of the cameras' up (the mean of their -y axes) that they look down "
