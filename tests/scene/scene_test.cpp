@@ -190,8 +190,21 @@ TEST(Up, WithoutPlanesUpIsTheCamerasMeanUpAxisAndItIsSaid) {
   Vec3 mean_up = Vec3::Zero();
   for (const Pose& c : cams) mean_up -= c.linear().col(1);
   EXPECT_LT(angle_deg(e.up, mean_up), 1e-9);
-  ASSERT_EQ(e.warnings.size(), 1u);  // no plane: said
-  EXPECT_NE(e.warnings[0].find("no plane of the dense map"), std::string::npos);
+  ASSERT_EQ(e.warnings.size(), 1u);  // no dense map (fuse --dense-map false): said
+  EXPECT_NE(e.warnings[0].find("no dense map to find the floor and tables in"), std::string::npos)
+      << e.warnings[0];
+  // Points without a plane (a ball of 0.5 m): the same up, and no plane is said.
+  std::vector<Vec3f> ball;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 120; ++j) {
+      const double th = M_PI * (i + 0.5) / 60, ph = 2 * M_PI * j / 120;
+      ball.push_back(Vec3f(0.5 * std::sin(th) * std::cos(ph), 0.5 * std::sin(th) * std::sin(ph),
+                           1.0 + 0.5 * std::cos(th)));
+    }
+  e = estimate_up(cams, ball, UpOptions{});
+  EXPECT_EQ(e.source, "cameras");
+  ASSERT_EQ(e.warnings.size(), 1u);
+  EXPECT_NE(e.warnings[0].find("no plane of the dense map"), std::string::npos) << e.warnings[0];
 }
 
 TEST(Up, AWallInFrontOfCamerasLookingDownIsNotTheFloor) {
