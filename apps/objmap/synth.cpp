@@ -124,10 +124,12 @@ void setup_synth(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--preset", o.preset,
                 "scene: tabletop (one table), office (two tables), edge (a small table, its "
-                "objects at the edges, the floor behind them: for the mask bleed) or walkthrough "
+                "objects at the edges, the floor behind them: for the mask bleed), walkthrough "
                 "(an 8 x 6 m room, three tables, 12 chairs, objects on the tables and the floor; "
                 "the camera walks round it, 318 frames a loop: --frames 954 passes every table "
-                "three times)")
+                "three times) or apartment (a bed, a couch, a refrigerator, a toilet, a dining "
+                "table with two chairs, a television; 248 frames a loop: with --keep-every 18, "
+                "the large furniture of scans exported for 3D detection)")
       ->capture_default_str();
   c->add_flag("--noise-free", cmd->noise_free,
               "exact depth and segmentation, no image noise, no drift (overrides the knobs below)");

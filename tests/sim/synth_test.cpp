@@ -196,11 +196,13 @@ TEST(Synth, KeepEveryWritesOneFrameInKEachInstanceWithATrackIdOfItsOwn) {
   EXPECT_EQ(std::count(rgb.begin(), rgb.end(), '\n'), 3 + 3);  // 3 comment lines
   std::set<int> ids;
   int instances = 0;
-  for (const auto& e : test::fs::directory_iterator(tmp / "streamed" / "segmentation"))
-    for (const auto& i : nlohmann::json::parse(test::read_text(e.path()))["instances"]) {
+  for (const auto& e : test::fs::directory_iterator(tmp / "streamed" / "segmentation")) {
+    const nlohmann::json frame = nlohmann::json::parse(test::read_text(e.path()));
+    for (const auto& i : frame.at("instances")) {
       ++instances;
-      ids.insert(i["track_id"].get<int>());
+      ids.insert(i.at("track_id").get<int>());
     }
+  }
   EXPECT_GT(instances, 10);
   EXPECT_EQ(static_cast<int>(ids.size()), instances);
   o.keep_every = 0;
