@@ -239,7 +239,9 @@ ObjectMap& ObjectMap::operator=(const ObjectMap& other) {
 }
 
 std::string ObjectMap::voted_class(const Object& o) {
-  // Score-weighted vote; ties: more observations, then the smaller name (deterministic).
+  // Score-weighted vote; ties: more observations, then the smaller name (deterministic). The
+  // name split_oversize gave it for its size comes first.
+  if (!o.size_class.empty()) return o.size_class;
   const std::pair<const std::string, ClassVote>* best = nullptr;
   for (const auto& entry : o.histogram) {
     if (!best || entry.second.score_sum > best->second.score_sum ||

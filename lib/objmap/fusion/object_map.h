@@ -265,6 +265,14 @@ struct SplitLink {
   std::size_t large_clusters = 0;  // clusters with split_min_share of the surface voxels
 };
 
+// split_oversize: an object too wide for its voted class, one instance, named after another class
+// of its votes that admits its extent (OversizeOptions::rename).
+struct ClassRename {
+  int id = -1;
+  std::string from, to;
+  double extent_m = 0.0;  // its horizontal extent (OversizeCut::extent_m)
+};
+
 // The rule of the merge pass that keeps two objects apart: the first that refuses, in the pass's
 // order (class, shared keyframes, P, M).
 enum class MergeRefusal {
@@ -430,8 +438,11 @@ class ObjectMap {
   // again while it is too wide: one mask over two chairs that the tracker gave one id, or two
   // objects a merge joined. Each part takes the voxels on its side and the observations whose
   // cells lie mostly on it. Call after split_pass(); when it splits anything, judge_visibility()
-  // again. Returns the splits (SplitLink::large_clusters 0), in the order made.
-  std::vector<SplitLink> split_oversize(const Vec3& up, const segmentation::ClassSizes& sizes);
+  // again. Returns the splits (SplitLink::large_clusters 0), in the order made. An object too wide
+  // that is one instance is named after another class of its votes that admits it
+  // (OversizeOptions::rename; appended to `renamed`).
+  std::vector<SplitLink> split_oversize(const Vec3& up, const segmentation::ClassSizes& sizes,
+                                        std::vector<ClassRename>* renamed = nullptr);
   // Once the up is known, after split_oversize: joins the objects of one class that are parts of
   // one instance (OversizeOptions::join_parts: a chair's back seen over a table, its legs seen
   // below it, when a mask over two chairs took its other views), the smaller footprint into the
@@ -536,8 +547,14 @@ class ObjectMap {
   // and merges, the others are new objects (link.parts).
   void install_parts(std::size_t index, std::vector<std::unique_ptr<Object>> parts,
                      SplitLink& link);
-  // split_oversize() for objects_[index] with its class's size: true and `link` when it was cut.
-  bool cut_oversize(std::size_t index, const Vec3& up, double min_m, double max_m, SplitLink& link);
+  // split_oversize() for objects_[index] with its class's size: true and `link` when it was cut;
+  // false, with *one_wide_m its extent, when it is too wide but one instance with nothing to trim.
+  bool cut_oversize(std::size_t index, const Vec3& up, double min_m, double max_m, SplitLink& link,
+                    double* one_wide_m);
+  // The class of o's votes, other than its voted one, that admits `extent_m` with the most score
+  // of at least rename_min_vote × the voted class's; "" when none.
+  std::string name_for_size(const Object& o, double extent_m,
+                            const segmentation::ClassSizes& sizes) const;
   // Half or more of `part` (surface points of `o`) lies over the footprint of another confirmed
   // object of o's class (cut_oversize: the part beyond a cut is that instance's).
   bool on_another_instance(const Object& o, const std::vector<Vec3>& part, const Vec3& up) const;

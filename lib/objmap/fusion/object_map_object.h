@@ -75,6 +75,7 @@ struct ObjectMap::Object {
     if (it == frames.end() || *it != t) frames.insert(it, t);
   }
   std::map<std::string, ClassVote> histogram;
+  std::string size_class;  // split_oversize's name for its size (OversizeOptions::rename), or ""
   double score_sum = 0.0;
   int observations = 0;
   std::set<int> track_ids;

@@ -12,7 +12,8 @@
 namespace objmap::fusion {
 
 std::vector<SplitLink> ObjectMap::split_oversize(const Vec3& up,
-                                                 const segmentation::ClassSizes& sizes) {
+                                                 const segmentation::ClassSizes& sizes,
+                                                 std::vector<ClassRename>* renamed) {
   std::vector<SplitLink> made;
   if (!options_.oversize.enabled) return made;
   options_.oversize.check();
@@ -27,7 +28,18 @@ std::vector<SplitLink> ObjectMap::split_oversize(const Vec3& up,
     const std::optional<segmentation::ClassSize> size = sizes.find(voted_class(*objects_[index]));
     if (!size || depth >= 8) continue;
     SplitLink link;
-    if (!cut_oversize(index, up, size->min_m, size->max_m, link)) continue;
+    double one_wide_m = 0.0;
+    if (!cut_oversize(index, up, size->min_m, size->max_m, link, &one_wide_m)) {
+      Object& o = *objects_[index];
+      const std::string to = one_wide_m > 0.0 && options_.oversize.rename
+                                 ? name_for_size(o, one_wide_m, sizes)
+                                 : std::string();
+      if (!to.empty()) {
+        if (renamed) renamed->push_back({o.id, voted_class(o), to, one_wide_m});
+        o.size_class = to;
+      }
+      continue;
+    }
     todo.emplace_back(index, depth + 1);
     for (int part : link.parts) todo.emplace_back(static_cast<std::size_t>(part), depth + 1);
     made.push_back(std::move(link));
@@ -35,8 +47,26 @@ std::vector<SplitLink> ObjectMap::split_oversize(const Vec3& up,
   return made;
 }
 
+std::string ObjectMap::name_for_size(const Object& o, double extent_m,
+                                     const segmentation::ClassSizes& sizes) const {
+  const std::string voted = voted_class(o);
+  const auto voted_vote = o.histogram.find(voted);
+  if (voted_vote == o.histogram.end()) return {};
+  const double bar = options_.oversize.rename_min_vote * voted_vote->second.score_sum;
+  const std::string* best = nullptr;
+  double best_score = 0.0;
+  for (const auto& [name, vote] : o.histogram) {
+    if (name == voted || vote.score_sum < bar || (best && vote.score_sum <= best_score)) continue;
+    const std::optional<segmentation::ClassSize> size = sizes.find(name);
+    if (!size || extent_m > size->max_m * (1.0 + options_.oversize.margin)) continue;
+    best = &name;
+    best_score = vote.score_sum;
+  }
+  return best ? *best : std::string();
+}
+
 bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, double max_m,
-                             SplitLink& link) {
+                             SplitLink& link, double* one_wide_m) {
   Object& o = *objects_[index];
   // 1. The cut through its surface (voxels seen in >= 10% of its observations).
   const std::vector<Vec3> surface = surface_points(o, 0.1);
@@ -51,7 +81,10 @@ bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, do
     std::vector<Vec3> beyond;
     for (const Vec3& p : surface)
       if (side(p) != cut->keep) beyond.push_back(p);
-    if (!on_another_instance(o, beyond, up)) return false;
+    if (!on_another_instance(o, beyond, up)) {
+      *one_wide_m = cut->extent_m;
+      return false;
+    }
   }
   // 2. Two instances: each observation to the side that holds most of its coarse cells (or its
   //    centroid's side); one that holds a quarter of its cells on the other side too (a mask over

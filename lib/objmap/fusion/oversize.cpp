@@ -80,6 +80,30 @@ Valley emptiest_place(const std::vector<double>& along, double lo, double hi, do
   return v;
 }
 
+// The band [from, from + width) of sorted values `along` (from within [lo, hi], its centre within
+// [first, last], in steps of width / 2) holding the fewest values: a gap between two parts must
+// be empty at the points' own spacing; bins of fixed phase would count a wall beside the gap in
+// the gap's bin, and a smoothed profile would hide a gap narrower than the smoothing.
+struct Band {
+  double from = 0.0;
+  double count = 0.0;
+};
+Band emptiest_band(const std::vector<double>& along, double lo, double hi, double first,
+                   double last, double width) {
+  Band best;
+  best.count = -1.0;
+  const double start = std::max(lo, first - 0.5 * width);
+  const double end = std::min(hi - width, last - 0.5 * width);
+  for (double from = start; from <= end + 1e-12; from += 0.5 * width) {
+    const double n =
+        static_cast<double>(std::lower_bound(along.begin(), along.end(), from + width) -
+                            std::lower_bound(along.begin(), along.end(), from));
+    if (best.count < 0.0 || n < best.count) best = {from, n};
+  }
+  if (best.count < 0.0) best = {0.5 * (lo + hi - width), 1e300};
+  return best;
+}
+
 }  // namespace
 
 void OversizeOptions::check() const {
@@ -101,6 +125,8 @@ void OversizeOptions::check() const {
   require(join_min_inside >= 0.0 && join_min_inside <= 1.0, "OversizeOptions.join_min_inside",
           "must be in [0, 1]");
   require(join_valley_ratio >= 0.0 && join_valley_ratio <= 1.0, "OversizeOptions.join_valley_ratio",
+          "must be in [0, 1]");
+  require(rename_min_vote >= 0.0 && rename_min_vote <= 1.0, "OversizeOptions.rename_min_vote",
           "must be in [0, 1]");
 }
 
@@ -233,8 +259,20 @@ bool continuous_parts(const std::vector<Vec3>& a, const std::vector<Vec3>& b, co
   for (const Vec3& p : both) along.push_back(axis.dot(p));
   std::sort(along.begin(), along.end());
   const double lo = quantile(along, o.percentile), hi = quantile(along, 1.0 - o.percentile);
-  return !emptiest_place(along, lo, hi, std::min(ma, mb), std::max(ma, mb), o.join_valley_ratio, o)
-              .apart;
+  const Band band = emptiest_band(along, lo, hi, std::min(ma, mb), std::max(ma, mb), o.bin_m);
+  const auto count_in = [&](double from, double to) {
+    return static_cast<double>(std::lower_bound(along.begin(), along.end(), to) -
+                               std::lower_bound(along.begin(), along.end(), from));
+  };
+  // Each side's mean count per band width, and its share of what lies in [lo, hi].
+  const double left = count_in(lo, band.from), right = count_in(band.from + o.bin_m, hi);
+  const double total = count_in(lo, hi);
+  const double sparser = std::min(left / std::max(o.bin_m, band.from - lo),
+                                  right / std::max(o.bin_m, hi - band.from - o.bin_m)) *
+                         o.bin_m;
+  const bool gap = total > 0.0 && std::min(left, right) >= o.min_side_share * total &&
+                   band.count <= o.join_valley_ratio * sparser;
+  return !gap;
 }
 
 }  // namespace objmap::fusion

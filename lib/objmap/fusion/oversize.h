@@ -36,10 +36,16 @@ struct OversizeOptions {
   double join_grow_m = 0.03;
   double join_min_inside = 0.8;
   bool join_continuous = true;
-  // continuous_parts: a gap where two parts meet is a place of the profile holding at most this ×
-  // the sparser side's mean (an empty band between two objects; a couch's middle, seen aslant
-  // from both sides, holds 0.4-0.5 of it).
+  // continuous_parts: a gap where two parts meet is a band bin_m wide holding at most this × the
+  // sparser side's mean per bin_m (an empty band between two objects; a couch's middle, seen
+  // aslant from both sides, holds 0.4-0.5 of it).
   double join_valley_ratio = 0.2;
+  // Named for its size (ObjectMap::split_oversize): an object wider than its voted class allows
+  // that is one instance (nothing beyond the cut to trim) takes the name of another class of its
+  // votes that admits its extent, when that class holds at least rename_min_vote × the voted
+  // class's score (a monitor the detector called "laptop" and "tv monitor" about as often).
+  bool rename = true;
+  double rename_min_vote = 0.3;
   void check() const;  // throws InputError naming the bad field
 };
 
@@ -98,10 +104,10 @@ PartsFit fit_parts(const std::vector<Vec3>& small, const std::vector<Vec3>& larg
                    double grow_m);
 
 // Whether two surfaces are one where they meet: along the long horizontal axis of both together,
-// the profile between the two parts' medians has no gap (the cut's test of two instances,
-// plan_oversize_cut, with join_valley_ratio for valley_ratio). Two chairs side by side have an
-// empty band between them; the halves of a couch, each seen from its own side, overlap in the
-// middle and have none.
+// no band bin_m wide between the two parts' medians (slid in steps of bin_m / 2) holds at most
+// join_valley_ratio × the sparser side's mean per bin_m while each side holds min_side_share of
+// the points. Two chairs side by side have an empty band between them; the halves of a couch,
+// each seen from its own side, overlap in the middle and have none.
 bool continuous_parts(const std::vector<Vec3>& a, const std::vector<Vec3>& b, const Vec3& up,
                       const OversizeOptions& options);
 

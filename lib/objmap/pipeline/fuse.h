@@ -127,6 +127,7 @@ struct FuseResult {
   std::vector<fusion::MergeLink> merges;
   std::vector<fusion::SplitLink> splits;      // objects split in parts (split_clusters)
   std::vector<fusion::SplitLink> oversize;    // objects cut for their class's size (oversize)
+  std::vector<fusion::ClassRename> renamed;   // objects named after another class for their size
   std::vector<fusion::MergeLink> part_joins;  // objects joined as parts of one instance
   std::vector<fusion::ObjectRecord> objects;  // confirmed, ascending id
   // Confirmed objects of a mover class (FuseOptions::movers), ascending id: not in `objects`, the

@@ -82,7 +82,7 @@ void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassS
                           fusion::ObjectMap& objects, const fusion::ViewLog* view_log,
                           FuseResult& result) {
   const auto t0 = Clock::now();
-  result.oversize = objects.split_oversize(result.scene.up.up, sizes);
+  result.oversize = objects.split_oversize(result.scene.up.up, sizes, &result.renamed);
   result.part_joins = objects.join_parts(result.scene.up.up, sizes);
   std::set<int> cut;
   for (const fusion::SplitLink& link : result.oversize) {
@@ -90,6 +90,7 @@ void cut_oversize_objects(const FuseOptions& options, const segmentation::ClassS
     cut.insert(link.parts.begin(), link.parts.end());
   }
   for (const fusion::MergeLink& link : result.part_joins) cut.insert({link.into, link.absorbed});
+  for (const fusion::ClassRename& r : result.renamed) cut.insert(r.id);
   if (!cut.empty()) {
     const double bar = result.detected_share_bar;
     result.objects_total = objects.size();

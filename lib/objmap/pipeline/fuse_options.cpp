@@ -177,6 +177,14 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        "with --join-parts: two parts whose surfaces run on without a gap where they meet are one "
        "instance (a large object seen from two places, frames apart, each part its nearer side)",
        &m.oversize.join_continuous},
+      {"objects.name_for_size", "--name-for-size",
+       "with --split-oversize: an object too wide for its voted class that is one instance (no "
+       "gap to cut at, nothing to trim) takes the name of another class of its votes that admits "
+       "its width, voted at least --name-for-size-vote times as much (a monitor called laptop)",
+       &m.oversize.rename},
+      {"objects.name_for_size_vote", "--name-for-size-vote",
+       "... the other class's score at least this share of the voted class's",
+       &m.oversize.rename_min_vote},
       {"objects.class_sizes", "--class-sizes",
        "builtin (the COCO classes' usual sizes, docs/fusion.md), none, or a JSON file "
        "{\"sizes\": {\"chair\": [0.4, 0.7]}} of sizes in metres added to the built-in table",
@@ -451,8 +459,9 @@ FuseChoices FuseOptions::check() const {
   check_part([&] { mask_refine.check(); }, "MaskRefineOptions", "mask_refine");
   check_part([&] { depth_gate.check(); }, "DepthGateOptions", "depth_gate");
   check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
-  check_part([&] { objects.oversize.check(); }, "OversizeOptions", "objects",
-             {{"margin", "objects.oversize_margin"}});
+  check_part(
+      [&] { objects.oversize.check(); }, "OversizeOptions", "objects",
+      {{"margin", "objects.oversize_margin"}, {"rename_min_vote", "objects.name_for_size_vote"}});
   require(!class_sizes.empty(), "objects.class_sizes",
           "is empty; expected builtin, none or a JSON file of class sizes");
   check_part([&] { visibility.check(); }, "VisibilityOptions", "visibility");

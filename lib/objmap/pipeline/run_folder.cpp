@@ -237,6 +237,7 @@ ordered_json counts_json(const FuseInputs& inputs, const FuseResult& result) {
       {"merges", result.merges.size()},
       {"objects_split", result.splits.size()},
       {"objects_cut_for_size", result.oversize.size()},
+      {"objects_named_for_size", result.renamed.size()},
       {"objects_joined_as_parts", result.part_joins.size()},
       {"object_meshes", std::count_if(result.object_meshes.begin(), result.object_meshes.end(),
                                       [](const ObjectMesh& m) { return !m.model.mesh.empty(); })},
