@@ -130,6 +130,10 @@ TEST(Oversize, OptionsAreChecked) {
   o = {};
   o.join_valley_ratio = 1.5;
   EXPECT_THROW(o.check(), InputError);
+  o = {};
+  o.under_gap_m = -0.01;
+  EXPECT_THROW(o.check(), InputError);
+  EXPECT_NO_THROW(OversizeOptions{}.check());
 }
 
 // `n` chairs (0.41 m boxes) packed 6 cm apart along x, one track id for all of them: each

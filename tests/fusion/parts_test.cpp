@@ -116,5 +116,59 @@ TEST(ObjectMap, ATallPartBeyondTheCutIsTrimmedOnlyWhenItIsAnotherInstances) {
   }
 }
 
+// Points 1 cm apart filling the box lo-hi.
+PointCloud parts_slab(const Vec3& lo, const Vec3& hi) {
+  PointCloud c;
+  const Eigen::Vector3i n = ((hi - lo) / 0.01).array().round().cast<int>();
+  for (int i = 0; i <= n.x(); ++i)
+    for (int j = 0; j <= n.y(); ++j)
+      for (int k = 0; k <= n.z(); ++k)
+        c.push_back((lo + 0.01 * Vec3(i, j, k)).cast<float>(), Rgb{40, 40, 40});
+  return c;
+}
+
+// A monitor (0.50 m wide, 5 cm deep, 0.35 m tall, its bottom 0.93 m up) called "tv" in 6
+// keyframes, and its domed foot (0.30 x 0.16 m, 5 cm high, on a desk at 0.78 m) called "mouse" in
+// 6 others: too wide for a mouse (0.14 m), nothing flat to trim and no other name, its middle
+// under the monitor, 10 cm below it (the stand's neck unseen). The foot joins the monitor; not with
+// join_under off, nor when it lies 0.6 m aside.
+TEST(ObjectMap, AMonitorsFootTooWideForAMouseJoinsTheMonitorAboveIt) {
+  const PointCloud screen = parts_slab(Vec3(0.25, 0.975, 0.93), Vec3(0.75, 1.025, 1.28));
+  const auto fused = [&](bool join_under, double foot_x, std::vector<MergeLink>* joins) {
+    ObjectMapOptions options = parts_options();
+    options.oversize.join_under = join_under;
+    ObjectMap map(options);
+    for (int f = 0; f < 6; ++f) map.add_frame({instance(f, 1, "tv", screen)});
+    PointCloud foot;  // domed: 0.78 m at its rim, 0.83 m in the middle
+    for (int i = -15; i <= 15; ++i)
+      for (int j = -8; j <= 8; ++j) {
+        const double rim = std::max(std::abs(i) / 15.0, std::abs(j) / 8.0);
+        foot.push_back(Vec3f(static_cast<float>(foot_x + 0.01 * i), 1.0f + 0.01f * j,
+                             static_cast<float>(0.78 + 0.05 * (1.0 - rim * rim))),
+                       Rgb{40, 40, 40});
+      }
+    for (int f = 10; f < 16; ++f) map.add_frame({instance(f, 2, "mouse", foot)});
+    EXPECT_TRUE(map.split_oversize(Vec3::UnitZ(), {}).empty());  // nothing to cut
+    *joins = map.join_parts(Vec3::UnitZ(), {});
+    return map.records(RecordOptions{});
+  };
+  std::vector<MergeLink> joins;
+  auto records = fused(true, 0.5, &joins);
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].class_name, "tv");
+  // Its points lie beyond eq 18's bound around the monitor's: the box stays the screen's.
+  EXPECT_NEAR(records[0].aabb.min.z(), 0.93, 0.02);
+  EXPECT_NEAR(records[0].position.x(), 0.5, 0.01);
+  ASSERT_EQ(joins.size(), 1u);
+  EXPECT_TRUE(joins[0].part);
+  EXPECT_EQ(joins[0].into, records[0].id);
+  for (const auto& [under, x] : {std::pair{false, 0.5}, std::pair{true, 1.1}}) {
+    records = fused(under, x, &joins);
+    EXPECT_TRUE(joins.empty()) << under << " " << x;
+    ASSERT_EQ(records.size(), 2u) << under << " " << x;
+    EXPECT_EQ(records[1].class_name, "mouse");
+  }
+}
+
 }  // namespace
 }  // namespace objmap::fusion

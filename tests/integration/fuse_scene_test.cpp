@@ -262,7 +262,7 @@ TEST(FuseScene, Fr1RpyZUpGroundTruthHasKeyboardsMiceAndTheMonitorOnTheDeskTheCha
     }
   }
   EXPECT_GE(on_table["keyboard"], 2);
-  EXPECT_GE(on_table["mouse"], 3);
+  EXPECT_GE(on_table["mouse"], 2);  // a third "mouse" was a monitor's foot: now its part
   EXPECT_GE(on_table["tv monitor"], 1);
   EXPECT_EQ(count["chair"], 1);
   EXPECT_EQ(on_floor["chair"], 1) << "a chair does not float: its legs are hidden";
@@ -341,17 +341,17 @@ std::string wider_than_their_class(const fs::path& run) {
   return wide;
 }
 
-TEST(FuseScene, OnlyTheMonitorsFootIsWiderThanItsClassOnFr1RpyNothingOnTheKitchenClip) {
+TEST(FuseScene, NoObjectIsWiderThanItsClassOnFr1RpyOrTheKitchenClip) {
   // fr1_rpy_every4 with its ground truth and boxes: the 0.81 m keyboard and a mouse are trimmed of
-  // the desk their box masks held, and the 0.67 m "laptop" is the tv monitor it was also called.
-  // Left: the monitor's 0.31 m foot, called mouse and cell phone (docs/scene.md). The 7-Scenes
-  // clip with YOLOv8n-seg's masks: a cup's box trimmed of the table, 0.22 -> 0.15 m.
+  // the desk their box masks held, the 0.67 m "laptop" is the tv monitor it was also called, and
+  // the monitor's 0.31 m foot, called mouse and cell phone, is part of the monitor above it. The
+  // 7-Scenes clip with YOLOv8n-seg's masks: a cup's box trimmed of the table, 0.22 -> 0.15 m.
   OBJMAP_DATA_OR_SKIP(rpy, "tum/fr1_rpy_every4");
   RunResult why;
   const fs::path run = fuse_cached("fr1-rpy-groundtruth", rpy, rpy / "groundtruth.txt",
                                    rpy / "detections_yolofastest", &why);
   ASSERT_TRUE(fs::exists(run)) << why.err;
-  EXPECT_EQ(wider_than_their_class(run), "mouse\n") << "fr1_rpy_every4";
+  EXPECT_EQ(wider_than_their_class(run), "") << "fr1_rpy_every4";
   OBJMAP_DATA_OR_SKIP(scenes, "7scenes_redkitchen_3dmatch_50f");
   OBJMAP_DATA_OR_SKIP(model, "../models/yolov8n-seg_coco/yolov8n-seg_640x640.onnx");
   const fs::path seg = cached_output(

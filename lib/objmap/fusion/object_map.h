@@ -447,6 +447,8 @@ class ObjectMap {
   // one instance (OversizeOptions::join_parts: a chair's back seen over a table, its legs seen
   // below it, when a mask over two chairs took its other views), the smaller footprint into the
   // larger, a confirmed object, the best fit first; the joined object is judged in view again.
+  // Then an object split_oversize left too wide for every class it was called joins the larger
+  // object of another class it lies under (OversizeOptions::join_under: a monitor's foot).
   // Returns the joins.
   std::vector<MergeLink> join_parts(const Vec3& up, const segmentation::ClassSizes& sizes);
 
@@ -558,6 +560,11 @@ class ObjectMap {
   // Half or more of `part` (surface points of `o`) lies over the footprint of another confirmed
   // object of o's class (cut_oversize: the part beyond a cut is that instance's).
   bool on_another_instance(const Object& o, const std::vector<Vec3>& part, const Vec3& up) const;
+  // join_parts' second step (OversizeOptions::join_under): each object too wide for every class
+  // it was called joins the confirmed object of another class, with the larger footprint, that it
+  // lies under, the nearest first; appended to `made`.
+  void join_under(const Vec3& up, const segmentation::ClassSizes& sizes,
+                  std::vector<MergeLink>& made);
   // The parts of `object` by split_object's plan: observation j to part obs_part[j], voxel (its
   // cell) to part voxel_part(key).
   std::vector<std::unique_ptr<Object>> make_parts(Object& object, const std::vector<int>& obs_part,

@@ -76,6 +76,7 @@ struct ObjectMap::Object {
   }
   std::map<std::string, ClassVote> histogram;
   std::string size_class;  // split_oversize's name for its size (OversizeOptions::rename), or ""
+  bool too_wide = false;   // split_oversize: one instance too wide for every class it was called
   double score_sum = 0.0;
   int observations = 0;
   std::set<int> track_ids;

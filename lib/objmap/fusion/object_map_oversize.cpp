@@ -38,6 +38,7 @@ std::vector<SplitLink> ObjectMap::split_oversize(const Vec3& up,
         if (renamed) renamed->push_back({o.id, voted_class(o), to, one_wide_m});
         o.size_class = to;
       }
+      o.too_wide = one_wide_m > 0.0 && to.empty();
       continue;
     }
     todo.emplace_back(index, depth + 1);

@@ -101,7 +101,7 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
         best_small = ia;
         best_large = ib;
       }
-    if (!best) return made;
+    if (!best) break;
     Object& large = *views[best_large].object;
     Object& small = *views[best_small].object;
     MergeLink link{large.id, small.id, share_a_track(small, large) ? 1.0 : 0.0,
@@ -117,6 +117,72 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
     }
     views[best_large] = view_of(&large);
     views.erase(views.begin() + static_cast<std::ptrdiff_t>(best_small));
+  }
+  if (o.join_under) join_under(up, sizes, made);
+  return made;
+}
+
+void ObjectMap::join_under(const Vec3& up, const segmentation::ClassSizes& sizes,
+                           std::vector<MergeLink>& made) {
+  const OversizeOptions& o = options_.oversize;
+  const int reach = static_cast<int>(std::ceil(o.under_gap_m / options_.voxel_m)) + 1;
+  const auto near = [&](const Object& a, const Object& b) {
+    for (int k = 0; k < 3; ++k)
+      if (a.lo[k] - b.hi[k] > reach || b.lo[k] - a.hi[k] > reach) return false;
+    return true;
+  };
+  const auto volume = [](const Footprint& f) {
+    return (f.hi[0] - f.lo[0]) * (f.hi[1] - f.lo[1]) * (f.hi[2] - f.lo[2]);
+  };
+  for (const auto& candidate : objects_) {
+    Object& part = *candidate;
+    if (!part.alive || !part.too_wide) continue;
+    const std::vector<Vec3> below = surface_points(part, 0.1);
+    if (below.empty()) continue;
+    const Footprint part_box = footprint(below, up, o.percentile);
+    Vec3 middle = Vec3::Zero();
+    for (const Vec3& p : below) middle += p;
+    middle /= static_cast<double>(below.size());
+    const std::string part_class = segmentation::canonical_class(voted_class(part));
+    Object* into = nullptr;
+    PartsFit best;
+    for (const auto& other : objects_) {
+      Object& b = *other;
+      if (!b.alive || &b == &part || b.too_wide || !confirmed(b) || !near(part, b)) continue;
+      const std::string cls = segmentation::canonical_class(voted_class(b));
+      if (cls == part_class) continue;
+      const std::vector<Vec3> above = surface_points(b, 0.1);
+      const Footprint box = footprint(above, up, o.percentile);
+      // Under it: its bottom below the other's, its top no higher than the other's middle.
+      if (volume(box) <= volume(part_box) || part_box.lo[2] >= box.lo[2] ||
+          part_box.hi[2] > 0.5 * (box.lo[2] + box.hi[2]))
+        continue;
+      // ... and the other stands on it: its middle under the other's footprint (a stand's foot
+      // is wider across than the screen it holds).
+      bool centred = true;
+      for (int k = 0; k < 2; ++k) {
+        const double at = box.axes[k].dot(middle);
+        centred = centred && at >= box.lo[k] - o.join_grow_m && at <= box.hi[k] + o.join_grow_m;
+      }
+      if (!centred) continue;
+      const PartsFit fit = fit_parts(below, above, box, up, o.percentile, o.join_grow_m);
+      const std::optional<segmentation::ClassSize> size = sizes.find(cls);
+      if (fit.gap_m > o.under_gap_m ||
+          (size && fit.union_extent_m > size->max_m * (1.0 + o.margin)))
+        continue;
+      if (into && fit.gap_m >= best.gap_m) continue;
+      into = &b;
+      best = fit;
+    }
+    if (!into) continue;
+    MergeLink link{into->id, part.id, 0.0, (part.centroid - into->centroid).norm(),
+                   best.inside_share};
+    link.part = true;
+    part.too_wide = false;
+    part.histogram.clear();  // no class it was called fits it: its votes do not name the whole
+    absorb(*into, part, link);
+    into->frames_in_view = -1;  // judged again (judge_visibility's only_unjudged)
+    made.push_back(link);
   }
 }
 

@@ -126,6 +126,8 @@ void OversizeOptions::check() const {
           "must be in [0, 1]");
   require(join_valley_ratio >= 0.0 && join_valley_ratio <= 1.0, "OversizeOptions.join_valley_ratio",
           "must be in [0, 1]");
+  require(under_gap_m >= 0.0 && under_gap_m <= 10.0, "OversizeOptions.under_gap_m",
+          "must be in [0, 10] m");
   require(rename_min_vote >= 0.0 && rename_min_vote <= 1.0, "OversizeOptions.rename_min_vote",
           "must be in [0, 1]");
 }

@@ -46,6 +46,13 @@ struct OversizeOptions {
   // class's score (a monitor the detector called "laptop" and "tv monitor" about as often).
   bool rename = true;
   double rename_min_vote = 0.3;
+  // Its foot (ObjectMap::join_parts): an object left too wide for every class it was called (no
+  // name above fits) whose middle lies under the footprint (grown by join_grow_m) of a larger
+  // confirmed object of another class, at most under_gap_m below it, their union no wider than
+  // that class allows, is that object's part (a monitor's foot called mouse and cell phone: its
+  // neck, thin and rarely seen, leaves ~10 cm between them).
+  bool join_under = true;
+  double under_gap_m = 0.15;
   void check() const;  // throws InputError naming the bad field
 };
 

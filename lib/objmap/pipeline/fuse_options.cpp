@@ -177,6 +177,14 @@ std::vector<ConfigField> merging_fields(FuseOptions& o) {
        "with --join-parts: two parts whose surfaces run on without a gap where they meet are one "
        "instance (a large object seen from two places, frames apart, each part its nearer side)",
        &m.oversize.join_continuous},
+      {"objects.join_under", "--join-under",
+       "with --join-parts: an object one instance too wide for every class it was called that lies "
+       "under a larger object of another class, at most --join-under-gap below it, is that "
+       "object's part (a monitor's foot called mouse and cell phone)",
+       &m.oversize.join_under},
+      {"objects.join_under_gap", "--join-under-gap",
+       "... in metres (the neck of a monitor's stand is thin and rarely seen)",
+       &m.oversize.under_gap_m},
       {"objects.name_for_size", "--name-for-size",
        "with --split-oversize: an object too wide for its voted class that is one instance (no "
        "gap to cut at, nothing to trim) takes the name of another class of its votes that admits "
@@ -459,9 +467,10 @@ FuseChoices FuseOptions::check() const {
   check_part([&] { mask_refine.check(); }, "MaskRefineOptions", "mask_refine");
   check_part([&] { depth_gate.check(); }, "DepthGateOptions", "depth_gate");
   check_part([&] { objects.check(); }, "ObjectMapOptions", "objects");
-  check_part(
-      [&] { objects.oversize.check(); }, "OversizeOptions", "objects",
-      {{"margin", "objects.oversize_margin"}, {"rename_min_vote", "objects.name_for_size_vote"}});
+  check_part([&] { objects.oversize.check(); }, "OversizeOptions", "objects",
+             {{"margin", "objects.oversize_margin"},
+              {"rename_min_vote", "objects.name_for_size_vote"},
+              {"under_gap_m", "objects.join_under_gap"}});
   require(!class_sizes.empty(), "objects.class_sizes",
           "is empty; expected builtin, none or a JSON file of class sizes");
   check_part([&] { visibility.check(); }, "VisibilityOptions", "visibility");
