@@ -20,9 +20,11 @@ std::vector<SplitLink> ObjectMap::split_oversize(const Vec3& up,
   // Each object with the views to be confirmed, then each part of a cut again (a mask over three
   // chairs is cut twice); an object is cut at most 8 times.
   std::deque<std::pair<std::size_t, int>> todo;
-  for (std::size_t i = 0; i < objects_.size(); ++i)
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    objects_[i]->too_wide = false;  // judged again below (a map whose objects grew since)
     if (objects_[i]->alive && confirmation_count(*objects_[i]) >= options_.min_observations)
       todo.emplace_back(i, 0);
+  }
   for (; !todo.empty(); todo.pop_front()) {
     const auto [index, depth] = todo.front();
     const std::optional<segmentation::ClassSize> size = sizes.find(voted_class(*objects_[index]));
