@@ -561,8 +561,8 @@ class ObjectMap {
   // object of o's class (cut_oversize: the part beyond a cut is that instance's).
   bool on_another_instance(const Object& o, const std::vector<Vec3>& part, const Vec3& up) const;
   // join_parts' second step (OversizeOptions::join_under): each object too wide for every class
-  // it was called joins the confirmed object of another class, with the larger footprint, that it
-  // lies under, the nearest first; appended to `made`.
+  // it was called joins the confirmed object of another class, larger (its upright box's volume),
+  // that it lies under, the nearest; appended to `made`.
   void join_under(const Vec3& up, const segmentation::ClassSizes& sizes,
                   std::vector<MergeLink>& made);
   // The parts of `object` by split_object's plan: observation j to part obs_part[j], voxel (its
