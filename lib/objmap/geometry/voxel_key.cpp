@@ -35,6 +35,13 @@ void* map_zeroed(std::size_t bytes) {
 #ifdef MADV_HUGEPAGE
   madvise(table, size, MADV_HUGEPAGE);  // a hint: without huge pages the table works the same
 #endif
+#ifdef MADV_POPULATE_WRITE
+  // Its pages made now, written: a hash table is touched all over anyway, and a page first read
+  // (a probe) maps the shared zero page, whose replacement on the write is a second fault and a
+  // TLB flush on the other threads' cores (docs/fusion.md, "Voxel keys"). Kernels before 5.14
+  // refuse it, and the pages come on first touch as before.
+  madvise(table, size, MADV_POPULATE_WRITE);
+#endif
   return table;
 }
 
