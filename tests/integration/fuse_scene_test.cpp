@@ -298,6 +298,18 @@ TEST(FuseScene, UpIsTheSameInAnyWorldFrameOnASyntheticScene) {
   }
 }
 
+// The 7-Scenes kitchen clip detected with `model` (YOLOv8n-seg, every class) and fused with its
+// own poses, both cached: the run folder (absent when a step failed; `why` says why).
+fs::path seven_scenes_run(const fs::path& data, const fs::path& model, RunResult* why) {
+  const fs::path seg = cached_output(
+      "7scenes-yolov8n-seg",
+      {"detect", "--dataset", data.string(), "--model", model.string(), "--out", "{OUT}"}, why);
+  if (!fs::exists(seg)) return seg;
+  return cached_output(
+      "7scenes-yolov8n-fuse",
+      {"fuse", "--dataset", data.string(), "--segmentation", seg.string(), "--out", "{OUT}"}, why);
+}
+
 TEST(FuseScene, SevenScenesChairsAtTheDiningTableAreNearIt) {
   // The 7-Scenes kitchen clip with YOLOv8n-seg's masks (YOLOv5n-seg finds no table there): a
   // dining table and two chairs pushed under it. By their box centres (the old rule, 0.5 m) one
@@ -305,13 +317,7 @@ TEST(FuseScene, SevenScenesChairsAtTheDiningTableAreNearIt) {
   OBJMAP_DATA_OR_SKIP(data, "7scenes_redkitchen_3dmatch_50f");
   OBJMAP_DATA_OR_SKIP(model, "../models/yolov8n-seg_coco/yolov8n-seg_640x640.onnx");
   RunResult why;
-  const fs::path seg = cached_output(
-      "7scenes-yolov8n-seg",
-      {"detect", "--dataset", data.string(), "--model", model.string(), "--out", "{OUT}"}, &why);
-  ASSERT_TRUE(fs::exists(seg)) << why.err;
-  const fs::path run = cached_output(
-      "7scenes-yolov8n-fuse",
-      {"fuse", "--dataset", data.string(), "--segmentation", seg.string(), "--out", "{OUT}"}, &why);
+  const fs::path run = seven_scenes_run(data, model, &why);
   ASSERT_TRUE(fs::exists(run)) << why.err;
   const RunResult q =
       run_objmap({"query", "--run", run.string(), "chair near dining table", "--json"});
@@ -354,14 +360,7 @@ TEST(FuseScene, NoObjectIsWiderThanItsClassOnFr1RpyOrTheKitchenClip) {
   EXPECT_EQ(wider_than_their_class(run), "") << "fr1_rpy_every4";
   OBJMAP_DATA_OR_SKIP(scenes, "7scenes_redkitchen_3dmatch_50f");
   OBJMAP_DATA_OR_SKIP(model, "../models/yolov8n-seg_coco/yolov8n-seg_640x640.onnx");
-  const fs::path seg = cached_output(
-      "7scenes-yolov8n-seg",
-      {"detect", "--dataset", scenes.string(), "--model", model.string(), "--out", "{OUT}"}, &why);
-  ASSERT_TRUE(fs::exists(seg)) << why.err;
-  const fs::path kitchen = cached_output(
-      "7scenes-yolov8n-fuse",
-      {"fuse", "--dataset", scenes.string(), "--segmentation", seg.string(), "--out", "{OUT}"},
-      &why);
+  const fs::path kitchen = seven_scenes_run(scenes, model, &why);
   ASSERT_TRUE(fs::exists(kitchen)) << why.err;
   EXPECT_EQ(wider_than_their_class(kitchen), "") << "7scenes_redkitchen_3dmatch_50f";
 }

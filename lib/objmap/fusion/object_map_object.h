@@ -135,6 +135,14 @@ struct ObjectMap::Object {
       for (VoxelKey off : offsets) near[keys[i] + off];  // inserted as 0 when absent
     }
   }
+  // Whether the voxel bounds of this object and `other` are within `gap_m` of each other along
+  // every world axis (one voxel of slack), at `voxel_m` a voxel.
+  bool within(const Object& other, double gap_m, double voxel_m) const {
+    const int reach = static_cast<int>(std::ceil(gap_m / voxel_m)) + 1;
+    for (int k = 0; k < 3; ++k)
+      if (lo[k] - other.hi[k] > reach || other.lo[k] - hi[k] > reach) return false;
+    return true;
+  }
   // Bounds, voxel-weighted centroid and RMS radius in one pass over the voxels.
   void refresh() {
     Vec3 sum = Vec3::Zero();

@@ -34,13 +34,6 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
       if (b.track_ids.count(t)) return true;
     return false;
   };
-  // The voxel bounds of a and b are more than join_gap_m apart along some world axis.
-  const auto far_apart = [&](const Object& a, const Object& b) {
-    const int reach = static_cast<int>(std::ceil(o.join_gap_m / options_.voxel_m)) + 1;
-    for (int k = 0; k < 3; ++k)
-      if (a.lo[k] - b.hi[k] > reach || b.lo[k] - a.hi[k] > reach) return true;
-    return false;
-  };
   const auto view_of = [&](Object* object) {
     PartView v;
     v.object = object;
@@ -55,7 +48,7 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
   };
   // The fit of a pair (smaller a, larger b) that may join; none when it may not.
   const auto fit_of = [&](const PartView& a, const PartView& b) -> std::optional<PartsFit> {
-    if (far_apart(*a.object, *b.object)) return std::nullopt;
+    if (!a.object->within(*b.object, o.join_gap_m, options_.voxel_m)) return std::nullopt;
     std::vector<double> shared;
     std::set_intersection(a.object->frames.begin(), a.object->frames.end(),
                           b.object->frames.begin(), b.object->frames.end(),
@@ -125,12 +118,6 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
 void ObjectMap::join_under(const Vec3& up, const segmentation::ClassSizes& sizes,
                            std::vector<MergeLink>& made) {
   const OversizeOptions& o = options_.oversize;
-  const int reach = static_cast<int>(std::ceil(o.under_gap_m / options_.voxel_m)) + 1;
-  const auto near = [&](const Object& a, const Object& b) {
-    for (int k = 0; k < 3; ++k)
-      if (a.lo[k] - b.hi[k] > reach || b.lo[k] - a.hi[k] > reach) return false;
-    return true;
-  };
   const auto volume = [](const Footprint& f) {
     return (f.hi[0] - f.lo[0]) * (f.hi[1] - f.lo[1]) * (f.hi[2] - f.lo[2]);
   };
@@ -148,7 +135,9 @@ void ObjectMap::join_under(const Vec3& up, const segmentation::ClassSizes& sizes
     PartsFit best;
     for (const auto& other : objects_) {
       Object& b = *other;
-      if (!b.alive || &b == &part || b.too_wide || !confirmed(b) || !near(part, b)) continue;
+      if (!b.alive || &b == &part || b.too_wide || !confirmed(b) ||
+          !part.within(b, o.under_gap_m, options_.voxel_m))
+        continue;
       const std::string cls = segmentation::canonical_class(voted_class(b));
       if (cls == part_class) continue;
       const std::vector<Vec3> above = surface_points(b, 0.1);
