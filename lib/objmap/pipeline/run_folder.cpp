@@ -39,7 +39,7 @@ std::string folder_checksum(const fs::path& dir) {
   std::sort(files.begin(), files.end());
   std::uint64_t h = kFnv1aOffset;
   for (const auto& f : files) {
-    h = fnv1a(fs::relative(f, dir).generic_string(), h);
+    h = fnv1a(f.lexically_relative(dir).generic_string(), h);  // no syscalls: f lies under dir
     h = fnv1a(read_all(f), h);
   }
   return hex64(h);
