@@ -65,7 +65,12 @@ FollowStatus follow_loop(FollowState& s, const FollowOptions& options, const Fol
       start_publish(s);
     else
       write_status(s);
-    std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_s));
+    // Until the next poll, or until the publish in flight is done (the next may start at once).
+    const auto poll = std::chrono::duration<double>(options.poll_s);
+    if (s.publishing.valid())
+      s.publishing.wait_for(poll);
+    else
+      std::this_thread::sleep_for(poll);
   }
 }
 

@@ -54,17 +54,23 @@ void start_publish(FollowState& s) {
     finish_fuse(state->options.fuse, state->choices, *inputs, state->class_sizes, *maps,
                 staging.path(), state->started, *result);
     staging.commit();
-    return result->objects.size();
+    return PublishDone{result->objects.size(), Clock::now()};
   });
+}
+
+bool publish_done(const FollowState& s) {
+  return s.publishing.valid() &&
+         s.publishing.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
 }
 
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
   if (!s.publishing.valid()) return false;
-  if (!wait && s.publishing.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-    return false;
-  s.status.objects = s.publishing.get();
-  // The lag of each keyframe this publish brought in: from its frame's arrival to now.
-  const Clock::time_point now = Clock::now();
+  if (!wait && !publish_done(s)) return false;
+  const PublishDone done = s.publishing.get();
+  s.status.objects = done.objects;
+  // The lag of each keyframe this publish brought in: from its frame's arrival to the moment its
+  // map was in place (not to when this loop noticed it).
+  const Clock::time_point now = done.committed;
   s.status.publish_seconds_last = std::chrono::duration<double>(now - s.publish_started).count();
   s.status.lag_last_s = 0.0;
   for (const Clock::time_point& arrived : s.publishing_arrivals) {

@@ -40,6 +40,13 @@ struct KeptKeyframe {
   cv::Mat view_depth;
 };
 
+// A publish's end: the objects of its map and when that map was renamed into place (the moment a
+// reader sees it: the lag's end).
+struct PublishDone {
+  std::size_t objects = 0;
+  Clock::time_point committed;
+};
+
 struct FollowState {
   FollowOptions options;  // options.fuse with dataset, out (OUT/map), trajectory, segmentation set
   FuseChoices choices;
@@ -78,7 +85,8 @@ struct FollowState {
   std::vector<Clock::time_point> unpublished;  // arrival of the keyframes fused since the publish
   Clock::time_point last_news = Clock::now();  // last new frame or pose
   Clock::time_point last_publish = Clock::now();  // the last publish's start
-  std::future<std::size_t> publishing;  // the publish in flight: its objects when it is done
+  // The publish in flight: when it is done, its objects and the moment its map was in place.
+  std::future<PublishDone> publishing;
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
   std::vector<double> lags;  // every published keyframe's lag (s), for the median
   Clock::time_point publish_started;
@@ -116,6 +124,7 @@ void replace_after_loop_closure(FollowState& s);
 //    with the lag. publish: every keyframe published, to its end (the one in flight may do).
 void start_publish(FollowState& s);
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
+bool publish_done(const FollowState& s);  // a publish in flight has its map in place
 void publish(FollowState& s, const FollowEvents& events);
 
 // OUT/status.json from s.status (atomically), its time and peak memory updated.

@@ -108,8 +108,9 @@ std::optional<InstancesReader> keyframe_instances(FollowState& s, const Keyframe
 bool queue_keyframes(FollowState& s, bool ending, std::size_t& from, std::size_t taken,
                      std::size_t window) {
   for (; from < s.waiting.size() && s.live->queued() < window; ++from) {
-    // A backlog does not hold back the publish that is due: the rest waits for the next poll.
-    if (!ending && from > 0 && !s.publishing.valid() &&
+    // A backlog does not hold back the publish that is due (none in flight, or the one in flight
+    // done): the rest waits for the next poll.
+    if (!ending && from > 0 && (!s.publishing.valid() || publish_done(s)) &&
         seconds_since(s.last_publish) >= s.options.publish_every_s)
       return false;
     const Keyframe& k = s.waiting[from].keyframe;
