@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <cstring>
 #include <limits>
 
 namespace objmap::geometry {
@@ -28,6 +30,31 @@ TEST(VoxelHashTable, GrowsAndFindsEveryKey) {
   EXPECT_EQ(table.find(pack_voxel(1000, 1000, 1000)), nullptr);
   const auto keys = table.sorted_keys();
   EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end()));
+}
+
+TEST(VoxelHashTable, ATableMadeWhereDirtyMemoryWasFreedStartsEmpty) {
+  // The slots below 2 MB come from malloc and are zeroed by the table (not by calloc): blocks of
+  // the tables' sizes filled with ones and freed first, so that the heap hands their memory out
+  // again; every table made after them is empty, and finds only what was put in.
+  for (std::size_t slots : {std::size_t{1024}, std::size_t{16384}, std::size_t{65536}}) {
+    const std::size_t bytes = slots * sizeof(VoxelHashTable<int>::Slot);
+    for (int round = 0; round < 3; ++round) {
+      void* dirty = std::malloc(bytes);
+      ASSERT_NE(dirty, nullptr);
+      std::memset(dirty, 0xff, bytes);
+      std::free(dirty);
+    }
+    VoxelHashTable<int> table(slots / 2);
+    ASSERT_EQ(table.capacity(), slots);
+    std::size_t entries = 0;
+    table.for_each([&](VoxelKey, int) { ++entries; });
+    EXPECT_EQ(entries, 0u) << slots << " slots";
+    table[pack_voxel(1, 2, 3)] = 7;
+    EXPECT_EQ(table.size(), 1u);
+    EXPECT_EQ(table.find(pack_voxel(3, 2, 1)), nullptr);
+    ASSERT_NE(table.find(pack_voxel(1, 2, 3)), nullptr);
+    EXPECT_EQ(*table.find(pack_voxel(1, 2, 3)), 7);
+  }
 }
 
 TEST(VoxelHashTable, EraseKeepsEveryOtherKeyFindable) {

@@ -124,9 +124,9 @@ void unmap(void* p, std::size_t bytes);
 // that export sort by key.
 //
 // A slot stores its key XOR kNoVoxel, so that an empty slot (key kNoVoxel, value Value{}) is all
-// zero bits: the slot array is a zeroed allocation (calloc: a large one is fresh pages from the
-// kernel, written only where entries land), neither filled on allocation nor on growth. Value
-// must be trivially copyable and Value{} all zero bits (integers, floats, structs of them).
+// zero bits: the slot array is a zeroed allocation (every page written once when it is made, see
+// allocate), not filled again when entries land or the table grows. Value must be trivially
+// copyable and Value{} all zero bits (integers, floats, structs of them).
 template <typename Value>
 class VoxelHashTable {
   static_assert(std::is_trivially_copyable<Value>::value,
@@ -252,7 +252,7 @@ class VoxelHashTable {
  private:
   // Slot arrays of 2 MB and more are mapped from the kernel (zeroed pages) with transparent huge
   // pages asked for: a large table is touched all over, and one fault per 2 MB instead of per 4 KB
-  // is most of what filling it costs. Smaller ones come from calloc / malloc.
+  // is most of what filling it costs. Smaller ones come from malloc.
   static constexpr std::size_t kMapBytes = std::size_t{2} << 20;
   struct Free {
     std::size_t bytes = 0;
@@ -261,10 +261,13 @@ class VoxelHashTable {
   using Slots = std::unique_ptr<Slot[], Free>;
   static Slots allocate(std::size_t cap, bool zeroed) {
     const std::size_t bytes = cap * sizeof(Slot);
-    void* p = bytes >= kMapBytes ? map_zeroed(bytes)
-              : zeroed           ? std::calloc(cap, sizeof(Slot))
-                                 : std::malloc(bytes);
+    void* p = bytes >= kMapBytes ? map_zeroed(bytes) : std::malloc(bytes);
     if (!p) throw std::bad_alloc();
+    // Zeroed by writing, not by calloc: calloc leaves fresh pages to the kernel, and a probe's read
+    // of such a page maps the shared zero page, whose replacement at the write that follows is a
+    // second fault and a TLB flush on the other threads' cores (as map_zeroed's pages, written).
+    // explicit_bzero: the compiler would turn malloc + memset back into calloc.
+    if (zeroed && bytes < kMapBytes) explicit_bzero(p, bytes);
     return Slots(static_cast<Slot*>(p), Free{bytes});
   }
   static void free_slots(Slot* p, std::size_t bytes) {
