@@ -346,6 +346,40 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
   EXPECT_NE(e.find("text.bag: is a file and not a ROS 1 bag"), std::string::npos) << e;
 }
 
+// An array whose message claims more than the message holds (a damaged bag; ROS's own reader
+// would first size the array: here a gigabyte of pixels): named, before anything is allocated.
+TEST(Rosbag, AnArrayClaimingMoreThanItsMessageHoldsIsADamagedBag) {
+  TempDir tmp;
+  {
+    BagWriter bag(tmp / "plain.bag", "none");
+    bag.image("/c/image_raw", 1.0, cv::Mat(4, 4, CV_8UC3, cv::Scalar(0)), "bgr8");
+    bag.image("/d/image_raw", 1.0, cv::Mat(4, 4, CV_16UC1, cv::Scalar(0)), "16UC1");
+  }
+  std::string bytes;
+  {
+    std::ifstream in(tmp / "plain.bag", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto patched = [&](const std::string& name, const std::string& before,
+                           const std::string& length) {
+    std::string b = bytes;
+    const std::size_t at = b.find(before);
+    EXPECT_NE(at, std::string::npos) << name;
+    if (at != std::string::npos) b.replace(at + before.size(), 4, length);
+    std::ofstream(tmp / name, std::ios::binary) << b;
+    return tmp / name;
+  };
+  // The depth image's 32 bytes of pixels (after its encoding, is_bigendian 0 and step 8) made 1 GB.
+  const fs::path pixels = patched("pixels.bag", std::string("16UC1\x00\x08\x00\x00\x00", 10),
+                                  std::string("\x00\x00\x00\x40", 4));
+  std::string e = error_of([&] { read_dataset(pixels); });
+  EXPECT_NE(e.find("pixels.bag: not a readable ROS bag: damaged message: its image data claims "
+                   "1073741824 bytes with 32 bytes left in the message; expected a complete "
+                   "message"),
+            std::string::npos)
+      << e;
+}
+
 #endif  // OBJMAP_TEST_BAGS
 
 }  // namespace

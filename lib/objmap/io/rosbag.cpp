@@ -28,43 +28,8 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include "objmap/io/codecs.h"
+#include "objmap/io/rosbag_messages.h"
 #include "objmap/io/tum_dataset.h"
-
-// The header of an Image or CompressedImage alone (both start with it): the stamps of a stream are
-// read without copying its pixels.
-namespace objmap_rosbag {
-struct StampOnly {
-  std_msgs::Header header;
-};
-}  // namespace objmap_rosbag
-
-namespace ros::message_traits {
-template <>
-struct MD5Sum<objmap_rosbag::StampOnly> {
-  static const char* value() { return "*"; }
-  static const char* value(const objmap_rosbag::StampOnly&) { return value(); }
-};
-template <>
-struct DataType<objmap_rosbag::StampOnly> {
-  static const char* value() { return "*"; }
-  static const char* value(const objmap_rosbag::StampOnly&) { return value(); }
-};
-template <>
-struct Definition<objmap_rosbag::StampOnly> {
-  static const char* value() { return ""; }
-  static const char* value(const objmap_rosbag::StampOnly&) { return value(); }
-};
-}  // namespace ros::message_traits
-
-namespace ros::serialization {
-template <>
-struct Serializer<objmap_rosbag::StampOnly> {
-  template <typename Stream>
-  static void read(Stream& stream, objmap_rosbag::StampOnly& m) {
-    stream.next(m.header);
-  }
-};
-}  // namespace ros::serialization
 
 #endif  // OBJMAP_HAVE_ROSBAG
 
@@ -188,9 +153,9 @@ std::map<std::string, Stream> image_streams(const rosbag::Bag& bag) {
     }
     if (messages.empty()) continue;
     if (s.compressed) {
-      if (auto first = messages.front().instantiate<sensor_msgs::CompressedImage>())
+      if (auto first = messages.front().instantiate<objmap_rosbag::CheckedCompressedImage>())
         s.encoding = first->format;
-    } else if (auto first = messages.front().instantiate<sensor_msgs::Image>()) {
+    } else if (auto first = messages.front().instantiate<objmap_rosbag::CheckedImage>()) {
       s.encoding = first->encoding;
     }
     s.depth = is_depth_encoding(s.encoding, s.compressed);
@@ -345,7 +310,7 @@ std::optional<Pose> transform_from_tree(const rosbag::Bag& bag, const std::strin
   for (const std::string topic : {"/tf_static", "/tf"}) {
     rosbag::View view(bag, rosbag::TopicQuery(topic));
     for (const rosbag::MessageInstance& m : view) {
-      const auto message = m.instantiate<tf2_msgs::TFMessage>();
+      const auto message = m.instantiate<objmap_rosbag::CheckedTFMessage>();
       if (!message) break;
       for (const auto& t : message->transforms) {
         const std::string parent = without_slash(t.header.frame_id),
@@ -408,7 +373,7 @@ void require_pixels(const sensor_msgs::Image& msg, std::size_t bytes, const char
 // The colour image of a message: CV_8UC3 BGR.
 cv::Mat decode_color(const rosbag::MessageInstance& m, const Stream& s, const std::string& where) {
   if (s.compressed) {
-    const auto msg = m.instantiate<sensor_msgs::CompressedImage>();
+    const auto msg = m.instantiate<objmap_rosbag::CheckedCompressedImage>();
     require(msg != nullptr, where, "not a sensor_msgs/CompressedImage");
     std::string error;
     const std::string f = lower(msg->format);
@@ -427,7 +392,7 @@ cv::Mat decode_color(const rosbag::MessageInstance& m, const Stream& s, const st
       }
     return bgr;
   }
-  const auto msg = m.instantiate<sensor_msgs::Image>();
+  const auto msg = m.instantiate<objmap_rosbag::CheckedImage>();
   require(msg != nullptr, where, "not a sensor_msgs/Image");
   const std::string e = lower(msg->encoding);
   const std::size_t channels = e == "mono8" ? 1 : (e == "rgba8" || e == "bgra8") ? 4 : 3;
@@ -474,11 +439,11 @@ cv::Mat decode_compressed_depth(const sensor_msgs::CompressedImage& msg, const s
 // The depth image of a message: CV_16UC1 in the stream's units (32FC1: kFloatDepthFactor).
 cv::Mat decode_depth(const rosbag::MessageInstance& m, const Stream& s, const std::string& where) {
   if (s.compressed) {
-    const auto msg = m.instantiate<sensor_msgs::CompressedImage>();
+    const auto msg = m.instantiate<objmap_rosbag::CheckedCompressedImage>();
     require(msg != nullptr, where, "not a sensor_msgs/CompressedImage");
     return decode_compressed_depth(*msg, where);
   }
-  const auto msg = m.instantiate<sensor_msgs::Image>();
+  const auto msg = m.instantiate<objmap_rosbag::CheckedImage>();
   require(msg != nullptr, where, "not a sensor_msgs/Image");
   const std::string e = lower(msg->encoding);
   require(is_depth_encoding(msg->encoding, false), where,
@@ -649,13 +614,15 @@ void read_cameras(const rosbag::Bag& bag, const Stream& color, const Stream& dep
     if (c->datatype == "sensor_msgs/CameraInfo") infos.insert(c->topic);
   const std::string color_topic = camera_info_topic(infos, color.topic);
   const std::string depth_topic = camera_info_topic(infos, depth.topic);
-  const auto color_info =
-      color_topic.empty() ? nullptr : first_message<sensor_msgs::CameraInfo>(bag, color_topic);
+  const auto color_info = color_topic.empty()
+                              ? nullptr
+                              : first_message<objmap_rosbag::CheckedCameraInfo>(bag, color_topic);
   if (!color_info) return;  // the camera comes from --camera
   d.camera = camera_from_info(*color_info, where + ":" + color_topic, d.depth_factor);
   d.camera_source = where + ":" + color_topic;
-  const auto depth_info =
-      depth_topic.empty() ? nullptr : first_message<sensor_msgs::CameraInfo>(bag, depth_topic);
+  const auto depth_info = depth_topic.empty()
+                              ? nullptr
+                              : first_message<objmap_rosbag::CheckedCameraInfo>(bag, depth_topic);
   if (!depth_info || contains(depth.topic, "aligned_depth_to_color") ||
       contains(depth.topic, "depth_registered"))
     return;
