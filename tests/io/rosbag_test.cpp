@@ -334,6 +334,21 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
   EXPECT_NE(e.find(" (in a chunk) has a header field of 65536 bytes beyond its "),
             std::string::npos)
       << e;
+  // A connection record's data is the connection's header, parsed the same way (a field claiming
+  // more than that header).
+  {
+    std::ifstream in(tmp / "plain.bag", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const std::size_t def = bytes.find("message_definition=");
+    ASSERT_NE(def, std::string::npos);
+    const unsigned char long_field[4] = {0x00, 0x00, 0x01, 0x00};
+    bytes.replace(def - 4, 4, reinterpret_cast<const char*>(long_field), 4);
+    std::ofstream(tmp / "connection.bag", std::ios::binary) << bytes;
+  }
+  e = error_of([&] { read_dataset(tmp / "connection.bag"); });
+  EXPECT_NE(e.find("connection.bag: damaged ROS bag: the record at byte "), std::string::npos) << e;
+  EXPECT_NE(e.find(" has a connection header field of 65536 bytes beyond its "), std::string::npos)
+      << e;
   // Not a bag at all, named as one.
   std::ofstream(tmp / "text.bag") << "hello\n";
   DatasetOptions as_bag;

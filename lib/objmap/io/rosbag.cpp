@@ -495,15 +495,16 @@ std::optional<std::string> header_field(const std::string& header, const std::st
   return std::nullopt;
 }
 
-// Why the fields of `header` do not fill it exactly with <len><field> pairs, or empty.
-std::string header_fields_problem(const std::string& header) {
+// Why the fields of `header` (`what`: "header", or a connection record's "connection header") do
+// not fill it exactly with <len><field> pairs, or empty.
+std::string header_fields_problem(const std::string& header, const std::string& what) {
   for (std::size_t at = 0; at < header.size();) {
     if (header.size() - at < 4)
-      return "has a header field length cut short at header byte " + std::to_string(at);
+      return "has a " + what + " field length cut short at " + what + " byte " + std::to_string(at);
     const std::uint32_t len = little_u32(reinterpret_cast<const unsigned char*>(&header[at]));
     if (len > header.size() - at - 4)
-      return "has a header field of " + std::to_string(len) + " bytes beyond its " +
-             std::to_string(header.size()) + "-byte header";
+      return "has a " + what + " field of " + std::to_string(len) + " bytes beyond its " +
+             std::to_string(header.size()) + "-byte " + what;
     at += 4 + std::size_t{len};
   }
   return {};
@@ -529,7 +530,7 @@ void check_records_in(std::ifstream& in, const std::string& where, std::uint64_t
     if (end - at - 4 - header_len < 4 || !in.read(header.data(), header_len) ||
         !in.read(reinterpret_cast<char*>(len), 4))
       fail("is cut short");
-    const std::string problem = header_fields_problem(header);
+    const std::string problem = header_fields_problem(header, "header");
     if (!problem.empty()) fail(problem);
     const std::uint32_t data_len = little_u32(len);
     if (data_len > end - at - 8 - header_len)
@@ -537,6 +538,14 @@ void check_records_in(std::ifstream& in, const std::string& where, std::uint64_t
            (in_chunk ? "chunk" : "file"));
     const auto op = header_field(header, "op");
     const std::uint64_t data_at = at + 8 + header_len;
+    if (op && *op == std::string(1, '\x07')) {  // a connection: its data is a header as well
+      if (data_len > (16u << 20))
+        fail("claims a connection header of " + std::to_string(data_len) + " bytes");
+      std::string connection(data_len, '\0');
+      if (!in.read(connection.data(), data_len)) fail("is cut short");
+      const std::string bad = header_fields_problem(connection, "connection header");
+      if (!bad.empty()) fail(bad);
+    }
     if (op && *op == std::string(1, '\x05')) {
       const auto uncompressed = header_field(header, "size");
       if (uncompressed && uncompressed->size() == 4 &&
