@@ -35,7 +35,9 @@ export CXXFLAGS="$flags" LDFLAGS="-fsanitize=address,undefined"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 # Leaks inside third-party libraries (scripts/lsan.supp names each and why).
-export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp}
+# print_suppressions=0: the suppressions' tally is not printed at exit, so that a test that counts
+# the lines of a command's error output (one line for a bad input) sees the command's own.
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan.supp:print_suppressions=0}
 status=0
 selection=()
 [ -z "${SANITIZE_TESTS:-}" ] || selection=(-R "$SANITIZE_TESTS")

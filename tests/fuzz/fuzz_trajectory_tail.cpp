@@ -67,7 +67,8 @@ objmap::io::TrajectoryTailPoll checked_poll(objmap::io::TrajectoryTail& tail,
 void append_file(const fs::path& file, std::string_view bytes) {
   std::FILE* f = std::fopen(file.c_str(), "ab");
   if (!f) finding("cannot append to the scratch file");
-  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  // An empty part's view may hold a null pointer, which fwrite must not be given.
+  const bool ok = bytes.empty() || std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
   if (std::fclose(f) != 0 || !ok) finding("cannot append to the scratch file");
 }
 
