@@ -32,6 +32,16 @@ TEST(Rosbag, ReadsBags) {
 #else
 
 using test::BagWriter;
+using test::read_text;
+
+// A copy of the bag `from` at `to` with `bytes` written over it at byte `at` (a damaged bag).
+fs::path damaged_copy(const fs::path& from, const fs::path& to, std::size_t at,
+                      const std::string& bytes) {
+  std::string b = read_text(from);
+  b.replace(at, bytes.size(), bytes);
+  std::ofstream(to, std::ios::binary) << b;
+  return to;
+}
 
 // Every pixel of two images equal.
 ::testing::AssertionResult same_pixels(const cv::Mat& a, const cv::Mat& b) {
@@ -288,13 +298,7 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
   e = error_of([&] { read_dataset(tmp / "cut.bag"); });
   EXPECT_NE(e.find("cut.bag: "), std::string::npos) << e;
   // A record that claims 2.3 GB (rosbag_storage would allocate it): refused before it is read.
-  {
-    std::ifstream in(tmp / "short.bag", std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    const unsigned char huge[4] = {0x00, 0x00, 0x00, 0x8a};
-    bytes.replace(13, 4, reinterpret_cast<const char*>(huge), 4);
-    std::ofstream(tmp / "huge.bag", std::ios::binary) << bytes;
-  }
+  damaged_copy(tmp / "short.bag", tmp / "huge.bag", 13, std::string("\x00\x00\x00\x8a", 4));
   e = error_of([&] { read_dataset(tmp / "huge.bag"); });
   EXPECT_NE(e.find("huge.bag: damaged ROS bag: the record at byte 13 claims a header of 2315255808 "
                    "bytes; expected a complete bag"),
@@ -302,13 +306,7 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
       << e;
   // A header field that claims more than its header (ros::Header::parse would read past it): the
   // file header record's first field, and a connection record's inside an uncompressed chunk.
-  {
-    std::ifstream in(tmp / "short.bag", std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    const unsigned char long_field[4] = {0x00, 0x21, 0x00, 0x00};
-    bytes.replace(17, 4, reinterpret_cast<const char*>(long_field), 4);
-    std::ofstream(tmp / "field.bag", std::ios::binary) << bytes;
-  }
+  damaged_copy(tmp / "short.bag", tmp / "field.bag", 17, std::string("\x00\x21\x00\x00", 4));
   e = error_of([&] { read_dataset(tmp / "field.bag"); });
   EXPECT_NE(e.find("field.bag: damaged ROS bag: the record at byte 13 has a header field of 8448 "
                    "bytes beyond its "),
@@ -320,15 +318,11 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
     bag.image("/d/image_raw", 1.0, cv::Mat(4, 4, CV_16UC1, cv::Scalar(0)), "16UC1");
   }
   ASSERT_NO_THROW(read_dataset(tmp / "plain.bag"));
-  {
-    std::ifstream in(tmp / "plain.bag", std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    const std::size_t op = bytes.find(std::string("op=\x07", 4));  // the chunk's first connection
-    ASSERT_NE(op, std::string::npos);
-    const unsigned char long_field[4] = {0x00, 0x00, 0x01, 0x00};
-    bytes.replace(op - 4, 4, reinterpret_cast<const char*>(long_field), 4);
-    std::ofstream(tmp / "inner.bag", std::ios::binary) << bytes;
-  }
+  const std::string plain = read_text(tmp / "plain.bag");
+  const std::string long_field("\x00\x00\x01\x00", 4);
+  const std::size_t op = plain.find(std::string("op=\x07", 4));  // the chunk's first connection
+  ASSERT_NE(op, std::string::npos);
+  damaged_copy(tmp / "plain.bag", tmp / "inner.bag", op - 4, long_field);
   e = error_of([&] { read_dataset(tmp / "inner.bag"); });
   EXPECT_NE(e.find("inner.bag: damaged ROS bag: the record at byte "), std::string::npos) << e;
   EXPECT_NE(e.find(" (in a chunk) has a header field of 65536 bytes beyond its "),
@@ -336,15 +330,9 @@ TEST(Rosbag, BadBagsAreNamedWithTheTopicAndWhatWasExpected) {
       << e;
   // A connection record's data is the connection's header, parsed the same way (a field claiming
   // more than that header).
-  {
-    std::ifstream in(tmp / "plain.bag", std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    const std::size_t def = bytes.find("message_definition=");
-    ASSERT_NE(def, std::string::npos);
-    const unsigned char long_field[4] = {0x00, 0x00, 0x01, 0x00};
-    bytes.replace(def - 4, 4, reinterpret_cast<const char*>(long_field), 4);
-    std::ofstream(tmp / "connection.bag", std::ios::binary) << bytes;
-  }
+  const std::size_t def = plain.find("message_definition=");
+  ASSERT_NE(def, std::string::npos);
+  damaged_copy(tmp / "plain.bag", tmp / "connection.bag", def - 4, long_field);
   e = error_of([&] { read_dataset(tmp / "connection.bag"); });
   EXPECT_NE(e.find("connection.bag: damaged ROS bag: the record at byte "), std::string::npos) << e;
   EXPECT_NE(e.find(" has a connection header field of 65536 bytes beyond its "), std::string::npos)
@@ -370,23 +358,12 @@ TEST(Rosbag, AnArrayClaimingMoreThanItsMessageHoldsIsADamagedBag) {
     bag.image("/c/image_raw", 1.0, cv::Mat(4, 4, CV_8UC3, cv::Scalar(0)), "bgr8");
     bag.image("/d/image_raw", 1.0, cv::Mat(4, 4, CV_16UC1, cv::Scalar(0)), "16UC1");
   }
-  std::string bytes;
-  {
-    std::ifstream in(tmp / "plain.bag", std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
-  const auto patched = [&](const std::string& name, const std::string& before,
-                           const std::string& length) {
-    std::string b = bytes;
-    const std::size_t at = b.find(before);
-    EXPECT_NE(at, std::string::npos) << name;
-    if (at != std::string::npos) b.replace(at + before.size(), 4, length);
-    std::ofstream(tmp / name, std::ios::binary) << b;
-    return tmp / name;
-  };
   // The depth image's 32 bytes of pixels (after its encoding, is_bigendian 0 and step 8) made 1 GB.
-  const fs::path pixels = patched("pixels.bag", std::string("16UC1\x00\x08\x00\x00\x00", 10),
-                                  std::string("\x00\x00\x00\x40", 4));
+  const std::string before("16UC1\x00\x08\x00\x00\x00", 10);
+  const std::size_t length = read_text(tmp / "plain.bag").find(before);
+  ASSERT_NE(length, std::string::npos);
+  const fs::path pixels = damaged_copy(tmp / "plain.bag", tmp / "pixels.bag",
+                                       length + before.size(), std::string("\x00\x00\x00\x40", 4));
   std::string e = error_of([&] { read_dataset(pixels); });
   EXPECT_NE(e.find("pixels.bag: not a readable ROS bag: damaged message: its image data claims "
                    "1073741824 bytes with 32 bytes left in the message; expected a complete "

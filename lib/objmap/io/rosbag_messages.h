@@ -49,7 +49,8 @@ void next_array(Stream& stream, Vector& v, std::uint64_t element_bytes, const ch
         std::string("damaged message: its ") + field + " claims " + std::to_string(n) +
         (element_bytes == 1 ? " bytes"
                             : " elements of at least " + std::to_string(element_bytes) + " bytes") +
-        " with " + std::to_string(left) + " bytes left in the message; expected a complete message");
+        " with " + std::to_string(left) +
+        " bytes left in the message; expected a complete message");
   v.resize(n);
   using Element = typename Vector::value_type;
   if constexpr (std::is_same_v<Element, std::uint8_t>) {
@@ -103,63 +104,71 @@ OBJMAP_CHECKED_MESSAGE_TRAITS(objmap_rosbag::CheckedTFMessage, tf2_msgs::TFMessa
 }  // namespace ros::message_traits
 
 // The readers, field by field in each message's order (sensor_msgs/Image.msg and the others).
+namespace objmap_rosbag {
+
+template <typename Stream>
+void read_fields(Stream& stream, StampOnly& m) {
+  stream.next(m.header);
+}
+
+// Image and CameraInfo begin alike: header, height, width.
+template <typename Stream, typename Message>
+void read_sized_header(Stream& stream, Message& m) {
+  stream.next(m.header);
+  stream.next(m.height);
+  stream.next(m.width);
+}
+
+template <typename Stream>
+void read_fields(Stream& stream, CheckedImage& m) {
+  read_sized_header(stream, m);
+  stream.next(m.encoding);
+  stream.next(m.is_bigendian);
+  stream.next(m.step);
+  next_array(stream, m.data, 1, "image data");
+}
+
+template <typename Stream>
+void read_fields(Stream& stream, CheckedCompressedImage& m) {
+  stream.next(m.header);
+  stream.next(m.format);
+  next_array(stream, m.data, 1, "compressed image data");
+}
+
+template <typename Stream>
+void read_fields(Stream& stream, CheckedCameraInfo& m) {
+  read_sized_header(stream, m);
+  stream.next(m.distortion_model);
+  next_array(stream, m.D, sizeof(double), "distortion D");
+  stream.next(m.K);
+  stream.next(m.R);
+  stream.next(m.P);
+  stream.next(m.binning_x);
+  stream.next(m.binning_y);
+  stream.next(m.roi);
+}
+
+template <typename Stream>
+void read_fields(Stream& stream, CheckedTFMessage& m) {
+  next_array(stream, m.transforms, kMinTransformStampedBytes, "transforms");
+}
+
+}  // namespace objmap_rosbag
+
+// ROS reads a message through its Serializer: each of these through its read_fields above.
 namespace ros::serialization {
-template <>
-struct Serializer<objmap_rosbag::StampOnly> {
-  template <typename Stream>
-  static void read(Stream& stream, objmap_rosbag::StampOnly& m) {
-    stream.next(m.header);
-  }
-};
-
-template <>
-struct Serializer<objmap_rosbag::CheckedImage> {
-  template <typename Stream>
-  static void read(Stream& stream, objmap_rosbag::CheckedImage& m) {
-    stream.next(m.header);
-    stream.next(m.height);
-    stream.next(m.width);
-    stream.next(m.encoding);
-    stream.next(m.is_bigendian);
-    stream.next(m.step);
-    objmap_rosbag::next_array(stream, m.data, 1, "image data");
-  }
-};
-
-template <>
-struct Serializer<objmap_rosbag::CheckedCompressedImage> {
-  template <typename Stream>
-  static void read(Stream& stream, objmap_rosbag::CheckedCompressedImage& m) {
-    stream.next(m.header);
-    stream.next(m.format);
-    objmap_rosbag::next_array(stream, m.data, 1, "compressed image data");
-  }
-};
-
-template <>
-struct Serializer<objmap_rosbag::CheckedCameraInfo> {
-  template <typename Stream>
-  static void read(Stream& stream, objmap_rosbag::CheckedCameraInfo& m) {
-    stream.next(m.header);
-    stream.next(m.height);
-    stream.next(m.width);
-    stream.next(m.distortion_model);
-    objmap_rosbag::next_array(stream, m.D, sizeof(double), "distortion D");
-    stream.next(m.K);
-    stream.next(m.R);
-    stream.next(m.P);
-    stream.next(m.binning_x);
-    stream.next(m.binning_y);
-    stream.next(m.roi);
-  }
-};
-
-template <>
-struct Serializer<objmap_rosbag::CheckedTFMessage> {
-  template <typename Stream>
-  static void read(Stream& stream, objmap_rosbag::CheckedTFMessage& m) {
-    objmap_rosbag::next_array(stream, m.transforms, objmap_rosbag::kMinTransformStampedBytes,
-                              "transforms");
-  }
-};
+#define OBJMAP_READ_THROUGH_FIELDS(Message)        \
+  template <>                                      \
+  struct Serializer<Message> {                     \
+    template <typename Stream>                     \
+    static void read(Stream& stream, Message& m) { \
+      objmap_rosbag::read_fields(stream, m);       \
+    }                                              \
+  };
+OBJMAP_READ_THROUGH_FIELDS(objmap_rosbag::StampOnly)
+OBJMAP_READ_THROUGH_FIELDS(objmap_rosbag::CheckedImage)
+OBJMAP_READ_THROUGH_FIELDS(objmap_rosbag::CheckedCompressedImage)
+OBJMAP_READ_THROUGH_FIELDS(objmap_rosbag::CheckedCameraInfo)
+OBJMAP_READ_THROUGH_FIELDS(objmap_rosbag::CheckedTFMessage)
+#undef OBJMAP_READ_THROUGH_FIELDS
 }  // namespace ros::serialization
