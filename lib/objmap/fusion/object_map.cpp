@@ -605,16 +605,26 @@ std::size_t ObjectMap::confirmed_count() const {
   return n;
 }
 
-std::vector<Vec3> ObjectMap::surface_points(const Object& o, double share) const {
+std::shared_ptr<const std::vector<Vec3>> ObjectMap::surface_points(const Object& o,
+                                                                   double share) const {
+  // Made once per content and share (the memo; its copies share it).
+  ObjectMemo& memo = *o.memo;
+  {
+    const std::lock_guard<std::mutex> lock(memo.mutex);
+    if (memo.surface && memo.surface_share == share) return memo.surface;
+  }
   const double need = std::min(255.0, std::max(1.0, share * o.observations));
   auto seen = o.voxels.sorted_voxels([&](VoxelKey key) {
     const std::uint8_t* hits = o.near.find(key);
     return hits && *hits >= need;
   });
   if (seen.empty()) seen = o.voxels.sorted_voxels();
-  std::vector<Vec3> surface;
-  surface.reserve(seen.size());
-  for (const auto& [key, v] : seen) surface.push_back(o.voxels.mean_position(key, *v));
+  auto surface = std::make_shared<std::vector<Vec3>>();
+  surface->reserve(seen.size());
+  for (const auto& [key, v] : seen) surface->push_back(o.voxels.mean_position(key, *v));
+  const std::lock_guard<std::mutex> lock(memo.mutex);
+  memo.surface_share = share;
+  memo.surface = surface;
   return surface;
 }
 
@@ -633,7 +643,8 @@ void ObjectMap::judge_visibility(const ViewLog& log, const VisibilityOptions& op
     if (!o.alive || (only_unjudged && o.frames_in_view >= 0)) continue;
     // The sample: evenly spaced among the voxels of its surface (seen in >= 10% of its
     // observations; all of them when none is), in key order.
-    const std::vector<Vec3> surface = surface_points(o, 0.1);
+    const std::shared_ptr<const std::vector<Vec3>> surface_memo = surface_points(o, 0.1);
+    const std::vector<Vec3>& surface = *surface_memo;
     std::vector<Vec3> sample;
     const std::size_t n = std::min<std::size_t>(surface.size(), options.sample_points);
     for (std::size_t i = 0; i < n; ++i) sample.push_back(surface[i * surface.size() / n]);

@@ -571,8 +571,8 @@ class ObjectMap {
                                                   int parts,
                                                   const std::function<int(VoxelKey)>& voxel_part);
   // The mean positions of the voxels of `object` seen in >= `share` of its observations (all of
-  // them when none is), in key order.
-  std::vector<Vec3> surface_points(const Object& object, double share) const;
+  // them when none is), in key order. Made once per content (Object::memo).
+  std::shared_ptr<const std::vector<Vec3>> surface_points(const Object& object, double share) const;
 
   ObjectMapOptions options_;
   std::shared_ptr<RecordCache> record_cache_;    // set_record_cache; shared by copies

@@ -34,6 +34,12 @@ std::vector<double> class_frames(const ObjectT& o, const std::string& canonical)
 }  // namespace
 
 std::uint64_t ObjectMap::pair_content(const Object& o) {
+  // Made once per content (the memo; its copies share it).
+  ObjectMemo& memo = *o.memo;
+  {
+    const std::lock_guard<std::mutex> lock(memo.mutex);
+    if (memo.pair_content) return *memo.pair_content;
+  }
   // Order-free over the voxels and the dilated support table; in order over the rest.
   OrderFreeHash voxels, near;
   o.voxels.for_each([&](VoxelKey key, const VoxelData& v) { voxels.add(voxel_content(key, v)); });
@@ -60,6 +66,8 @@ std::uint64_t ObjectMap::pair_content(const Object& o) {
   }
   for (double t : o.frames) add(content_bits(t));
   for (int t : o.track_ids) add(content_bits(t));
+  const std::lock_guard<std::mutex> lock(memo.mutex);
+  memo.pair_content = h;
   return h;
 }
 
@@ -99,6 +107,7 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   into->merges.insert(into->merges.end(), absorbed->merges.begin(), absorbed->merges.end());
   absorbed->alive = false;
   absorbed->absorbed_into = into->id;
+  absorbed->changed();
   absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
   absorbed->near.clear();
   absorbed->frames.clear();
@@ -359,14 +368,14 @@ void ObjectMap::merge_fragments_in_box(std::vector<MergeLink>& made) {
     Object* object;
     int views;
     std::string cls;
-    std::vector<Vec3> surface;
+    std::shared_ptr<const std::vector<Vec3>> surface;
     Obb box;
   };
   const auto make_live = [&](Object* o) {
     Live l{o, count_views(o->provenance, options_), segmentation::canonical_class(voted_class(*o)),
            surface_points(*o, 0.1), Obb{}};
     PointCloud cloud;
-    for (const Vec3& p : l.surface) cloud.points.push_back(p.cast<float>());
+    for (const Vec3& p : *l.surface) cloud.points.push_back(p.cast<float>());
     l.box = geometry::compute_obb(cloud);
     return l;
   };
@@ -392,12 +401,12 @@ void ObjectMap::merge_fragments_in_box(std::vector<MergeLink>& made) {
                               std::back_inserter(shared));
         if (shared.size() > options_.merge_max_shared_frames * a.object->frames.size()) continue;
         std::size_t inside = 0;
-        for (const Vec3& p : a.surface) {
+        for (const Vec3& p : *a.surface) {
           const Vec3 local = b.box.rotation.transpose() * (p - b.box.center);
           inside += (local.array().abs() <= b.box.half_extent.array() + grow).all();
         }
         const double share = static_cast<double>(inside) /
-                             static_cast<double>(std::max<std::size_t>(1, a.surface.size()));
+                             static_cast<double>(std::max<std::size_t>(1, a.surface->size()));
         if (share < options_.fragment_min_inside || share <= best_inside) continue;
         best_small = ia;
         best_large = ib;

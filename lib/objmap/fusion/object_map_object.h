@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -55,6 +58,18 @@ inline std::uint64_t voxel_content(VoxelKey key, const VoxelData& v) {
   return content_mix(h ^ v.count ^ (std::uint64_t{v.color_count} << 32));
 }
 
+// What the finishing steps compute from one object's content again and again (its surface points,
+// its pair content hash), kept until the object changes. An object copied (ObjectMap's copy: each
+// publish of objmap follow) shares its memo with the copy until either changes: every change of
+// the content gives the changed object a fresh memo (Object::changed), so a memo always belongs
+// to one content. Several threads may fill and read one memo.
+struct ObjectMemo {
+  std::mutex mutex;
+  double surface_share = -1.0;  // the share of `surface` (surface_points)
+  std::shared_ptr<const std::vector<Vec3>> surface;
+  std::optional<std::uint64_t> pair_content;
+};
+
 struct ObjectMap::Object {
   int id = -1;
   bool alive = true;
@@ -87,6 +102,7 @@ struct ObjectMap::Object {
   std::vector<std::pair<double, int>> moved;  // split_pass(): observation timestamp -> its part
   std::vector<MergeLink> merges;
   PointCloud points;  // its observations' points (ObjectMapOptions::keep_points)
+  std::shared_ptr<ObjectMemo> memo = std::make_shared<ObjectMemo>();
 
   explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
   // Provenance by timestamp, then insertion order; the cells follow their entries (when every
@@ -110,6 +126,7 @@ struct ObjectMap::Object {
   // Takes one observation of another object's (a split's part): its provenance entry and coarse
   // cells, its class vote, track id and frame.
   void take(const ObservationLink& link, std::vector<VoxelKey> link_cells) {
+    changed();
     ClassVote& vote = histogram[link.class_name];
     vote.score_sum += link.score;
     ++vote.count;
@@ -143,8 +160,13 @@ struct ObjectMap::Object {
       if (lo[k] - other.hi[k] > reach || other.lo[k] - hi[k] > reach) return false;
     return true;
   }
+  // The memo of the content before a change is not this object's any more: every step that
+  // changes the content calls this (refresh() does; the counts, votes and links a step changes
+  // beside the voxels are changed in the same step, before any memo is read).
+  void changed() { memo = std::make_shared<ObjectMemo>(); }
   // Bounds, voxel-weighted centroid and RMS radius in one pass over the voxels.
   void refresh() {
+    changed();
     Vec3 sum = Vec3::Zero();
     double sq = 0.0;
     bool any = false;

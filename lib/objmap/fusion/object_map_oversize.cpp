@@ -72,7 +72,8 @@ bool ObjectMap::cut_oversize(std::size_t index, const Vec3& up, double min_m, do
                              SplitLink& link, double* one_wide_m) {
   Object& o = *objects_[index];
   // 1. The cut through its surface (voxels seen in >= 10% of its observations).
-  const std::vector<Vec3> surface = surface_points(o, 0.1);
+  const std::shared_ptr<const std::vector<Vec3>> surface_memo = surface_points(o, 0.1);
+  const std::vector<Vec3>& surface = *surface_memo;
   bool tall_beyond = false;
   const std::optional<OversizeCut> cut =
       plan_oversize_cut(surface, up, min_m, max_m, options_.oversize, &tall_beyond);
@@ -136,7 +137,8 @@ bool ObjectMap::on_another_instance(const Object& o, const std::vector<Vec3>& pa
     if (!other->alive || other.get() == &o || !confirmed(*other) ||
         segmentation::canonical_class(voted_class(*other)) != cls)
       continue;
-    const std::vector<Vec3> surface = surface_points(*other, 0.1);
+    const std::shared_ptr<const std::vector<Vec3>> surface_memo = surface_points(*other, 0.1);
+    const std::vector<Vec3>& surface = *surface_memo;
     const PartsFit fit = fit_parts(part, surface, footprint(surface, up, opt.percentile), up,
                                    opt.percentile, opt.join_grow_m);
     if (fit.inside_share >= 0.5) return true;

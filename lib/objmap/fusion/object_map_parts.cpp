@@ -24,7 +24,7 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
     Object* object = nullptr;
     std::string cls;
     double limit_m = 0.0;
-    std::vector<Vec3> surface;
+    std::shared_ptr<const std::vector<Vec3>> surface;  // surface_points
     Footprint box;
     double area = 0.0;  // of the footprint (m²)
     bool confirmed = false;
@@ -41,7 +41,7 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
     const std::optional<segmentation::ClassSize> size = sizes.find(v.cls);
     v.limit_m = size ? size->max_m * (1.0 + o.margin) : 0.0;
     v.surface = surface_points(*object, 0.1);
-    v.box = footprint(v.surface, up, o.percentile);
+    v.box = footprint(*v.surface, up, o.percentile);
     v.area = (v.box.hi[0] - v.box.lo[0]) * (v.box.hi[1] - v.box.lo[1]);
     v.confirmed = confirmed(*object);
     return v;
@@ -55,10 +55,10 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
                           std::back_inserter(shared));
     const std::size_t fewer = std::min(a.object->frames.size(), b.object->frames.size());
     if (shared.size() > options_.merge_max_shared_frames * fewer) return std::nullopt;
-    const PartsFit fit = fit_parts(a.surface, b.surface, b.box, up, o.percentile, o.join_grow_m);
+    const PartsFit fit = fit_parts(*a.surface, *b.surface, b.box, up, o.percentile, o.join_grow_m);
     if (fit.gap_m > o.join_gap_m || fit.union_extent_m > b.limit_m) return std::nullopt;
     if (fit.inside_share < o.join_min_inside && !share_a_track(*a.object, *b.object) &&
-        !(o.join_continuous && continuous_parts(a.surface, b.surface, up, o)))
+        !(o.join_continuous && continuous_parts(*a.surface, *b.surface, up, o)))
       return std::nullopt;
     return fit;
   };
@@ -68,7 +68,7 @@ std::vector<MergeLink> ObjectMap::join_parts(const Vec3& up,
   for (const auto& object : objects_)
     if (object->alive && object->observations > 0) {
       PartView v = view_of(object.get());
-      if (v.limit_m > 0.0 && !v.surface.empty()) views.push_back(std::move(v));
+      if (v.limit_m > 0.0 && !v.surface->empty()) views.push_back(std::move(v));
     }
   while (true) {
     // The pair (smaller, larger footprint) of one class that fits best: the smallest gap, then the
@@ -124,7 +124,8 @@ void ObjectMap::join_under(const Vec3& up, const segmentation::ClassSizes& sizes
   for (const auto& candidate : objects_) {
     Object& part = *candidate;
     if (!part.alive || !part.too_wide) continue;
-    const std::vector<Vec3> below = surface_points(part, 0.1);
+    const std::shared_ptr<const std::vector<Vec3>> below_memo = surface_points(part, 0.1);
+    const std::vector<Vec3>& below = *below_memo;
     if (below.empty()) continue;
     const Footprint part_box = footprint(below, up, o.percentile);
     Vec3 middle = Vec3::Zero();
@@ -140,7 +141,8 @@ void ObjectMap::join_under(const Vec3& up, const segmentation::ClassSizes& sizes
         continue;
       const std::string cls = segmentation::canonical_class(voted_class(b));
       if (cls == part_class) continue;
-      const std::vector<Vec3> above = surface_points(b, 0.1);
+      const std::shared_ptr<const std::vector<Vec3>> above_memo = surface_points(b, 0.1);
+      const std::vector<Vec3>& above = *above_memo;
       const Footprint box = footprint(above, up, o.percentile);
       // Under it: its bottom below the other's, its top no higher than the other's middle.
       if (volume(box) <= volume(part_box) || part_box.lo[2] >= box.lo[2] ||

@@ -33,18 +33,15 @@ void start_publish(FollowState& s) {
   auto result = std::make_shared<FuseResult>(s.result);
   result->frames = s.dataset.frames.size();
   result->keyframes.frames_with_pose = s.status.frames_with_pose;
-  // The dense map's changes taken here; its cloud brought up to date on a thread of its own, beside
-  // the publish's objects (the one publish in flight applies them: one apply at a time).
+  // The dense map's changes taken here, after the publish's thread has started on the objects
+  // (their merge pass does not need the dense cloud); its cloud brought up to date on a thread of
+  // its own (the one publish in flight applies them: one apply at a time).
+  std::promise<std::shared_ptr<const DenseCloud>> dense_promise;
   std::shared_future<std::shared_ptr<const DenseCloud>> dense_cloud;
-  if (s.dense_snapshot)
-    dense_cloud =
-        std::async(std::launch::async, [snapshot = &*s.dense_snapshot,
-                                        changes = s.dense_snapshot->take(s.maps->dense)]() mutable {
-          return snapshot->apply(std::move(changes));
-        }).share();
+  if (s.dense_snapshot) dense_cloud = dense_promise.get_future().share();
   auto maps = std::make_shared<FuseMaps>(
       FuseMaps{s.maps->dense_options, fusion::VoxelMap(s.maps->dense_options), s.maps->objects,
-               std::nullopt, std::nullopt, s.maps->view_log, std::move(dense_cloud)});
+               std::nullopt, std::nullopt, s.maps->view_log, dense_cloud});
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
   const FollowState* state = &s;  // its options, choices and class sizes do not change
@@ -56,6 +53,16 @@ void start_publish(FollowState& s) {
     staging.commit();
     return PublishDone{result->objects.size(), Clock::now()};
   });
+  if (s.dense_snapshot)
+    s.dense_apply = std::async(std::launch::async, [snapshot = &*s.dense_snapshot,
+                                                    changes = s.dense_snapshot->take(s.maps->dense),
+                                                    promise = std::move(dense_promise)]() mutable {
+      try {
+        promise.set_value(snapshot->apply(std::move(changes)));
+      } catch (...) {
+        promise.set_exception(std::current_exception());
+      }
+    });
 }
 
 bool publish_done(const FollowState& s) {

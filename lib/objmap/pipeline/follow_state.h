@@ -87,6 +87,7 @@ struct FollowState {
   Clock::time_point last_publish = Clock::now();  // the last publish's start
   // The publish in flight: when it is done, its objects and the moment its map was in place.
   std::future<PublishDone> publishing;
+  std::future<void> dense_apply;  // its dense cloud's update (its dense_cloud future's value)
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
   std::vector<double> lags;  // every published keyframe's lag (s), for the median
   Clock::time_point publish_started;
