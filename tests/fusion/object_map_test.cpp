@@ -693,6 +693,47 @@ TEST(ObjectMap, AClassConfusionJoinsTheObjectItLiesOn) {
   EXPECT_TRUE(kept.merge_pass().empty());
 }
 
+// objmap follow's publishes score class confusions through the pair cache: as the map grows, the
+// merges of copies sharing one cache are those of the map made afresh without it.
+TEST(ObjectMap, ClassConfusionsWithThePairCacheAreThoseMadeAfresh) {
+  const Vec3 keyboard(0.005, 0.005, 0.765);
+  std::vector<std::vector<Observation>> frames;
+  for (int f = 0; f < 16; ++f) {
+    // Now and then a frame sees only a cup elsewhere: the keyboard and the book do not change.
+    if (f % 4 == 2) {
+      frames.push_back({posed(f, 3, "cup", box(Vec3(1.505, 0.005, 0.805), 3), camera_at(0.1 * f))});
+      continue;
+    }
+    frames.push_back({posed(f, 1, "keyboard", slab(keyboard, 22, 1), camera_at(0.1 * f))});
+    // The book boxed on the keyboard, then further along it (less of it on the keyboard's
+    // surface).
+    const Vec3 at = keyboard + Vec3(f < 8 ? 0.0 : 0.12, 0.0, 0.0);
+    if (f % 4 == 0)
+      frames.back().push_back(posed(f, 2, "book", slab(at, 20, 1), camera_at(0.1 * f)));
+  }
+  auto cache = std::make_shared<PairCache>();
+  ObjectMap live;
+  live.set_pair_cache(cache);
+  std::size_t confusions = 0;
+  for (std::size_t n = 0; n < frames.size(); ++n) {
+    live.add_frame(frames[n]);
+    ObjectMap published = live;
+    ObjectMap fresh;
+    for (std::size_t k = 0; k <= n; ++k) fresh.add_frame(frames[k]);
+    const std::vector<MergeLink> a = published.merge_pass(), b = fresh.merge_pass();
+    ASSERT_EQ(a.size(), b.size()) << n;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].into, b[i].into) << n;
+      EXPECT_EQ(a[i].absorbed, b[i].absorbed) << n;
+      EXPECT_EQ(a[i].overlap, b[i].overlap) << n;
+      EXPECT_EQ(a[i].class_confusion, b[i].class_confusion) << n;
+      confusions += a[i].class_confusion;
+    }
+  }
+  EXPECT_GT(confusions, 0u);
+  EXPECT_GT(cache->shares.hits(), 0u);  // the pairs no frame changed
+}
+
 TEST(ObjectMap, AMouseOnAKeyboardsBleedIsNoClassConfusion) {
   // The keyboard's masks took the mouse beside it in 1 of its 12 views: the mouse's voxels lie on
   // the keyboard's voxels, but not on its surface (voxels in >= 10% of its observations).

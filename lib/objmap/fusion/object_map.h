@@ -537,6 +537,8 @@ class ObjectMap {
   void absorb(Object& into, Object& absorbed, const MergeLink& link);
   // The share of a's voxels within reach of b's supported voxels (class confusion).
   double supported_share(const Object& a, const Object& b) const;
+  // supported_share(a, b) through the pair cache (by the two objects' pair_content), when set.
+  double cached_supported_share(const Object& a, const Object& b) const;
   // The pair rule of merge_pass() (highest P first), its merges appended to `made`.
   void merge_scored_pairs(std::vector<MergeLink>& made);
   // The class-confusion merges (ObjectMapOptions::merge_class_confusions), appended to `made`.

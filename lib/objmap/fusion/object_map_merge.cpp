@@ -313,6 +313,15 @@ double ObjectMap::supported_share(const Object& a, const Object& b) const {
          static_cast<double>(std::max<std::size_t>(1, a.voxels.size()));
 }
 
+double ObjectMap::cached_supported_share(const Object& a, const Object& b) const {
+  if (!pair_cache_) return supported_share(a, b);
+  const std::uint64_t ca = pair_content(a), cb = pair_content(b);
+  if (const std::optional<double> share = pair_cache_->shares.find(ca, cb)) return *share;
+  const double share = supported_share(a, b);
+  pair_cache_->shares.put(ca, cb, share);
+  return share;
+}
+
 void ObjectMap::merge_class_confusions(std::vector<MergeLink>& made) {
   while (true) {
     // The pair (smaller, larger) with the highest containment of the smaller in the larger (ties:
@@ -343,7 +352,7 @@ void ObjectMap::merge_class_confusions(std::vector<MergeLink>& made) {
           continue;
         Scores s;
         s.distance_m = (a->centroid - b->centroid).norm();
-        s.overlap = supported_share(*a, *b);
+        s.overlap = cached_supported_share(*a, *b);
         if (s.overlap < options_.confusion_min_containment) continue;
         if (!best_small || s.overlap > best.overlap) {
           best_small = a.get();

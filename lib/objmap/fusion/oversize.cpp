@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 
 #include <Eigen/Eigenvalues>
 
@@ -24,6 +25,24 @@ std::pair<Vec3, Vec3> horizontal_basis(const Vec3& up) {
 double quantile(const std::vector<double>& sorted, double q) {
   const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(sorted.size() - 1)));
   return sorted[std::min(k, sorted.size() - 1)];
+}
+
+// quantile() of `values` sorted, at q and at 1 - q: the same two order statistics, found by two
+// selections rather than a sort (`values` is reordered; empty: zeros).
+std::pair<double, double> quantile_pair(std::vector<double>& values, double q) {
+  const std::size_t n = values.size();
+  if (n == 0) return {0.0, 0.0};
+  const auto index = [n](double p) {
+    const auto k = static_cast<std::size_t>(std::lround(p * static_cast<double>(n - 1)));
+    return std::min(k, n - 1);
+  };
+  const std::size_t a = index(q), b = index(1.0 - q);
+  const auto at = [&values](std::size_t k) {
+    return values.begin() + static_cast<std::ptrdiff_t>(k);
+  };
+  std::nth_element(values.begin(), at(std::max(a, b)), values.end());
+  if (a != b) std::nth_element(values.begin(), at(std::min(a, b)), at(std::max(a, b)));
+  return {values[a], values[b]};
 }
 
 // The profile of sorted values `along` between lo and hi, in bins of about bin_m (smoothed over
@@ -153,9 +172,9 @@ double horizontal_extent(const std::vector<Vec3>& surface, const Vec3& up, doubl
   std::vector<double> along;
   along.reserve(surface.size());
   for (const Vec3& p : surface) along.push_back(long_axis.dot(p));
-  std::sort(along.begin(), along.end());
   if (axis) *axis = long_axis;
-  return quantile(along, 1.0 - percentile) - quantile(along, percentile);
+  const auto [lo, hi] = quantile_pair(along, percentile);
+  return hi - lo;
 }
 
 std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, const Vec3& up,
@@ -188,8 +207,8 @@ std::optional<OversizeCut> plan_oversize_cut(const std::vector<Vec3>& surface, c
   std::array<double, 2> span{0.0, 0.0};
   for (int k = 0; k < 2; ++k) {
     if (heights[k].size() < 2) continue;
-    std::sort(heights[k].begin(), heights[k].end());
-    span[k] = quantile(heights[k], 1.0 - o.percentile) - quantile(heights[k], o.percentile);
+    const auto [lo, hi] = quantile_pair(heights[k], o.percentile);
+    span[k] = hi - lo;
   }
   if (span[1 - cut.keep] > std::max(o.flat_m, o.flat_share * span[cut.keep])) {
     if (!tall_beyond) return std::nullopt;
@@ -207,9 +226,7 @@ Footprint footprint(const std::vector<Vec3>& surface, const Vec3& up, double per
   std::vector<double> along(surface.size());
   for (int k = 0; k < 3; ++k) {
     for (std::size_t i = 0; i < surface.size(); ++i) along[i] = f.axes[k].dot(surface[i]);
-    std::sort(along.begin(), along.end());
-    f.lo[k] = quantile(along, percentile);
-    f.hi[k] = quantile(along, 1.0 - percentile);
+    std::tie(f.lo[k], f.hi[k]) = quantile_pair(along, percentile);
   }
   return f;
 }
@@ -231,8 +248,7 @@ PartsFit fit_parts(const std::vector<Vec3>& small, const std::vector<Vec3>& larg
   fit.inside_share = static_cast<double>(inside) / static_cast<double>(small.size());
   double gap2 = 0.0;
   for (int k = 0; k < 3; ++k) {
-    std::sort(at[k].begin(), at[k].end());
-    const double lo = quantile(at[k], percentile), hi = quantile(at[k], 1.0 - percentile);
+    const auto [lo, hi] = quantile_pair(at[k], percentile);
     const double gap = std::max({0.0, lo - lf.hi[k], lf.lo[k] - hi});
     gap2 += gap * gap;
   }

@@ -97,6 +97,13 @@ struct PairVerdict {
 class PairCache : public PassCache<PairVerdict> {
  public:
   using Verdict = PairVerdict;
+  // The class-confusion rule's supported share of one object on another (ObjectMap's
+  // supported_share: the first's voxels against the second's support table), by the same hashes.
+  PassCache<double> shares;
+  void begin_pass() {
+    PassCache<PairVerdict>::begin_pass();
+    shares.begin_pass();
+  }
 };
 
 // The duplicate check's surface contact of two clouds (fusion/duplicates.h) by their content (a
