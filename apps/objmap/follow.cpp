@@ -60,7 +60,9 @@ void setup_follow(CLI::App& app) {
   c->add_option("--idle-exit", o->idle_exit_s,
                 "end after this many seconds without a new frame or pose (0: only DATASET/done)")
       ->capture_default_str();
-  c->add_option("--poll", o->poll_s, "seconds between two reads of the recording folder")
+  c->add_option("--poll", o->poll_s,
+                "seconds between two reads of the recording folder (a new frame waits for the "
+                "next read; each read lists the whole recording again)")
       ->capture_default_str();
   c->add_option("--threads", o->fuse.threads, "worker threads, 0 = all cores")
       ->capture_default_str();

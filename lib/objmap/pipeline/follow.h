@@ -28,7 +28,7 @@ struct FollowOptions {
   std::string camera;            // empty: camera.json, folder name or rgb.txt header
   double publish_every_s = 0.5;  // seconds between publish starts (when something is new)
   double idle_exit_s = 0.0;      // > 0: ends after this long without a new frame or pose
-  double poll_s = 0.1;           // seconds between polls of the recording folder
+  double poll_s = 0.02;          // seconds between polls of the recording folder
   FuseOptions fuse;              // the fuse's options (dataset, out, trajectory set from above)
   void check() const;            // throws InputError naming the bad field
 };
