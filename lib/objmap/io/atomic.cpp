@@ -315,6 +315,7 @@ void StagingDir::commit() {
                        "cannot move " + staging_.string() + " into place: " + ec.message());
     }
     committed_ = true;
+    committed_at_ = std::chrono::steady_clock::now();
     unfinished_.release_locked();
   }
   if (!aside.empty()) {

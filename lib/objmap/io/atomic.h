@@ -1,4 +1,5 @@
 #pragma once
+#include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -118,6 +119,8 @@ class StagingDir {
   // Renames the temporary folder to `out`. An existing `out` is moved aside first and deleted only
   // after the rename succeeded (restored if it failed). Throws InputError on failure.
   void commit();
+  // The moment commit() put the new folder in place (before it deleted the old one).
+  std::chrono::steady_clock::time_point committed_at() const { return committed_at_; }
 
  private:
   std::filesystem::path out_;
@@ -125,6 +128,7 @@ class StagingDir {
   UnfinishedOutput unfinished_;
   OutputKind kind_;
   bool committed_ = false;
+  std::chrono::steady_clock::time_point committed_at_;
 };
 
 }  // namespace objmap::io

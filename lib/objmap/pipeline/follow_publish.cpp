@@ -51,7 +51,7 @@ void start_publish(FollowState& s) {
     finish_fuse(state->options.fuse, state->choices, *inputs, state->class_sizes, *maps,
                 staging.path(), state->started, *result);
     staging.commit();
-    return PublishDone{result->objects.size(), Clock::now()};
+    return PublishDone{result->objects.size(), staging.committed_at()};
   });
   if (s.dense_snapshot)
     s.dense_apply = std::async(std::launch::async, [snapshot = &*s.dense_snapshot,
