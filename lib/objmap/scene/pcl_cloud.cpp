@@ -8,6 +8,7 @@
 #include <pcl/sample_consensus/sac_model_plane.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -40,13 +41,33 @@ Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m,
     std::uint32_t count;
   };
   std::vector<Cell> cells;
-  geometry::VoxelHashTable<std::uint32_t> cell_of(points.size() / 8 + 16);  // index + 1
+  // The cells in blocks of 8x8x8 (hashed by block; a cell found directly inside its block): a
+  // map's points come in voxel order, so most fall in the block of the point before.
+  constexpr int kBlockBits = 3, kBlockMask = (1 << kBlockBits) - 1;
+  using Block = std::array<std::uint32_t, 1 << (3 * kBlockBits)>;  // cell index + 1
+  std::vector<Block> blocks;
+  geometry::VoxelHashTable<std::uint32_t> block_of(points.size() / 512 + 16);  // index + 1
+  geometry::VoxelKey last_block = geometry::kNoVoxel;
+  Block* block = nullptr;
   for (const Vec3f& p : points) {
     const Eigen::Vector3f g = grid_from_world * (p - origin);
     Eigen::Vector3i ijk;
     Eigen::Vector3f offset;
     if (!geometry::voxel_coords(g, inv_cell, ijk, offset)) continue;
-    std::uint32_t& slot = cell_of[geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z())];
+    const geometry::VoxelKey block_key =
+        geometry::pack_voxel(ijk.x() >> kBlockBits, ijk.y() >> kBlockBits, ijk.z() >> kBlockBits);
+    if (block_key != last_block) {
+      std::uint32_t& b = block_of[block_key];
+      if (b == 0) {
+        blocks.emplace_back();
+        blocks.back().fill(0);
+        b = static_cast<std::uint32_t>(blocks.size());
+      }
+      last_block = block_key;
+      block = &blocks[b - 1];
+    }
+    std::uint32_t& slot = (*block)[((ijk.x() & kBlockMask) << (2 * kBlockBits)) |
+                                   ((ijk.y() & kBlockMask) << kBlockBits) | (ijk.z() & kBlockMask)];
     if (slot == 0) {
       cells.push_back(
           {geometry::pack_voxel(ijk.x(), ijk.y(), ijk.z()), Eigen::Vector3f::Zero(), 0});
