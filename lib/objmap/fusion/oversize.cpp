@@ -21,10 +21,15 @@ std::pair<Vec3, Vec3> horizontal_basis(const Vec3& up) {
   return {e1, n.cross(e1)};
 }
 
+// The nearest rank of the q-quantile among n > 0 values.
+std::size_t quantile_rank(std::size_t n, double q) {
+  const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(n - 1)));
+  return std::min(k, n - 1);
+}
+
 // The q-quantile of sorted values (nearest rank).
 double quantile(const std::vector<double>& sorted, double q) {
-  const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(sorted.size() - 1)));
-  return sorted[std::min(k, sorted.size() - 1)];
+  return sorted[quantile_rank(sorted.size(), q)];
 }
 
 // quantile() of `values` sorted, at q and at 1 - q: the same two order statistics, found by two
@@ -32,11 +37,7 @@ double quantile(const std::vector<double>& sorted, double q) {
 std::pair<double, double> quantile_pair(std::vector<double>& values, double q) {
   const std::size_t n = values.size();
   if (n == 0) return {0.0, 0.0};
-  const auto index = [n](double p) {
-    const auto k = static_cast<std::size_t>(std::lround(p * static_cast<double>(n - 1)));
-    return std::min(k, n - 1);
-  };
-  const std::size_t a = index(q), b = index(1.0 - q);
+  const std::size_t a = quantile_rank(n, q), b = quantile_rank(n, 1.0 - q);
   const auto at = [&values](std::size_t k) {
     return values.begin() + static_cast<std::ptrdiff_t>(k);
   };

@@ -59,8 +59,7 @@ Cloud::Ptr sample_on_grid(const std::vector<Vec3f>& points, double voxel_m,
     if (block_key != last_block) {
       std::uint32_t& b = block_of[block_key];
       if (b == 0) {
-        blocks.emplace_back();
-        blocks.back().fill(0);
+        blocks.emplace_back();  // value-initialised: every cell 0 (none yet)
         b = static_cast<std::uint32_t>(blocks.size());
       }
       last_block = block_key;
