@@ -162,6 +162,11 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   EXPECT_GT(fuse_objects, 0.0);
   EXPECT_LE(std::abs(live_objects - fuse_objects), 0.1 * fuse_objects)
       << live_objects << " vs " << fuse_objects;
+  // The last publish's up and surfaces are found on its own dense map (the publishes before take
+  // those of the publish before theirs): fuse's, on the same dense map and cameras.
+  EXPECT_EQ(status.at("scene_keyframes"), live.at("counts").at("keyframes"));
+  EXPECT_EQ(live.at("scene").at("up"), fused.at("scene").at("up"));
+  EXPECT_EQ(live.at("scene").at("surfaces"), fused.at("scene").at("surfaces"));
   const auto by_fuse = matched_objects(tmp / "fuse", scene, tmp / "eval_fuse.json");
   const auto by_follow = matched_objects(tmp / "live/map", scene, tmp / "eval_live.json");
   EXPECT_EQ(by_follow.reference, by_fuse.reference);

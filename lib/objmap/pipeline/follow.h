@@ -57,7 +57,10 @@ struct FollowStatus {
   double lag_median_s = 0.0;          // the median over every keyframe published so far
   double fuse_seconds = 0.0;          // spent fusing keyframes into the live maps
   double publish_seconds_last = 0.0;  // the last publish's time (finish and write the map)
-  double seconds = 0.0;               // since the start
+  // The last publish: the keyframes of the dense map its up and surfaces were found on (those of
+  // the publish before, made meanwhile; the last publish's are its own).
+  std::size_t scene_keyframes = 0;
+  double seconds = 0.0;  // since the start
   long peak_rss_kb = 0;
 };
 

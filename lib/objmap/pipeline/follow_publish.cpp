@@ -10,21 +10,75 @@
 #include "objmap/io/atomic.h"
 #include "objmap/pipeline/follow_state.h"
 #include "objmap/pipeline/fuse_inputs.h"
+#include "objmap/scene/scene.h"
 
 namespace objmap::pipeline {
 
 namespace fs = std::filesystem;
 
-void start_publish(FollowState& s) {
+namespace {
+
+using ScenePromise = std::promise<std::shared_ptr<const scene::SceneGraph>>;
+
+// A publish's up and surfaces (maps.scene): those found on the dense cloud of the publish before
+// (made since, on the dense thread), so that they are off its way; with `own_scene` (the last
+// publish), or when there are none yet, those of its own cloud, unless nothing was fused since.
+// Returns the keyframes of the dense map they are found on; `next` is for the ones of this
+// publish's cloud (s.scene from now on).
+std::size_t choose_scene(FollowState& s, FuseMaps& maps, bool own_scene, ScenePromise& next) {
+  auto next_scene = next.get_future().share();
+  const std::size_t keyframes = s.result.keyframes.keyframes.size();
+  const bool before = s.scene.valid() && (!own_scene || s.scene_keyframes == keyframes);
+  maps.scene = before ? s.scene : next_scene;
+  const std::size_t scene_keyframes = before ? s.scene_keyframes : keyframes;
+  s.scene = std::move(next_scene);
+  s.scene_keyframes = keyframes;
+  return scene_keyframes;
+}
+
+// The dense map's changes taken now (on the loop's thread, after the publish's thread has started
+// on the objects: their merge pass does not need the dense cloud) and, on a thread of their own,
+// folded into the cloud (`cloud`), then the up and the surfaces found on it (`scene`). One at a
+// time: each waits for the one before, its scene included.
+void start_dense_apply(FollowState& s, std::promise<std::shared_ptr<const DenseCloud>> cloud,
+                       ScenePromise scene) {
+  std::vector<Pose> cameras;
+  for (const Keyframe& k : s.result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
+  s.dense_apply =
+      std::async(std::launch::async,
+                 [snapshot = &*s.dense_snapshot, changes = s.dense_snapshot->take(s.maps->dense),
+                  cloud_promise = std::move(cloud), scene_promise = std::move(scene),
+                  cameras = std::move(cameras), before = std::move(s.dense_apply),
+                  options = &s.options.fuse.scene]() mutable {
+                   bool cloud_set = false;
+                   try {
+                     if (before.valid())
+                       before.get();  // done, and its cloud let go: this apply is in place
+                     std::shared_ptr<const DenseCloud> made = snapshot->apply(std::move(changes));
+                     cloud_promise.set_value(made);
+                     cloud_set = true;
+                     auto graph = std::make_shared<scene::SceneGraph>();
+                     scene::find_up_and_surfaces(cameras, made->cloud.points, *options, *graph);
+                     scene_promise.set_value(std::move(graph));
+                   } catch (...) {
+                     if (!cloud_set) cloud_promise.set_exception(std::current_exception());
+                     scene_promise.set_exception(std::current_exception());
+                   }
+                 });
+}
+
+}  // namespace
+
+void start_publish(FollowState& s, bool own_scene) {
   require(!s.result.keyframes.keyframes.empty(), s.options.dataset.string(),
           "no keyframe to map: " + std::to_string(s.status.frames_seen) + " frames seen, " +
               std::to_string(s.status.frames_with_pose) +
               " with a pose; expected frames with poses (--trajectory) while following");
   s.publish_started = Clock::now();
   s.last_publish = s.publish_started;
-  // What a fuse of the keyframes so far would have read, the dense map's cloud and a deep copy of
-  // the object map: the live maps go on growing meanwhile (follow makes no meshes: no mesh model
-  // to copy).
+  // What a fuse of the keyframes so far would have read, the dense map's cloud, its up and
+  // surfaces, and a deep copy of the object map: the live maps go on growing meanwhile (follow
+  // makes no meshes: no mesh model to copy).
   auto inputs = std::make_shared<FuseInputs>();
   inputs->dataset = s.dataset;
   inputs->trajectory = s.trajectory;
@@ -33,36 +87,35 @@ void start_publish(FollowState& s) {
   auto result = std::make_shared<FuseResult>(s.result);
   result->frames = s.dataset.frames.size();
   result->keyframes.frames_with_pose = s.status.frames_with_pose;
-  // The dense map's changes taken here, after the publish's thread has started on the objects
-  // (their merge pass does not need the dense cloud); its cloud brought up to date on a thread of
-  // its own (the one publish in flight applies them: one apply at a time).
-  std::promise<std::shared_ptr<const DenseCloud>> dense_promise;
-  std::shared_future<std::shared_ptr<const DenseCloud>> dense_cloud;
-  if (s.dense_snapshot) dense_cloud = dense_promise.get_future().share();
-  auto maps = std::make_shared<FuseMaps>(
-      FuseMaps{s.maps->dense_options, fusion::VoxelMap(s.maps->dense_options), s.maps->objects,
-               std::nullopt, std::nullopt, s.maps->view_log, dense_cloud});
+  auto maps = std::make_shared<FuseMaps>(FuseMaps{s.maps->dense_options,
+                                                  fusion::VoxelMap(s.maps->dense_options),
+                                                  s.maps->objects,
+                                                  std::nullopt,
+                                                  std::nullopt,
+                                                  s.maps->view_log,
+                                                  {},
+                                                  {}});
+  std::promise<std::shared_ptr<const DenseCloud>> cloud;
+  ScenePromise scene;
+  const std::size_t keyframes = s.result.keyframes.keyframes.size();
+  std::size_t scene_keyframes = keyframes;
+  if (s.dense_snapshot) {
+    maps->dense_cloud = cloud.get_future().share();
+    scene_keyframes = choose_scene(s, *maps, own_scene, scene);
+  }
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
   const FollowState* state = &s;  // its options, choices and class sizes do not change
-  s.publishing = std::async(std::launch::async, [state, inputs, result, maps] {
+  s.publishing = std::async(std::launch::async, [state, inputs, result, maps, scene_keyframes,
+                                                 complete = scene_keyframes == keyframes] {
     // The map written under a temporary name and renamed: a reader never sees half of it.
     io::StagingDir staging(state->options.fuse.out, io::kRunFolder);
     finish_fuse(state->options.fuse, state->choices, *inputs, state->class_sizes, *maps,
                 staging.path(), state->started, *result);
     staging.commit();
-    return PublishDone{result->objects.size(), staging.committed_at()};
+    return PublishDone{result->objects.size(), staging.committed_at(), scene_keyframes, complete};
   });
-  if (s.dense_snapshot)
-    s.dense_apply = std::async(std::launch::async, [snapshot = &*s.dense_snapshot,
-                                                    changes = s.dense_snapshot->take(s.maps->dense),
-                                                    promise = std::move(dense_promise)]() mutable {
-      try {
-        promise.set_value(snapshot->apply(std::move(changes)));
-      } catch (...) {
-        promise.set_exception(std::current_exception());
-      }
-    });
+  if (s.dense_snapshot) start_dense_apply(s, std::move(cloud), std::move(scene));
 }
 
 bool publish_done(const FollowState& s) {
@@ -75,6 +128,8 @@ bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
   if (!wait && !publish_done(s)) return false;
   const PublishDone done = s.publishing.get();
   s.status.objects = done.objects;
+  s.status.scene_keyframes = done.scene_keyframes;
+  s.scene_complete = done.scene_complete;
   // The lag of each keyframe this publish brought in: from its frame's arrival to the moment its
   // map was in place (not to when this loop noticed it).
   const Clock::time_point now = done.committed;
@@ -101,11 +156,11 @@ bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
 void publish(FollowState& s, const FollowEvents& events) {
   // The one in flight, or the last one done, is enough when it holds every keyframe.
   finish_publish(s, events, true);
-  if (s.unpublished.empty() && s.status.publishes > 0) {
+  if (s.unpublished.empty() && s.status.publishes > 0 && s.scene_complete) {
     write_status(s);
     return;
   }
-  start_publish(s);
+  start_publish(s, true);
   finish_publish(s, events, true);
 }
 
@@ -138,6 +193,7 @@ void write_status(FollowState& s) {
                                 {"lag_median_s", st.lag_median_s},
                                 {"fuse_seconds", st.fuse_seconds},
                                 {"publish_seconds_last", st.publish_seconds_last},
+                                {"scene_keyframes", st.scene_keyframes},
                                 {"seconds", st.seconds},
                                 {"peak_rss_kb", st.peak_rss_kb}};
   io::write_file_atomic(s.options.out / "status.json", doc.dump(2) + "\n");

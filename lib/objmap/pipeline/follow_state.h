@@ -20,6 +20,7 @@
 #include "objmap/pipeline/follow_detect.h"
 #include "objmap/pipeline/fuse_keyframes.h"
 #include "objmap/pipeline/fuse_maps.h"
+#include "objmap/scene/scene.h"
 #include "objmap/segmentation/class_sizes.h"
 #include "objmap/segmentation/read.h"
 
@@ -40,11 +41,14 @@ struct KeptKeyframe {
   cv::Mat view_depth;
 };
 
-// A publish's end: the objects of its map and when that map was renamed into place (the moment a
-// reader sees it: the lag's end).
+// A publish's end: the objects of its map, when that map was renamed into place (the moment a
+// reader sees it: the lag's end) and the keyframes of the dense map its up and surfaces were found
+// on (fewer than its own when they are those of the publish before: start_publish).
 struct PublishDone {
   std::size_t objects = 0;
   Clock::time_point committed;
+  std::size_t scene_keyframes = 0;
+  bool scene_complete = true;  // the up and surfaces of its own dense map
 };
 
 struct FollowState {
@@ -87,7 +91,12 @@ struct FollowState {
   Clock::time_point last_publish = Clock::now();  // the last publish's start
   // The publish in flight: when it is done, its objects and the moment its map was in place.
   std::future<PublishDone> publishing;
-  std::future<void> dense_apply;  // its dense cloud's update (its dense_cloud future's value)
+  // The dense cloud's update on a thread of its own, then the up and surfaces of that cloud (the
+  // next publish's: start_publish); one at a time, each waiting for the one before.
+  std::future<void> dense_apply;
+  std::shared_future<std::shared_ptr<const scene::SceneGraph>> scene;  // the last dense_apply's
+  std::size_t scene_keyframes = 0;  // the keyframes of the dense map `scene` is found on
+  bool scene_complete = true;       // the last publish's up and surfaces were of its dense map
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
   std::vector<double> lags;  // every published keyframe's lag (s), for the median
   Clock::time_point publish_started;
@@ -122,8 +131,11 @@ void replace_after_loop_closure(FollowState& s);
 // 4. A copy of the maps finished as objmap fuse finishes them, written to OUT/map through a
 //    staging folder, on a thread of its own while the keyframes go on (start_publish); when it is
 //    done (finish_publish, waiting for it with `wait`; false when none was done), OUT/status.json
-//    with the lag. publish: every keyframe published, to its end (the one in flight may do).
-void start_publish(FollowState& s);
+//    with the lag. publish: every keyframe published, to its end (the one in flight may do if
+//    its up and surfaces were of its own dense map). A publish takes the up and surfaces made of
+//    the dense cloud of the publish before, off its way; `own_scene` (the last publish) waits for
+//    those of its own.
+void start_publish(FollowState& s, bool own_scene = false);
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
 bool publish_done(const FollowState& s);  // a publish in flight has its map in place
 void publish(FollowState& s, const FollowEvents& events);

@@ -41,6 +41,7 @@ FuseMaps make_fuse_maps(const FuseOptions& options, const FuseChoices& choices,
       std::nullopt,
       std::nullopt,
       std::nullopt,
+      {},
       {}};
   if (choices.meshes.objects) maps.object_views.emplace();
   if (choices.meshes.scene)
@@ -89,7 +90,8 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
   const fusion::ViewLog* view_log = maps.view_log ? &*maps.view_log : nullptr;
   // The dense map's cloud, the up direction and the support surfaces (docs/scene.md) are made on
   // a second thread meanwhile the objects are merged and filtered (they do not depend on each
-  // other); objmap follow hands the cloud in made (maps.dense_cloud).
+  // other); objmap follow hands the cloud in made (maps.dense_cloud), and the up and surfaces
+  // (maps.scene).
   io::PlyWriteOptions ply;
   ply.comment = std::string("objmap ") + objmap::version();
   auto t_dense = Clock::now();
@@ -104,7 +106,10 @@ void finish_fuse(const FuseOptions& options, const FuseChoices& choices, const F
                            : DenseCloud{};
     dense_seconds = seconds_since(t_dense);
     const DenseCloud& made = handed ? *handed : cloud;
-    scene::find_up_and_surfaces(cameras, made.cloud.points, options.scene, result.scene);
+    if (maps.scene.valid())
+      result.scene = *maps.scene.get();
+    else
+      scene::find_up_and_surfaces(cameras, made.cloud.points, options.scene, result.scene);
     return cloud;
   });
 

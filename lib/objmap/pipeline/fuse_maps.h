@@ -13,6 +13,7 @@
 #include "objmap/pipeline/fuse.h"
 #include "objmap/pipeline/fuse_inputs.h"
 #include "objmap/pipeline/fuse_mesh.h"
+#include "objmap/scene/scene.h"
 #include "objmap/segmentation/class_sizes.h"
 
 // What the keyframes of a fuse build (step 3) and what is made of it (steps 4-5): `objmap fuse`
@@ -30,6 +31,9 @@ struct FuseMaps {
   // The dense map's cloud, made beside finish_fuse (objmap follow's DenseSnapshot; `dense` is then
   // left empty: the objects' steps start meanwhile); not valid: finish_fuse takes it from `dense`.
   std::shared_future<std::shared_ptr<const DenseCloud>> dense_cloud;
+  // The up direction and the surfaces, made beside finish_fuse (objmap follow: of this dense cloud
+  // or of the one of the publish before); not valid: finish_fuse finds them on the dense cloud.
+  std::shared_future<std::shared_ptr<const scene::SceneGraph>> scene;
 };
 
 // The empty maps of a fuse with these options (result.camera, result.threads and
