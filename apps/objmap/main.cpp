@@ -19,6 +19,7 @@
 
 #include "command.h"
 #include "objmap/core/error.h"
+#include "objmap/core/memory.h"
 #include "objmap/core/version.h"
 #include "objmap/io/atomic.h"
 
@@ -119,6 +120,7 @@ std::string unknown_command(CLI::App& app, int argc, char** argv) {
 
 int main(int argc, char** argv) {
   objmap::app::take_interrupts();  // first: before any thread starts
+  objmap::keep_freed_memory();
   CLI::App app{
       "objmap: object-oriented semantic maps from a finished RGB-D SLAM run.\n"
       "One command: objmap run (detect -> track -> fuse -> report on a recording).\n"

@@ -25,6 +25,7 @@
 
 #include "bench_data.h"
 #include "child_run.h"
+#include "objmap/core/memory.h"
 #include "objmap/core/version.h"
 #include "objmap/io/image.h"
 #include "objmap/io/tum_dataset.h"
@@ -135,6 +136,7 @@ double startup_seconds(int rounds) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  objmap::keep_freed_memory();  // as the objmap command keeps it (the fuses run in children)
   int threads = 2, repeat = 3;
   fs::path dataset = data_dir() / "tum" / "fr1_rpy_every4";
   for (int i = 1; i + 1 < argc; i += 2) {
