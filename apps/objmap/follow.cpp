@@ -31,6 +31,9 @@ void follow_and_print(const pipeline::FollowOptions& options) {
               s.frames_skipped_detect, s.frame_retries);
   std::printf("peak memory   %.1f MB\n", static_cast<double>(s.peak_rss_kb) / 1024.0);
   std::printf("map           %s\n", (options.out / "map").c_str());
+  if (s.reports > 0)
+    std::printf("report        %s (of publish %zu; %zu reports)\n",
+                (options.out / "report" / "report.html").c_str(), s.report_publish, s.reports);
 }
 
 void setup_follow(CLI::App& app) {
@@ -39,7 +42,8 @@ void setup_follow(CLI::App& app) {
       "follow",
       "Keeps the object map of a recording up to date while the recording is written: polls the "
       "folder, fuses each new keyframe as it arrives, and every --publish-every seconds writes "
-      "OUT/map (objects.json, the object PLYs, map_semantic.ply) atomically and OUT/status.json. "
+      "OUT/map (objects.json, the object PLYs, map_semantic.ply) atomically, OUT/report every "
+      "--report-every seconds, and OUT/status.json. "
       "Ends on DATASET/done or --idle-exit (docs/follow.md).");
   c->add_option("--dataset", o->dataset, kDatasetHelp)->required();
   c->add_option("--out", o->out, "the run folder: new, empty or an earlier follow")->required();
@@ -63,6 +67,11 @@ void setup_follow(CLI::App& app) {
   c->add_option("--poll", o->poll_s,
                 "seconds between two reads of the recording folder (a new frame waits for the "
                 "next read; each read lists the whole recording again)")
+      ->capture_default_str();
+  c->add_option("--report-every", o->report_every_s,
+                "seconds between two reports (OUT/report, objmap report of the map just "
+                "published, made on a thread of its own: ~1 s of one core on a 30 s walk-through); "
+                "0: only the report of the last map")
       ->capture_default_str();
   c->add_option("--threads", o->fuse.threads, "worker threads, 0 = all cores")
       ->capture_default_str();

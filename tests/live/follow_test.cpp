@@ -171,9 +171,17 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   const auto by_follow = matched_objects(tmp / "live/map", scene, tmp / "eval_live.json");
   EXPECT_EQ(by_follow.reference, by_fuse.reference);
   EXPECT_EQ(by_follow.unmatched_map, 0u);
-  // No staging folder is left beside the map.
+  // OUT/report is the report of the last map (its page names OUT/map, its objects those of the
+  // map); no staging folder or report scratch is left beside them.
+  EXPECT_GE(status.at("reports").get<int>(), 1);
+  EXPECT_EQ(status.at("report_publish"), status.at("publishes"));
+  const std::string page = read_text(tmp / "live/report/report.md");
+  EXPECT_NE(page.find((tmp / "live/map").string()), std::string::npos) << page.substr(0, 400);
+  EXPECT_EQ(page.find(".report-"), std::string::npos);
   for (const auto& e : fs::directory_iterator(tmp / "live"))
-    EXPECT_TRUE(e.path().filename() == "map" || e.path().filename() == "status.json") << e.path();
+    EXPECT_TRUE(e.path().filename() == "map" || e.path().filename() == "report" ||
+                e.path().filename() == "status.json")
+        << e.path();
 }
 
 TEST(Follow, AMalformedTrajectoryLineIsNamedSkippedAndCountedALineBeingWrittenWaits) {
@@ -323,6 +331,19 @@ TEST(Follow, BadInputIsOneLineAndExitTwo) {
       {"follow", "--dataset", (tmp / "rec").string(), "--out", (tmp / "other").string()});
   EXPECT_EQ(other.exit_code, 2);
   EXPECT_EQ(read_text(tmp / "other/notes.txt"), "mine");
+  // An earlier follow whose report folder holds something else: refused before any work.
+  write_text(tmp / "earlier/status.json", "{}");
+  write_text(tmp / "earlier/report/notes.txt", "mine");
+  const auto report = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out",
+                                  (tmp / "earlier").string(), "--report-every", "5"});
+  EXPECT_EQ(report.exit_code, 2);
+  EXPECT_EQ(std::count(report.err.begin(), report.err.end(), '\n'), 1) << report.err;
+  EXPECT_NE(report.err.find((tmp / "earlier/report").string()), std::string::npos) << report.err;
+  EXPECT_EQ(read_text(tmp / "earlier/report/notes.txt"), "mine");
+  const auto negative = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out",
+                                    (tmp / "live").string(), "--report-every", "-1"});
+  EXPECT_EQ(negative.exit_code, 2);
+  EXPECT_NE(negative.err.find("--report-every: must be >= 0 s"), std::string::npos) << negative.err;
 }
 
 }  // namespace

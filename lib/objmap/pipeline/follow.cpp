@@ -1,7 +1,8 @@
 // `objmap follow` as an outline (run_follow): each poll 1. reads the recording again, 2. selects
 // the keyframes whose poses arrived, 3. fuses them as their segmentation arrives, 4. publishes the
-// map every publish_every_s seconds; the end (DATASET/done, or idle_exit_s without news) fuses
-// what is left and publishes once more. The steps: follow_steps.cpp, follow_publish.cpp.
+// map every publish_every_s seconds, 5. makes OUT/report of a published map every report_every_s
+// seconds; the end (DATASET/done, or idle_exit_s without news) fuses what is left, publishes once
+// more and reports that map. The steps: follow_steps.cpp, follow_publish.cpp, follow_report.cpp.
 #include "objmap/pipeline/follow.h"
 
 #include <chrono>
@@ -23,6 +24,8 @@ void FollowOptions::check() const {
   require(std::isfinite(idle_exit_s) && idle_exit_s >= 0, "--idle-exit",
           "must be >= 0 s (0: only DATASET/done ends it)");
   require(std::isfinite(poll_s) && poll_s > 0 && poll_s <= 10, "--poll", "must be in (0, 10] s");
+  require(std::isfinite(report_every_s) && report_every_s >= 0, "--report-every",
+          "must be >= 0 s (0: the report of the last map only)");
   require(fs::is_directory(dataset), dataset.string(),
           "not a folder; expected the recording being written");
 }
@@ -53,11 +56,14 @@ FollowStatus follow_loop(FollowState& s, const FollowOptions& options, const Fol
     replace_after_loop_closure(s);
     // 4. Published every publish_every_s seconds when something is new (on a thread of its own),
     //    and at the end.
-    finish_publish(s, events, false);
+    // 5. OUT/report from the map just published when it is due (on a thread of its own).
+    if (finish_publish(s, events, false)) start_report_if_due(s, events);
+    finish_report(s, events, false);
     if (ending) {
       s.status.state = "finished";
       s.status.ended_by = done ? "done file" : "idle";
       publish(s, events);
+      report_last_map(s, events);
       return s.status;
     }
     if (!s.publishing.valid() && !s.unpublished.empty() &&

@@ -12,7 +12,8 @@
 // segmentation frame from DATASET/segmentation, or the instances a detector thread found on the
 // newest keyframe with --model), and every publish_every_s seconds a copy of the maps is finished
 // as `objmap fuse` finishes its maps (merges, filters, scene) and written to OUT/map through a
-// staging folder and a rename; OUT/status.json says how far it got. When the trajectory's past
+// staging folder and a rename; OUT/report is made again from a published map every
+// report_every_s seconds; OUT/status.json says how far it got. When the trajectory's past
 // poses change (a loop closure) the mapped observations are moved with them. It ends on
 // DATASET/done or idle_exit_s without a new frame, with a last publish of everything.
 namespace objmap::pipeline {
@@ -29,8 +30,12 @@ struct FollowOptions {
   double publish_every_s = 0.5;  // seconds between publish starts (when something is new)
   double idle_exit_s = 0.0;      // > 0: ends after this long without a new frame or pose
   double poll_s = 0.02;          // seconds between polls of the recording folder
-  FuseOptions fuse;              // the fuse's options (dataset, out, trajectory set from above)
-  void check() const;            // throws InputError naming the bad field
+  // OUT/report (objmap report of the map) made again, on a thread of its own, from a publish at
+  // least this many seconds after the last report started, and from the last publish; 0: only
+  // from the last.
+  double report_every_s = 10.0;
+  FuseOptions fuse;    // the fuse's options (dataset, out, trajectory set from above)
+  void check() const;  // throws InputError naming the bad field
 };
 
 // OUT/status.json (schemas/follow_status.schema.json).
@@ -60,7 +65,10 @@ struct FollowStatus {
   // The last publish: the keyframes of the dense map its up and surfaces were found on (those of
   // the publish before, made meanwhile; the last publish's are its own).
   std::size_t scene_keyframes = 0;
-  double seconds = 0.0;  // since the start
+  std::size_t reports = 0;           // OUT/report made
+  std::size_t report_publish = 0;    // the publish OUT/report shows (0: none yet)
+  double report_seconds_last = 0.0;  // the last report's time
+  double seconds = 0.0;              // since the start
   long peak_rss_kb = 0;
 };
 

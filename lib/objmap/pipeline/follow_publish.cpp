@@ -38,33 +38,40 @@ std::size_t choose_scene(FollowState& s, FuseMaps& maps, bool own_scene, ScenePr
 
 // The dense map's changes taken now (on the loop's thread, after the publish's thread has started
 // on the objects: their merge pass does not need the dense cloud) and, on a thread of their own,
-// folded into the cloud (`cloud`), then the up and the surfaces found on it (`scene`). One at a
-// time: each waits for the one before, its scene included.
+// folded into the cloud (`cloud`, which `made` gives); on another, the up and the surfaces found
+// on that cloud (`scene`). One apply at a time and one scene at a time, each after the one before;
+// an apply does not wait for the scene of the cloud before (it copies that cloud if the scene
+// still reads it).
 void start_dense_apply(FollowState& s, std::promise<std::shared_ptr<const DenseCloud>> cloud,
+                       std::shared_future<std::shared_ptr<const DenseCloud>> made,
                        ScenePromise scene) {
   std::vector<Pose> cameras;
   for (const Keyframe& k : s.result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
   s.dense_apply =
       std::async(std::launch::async,
                  [snapshot = &*s.dense_snapshot, changes = s.dense_snapshot->take(s.maps->dense),
-                  cloud_promise = std::move(cloud), scene_promise = std::move(scene),
-                  cameras = std::move(cameras), before = std::move(s.dense_apply),
-                  options = &s.options.fuse.scene]() mutable {
-                   bool cloud_set = false;
+                  cloud_promise = std::move(cloud), before = std::move(s.dense_apply)]() mutable {
                    try {
-                     if (before.valid())
-                       before.get();  // done, and its cloud let go: this apply is in place
-                     std::shared_ptr<const DenseCloud> made = snapshot->apply(std::move(changes));
-                     cloud_promise.set_value(made);
-                     cloud_set = true;
-                     auto graph = std::make_shared<scene::SceneGraph>();
-                     scene::find_up_and_surfaces(cameras, made->cloud.points, *options, *graph);
-                     scene_promise.set_value(std::move(graph));
+                     if (before.valid()) before.get();  // the apply before done
+                     cloud_promise.set_value(snapshot->apply(std::move(changes)));
                    } catch (...) {
-                     if (!cloud_set) cloud_promise.set_exception(std::current_exception());
-                     scene_promise.set_exception(std::current_exception());
+                     cloud_promise.set_exception(std::current_exception());
                    }
                  });
+  s.scene_making = std::async(
+      std::launch::async,
+      [made = std::move(made), scene_promise = std::move(scene), cameras = std::move(cameras),
+       before = std::move(s.scene_making), options = &s.options.fuse.scene]() mutable {
+        try {
+          if (before.valid()) before.get();  // the scene before done
+          auto graph = std::make_shared<scene::SceneGraph>();
+          scene::find_up_and_surfaces(cameras, made.get()->cloud.points, *options, *graph);
+          made = {};  // the cloud let go: the next apply changes it in place
+          scene_promise.set_value(std::move(graph));
+        } catch (...) {
+          scene_promise.set_exception(std::current_exception());
+        }
+      });
 }
 
 }  // namespace
@@ -115,7 +122,7 @@ void start_publish(FollowState& s, bool own_scene) {
     staging.commit();
     return PublishDone{result->objects.size(), staging.committed_at(), scene_keyframes, complete};
   });
-  if (s.dense_snapshot) start_dense_apply(s, std::move(cloud), std::move(scene));
+  if (s.dense_snapshot) start_dense_apply(s, std::move(cloud), maps->dense_cloud, std::move(scene));
 }
 
 bool publish_done(const FollowState& s) {
@@ -194,6 +201,9 @@ void write_status(FollowState& s) {
                                 {"fuse_seconds", st.fuse_seconds},
                                 {"publish_seconds_last", st.publish_seconds_last},
                                 {"scene_keyframes", st.scene_keyframes},
+                                {"reports", st.reports},
+                                {"report_publish", st.report_publish},
+                                {"report_seconds_last", st.report_seconds_last},
                                 {"seconds", st.seconds},
                                 {"peak_rss_kb", st.peak_rss_kb}};
   io::write_file_atomic(s.options.out / "status.json", doc.dump(2) + "\n");

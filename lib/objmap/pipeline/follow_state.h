@@ -51,6 +51,12 @@ struct PublishDone {
   bool scene_complete = true;  // the up and surfaces of its own dense map
 };
 
+// A report's end: its time, or what went wrong (one line).
+struct ReportDone {
+  double seconds = 0.0;
+  std::string error;
+};
+
 struct FollowState {
   FollowOptions options;  // options.fuse with dataset, out (OUT/map), trajectory, segmentation set
   FuseChoices choices;
@@ -91,15 +97,20 @@ struct FollowState {
   Clock::time_point last_publish = Clock::now();  // the last publish's start
   // The publish in flight: when it is done, its objects and the moment its map was in place.
   std::future<PublishDone> publishing;
-  // The dense cloud's update on a thread of its own, then the up and surfaces of that cloud (the
-  // next publish's: start_publish); one at a time, each waiting for the one before.
+  // The dense cloud's update on a thread of its own, and the up and surfaces of that cloud on
+  // another (the next publish's: start_publish); each one at a time, waiting for the one before.
   std::future<void> dense_apply;
+  std::future<void> scene_making;
   std::shared_future<std::shared_ptr<const scene::SceneGraph>> scene;  // the last dense_apply's
   std::size_t scene_keyframes = 0;  // the keyframes of the dense map `scene` is found on
   bool scene_complete = true;       // the last publish's up and surfaces were of its dense map
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
   std::vector<double> lags;  // every published keyframe's lag (s), for the median
   Clock::time_point publish_started;
+  // The report in flight (OUT/report), the publish it shows, and when the last one started.
+  std::future<ReportDone> reporting;
+  std::size_t reporting_publish = 0;
+  std::optional<Clock::time_point> last_report;
   FollowStatus status;
 };
 
@@ -139,6 +150,16 @@ void start_publish(FollowState& s, bool own_scene = false);
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
 bool publish_done(const FollowState& s);  // a publish in flight has its map in place
 void publish(FollowState& s, const FollowEvents& events);
+
+// 5. OUT/report (objmap report) of the map just published, on a thread of its own, when none is
+//    in flight and report_every_s seconds have passed since the last one started: the report
+//    reads hard links of OUT/map's files (the next publish replaces OUT/map meanwhile) and the
+//    trajectory as follow has read it (its file is still being written). finish_report: its end
+//    taken (waiting for it with `wait`), a failure a warning. report_last_map: at the end, the
+//    report of the last map unless OUT/report shows it (follow_report.cpp).
+void start_report_if_due(FollowState& s, const FollowEvents& events);
+void finish_report(FollowState& s, const FollowEvents& events, bool wait);
+void report_last_map(FollowState& s, const FollowEvents& events);
 
 // OUT/status.json from s.status (atomically), its time and peak memory updated.
 void write_status(FollowState& s);

@@ -129,6 +129,7 @@ FollowState start_follow(const FollowOptions& options) {
   io::require_not_an_input({"--out", options.out},
                            {{"--dataset", options.dataset}, {"--trajectory", options.trajectory}});
   io::require_replaceable(options.out, kFollowFolder);
+  io::require_replaceable(options.out / "report", io::kReportFolder);  // made at the end at least
   FollowState s;
   s.options = options;
   FuseOptions& fuse = s.options.fuse;

@@ -182,7 +182,8 @@ RunFiles read_run(const ReportOptions& options, report::PageContent& page) {
   } else {
     page.notes.push_back(run_file.string() + " not found: no counts, no trajectory, no Table 6");
   }
-  page.inputs.push_back("run: " + options.run.string());
+  page.inputs.push_back("run: " +
+                        (options.shown_run.empty() ? options.run : options.shown_run).string());
   return files;
 }
 
@@ -232,8 +233,10 @@ Trajectories read_trajectories(const ReportOptions& options, const json& run,
   Trajectories t;
   const std::optional<fs::path> est_path = run_trajectory_path(options, run);
   if (est_path) {
-    if (fs::exists(*est_path)) {
-      t.est = io::read_trajectory(*est_path);
+    const fs::path poses = options.trajectory.empty() ? *est_path : options.trajectory;
+    if (fs::exists(poses)) {
+      t.est = io::read_trajectory(poses);
+      t.est->source = est_path->string();
       page.inputs.push_back("estimated trajectory: " + est_path->string());
     } else {
       page.notes.push_back("the run's trajectory " + est_path->string() +
@@ -627,8 +630,9 @@ fs::path write_report(const ReportOptions& options, const report::PageContent& p
 ReportResult run_report(const ReportOptions& options) {
   options.check();
   report::PageContent page;
-  page.title = page_title(options.run);
-  page.run_path = options.run.string();
+  const fs::path& shown = options.shown_run.empty() ? options.run : options.shown_run;
+  page.title = page_title(shown);
+  page.run_path = shown.string();
 
   // 1. The run: objects (required), run.json (counts, inputs, Table 6). Every small input is read
   //    before the big ones (the maps), so that a bad one fails fast. With --up auto the pictures

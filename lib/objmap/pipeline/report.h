@@ -13,6 +13,12 @@ namespace objmap::pipeline {
 
 struct ReportOptions {
   std::filesystem::path run;  // fuse output folder
+  // The run as the page names it, when `run` is a copy of it (objmap follow reports hard links of
+  // RUN/map); default `run`.
+  std::filesystem::path shown_run;
+  // The poses of the run's trajectory (the file run.json names) read from this file instead
+  // (objmap follow: the lines read so far of a trajectory still being written); default that file.
+  std::filesystem::path trajectory;
   std::filesystem::path out;  // default RUN/report
   std::filesystem::path gt;   // ground-truth trajectory; default the dataset's groundtruth.txt
   std::filesystem::path
