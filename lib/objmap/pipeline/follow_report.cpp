@@ -21,14 +21,19 @@ namespace fs = std::filesystem;
 namespace {
 
 // OUT/map's files as hard links in `copy` (no byte copied: the next publish renames a new OUT/map
-// into place and removes the old folder, the links keep its files).
+// into place and removes the old folder, the links keep its files); copied where the file system
+// has no hard links.
 void link_tree(const fs::path& from, const fs::path& copy) {
   fs::create_directories(copy);
   for (const fs::directory_entry& e : fs::directory_iterator(from)) {
-    if (e.is_directory())
-      link_tree(e.path(), copy / e.path().filename());
-    else
-      fs::create_hard_link(e.path(), copy / e.path().filename());
+    const fs::path to = copy / e.path().filename();
+    if (e.is_directory()) {
+      link_tree(e.path(), to);
+      continue;
+    }
+    std::error_code ec;
+    fs::create_hard_link(e.path(), to, ec);
+    if (ec) fs::copy_file(e.path(), to);
   }
 }
 
