@@ -101,7 +101,8 @@ struct FollowState {
   // another (the next publish's: start_publish); each one at a time, waiting for the one before.
   std::future<void> dense_apply;
   std::future<void> scene_making;
-  std::shared_future<std::shared_ptr<const scene::SceneGraph>> scene;  // the last dense_apply's
+  // The up and surfaces of the last publish's dense cloud (scene_making's), for the next publish.
+  std::shared_future<std::shared_ptr<const scene::SceneGraph>> scene;
   std::size_t scene_keyframes = 0;  // the keyframes of the dense map `scene` is found on
   bool scene_complete = true;       // the last publish's up and surfaces were of its dense map
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
