@@ -14,7 +14,7 @@
 # Every run also installs ONNX Runtime when it is missing (optional, like python3-open3d: when it
 # cannot be installed objmap detect runs ONNX models in OpenCV's dnn, about 3x slower; docs/cli.md).
 # Debian has no package: the x64 library of the npm package onnxruntime-node (pinned below, the
-# release of the C API headers in lib/objmap/segmentation/onnxruntime/) goes to
+# release of the C API that lib/objmap/segmentation/ort_api.h declares) goes to
 # /usr/local/lib/objmap/libonnxruntime.so.1, where objmap loads it at run time (dlopen; objmap
 # builds and works without it).
 #   scripts/install-deps.sh --no-onnxruntime   leaves ONNX Runtime out

@@ -7,11 +7,30 @@
 #include <mutex>
 
 #include "objmap/core/error.h"
-#include "objmap/segmentation/onnxruntime/onnxruntime_c_api.h"
+#include "objmap/segmentation/ort_api.h"
 
 namespace objmap::segmentation {
 
 namespace fs = std::filesystem;
+using ort::bind_api;
+using ort::kApiVersion;
+using ort::ONNX_TENSOR_ELEMENT_DATA_TYPE_FLOAT;
+using ort::ORT_ENABLE_ALL;
+using ort::ORT_LOGGING_LEVEL_FATAL;
+using ort::OrtAllocator;
+using ort::OrtApi;
+using ort::OrtApiBase;
+using ort::OrtApiTable;
+using ort::OrtArenaAllocator;
+using ort::OrtEnv;
+using ort::OrtMemoryInfo;
+using ort::OrtMemTypeDefault;
+using ort::OrtSession;
+using ort::OrtSessionOptions;
+using ort::OrtStatus;
+using ort::OrtTensorTypeAndShapeInfo;
+using ort::OrtTypeInfo;
+using ort::OrtValue;
 
 namespace {
 
@@ -22,7 +41,8 @@ constexpr const char* kInstallHint =
 // The loaded library and its API table: once per process, never unloaded.
 struct Runtime {
   OnnxRuntimeStatus status;
-  const OrtApi* api = nullptr;
+  OrtApi calls;                 // the table's functions objmap calls
+  const OrtApi* api = nullptr;  // &calls once the library serves them
   OrtEnv* env = nullptr;
 };
 
@@ -43,14 +63,15 @@ bool try_load(const std::string& file, Runtime& rt, std::string& tried) {
     return false;
   }
   const std::string version = base->GetVersionString();
-  rt.api = base->GetApi(ORT_API_VERSION);
-  if (rt.api == nullptr) {
+  const OrtApiTable* table = base->GetApi(kApiVersion);
+  if (table == nullptr) {
     tried += "; " + file + ": ONNX Runtime " + version + " is older than the C API objmap uses (" +
-             std::to_string(ORT_API_VERSION) + ", ONNX Runtime 1." +
-             std::to_string(ORT_API_VERSION) + ")";
+             std::to_string(kApiVersion) + ", ONNX Runtime 1." + std::to_string(kApiVersion) + ")";
     dlclose(handle);
     return false;
   }
+  rt.calls = bind_api(table);
+  rt.api = &rt.calls;
   // Its errors come back as statuses (one line, objmap's); its own log only for fatal ones.
   OrtStatus* s = rt.api->CreateEnv(ORT_LOGGING_LEVEL_FATAL, "objmap", &rt.env);
   if (s != nullptr) {

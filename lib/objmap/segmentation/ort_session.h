@@ -15,8 +15,8 @@
 //   2. /usr/local/lib/objmap/libonnxruntime.so.1, where `scripts/install-deps.sh` (make deps)
 //      puts the library of the npm package onnxruntime-node (docs/cli.md, "objmap detect");
 //   3. libonnxruntime.so.1 on the loader's path (LD_LIBRARY_PATH, ldconfig).
-// The C API headers are those of ONNX Runtime 1.29.0 (segmentation/onnxruntime/, vendored); a
-// library of that release or newer serves them.
+// The C API is that of ONNX Runtime 1.29.0 (ort_api.h); a library of that release or newer
+// serves it.
 namespace objmap::segmentation {
 
 // Whether ONNX Runtime can be used, and which (the library is loaded once per process).
