@@ -7,10 +7,9 @@ namespace objmap {
 // 32 MB come from the heap (not each from a fresh mmap) and the heap's free top is not trimmed.
 // By default glibc maps every block above a threshold that adapts (from 128 kB) and trims freed
 // tops, so a pipeline that frees and allocates buffers of tens of MB again and again (a follow
-// publish, fuse's keyframe buffers) has the kernel zero and fault them in page by page each time:
-// 8 % of fuse's time on fr1_rpy_every4 and half a second of follow's largest lag
-// (docs/benchmarks.md, "The allocator"). Costs a few percent of peak memory. Call once, first
-// thing in main. False when the allocator refused a setting.
+// publish, fuse's keyframe buffers) has the kernel zero and fault them in page by page each time
+// (what it costs and saves: docs/benchmarks.md, "The allocator"). Call once, first thing in main.
+// False when the allocator refused a setting.
 bool keep_freed_memory();
 
 }  // namespace objmap

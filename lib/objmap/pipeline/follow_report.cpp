@@ -24,17 +24,12 @@ namespace {
 // into place and removes the old folder, the links keep its files); copied where the file system
 // has no hard links.
 void link_tree(const fs::path& from, const fs::path& copy) {
-  fs::create_directories(copy);
-  for (const fs::directory_entry& e : fs::directory_iterator(from)) {
-    const fs::path to = copy / e.path().filename();
-    if (e.is_directory()) {
-      link_tree(e.path(), to);
-      continue;
-    }
-    std::error_code ec;
-    fs::create_hard_link(e.path(), to, ec);
-    if (ec) fs::copy_file(e.path(), to);
-  }
+  fs::create_directories(copy.parent_path());
+  std::error_code ec;
+  fs::copy(from, copy, fs::copy_options::recursive | fs::copy_options::create_hard_links, ec);
+  if (!ec) return;
+  fs::remove_all(copy);
+  fs::copy(from, copy, fs::copy_options::recursive);
 }
 
 // The report of `source` (a copy of OUT/map) into OUT/report, the run named OUT/map; `poses`, when
