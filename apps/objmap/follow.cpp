@@ -73,6 +73,11 @@ void setup_follow(CLI::App& app) {
                 "published, made on a thread of its own: ~1 s of one core on a 30 s walk-through); "
                 "0: only the report of the last map")
       ->capture_default_str();
+  c->add_option("--scene-every", o->scene_every_s,
+                "seconds between two findings of the up direction and the surfaces on a "
+                "published dense map (the publishes in between take the last ones found; the last "
+                "publish finds its own); 0: on every publish's")
+      ->capture_default_str();
   c->add_option("--threads", o->fuse.threads, "worker threads, 0 = all cores")
       ->capture_default_str();
   c->callback([o] { follow_and_print(*o); });

@@ -4,6 +4,7 @@
 // recording removed is exit 2 with the last map kept.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -65,6 +66,14 @@ bool copy_live_scene(int frames, const TempDir& tmp) {
   return true;
 }
 
+// objmap fuse on the finished recording `tmp`/rec (its estimated trajectory) into `tmp`/fuse.
+RunResult fuse_the_recording(const TempDir& tmp) {
+  const fs::path rec = tmp / "rec";
+  return run_objmap({"fuse", "--dataset", rec.string(), "--trajectory",
+                     (rec / "estimated.txt").string(), "--segmentation",
+                     (rec / "segmentation").string(), "--out", (tmp / "fuse").string()});
+}
+
 // objmap replay of `scene` into `rec` at `speed` on a thread of its own, its result into `result`.
 std::thread start_replay(const fs::path& scene, const fs::path& rec, const std::string& speed,
                          RunResult& result, const std::vector<std::string>& extra = {}) {
@@ -115,6 +124,7 @@ namespace {
 
 using follow_live::copy_live_scene;
 using follow_live::follow_a_replay;
+using follow_live::fuse_the_recording;
 using follow_live::LiveRun;
 using follow_live::matched_objects;
 using follow_live::read_json_file;
@@ -126,7 +136,6 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
   const fs::path scene = live_scene(60);
   ASSERT_FALSE(scene.empty());
   TempDir tmp;
-  const fs::path rec = tmp / "rec";
   const LiveRun run = follow_a_replay(scene, tmp, "1", {}, {"--publish-every", "0.3"});
   const RunResult& follow = run.follow;
   ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
@@ -148,9 +157,7 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
 
   // The final map against objmap fuse on the finished recording: the same keyframes, the object
   // count within 10%, every true object fuse finds found once.
-  const auto fuse = run_objmap({"fuse", "--dataset", rec.string(), "--trajectory",
-                                (rec / "estimated.txt").string(), "--segmentation",
-                                (rec / "segmentation").string(), "--out", (tmp / "fuse").string()});
+  const auto fuse = fuse_the_recording(tmp);
   ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
   const auto fused = read_json_file(tmp / "fuse/run.json");
   const auto live = read_json_file(tmp / "live/map/run.json");
@@ -182,6 +189,48 @@ TEST(Follow, FollowsAReplayToTheMapOfFuseOnTheFinishedRecording) {
     EXPECT_TRUE(e.path().filename() == "map" || e.path().filename() == "report" ||
                 e.path().filename() == "status.json")
         << e.path();
+}
+
+// With --scene-every longer than the recording, every publish while following takes the up and
+// surfaces found on the first one's dense map; the last map still finds its own (fuse's), after a
+// publish of the keyframes not yet published with the old ones.
+TEST(Follow, TheUpAndSurfacesAreFoundAgainOnlyEverySceneEverySecondsAndTheLastMapFindsItsOwn) {
+  const fs::path scene = live_scene(60);
+  ASSERT_FALSE(scene.empty());
+  TempDir tmp;
+  std::set<int> scene_keyframes_seen;  // status.json's while following, read every 20 ms
+  std::atomic<bool> stop{false};
+  std::thread watcher([&] {
+    while (!stop) {
+      try {
+        const auto st = read_json_file(tmp / "live/status.json");
+        if (st.at("state") == "following" && st.at("publishes").get<int>() > 0)
+          scene_keyframes_seen.insert(st.at("scene_keyframes").get<int>());
+      } catch (const std::exception&) {  // not there yet
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  const LiveRun run =
+      follow_a_replay(scene, tmp, "1", {}, {"--publish-every", "0.2", "--scene-every", "1000"});
+  stop = true;
+  watcher.join();
+  ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
+  ASSERT_EQ(run.follow.exit_code, 0) << run.follow.err;
+  const auto status = read_json_file(tmp / "live/status.json");
+  EXPECT_GE(status.at("publishes").get<int>(), 4) << run.follow.err;
+  // One scene while following: the first publish's (made on its own dense map).
+  EXPECT_EQ(scene_keyframes_seen.size(), 1u);
+  const auto fuse = fuse_the_recording(tmp);
+  ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
+  const auto fused = read_json_file(tmp / "fuse/run.json");
+  const auto live = read_json_file(tmp / "live/map/run.json");
+  EXPECT_EQ(status.at("scene_keyframes"), live.at("counts").at("keyframes"));
+  EXPECT_EQ(live.at("counts").at("keyframes"), fused.at("counts").at("keyframes"));
+  EXPECT_EQ(live.at("scene").at("up"), fused.at("scene").at("up"));
+  EXPECT_EQ(live.at("scene").at("surfaces"), fused.at("scene").at("surfaces"));
+  EXPECT_EQ(read_text(tmp / "live/map/objects.json"), read_text(tmp / "fuse/objects.json"));
+  EXPECT_GT(status.at("lag_last_s").get<double>(), 0.0);
 }
 
 TEST(Follow, AMalformedTrajectoryLineIsNamedSkippedAndCountedALineBeingWrittenWaits) {
@@ -291,16 +340,13 @@ TEST(Follow, ALoopClosureMovesTheObjectsWhereFuseOnTheRewrittenTrajectoryPutsThe
   const fs::path scene = live_scene(60);
   ASSERT_FALSE(scene.empty());
   TempDir tmp;
-  const fs::path rec = tmp / "rec";
   const LiveRun run = follow_a_replay(scene, tmp, "1", {"--rewrite-at", "0.5"}, {});
   ASSERT_EQ(run.replay.exit_code, 0) << run.replay.err;
   ASSERT_EQ(run.follow.exit_code, 0) << run.follow.err;
   const auto status = read_json_file(tmp / "live/status.json");
   EXPECT_GE(status.at("trajectory_rewrites").get<int>(), 1);
   EXPECT_GE(status.at("replacements").get<int>(), 1);
-  const auto fuse = run_objmap({"fuse", "--dataset", rec.string(), "--trajectory",
-                                (rec / "estimated.txt").string(), "--segmentation",
-                                (rec / "segmentation").string(), "--out", (tmp / "fuse").string()});
+  const auto fuse = fuse_the_recording(tmp);
   ASSERT_EQ(fuse.exit_code, 0) << fuse.err;
   const auto live = read_json_file(tmp / "live/map/objects.json").at("objects");
   const auto fused = read_json_file(tmp / "fuse/objects.json").at("objects");
@@ -344,6 +390,11 @@ TEST(Follow, BadInputIsOneLineAndExitTwo) {
                                     (tmp / "live").string(), "--report-every", "-1"});
   EXPECT_EQ(negative.exit_code, 2);
   EXPECT_NE(negative.err.find("--report-every: must be >= 0 s"), std::string::npos) << negative.err;
+  const auto scene = run_objmap({"follow", "--dataset", (tmp / "rec").string(), "--out",
+                                 (tmp / "live").string(), "--scene-every", "nan"});
+  EXPECT_EQ(scene.exit_code, 2);
+  EXPECT_NE(scene.err.find("--scene-every: must be >= 0 s"), std::string::npos) << scene.err;
+  EXPECT_FALSE(fs::exists(tmp / "live"));
 }
 
 }  // namespace

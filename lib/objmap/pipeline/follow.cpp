@@ -26,6 +26,8 @@ void FollowOptions::check() const {
   require(std::isfinite(poll_s) && poll_s > 0 && poll_s <= 10, "--poll", "must be in (0, 10] s");
   require(std::isfinite(report_every_s) && report_every_s >= 0, "--report-every",
           "must be >= 0 s (0: the report of the last map only)");
+  require(std::isfinite(scene_every_s) && scene_every_s >= 0, "--scene-every",
+          "must be >= 0 s (0: on every publish's dense map)");
   require(fs::is_directory(dataset), dataset.string(),
           "not a folder; expected the recording being written");
 }

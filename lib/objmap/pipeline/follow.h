@@ -34,6 +34,11 @@ struct FollowOptions {
   // least this many seconds after the last report started, and from the last publish; 0: only
   // from the last.
   double report_every_s = 10.0;
+  // The up direction and surfaces (the scene step: 0.2–0.5 s of a core on a dense map of millions
+  // of points) found again, on a publish's dense cloud, for the publishes after it, when this many
+  // seconds have passed since they were last found; 0: on every publish's cloud. The last publish
+  // finds its own.
+  double scene_every_s = 2.0;
   FuseOptions fuse;    // the fuse's options (dataset, out, trajectory set from above)
   void check() const;  // throws InputError naming the bad field
 };

@@ -5,6 +5,7 @@
 #include <future>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "objmap/core/error.h"
 #include "objmap/io/atomic.h"
@@ -20,33 +21,40 @@ namespace {
 
 using ScenePromise = std::promise<std::shared_ptr<const scene::SceneGraph>>;
 
-// A publish's up and surfaces (maps.scene): those found on the dense cloud of the publish before
-// (made since, on the dense thread), so that they are off its way; with `own_scene` (the last
+// A publish's up and surfaces (maps.scene): the last found, on the dense cloud of a publish before
+// (on a thread of their own since), so that they are off its way; with `own_scene` (the last
 // publish), or when there are none yet, those of its own cloud, unless nothing was fused since.
-// Returns the keyframes of the dense map they are found on; `next` is for the ones of this
-// publish's cloud (s.scene from now on).
-std::size_t choose_scene(FollowState& s, FuseMaps& maps, bool own_scene, ScenePromise& next) {
-  auto next_scene = next.get_future().share();
+struct SceneChoice {
+  std::size_t keyframes = 0;  // of the dense map the publish's up and surfaces are found on
+  bool make = false;  // they are found on this publish's cloud (`next`), for it or those after
+};
+
+// They are found again on this publish's cloud (s.scene from then on) when its own are needed or
+// the last were found scene_every_s or more before.
+SceneChoice choose_scene(FollowState& s, FuseMaps& maps, bool own_scene, ScenePromise& next) {
   const std::size_t keyframes = s.result.keyframes.keyframes.size();
   const bool before = s.scene.valid() && (!own_scene || s.scene_keyframes == keyframes);
-  maps.scene = before ? s.scene : next_scene;
-  const std::size_t scene_keyframes = before ? s.scene_keyframes : keyframes;
-  s.scene = std::move(next_scene);
+  const bool make = !before || (s.scene_keyframes != keyframes &&
+                                seconds_since(s.scene_started) >= s.options.scene_every_s);
+  const SceneChoice choice{before ? s.scene_keyframes : keyframes, make};
+  if (before) maps.scene = s.scene;
+  if (!make) return choice;
+  s.scene = next.get_future().share();
+  if (!before) maps.scene = s.scene;
   s.scene_keyframes = keyframes;
-  return scene_keyframes;
+  s.scene_started = s.publish_started;
+  return choice;
 }
 
 // The dense map's changes taken now (on the loop's thread, after the publish's thread has started
 // on the objects: their merge pass does not need the dense cloud) and, on a thread of their own,
-// folded into the cloud (`cloud`, which `made` gives); on another, the up and the surfaces found
-// on that cloud (`scene`). One apply at a time and one scene at a time, each after the one before;
-// an apply does not wait for the scene of the cloud before (it copies that cloud if the scene
-// still reads it).
+// folded into the cloud (`cloud`, which `made` gives); on another, when `scene` is given, the up
+// and the surfaces found on that cloud. One apply at a time and one scene at a time, each after
+// the one before; an apply does not wait for the scene of the cloud before (it copies that cloud
+// if the scene still reads it).
 void start_dense_apply(FollowState& s, std::promise<std::shared_ptr<const DenseCloud>> cloud,
                        std::shared_future<std::shared_ptr<const DenseCloud>> made,
-                       ScenePromise scene) {
-  std::vector<Pose> cameras;
-  for (const Keyframe& k : s.result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
+                       std::optional<ScenePromise> scene) {
   s.dense_apply =
       std::async(std::launch::async,
                  [snapshot = &*s.dense_snapshot, changes = s.dense_snapshot->take(s.maps->dense),
@@ -58,9 +66,12 @@ void start_dense_apply(FollowState& s, std::promise<std::shared_ptr<const DenseC
                      cloud_promise.set_exception(std::current_exception());
                    }
                  });
+  if (!scene) return;
+  std::vector<Pose> cameras;
+  for (const Keyframe& k : s.result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
   s.scene_making = std::async(
       std::launch::async,
-      [made = std::move(made), scene_promise = std::move(scene), cameras = std::move(cameras),
+      [made = std::move(made), scene_promise = std::move(*scene), cameras = std::move(cameras),
        before = std::move(s.scene_making), options = &s.options.fuse.scene]() mutable {
         try {
           if (before.valid()) before.get();  // the scene before done
@@ -105,16 +116,17 @@ void start_publish(FollowState& s, bool own_scene) {
   std::promise<std::shared_ptr<const DenseCloud>> cloud;
   ScenePromise scene;
   const std::size_t keyframes = s.result.keyframes.keyframes.size();
-  std::size_t scene_keyframes = keyframes;
+  SceneChoice choice{keyframes, false};
   if (s.dense_snapshot) {
     maps->dense_cloud = cloud.get_future().share();
-    scene_keyframes = choose_scene(s, *maps, own_scene, scene);
+    choice = choose_scene(s, *maps, own_scene, scene);
   }
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
   const FollowState* state = &s;  // its options, choices and class sizes do not change
-  s.publishing = std::async(std::launch::async, [state, inputs, result, maps, scene_keyframes,
-                                                 complete = scene_keyframes == keyframes] {
+  s.publishing = std::async(std::launch::async, [state, inputs, result, maps,
+                                                 scene_keyframes = choice.keyframes,
+                                                 complete = choice.keyframes == keyframes] {
     // The map written under a temporary name and renamed: a reader never sees half of it.
     io::StagingDir staging(state->options.fuse.out, io::kRunFolder);
     finish_fuse(state->options.fuse, state->choices, *inputs, state->class_sizes, *maps,
@@ -122,7 +134,9 @@ void start_publish(FollowState& s, bool own_scene) {
     staging.commit();
     return PublishDone{result->objects.size(), staging.committed_at(), scene_keyframes, complete};
   });
-  if (s.dense_snapshot) start_dense_apply(s, std::move(cloud), maps->dense_cloud, std::move(scene));
+  if (s.dense_snapshot)
+    start_dense_apply(s, std::move(cloud), maps->dense_cloud,
+                      choice.make ? std::optional<ScenePromise>(std::move(scene)) : std::nullopt);
 }
 
 bool publish_done(const FollowState& s) {
@@ -138,10 +152,11 @@ bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
   s.status.scene_keyframes = done.scene_keyframes;
   s.scene_complete = done.scene_complete;
   // The lag of each keyframe this publish brought in: from its frame's arrival to the moment its
-  // map was in place (not to when this loop noticed it).
+  // map was in place (not to when this loop noticed it). A publish that brought none (the last
+  // map with its own up and surfaces) leaves the last lag as it was.
   const Clock::time_point now = done.committed;
   s.status.publish_seconds_last = std::chrono::duration<double>(now - s.publish_started).count();
-  s.status.lag_last_s = 0.0;
+  if (!s.publishing_arrivals.empty()) s.status.lag_last_s = 0.0;
   for (const Clock::time_point& arrived : s.publishing_arrivals) {
     s.lags.push_back(std::chrono::duration<double>(now - arrived).count());
     s.status.lag_last_s = std::max(s.status.lag_last_s, s.lags.back());
@@ -161,8 +176,15 @@ bool finish_publish(FollowState& s, const FollowEvents& events, bool wait) {
 }
 
 void publish(FollowState& s, const FollowEvents& events) {
-  // The one in flight, or the last one done, is enough when it holds every keyframe.
   finish_publish(s, events, true);
+  // The keyframes not yet published first, with the up and surfaces last found: their lag ends
+  // there, not after the scene step of the whole dense map.
+  if (!s.unpublished.empty() && s.status.publishes > 0) {
+    start_publish(s, false);
+    finish_publish(s, events, true);
+  }
+  // The last map is that of fuse: the up and surfaces of its own dense map. The publish before
+  // is it when it holds every keyframe and had those.
   if (s.unpublished.empty() && s.status.publishes > 0 && s.scene_complete) {
     write_status(s);
     return;

@@ -104,6 +104,7 @@ struct FollowState {
   // The up and surfaces of the last publish's dense cloud (scene_making's), for the next publish.
   std::shared_future<std::shared_ptr<const scene::SceneGraph>> scene;
   std::size_t scene_keyframes = 0;  // the keyframes of the dense map `scene` is found on
+  Clock::time_point scene_started;  // the start of the publish whose cloud `scene` is found on
   bool scene_complete = true;       // the last publish's up and surfaces were of its dense map
   std::vector<Clock::time_point> publishing_arrivals;  // the keyframes it brings in
   std::vector<double> lags;  // every published keyframe's lag (s), for the median
@@ -144,9 +145,9 @@ void replace_after_loop_closure(FollowState& s);
 //    staging folder, on a thread of its own while the keyframes go on (start_publish); when it is
 //    done (finish_publish, waiting for it with `wait`; false when none was done), OUT/status.json
 //    with the lag. publish: every keyframe published, to its end (the one in flight may do if
-//    its up and surfaces were of its own dense map). A publish takes the up and surfaces made of
-//    the dense cloud of the publish before, off its way; `own_scene` (the last publish) waits for
-//    those of its own.
+//    its up and surfaces were of its own dense map). A publish takes the up and surfaces last
+//    found, on the dense cloud of a publish before, off its way (found again every
+//    scene_every_s); `own_scene` (the last publish) waits for those of its own.
 void start_publish(FollowState& s, bool own_scene = false);
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
 bool publish_done(const FollowState& s);  // a publish in flight has its map in place
