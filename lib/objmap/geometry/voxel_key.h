@@ -253,25 +253,31 @@ class VoxelHashTable {
   // Slot arrays of 2 MB and more are mapped from the kernel (zeroed pages) with transparent huge
   // pages asked for: a large table is touched all over, and one fault per 2 MB instead of per 4 KB
   // is most of what filling it costs. Smaller ones come from malloc.
+  // A copy's slots (not zeroed: every byte is written by the copy) come from malloc whatever their
+  // size: memory the allocator kept (core/memory.h) is reused without the kernel zeroing and
+  // faulting in pages the copy overwrites at once (objmap follow copies its object map at every
+  // publish).
   static constexpr std::size_t kMapBytes = std::size_t{2} << 20;
   struct Free {
     std::size_t bytes = 0;
-    void operator()(Slot* p) const { free_slots(p, bytes); }
+    bool mapped = false;  // by map_zeroed, not malloc
+    void operator()(Slot* p) const { free_slots(p, bytes, mapped); }
   };
   using Slots = std::unique_ptr<Slot[], Free>;
   static Slots allocate(std::size_t cap, bool zeroed) {
     const std::size_t bytes = cap * sizeof(Slot);
-    void* p = bytes >= kMapBytes ? map_zeroed(bytes) : std::malloc(bytes);
+    const bool mapped = zeroed && bytes >= kMapBytes;
+    void* p = mapped ? map_zeroed(bytes) : std::malloc(bytes);
     if (!p) throw std::bad_alloc();
     // Zeroed by writing, not by calloc: calloc leaves fresh pages to the kernel, and a probe's read
     // of such a page maps the shared zero page, whose replacement at the write that follows is a
     // second fault and a TLB flush on the other threads' cores (as map_zeroed's pages, written).
     // explicit_bzero: the compiler would turn malloc + memset back into calloc.
-    if (zeroed && bytes < kMapBytes) explicit_bzero(p, bytes);
-    return Slots(static_cast<Slot*>(p), Free{bytes});
+    if (zeroed && !mapped) explicit_bzero(p, bytes);
+    return Slots(static_cast<Slot*>(p), Free{bytes, mapped});
   }
-  static void free_slots(Slot* p, std::size_t bytes) {
-    if (bytes >= kMapBytes)
+  static void free_slots(Slot* p, std::size_t bytes, bool mapped) {
+    if (mapped)
       unmap(p, bytes);
     else
       std::free(p);
