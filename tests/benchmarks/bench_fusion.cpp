@@ -362,6 +362,20 @@ BENCHMARK(BM_ReadBoxSegmentationFr3LongOffice)->Unit(benchmark::kMillisecond);
 // ---------------------------------------------------------------------------------------------
 // Object map: one observation (a masked 160×120 region: ~19k points) against 20 objects.
 
+// `count` objects of `class_name` added to `map`, each `points` moved `spacing` m further along x
+// (track ids 100, 101, ...).
+void add_objects(fusion::ObjectMap& map, const PointCloud& points, int count,
+                 const std::string& class_name, float spacing) {
+  for (int k = 0; k < count; ++k) {
+    fusion::Observation o;
+    o.class_name = class_name;
+    o.track_id = 100 + k;
+    for (const Vec3f& p : points.points)
+      o.points_in_world.push_back(p + Vec3f(spacing * (k + 1), 0, 0));
+    map.add_frame({o});
+  }
+}
+
 void BM_ObjectMapAdd(benchmark::State& state) {
   const Frame& f = test_frame();
   segmentation::Mask mask;
@@ -373,14 +387,7 @@ void BM_ObjectMapAdd(benchmark::State& state) {
   const auto points =
       geometry::backproject(rays(), {f.depth, f.world_from_cam, &f.bgr, &mask}).points_in_world;
   fusion::ObjectMap map;
-  for (int k = 0; k < 20; ++k) {  // 20 other objects, 30 cm apart
-    fusion::Observation o;
-    o.class_name = "book";
-    o.track_id = 100 + k;
-    for (const Vec3f& p : points.points)
-      o.points_in_world.push_back(p + Vec3f(0.3f * (k + 1), 0, 0));
-    map.add_frame({o});
-  }
+  add_objects(map, points, 20, "book", 0.3f);  // 20 other objects, 30 cm apart
   fusion::Observation o;
   o.class_name = "cup";
   o.track_id = 1;
@@ -399,14 +406,7 @@ void BM_ObjectMapCopy(benchmark::State& state) {
   const auto points =
       geometry::backproject(rays(), {f.depth, f.world_from_cam, &f.bgr}).points_in_world;
   fusion::ObjectMap map;
-  for (int k = 0; k < 8; ++k) {  // 8 objects, 5 m apart
-    fusion::Observation o;
-    o.class_name = "table";
-    o.track_id = 100 + k;
-    for (const Vec3f& p : points.points)
-      o.points_in_world.push_back(p + Vec3f(5.0f * (k + 1), 0, 0));
-    map.add_frame({o});
-  }
+  add_objects(map, points, 8, "table", 5.0f);  // 8 objects, 5 m apart
   for (auto _ : state) {
     fusion::ObjectMap copy(map);
     benchmark::DoNotOptimize(copy.size());
