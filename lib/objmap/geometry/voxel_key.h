@@ -250,13 +250,11 @@ class VoxelHashTable {
   std::vector<VoxelKey> sorted_keys() const;
 
  private:
-  // Slot arrays of 2 MB and more are mapped from the kernel (zeroed pages) with transparent huge
-  // pages asked for: a large table is touched all over, and one fault per 2 MB instead of per 4 KB
-  // is most of what filling it costs. Smaller ones come from malloc.
-  // A copy's slots (not zeroed: every byte is written by the copy) come from malloc whatever their
-  // size: memory the allocator kept (core/memory.h) is reused without the kernel zeroing and
-  // faulting in pages the copy overwrites at once (objmap follow copies its object map at every
-  // publish).
+  // Zeroed slot arrays of 2 MB and more are mapped from the kernel (zeroed pages) with transparent
+  // huge pages asked for: a large table is touched all over, and one fault per 2 MB instead of per
+  // 4 KB is most of what filling it costs. Smaller ones, and a copy's slots whatever their size
+  // (every byte written by the copy: memory the allocator kept, core/memory.h, is reused without
+  // the kernel zeroing and faulting in pages overwritten at once), come from malloc.
   static constexpr std::size_t kMapBytes = std::size_t{2} << 20;
   struct Free {
     std::size_t bytes = 0;

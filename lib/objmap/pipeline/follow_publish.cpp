@@ -26,20 +26,21 @@ using ScenePromise = std::promise<std::shared_ptr<const scene::SceneGraph>>;
 // publish), or when there are none yet, those of its own cloud, unless nothing was fused since.
 struct SceneChoice {
   std::size_t keyframes = 0;  // of the dense map the publish's up and surfaces are found on
-  bool make = false;  // they are found on this publish's cloud (`next`), for it or those after
+  // Given when they are found on this publish's cloud, for it or the publishes after.
+  std::optional<ScenePromise> make;
 };
 
 // They are found again on this publish's cloud (s.scene from then on) when its own are needed or
 // the last were found scene_every_s or more before.
-SceneChoice choose_scene(FollowState& s, FuseMaps& maps, bool own_scene, ScenePromise& next) {
+SceneChoice choose_scene(FollowState& s, FuseMaps& maps, bool own_scene) {
   const std::size_t keyframes = s.result.keyframes.keyframes.size();
   const bool before = s.scene.valid() && (!own_scene || s.scene_keyframes == keyframes);
-  const bool make = !before || (s.scene_keyframes != keyframes &&
-                                seconds_since(s.scene_started) >= s.options.scene_every_s);
-  const SceneChoice choice{before ? s.scene_keyframes : keyframes, make};
+  SceneChoice choice{before ? s.scene_keyframes : keyframes, std::nullopt};
   if (before) maps.scene = s.scene;
-  if (!make) return choice;
-  s.scene = next.get_future().share();
+  if (before &&
+      (s.scene_keyframes == keyframes || seconds_since(s.scene_started) < s.options.scene_every_s))
+    return choice;
+  s.scene = choice.make.emplace().get_future().share();
   if (!before) maps.scene = s.scene;
   s.scene_keyframes = keyframes;
   s.scene_started = s.publish_started;
@@ -114,12 +115,11 @@ void start_publish(FollowState& s, bool own_scene) {
                                                   {},
                                                   {}});
   std::promise<std::shared_ptr<const DenseCloud>> cloud;
-  ScenePromise scene;
   const std::size_t keyframes = s.result.keyframes.keyframes.size();
-  SceneChoice choice{keyframes, false};
+  SceneChoice choice{keyframes, std::nullopt};
   if (s.dense_snapshot) {
     maps->dense_cloud = cloud.get_future().share();
-    choice = choose_scene(s, *maps, own_scene, scene);
+    choice = choose_scene(s, *maps, own_scene);
   }
   s.publishing_arrivals = std::move(s.unpublished);
   s.unpublished.clear();
@@ -135,8 +135,7 @@ void start_publish(FollowState& s, bool own_scene) {
     return PublishDone{result->objects.size(), staging.committed_at(), scene_keyframes, complete};
   });
   if (s.dense_snapshot)
-    start_dense_apply(s, std::move(cloud), maps->dense_cloud,
-                      choice.make ? std::optional<ScenePromise>(std::move(scene)) : std::nullopt);
+    start_dense_apply(s, std::move(cloud), maps->dense_cloud, std::move(choice.make));
 }
 
 bool publish_done(const FollowState& s) {
