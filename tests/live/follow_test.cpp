@@ -334,8 +334,9 @@ TEST(Follow, WithAModelTheDetectorTakesTheNewestKeyframeAndSkipsTheRest) {
 }
 
 // A loop closure: the trajectory drifted until half-way, then rewritten with the true poses. The
-// objects mapped before it are moved with the new poses (no image read again): the final objects
-// lie where objmap fuse on the rewritten trajectory puts them (within 2 cm).
+// objects mapped before it are made again from their kept pixels with the new poses (no image read
+// again): the final objects lie where objmap fuse on the rewritten trajectory puts them (within
+// 5 mm; measured: 0.01 mm, the points being fuse's bit for bit).
 TEST(Follow, ALoopClosureMovesTheObjectsWhereFuseOnTheRewrittenTrajectoryPutsThem) {
   const fs::path scene = live_scene(60);
   ASSERT_FALSE(scene.empty());
@@ -361,7 +362,7 @@ TEST(Follow, ALoopClosureMovesTheObjectsWhereFuseOnTheRewrittenTrajectoryPutsThe
             nearest,
             (Eigen::Vector3d(f.at("position")[0], f.at("position")[1], f.at("position")[2]) - p)
                 .norm());
-    EXPECT_LE(nearest, 0.02) << o.at("class") << " " << o.at("id");
+    EXPECT_LE(nearest, 0.005) << o.at("class") << " " << o.at("id");
   }
 }
 

@@ -1,10 +1,12 @@
 // objmap follow's loop closure: when the trajectory's past poses change, the observations of the
-// keyframes mapped so far are moved with them (each observation's points by the change of its
-// keyframe's pose, so that they stay where they were in their camera's frame) and the object map
-// is made again from them in keyframe order, as objmap fuse would make it with the new poses. No
-// image is read again. The dense map keeps the poses it was fused with.
+// keyframes mapped so far are made again from their pixels (kept as runs: each pixel's raw depth
+// and colour) with their keyframes' new poses, so that they stay where they were in their camera's
+// frame, and the object map is made again from them in keyframe order, as objmap fuse would make
+// it with the new poses. No image is read again. The dense map keeps the poses it was fused with.
 #include <utility>
 
+#include "objmap/core/error.h"
+#include "objmap/geometry/pixel_runs.h"
 #include "objmap/io/trajectory.h"
 #include "objmap/pipeline/follow_state.h"
 #include "objmap/pipeline/fuse_keyframes.h"
@@ -12,8 +14,14 @@
 namespace objmap::pipeline {
 
 void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
-                        std::vector<fusion::Observation> observations, const cv::Mat& view_depth) {
-  s.kept.push_back({keyframe, std::move(observations), view_depth});
+                        std::vector<fusion::Observation> observations,
+                        std::vector<geometry::PixelRuns> pixels, const cv::Mat& view_depth) {
+  require(pixels.size() == observations.size(), "follow",
+          "a keyframe's observations came without their pixels");
+  // The points themselves are let go: the runs hold 5 bytes a point against 15 (docs/follow.md,
+  // "Memory").
+  for (fusion::Observation& o : observations) o.points_in_world = PointCloud{};
+  s.kept.push_back({keyframe, std::move(observations), std::move(pixels), view_depth});
 }
 
 void replace_after_loop_closure(FollowState& s) {
@@ -22,21 +30,18 @@ void replace_after_loop_closure(FollowState& s) {
   io::PoseLookupOptions lookup;
   lookup.max_diff_s = s.options.fuse.max_diff_s;
   lookup.interpolate = true;
-  // 1. Each kept keyframe's new pose; its observations moved by the change.
+  // 1. Each kept keyframe's new pose.
   for (std::size_t i = 0; i < s.kept.size(); ++i) {
     KeptKeyframe& k = s.kept[i];
     const std::optional<Pose> pose = io::lookup_pose(s.trajectory, k.keyframe.timestamp, lookup);
     if (!pose) continue;  // its pose went away: it stays where it was
-    const Pose new_from_old = *pose * k.keyframe.world_from_cam.inverse();
-    for (fusion::Observation& o : k.observations) {
-      for (Vec3f& p : o.points_in_world.points) p = (new_from_old * p.cast<double>()).cast<float>();
-      o.world_from_cam = *pose;
-    }
+    for (fusion::Observation& o : k.observations) o.world_from_cam = *pose;
     k.keyframe.world_from_cam = *pose;
     s.result.keyframes.keyframes[i].world_from_cam = *pose;
   }
-  // 2. The object map (and the view log) made again from them, in keyframe order; the counts of
-  //    the association replaced by the new ones.
+  // 2. The object map (and the view log) made again, keyframe by keyframe in their order, from
+  //    the observations with their points made from their pixels with the keyframe's pose; the
+  //    counts of the association replaced by the new ones.
   FuseResult& r = s.result;
   FuseResult counts;
   fusion::ObjectMap objects(s.maps->objects.options());
@@ -48,7 +53,11 @@ void replace_after_loop_closure(FollowState& s) {
   for (const KeptKeyframe& k : s.kept) {
     if (view_log && !k.view_depth.empty())
       view_log->add(k.keyframe.timestamp, k.view_depth.clone(), k.keyframe.world_from_cam);
-    count_added(objects.add_frame(k.observations), counts);
+    std::vector<fusion::Observation> observations = k.observations;
+    for (std::size_t j = 0; j < observations.size(); ++j)
+      observations[j].points_in_world =
+          geometry::points_from_runs(*s.rays, k.pixels[j], k.keyframe.world_from_cam);
+    count_added(objects.add_frame(observations), counts);
   }
   s.maps->objects = std::move(objects);
   s.maps->view_log = std::move(view_log);

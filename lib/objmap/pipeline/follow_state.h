@@ -33,11 +33,13 @@ struct WaitingKeyframe {
   Clock::time_point arrived;
 };
 
-// A keyframe mapped, kept for a loop closure: its observations as they were added (points in the
-// world with the keyframe's pose) and its thinned depth for the view log.
+// A keyframe mapped, kept for a loop closure: its observations as they were added, without their
+// points, which are kept as the pixels they came from (made again with the keyframe's new pose),
+// and its thinned depth for the view log.
 struct KeptKeyframe {
   Keyframe keyframe;
-  std::vector<fusion::Observation> observations;
+  std::vector<fusion::Observation> observations;  // points_in_world empty
+  std::vector<geometry::PixelRuns> pixels;        // per observation
   cv::Mat view_depth;
 };
 
@@ -135,10 +137,12 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
 
 // 3b. A keyframe mapped kept for a loop closure (follow_replace.cpp).
 void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
-                        std::vector<fusion::Observation> observations, const cv::Mat& view_depth);
+                        std::vector<fusion::Observation> observations,
+                        std::vector<geometry::PixelRuns> pixels, const cv::Mat& view_depth);
 
 // 3c. After a loop closure (the trajectory's past poses changed), the kept keyframes' observations
-//     moved with their new poses and the object map made again from them (no image read again).
+//     made again from their pixels with their new poses and the object map made again from them (no
+//     image read again).
 void replace_after_loop_closure(FollowState& s);
 
 // 4. A copy of the maps finished as objmap fuse finishes them, written to OUT/map through a

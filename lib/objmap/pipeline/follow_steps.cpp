@@ -268,7 +268,7 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
     const std::size_t empty_before = r.instances_empty;
     count_added(s.maps->objects.add_frame(live.observations), r);
     s.empty_by_add += r.instances_empty - empty_before;
-    keep_for_replacing(s, k, std::move(live.observations), view_depth);
+    keep_for_replacing(s, k, std::move(live.observations), std::move(live.pixels), view_depth);
     if (live.segmented) ++s.with_seg;
     r.keyframes.keyframes.push_back(k);
     s.unpublished.push_back(s.waiting[n].arrived);

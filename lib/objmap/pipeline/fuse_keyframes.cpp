@@ -115,6 +115,7 @@ struct FrameWork {
   std::vector<PointCloud> model_points;  // per observation, its object model's (--mesh objects)
   cv::Mat depth;       // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   cv::Mat view_depth;  // its thinned copy for the view log (fusion/visibility.h)
+  std::vector<geometry::PixelRuns> pixels;  // per observation, its pixels (KeyframeContext)
   std::unique_ptr<fusion::FrameVoxels> dense_voxels;  // summed, not yet in the dense map
   bool segmented = false;  // made with a segmentation frame (none: the dense map only)
   std::uint64_t dense_points = 0;
@@ -148,6 +149,7 @@ struct KeyframeContext {
   segmentation::InstanceMaskOptions masks;  // instance_mask_options(options)
   mesh::MeshSelection meshes;               // the rays of the scene model, the objects' models
   bool view_depth = false;                  // keep the thinned depth for the view log
+  bool keep_pixels = false;  // each observation's pixels as runs (objmap follow's loop closure)
 };
 
 // Where a keyframe's dense voxels go: the dense map, shard by shard in keyframe order, through a
@@ -215,7 +217,9 @@ FrameWork process_keyframe(const KeyframeContext& ctx, const io::FramePair& fram
       ++work.without_points;
       continue;
     }
-    auto points = geometry::backproject(rays, instance_frame, options.depth);
+    geometry::BackprojectOptions instance_options = options.depth;
+    instance_options.pixel_indices = ctx.keep_pixels;
+    auto points = geometry::backproject(rays, instance_frame, instance_options);
     if (points.points_in_world.size() < static_cast<std::size_t>(options.objects.min_points)) {
       ++work.without_points;
       continue;
@@ -225,6 +229,9 @@ FrameWork process_keyframe(const KeyframeContext& ctx, const io::FramePair& fram
     obs.track_id = m.instance->track_id;
     obs.class_name = m.instance->class_name;
     obs.score = m.instance->score;
+    if (ctx.keep_pixels)
+      work.pixels.push_back(geometry::make_pixel_runs(
+          points.pixel_index, depth, points.points_in_world.colors, instance_options.stride));
     obs.points_in_world = std::move(points.points_in_world);
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;
@@ -414,7 +421,7 @@ void LiveKeyframes::submit(const io::Dataset& dataset, const Keyframe& keyframe,
   m.queued.push_back(m.workers.submit([&m, &dataset, keyframe, index, seg = std::move(seg)] {
     const std::optional<segmentation::FrameSegmentation> instances = seg();
     const KeyframeContext ctx{
-        m.options, m.camera, m.rays, dataset, m.masks, mesh::MeshSelection{}, m.view_depth};
+        m.options, m.camera, m.rays, dataset, m.masks, mesh::MeshSelection{}, m.view_depth, true};
     std::optional<DenseMerge> merge;  // summed here, added by take() in keyframe order
     if (m.dense) merge.emplace(DenseMerge{*m.dense, nullptr, m.pool});
     FrameWork work = process_keyframe(ctx, dataset.frames[keyframe.frame], keyframe, index,
@@ -435,7 +442,8 @@ LiveKeyframe LiveKeyframes::take(FuseResult& result) {
     m.pool.give_back(std::move(work.dense_voxels));
   }
   add_counts(work, result);
-  return {std::move(work.observations), std::move(work.view_depth), work.segmented};
+  return {std::move(work.observations), std::move(work.pixels), std::move(work.view_depth),
+          work.segmented};
 }
 
 void LiveKeyframes::drop() {

@@ -9,6 +9,7 @@
 #include "objmap/fusion/visibility.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/backproject.h"
+#include "objmap/geometry/pixel_runs.h"
 #include "objmap/pipeline/fuse.h"
 #include "objmap/pipeline/fuse_inputs.h"
 
@@ -48,6 +49,7 @@ void count_added(const std::vector<fusion::AddResult>& added, FuseResult& result
 // fuse's order. The options, camera, rays and dense map given must outlive it.
 struct LiveKeyframe {
   std::vector<fusion::Observation> observations;  // not yet associated
+  std::vector<geometry::PixelRuns> pixels;        // each observation's pixels (pixel_runs.h)
   cv::Mat view_depth;                             // the thinned depth, for the view log
   bool segmented = false;                         // made with a segmentation frame
 };
