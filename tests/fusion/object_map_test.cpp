@@ -767,5 +767,49 @@ TEST(ObjectMap, BadOptionsAreNamed) {
   }
 }
 
+// A copy of the map (objmap follow's publish) shares the objects' voxels until one side changes
+// them: the copy, merged while the map it came from goes on fusing, ends as a map of its own
+// frames alone, and the map as one of every frame (clouds bit for bit).
+TEST(ObjectMap, ACopyGoesOnAsItWasWhileTheMapItCameFromGrows) {
+  // A tv seen in halves by tracks 1 and 2, then whole by 2 (the merge pass joins the halves: as
+  // in FinalMergePassRepairsAnIdSwitchTheOnlineStepMissed), and a cup beside it.
+  const Vec3 tv(0.305, 0.105, 0.905), cup(1.505, 0.105, 0.905);
+  const auto frame = [&](int t) {
+    const int faces = t < 3 ? 1 | 4 | 16 : t < 6 ? 2 | 8 | 32 : 63;
+    return std::vector<Observation>{obs(t, t < 3 ? 1 : 2, "tv", 0.8, box(tv, 10, faces)),
+                                    obs(t, 7, "cup", 0.9, box(cup, 3 + t % 2))};
+  };
+  const auto made_of = [&](int frames) {
+    ObjectMap map;
+    for (int t = 0; t < frames; ++t) map.add_frame(frame(t));
+    return map;
+  };
+  const auto expect_same = [](const std::vector<ObjectRecord>& x,
+                              const std::vector<ObjectRecord>& y) {
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      EXPECT_EQ(x[i].id, y[i].id);
+      EXPECT_EQ(x[i].observations, y[i].observations);
+      ASSERT_EQ(x[i].cloud.points, y[i].cloud.points) << "object " << x[i].id;
+    }
+  };
+  ObjectMap live = made_of(7);
+  ObjectMap copy = live;
+  for (int t = 7; t < 12; ++t) live.add_frame(frame(t));
+  const std::vector<MergeLink> merged = copy.merge_pass();
+  EXPECT_EQ(merged.size(), 1u);  // the copy changes too: the halves joined
+  ObjectMap seven = made_of(7);
+  EXPECT_EQ(seven.merge_pass().size(), merged.size());
+  expect_same(copy.records(no_outlier_filter()), seven.records(no_outlier_filter()));
+  expect_same(live.records(no_outlier_filter()), made_of(12).records(no_outlier_filter()));
+  const auto observations = [](const ObjectMap& map) {
+    int n = 0;
+    for (const ObjectRecord& r : map.records(no_outlier_filter())) n += r.observations;
+    return n;
+  };
+  EXPECT_EQ(observations(live), 24);
+  EXPECT_EQ(observations(copy), 14);
+}
+
 }  // namespace
 }  // namespace objmap::fusion

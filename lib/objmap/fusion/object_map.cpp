@@ -269,7 +269,7 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
   const double partial = o.weight_id * s.p_id + o.weight_distance * f;
   // Eq 21 only when it can change the decision: M <= 1 (IoU <= min(|A|,|B|)/max(|A|,|B|)), and 0
   // for voxel bounds further apart than the tolerance.
-  const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.voxels.size());
+  const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.voxels->size());
   const bool iou = o.overlap_measure == OverlapMeasure::kIou;
   const double bound = iou ? std::min(na, nb) / std::max(na, nb) : 1.0;
   const int t = o.overlap_tolerance_voxels;
@@ -285,7 +285,7 @@ ObjectMap::Scores ObjectMap::score(bool same_id, const Vec3& centroid_a, double 
 }
 
 std::size_t ObjectMap::shared_voxels(const VoxelMap& a, const Object& b) const {
-  if (options_.overlap_tolerance_voxels == 0) return fusion::common_voxels(a, b.voxels);
+  if (options_.overlap_tolerance_voxels == 0) return fusion::common_voxels(a, *b.voxels);
   // Each key's slot in b.near is prefetched kAhead keys before it is looked up (a ring of the keys
   // seen), so that the cache misses of a large table overlap.
   constexpr std::size_t kAhead = 8;
@@ -293,13 +293,13 @@ std::size_t ObjectMap::shared_voxels(const VoxelMap& a, const Object& b) const {
   std::size_t n = 0, seen = 0;
   a.for_each([&](VoxelKey key, const VoxelData&) {
     VoxelKey& slot = ring[seen % kAhead];
-    if (seen >= kAhead) n += b.near.contains(slot);
-    b.near.prefetch(key);
+    if (seen >= kAhead) n += b.near->contains(slot);
+    b.near->prefetch(key);
     slot = key;
     ++seen;
   });
   for (std::size_t i = seen > kAhead ? seen - kAhead : 0; i < seen; ++i)
-    n += b.near.contains(ring[i % kAhead]);
+    n += b.near->contains(ring[i % kAhead]);
   return n;
 }
 
@@ -374,14 +374,14 @@ bool ObjectMap::spans_two(const Observation& obs, const Prepared& prep) const {
     // same keyframes (two halves of one object seen by turns are one object, and this mask says
     // so).
     for (const Object* other : on) {
-      const Object& small = o.voxels.size() <= other->voxels.size() ? o : *other;
+      const Object& small = o.voxels->size() <= other->voxels->size() ? o : *other;
       const Object& large = &small == &o ? *other : o;
       std::vector<double> shared;
       std::set_intersection(small.frames.begin(), small.frames.end(), large.frames.begin(),
                             large.frames.end(), std::back_inserter(shared));
       if (shared.size() <= options_.merge_max_shared_frames * small.frames.size()) continue;
-      if (static_cast<double>(shared_voxels(small.voxels, large)) <
-          options_.span_min_share * static_cast<double>(small.voxels.size()))
+      if (static_cast<double>(shared_voxels(*small.voxels, large)) <
+          options_.span_min_share * static_cast<double>(small.voxels->size()))
         return true;
     }
     on.push_back(&o);
@@ -506,9 +506,10 @@ AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* 
   // neighbourhood joins `near`).
   std::vector<VoxelKey> new_keys;
   new_keys.reserve(obs_voxels.size());
-  o.near.reserve(o.near.size() + obs_voxels.size());
+  auto& near = o.near.write();
+  near.reserve(near.size() + obs_voxels.size());
   const auto count_hit = [&](VoxelKey key) {
-    std::uint8_t& hits = o.near[key];
+    std::uint8_t& hits = near[key];
     if (hits == 0) new_keys.push_back(key);
     if (hits < 255) ++hits;
   };
@@ -519,13 +520,13 @@ AddResult ObjectMap::fuse(const Observation& obs, const Prepared& prep, Object* 
   obs_voxels.for_each([&](VoxelKey key, const VoxelData&) {
     VoxelKey& slot = ring[seen % kAhead];
     if (seen >= kAhead) count_hit(slot);
-    o.near.prefetch(key);
+    near.prefetch(key);
     slot = key;
     ++seen;
   });
   for (std::size_t i = seen > kAhead ? seen - kAhead : 0; i < seen; ++i)
     count_hit(ring[i % kAhead]);
-  o.voxels.merge(obs_voxels);
+  o.voxels.write().merge(obs_voxels);
   o.dilate(new_keys);
   o.add_frame(obs.timestamp);
   if (options_.keep_points) {
@@ -614,14 +615,14 @@ std::shared_ptr<const std::vector<Vec3>> ObjectMap::surface_points(const Object&
     if (memo.surface && memo.surface_share == share) return memo.surface;
   }
   const double need = std::min(255.0, std::max(1.0, share * o.observations));
-  auto seen = o.voxels.sorted_voxels([&](VoxelKey key) {
-    const std::uint8_t* hits = o.near.find(key);
+  auto seen = o.voxels->sorted_voxels([&](VoxelKey key) {
+    const std::uint8_t* hits = o.near->find(key);
     return hits && *hits >= need;
   });
-  if (seen.empty()) seen = o.voxels.sorted_voxels();
+  if (seen.empty()) seen = o.voxels->sorted_voxels();
   auto surface = std::make_shared<std::vector<Vec3>>();
   surface->reserve(seen.size());
-  for (const auto& [key, v] : seen) surface->push_back(o.voxels.mean_position(key, *v));
+  for (const auto& [key, v] : seen) surface->push_back(o.voxels->mean_position(key, *v));
   const std::lock_guard<std::mutex> lock(memo.mutex);
   memo.surface_share = share;
   memo.surface = surface;

@@ -42,12 +42,12 @@ std::uint64_t ObjectMap::pair_content(const Object& o) {
   }
   // Order-free over the voxels and the dilated support table; in order over the rest.
   OrderFreeHash voxels, near;
-  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) { voxels.add(voxel_content(key, v)); });
-  o.near.for_each(
+  o.voxels->for_each([&](VoxelKey key, const VoxelData& v) { voxels.add(voxel_content(key, v)); });
+  o.near->for_each(
       [&](VoxelKey key, std::uint8_t hits) { near.add(content_mix(content_mix(key) ^ hits)); });
-  std::uint64_t h = voxels.value(o.voxels.size());
+  std::uint64_t h = voxels.value(o.voxels->size());
   const auto add = [&h](std::uint64_t field) { h = content_mix(h ^ field); };
-  add(near.value(o.near.size()));
+  add(near.value(o.near->size()));
   for (int k = 0; k < 3; ++k) {
     add(content_bits(o.centroid[k]));
     add(content_bits(o.lo[k]) ^ (content_bits(o.hi[k]) << 32));
@@ -74,13 +74,14 @@ std::uint64_t ObjectMap::pair_content(const Object& o) {
 void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const MergeLink& link) {
   Object* into = &into_object;
   Object* absorbed = &absorbed_object;
-  into->voxels.merge(absorbed->voxels);
+  into->voxels.write().merge(*absorbed->voxels);
   // `near` is the 3×3×3 dilation of the voxels (with each voxel's hits), so the joined object's
   // is the union of the two, the hits added: absorbed's entries are added as they are (its
   // neighbour-only entries with 0), rather than its new voxels dilated again (27 lookups each).
-  into->near.reserve(into->near.size() + absorbed->near.size());
-  absorbed->near.for_each([&](VoxelKey key, std::uint8_t hits) {
-    std::uint8_t& h = into->near[key];
+  auto& into_near = into->near.write();
+  into_near.reserve(into_near.size() + absorbed->near->size());
+  absorbed->near->for_each([&](VoxelKey key, std::uint8_t hits) {
+    std::uint8_t& h = into_near[key];
     h = static_cast<std::uint8_t>(std::min(255, h + hits));
   });
   for (double t : absorbed->frames) into->add_frame(t);
@@ -109,7 +110,7 @@ void ObjectMap::absorb(Object& into_object, Object& absorbed_object, const Merge
   absorbed->absorbed_into = into->id;
   absorbed->changed();
   absorbed->voxels = VoxelMap(VoxelMapOptions{options_.voxel_m, 1});  // free its memory
-  absorbed->near.clear();
+  absorbed->near = geometry::VoxelHashTable<std::uint8_t>();
   absorbed->frames.clear();
   absorbed->provenance.clear();
   absorbed->cells.clear();
@@ -165,12 +166,12 @@ MergeVerdict ObjectMap::judge_pair(const Object& a, const Object& b, bool full) 
   // M: the smaller object against the larger (containment: the share of the smaller on the
   // larger). The pass lets score() skip M when P cannot pass the threshold anyway; the verdict
   // computes it (the refusal is the same: P <= K either way).
-  const bool a_small = a.voxels.size() <= b.voxels.size();
+  const bool a_small = a.voxels->size() <= b.voxels->size();
   const Object& small = a_small ? a : b;
   const Object& large = a_small ? b : a;
   const double threshold =
       full ? -std::numeric_limits<double>::infinity() : options_.merge_threshold;
-  const Scores s = score(same_id, small.centroid, small.radius, small.voxels, small.lo, small.hi,
+  const Scores s = score(same_id, small.centroid, small.radius, *small.voxels, small.lo, small.hi,
                          large, threshold);
   v.p_id = s.p_id;
   v.distance_m = s.distance_m;
@@ -295,14 +296,14 @@ double ObjectMap::supported_share(const Object& a, const Object& b) const {
   const auto& offsets = geometry::neighbourhood_offsets();
   const int reach = options_.overlap_tolerance_voxels;
   std::size_t shared = 0;
-  a.voxels.for_each([&](VoxelKey key, const VoxelData&) {
+  a.voxels->for_each([&](VoxelKey key, const VoxelData&) {
     if (reach == 0) {
-      const std::uint8_t* hits = b.near.find(key);
+      const std::uint8_t* hits = b.near->find(key);
       shared += hits && *hits >= need;
       return;
     }
     for (VoxelKey off : offsets) {
-      const std::uint8_t* hits = b.near.find(key + off);
+      const std::uint8_t* hits = b.near->find(key + off);
       if (hits && *hits >= need) {
         ++shared;
         return;
@@ -310,7 +311,7 @@ double ObjectMap::supported_share(const Object& a, const Object& b) const {
     }
   });
   return static_cast<double>(shared) /
-         static_cast<double>(std::max<std::size_t>(1, a.voxels.size()));
+         static_cast<double>(std::max<std::size_t>(1, a.voxels->size()));
 }
 
 double ObjectMap::cached_supported_share(const Object& a, const Object& b) const {
@@ -340,8 +341,8 @@ void ObjectMap::merge_class_confusions(std::vector<MergeLink>& made) {
     for (const auto& a : objects_) {
       if (!a->alive) continue;
       for (const auto& b : objects_) {
-        if (!b->alive || a == b || a->voxels.size() > b->voxels.size()) continue;
-        if (a->voxels.size() == b->voxels.size() && a->id > b->id) continue;
+        if (!b->alive || a == b || a->voxels->size() > b->voxels->size()) continue;
+        if (a->voxels->size() == b->voxels->size() && a->id > b->id) continue;
         if (views[b->id] < options_.confusion_min_view_ratio * views[a->id]) continue;
         if (classes[b->id] == classes[a->id]) continue;
         // The containment of a in b (whatever the configured measure of eq 21); P is no

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "objmap/core/copy_on_write.h"
 #include "objmap/fusion/object_map.h"
 #include "objmap/geometry/bounds.h"
 #include "objmap/geometry/voxel_key.h"
@@ -74,14 +75,16 @@ struct ObjectMap::Object {
   int id = -1;
   bool alive = true;
   int absorbed_into = -1;
-  VoxelMap voxels;
+  // The voxels and their neighbourhoods, shared with the object's copies until one changes them
+  // (write()): a copy of the map (each publish of objmap follow) copies only what changes.
+  CopyOnWrite<VoxelMap> voxels;
   Eigen::Vector3i lo = Eigen::Vector3i::Zero(), hi = Eigen::Vector3i::Zero();  // voxel bounds
   Vec3 centroid = Vec3::Zero();                                                // voxel-weighted
   double radius = 0.0;  // RMS distance of the voxels' mean positions from the centroid
   // Every voxel within one voxel (3×3×3) of an occupied voxel (the tolerant overlap test is one
   // lookup per voxel of the other set); the value is, for an occupied voxel, the number of
   // observations that had it (saturating at 255), 0 for a neighbour only.
-  geometry::VoxelHashTable<std::uint8_t> near;
+  CopyOnWrite<geometry::VoxelHashTable<std::uint8_t>> near;
   std::vector<double> frames;  // timestamps of its observations, ascending, unique
   int frames_in_view = -1;     // judge_visibility(): keyframes in view or detected; -1: not judged
   bool has_frame(double t) const { return std::binary_search(frames.begin(), frames.end(), t); }
@@ -104,7 +107,7 @@ struct ObjectMap::Object {
   PointCloud points;  // its observations' points (ObjectMapOptions::keep_points)
   std::shared_ptr<ObjectMemo> memo = std::make_shared<ObjectMemo>();
 
-  explicit Object(double voxel_m) : voxels(VoxelMapOptions{voxel_m, 1}) {}
+  explicit Object(double voxel_m) : voxels(VoxelMap(VoxelMapOptions{voxel_m, 1})) {}
   // Provenance by timestamp, then insertion order; the cells follow their entries (when every
   // entry has its cells; else none is kept).
   void sort_provenance() {
@@ -142,14 +145,15 @@ struct ObjectMap::Object {
   // Marks the neighbourhoods of `keys` (voxels new to this object) in `near`.
   void dilate(const std::vector<VoxelKey>& keys) {
     const auto& offsets = geometry::neighbourhood_offsets();
-    near.reserve(near.size() + keys.size() * 4);
+    auto& near_voxels = near.write();
+    near_voxels.reserve(near_voxels.size() + keys.size() * 4);
     // The 27 slots of a key two keys ahead are prefetched, so that the cache misses of a large
     // table overlap (the slots, not the values, depend on the order: the table ends the same).
     constexpr std::size_t kAhead = 2;
     for (std::size_t i = 0; i < keys.size(); ++i) {
       if (i + kAhead < keys.size())
-        for (VoxelKey off : offsets) near.prefetch(keys[i + kAhead] + off);
-      for (VoxelKey off : offsets) near[keys[i] + off];  // inserted as 0 when absent
+        for (VoxelKey off : offsets) near_voxels.prefetch(keys[i + kAhead] + off);
+      for (VoxelKey off : offsets) near_voxels[keys[i] + off];  // inserted as 0 when absent
     }
   }
   // Whether the voxel bounds of this object and `other` are within `gap_m` of each other along
@@ -170,13 +174,13 @@ struct ObjectMap::Object {
     Vec3 sum = Vec3::Zero();
     double sq = 0.0;
     bool any = false;
-    voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+    voxels->for_each([&](VoxelKey key, const VoxelData& v) {
       geometry::extend_voxel_bounds(key, any, lo, hi);
-      const Vec3 p = voxels.mean_position(key, v);
+      const Vec3 p = voxels->mean_position(key, v);
       sum += p;
       sq += p.squaredNorm();
     });
-    const double n = static_cast<double>(voxels.size());
+    const double n = static_cast<double>(voxels->size());
     centroid = n > 0 ? Vec3(sum / n) : Vec3::Zero();
     radius = n > 0 ? std::sqrt(std::max(0.0, sq / n - centroid.squaredNorm())) : 0.0;
   }

@@ -26,7 +26,7 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
   const bool support = options.min_voxel_support > 0.0;
   const double need = std::min(255.0, std::max(1.0, options.min_voxel_support * o.observations));
   const auto supported = [&](VoxelKey key) {
-    const std::uint8_t* hits = o.near.find(key);
+    const std::uint8_t* hits = o.near->find(key);
     return hits && *hits >= need;
   };
   const auto outliers = [&](PointCloud& cloud) {  // eq 18
@@ -59,12 +59,12 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
   // The voxel filter is the object's voxel set itself: one point per voxel, sorted by key.
   PointCloud voxel_cloud;
   if (support) {
-    const auto voxels = o.voxels.sorted_voxels(supported);
+    const auto voxels = o.voxels->sorted_voxels(supported);
     voxel_cloud.reserve(voxels.size());
     for (const auto& [key, v] : voxels)
-      voxel_cloud.push_back(o.voxels.mean_position(key, *v).cast<float>(), v->mean_color());
+      voxel_cloud.push_back(o.voxels->mean_position(key, *v).cast<float>(), v->mean_color());
   } else {
-    voxel_cloud = o.voxels.to_cloud();
+    voxel_cloud = o.voxels->to_cloud();
   }
   r.points_voxel = voxel_cloud.size();
   if (options.outlier_filter) outliers(voxel_cloud);  // eq 18 on the voxel cloud
@@ -75,15 +75,15 @@ void ObjectMap::filter_record(const Object& o, const RecordOptions& options,
 std::uint64_t ObjectMap::record_content(const Object& o, const RecordOptions& options) const {
   const bool support = options.min_voxel_support > 0.0;
   OrderFreeHash voxels;
-  o.voxels.for_each([&](VoxelKey key, const VoxelData& v) {
+  o.voxels->for_each([&](VoxelKey key, const VoxelData& v) {
     std::uint64_t h = voxel_content(key, v);
     if (support) {
-      const std::uint8_t* hits = o.near.find(key);
+      const std::uint8_t* hits = o.near->find(key);
       h = content_mix(h ^ (hits ? *hits : 0u));
     }
     voxels.add(h);
   });
-  std::uint64_t h = voxels.value(o.voxels.size());
+  std::uint64_t h = voxels.value(o.voxels->size());
   for (const std::uint64_t field :
        {content_bits(o.observations), content_bits(options.min_voxel_support),
         content_bits(options.outlier_filter), content_bits(options.outlier.neighbours),
@@ -126,7 +126,7 @@ std::vector<ObjectRecord> ObjectMap::records(const RecordOptions& options,
     r.track_ids.assign(o.track_ids.begin(), o.track_ids.end());
     r.provenance = o.provenance;
     r.merges = o.merges;
-    r.points_raw = o.voxels.points_inserted();
+    r.points_raw = o.voxels->points_inserted();
     const std::uint64_t content =
         record_cache_ && !options_.keep_points ? record_content(o, options) : 0;
     std::optional<RecordCache::Filtered> made;

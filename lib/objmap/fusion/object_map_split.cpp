@@ -37,10 +37,10 @@ bool ObjectMap::split_object(std::size_t index, SplitLink& link) {
   //    coarse cell, and the cells of all its voxels.
   const double need = std::min(255.0, std::max(1.0, 0.1 * o.observations));
   std::vector<VoxelKey> surface, all;
-  o.voxels.for_each([&](VoxelKey key, const VoxelData&) {
+  o.voxels->for_each([&](VoxelKey key, const VoxelData&) {
     const VoxelKey cell = coarse_cell(key, cv);
     all.push_back(cell);
-    const std::uint8_t* hits = o.near.find(key);
+    const std::uint8_t* hits = o.near->find(key);
     if (hits && *hits >= need) surface.push_back(cell);
   });
   std::sort(surface.begin(), surface.end());
@@ -155,13 +155,14 @@ std::vector<std::unique_ptr<ObjectMap::Object>> ObjectMap::make_parts(
   std::vector<std::unique_ptr<Object>> parts;
   for (int g = 0; g < n; ++g) {
     auto p = std::make_unique<Object>(options_.voxel_m);
-    p->voxels = o.voxels.subset([&](VoxelKey key) { return voxel_part(key) == g; });
+    p->voxels = o.voxels->subset([&](VoxelKey key) { return voxel_part(key) == g; });
     // `near`: each voxel's hits as they were (the observations that had it), its neighbourhood.
     std::vector<VoxelKey> keys;
-    p->voxels.for_each([&](VoxelKey key, const VoxelData&) { keys.push_back(key); });
+    p->voxels->for_each([&](VoxelKey key, const VoxelData&) { keys.push_back(key); });
+    auto& near = p->near.write();
     for (VoxelKey key : keys) {
-      const std::uint8_t* hits = o.near.find(key);
-      p->near[key] = hits ? std::max<std::uint8_t>(1, *hits) : 1;
+      const std::uint8_t* hits = o.near->find(key);
+      near[key] = hits ? std::max<std::uint8_t>(1, *hits) : 1;
     }
     p->dilate(keys);
     p->refresh();
@@ -174,7 +175,7 @@ std::vector<std::unique_ptr<ObjectMap::Object>> ObjectMap::make_parts(
   // The kept points (keep_points) by their voxel.
   const bool colours = o.points.colors.size() == o.points.points.size();
   for (std::size_t i = 0; i < o.points.size(); ++i) {
-    const VoxelKey key = o.voxels.key_of(o.points.points[i]);
+    const VoxelKey key = o.voxels->key_of(o.points.points[i]);
     PointCloud& to = parts[key == geometry::kNoVoxel ? 0 : voxel_part(key)]->points;
     to.points.push_back(o.points.points[i]);
     if (colours) to.colors.push_back(o.points.colors[i]);
