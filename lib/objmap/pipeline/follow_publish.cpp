@@ -96,7 +96,8 @@ void start_publish(FollowState& s, bool own_scene) {
   s.publish_started = Clock::now();
   s.last_publish = s.publish_started;
   // What a fuse of the keyframes so far would have read, the dense map's cloud, its up and
-  // surfaces, and a deep copy of the object map: the live maps go on growing meanwhile (follow
+  // surfaces, and a copy of the object map (its objects' voxels shared until one side changes
+  // them: copy on write): the live maps go on growing meanwhile (follow
   // makes no meshes: no mesh model to copy).
   auto inputs = std::make_shared<FuseInputs>();
   inputs->dataset = s.dataset;
