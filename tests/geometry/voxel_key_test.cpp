@@ -1,7 +1,9 @@
 #include "objmap/geometry/voxel_key.h"
+#include "objmap/geometry/voxel_key_set.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -31,6 +33,39 @@ TEST(VoxelHashTable, GrowsAndFindsEveryKey) {
   EXPECT_EQ(table.find(pack_voxel(1000, 1000, 1000)), nullptr);
   const auto keys = table.sorted_keys();
   EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end()));
+}
+
+TEST(VoxelKeySet, HoldsEachKeyOnceAndGivesThemBackEmptied) {
+  VoxelKeySet set;
+  std::vector<VoxelKey> want;
+  for (int i = 0; i < 5000; ++i) want.push_back(pack_voxel(i % 71, -i / 71, i % 3));
+  for (int round = 0; round < 3; ++round)  // every key met three times, the last round reversed
+    for (int i = 0; i < 5000; ++i) {
+      const VoxelKey key = want[round == 2 ? 4999 - i : i];
+      set.prefetch(key);
+      EXPECT_EQ(set.insert(key), round == 0) << i;
+    }
+  EXPECT_EQ(set.size(), 5000u);
+  EXPECT_LE(set.size() * 4, set.capacity() * 3);  // at most 3/4 full
+  std::vector<VoxelKey> got = {kNoVoxel};         // take appends
+  set.take(got);
+  EXPECT_EQ(got.size(), 5001u);
+  EXPECT_EQ(set.size(), 0u);
+  got.erase(got.begin());
+  std::sort(got.begin(), got.end());
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(got, want);
+  // Emptied, it keeps its slots for a fill of the same size; a small fill after a large one
+  // lets the large slot array go at the next take.
+  const std::size_t capacity = set.capacity();
+  EXPECT_TRUE(set.insert(want[7]));
+  EXPECT_EQ(set.capacity(), capacity);
+  got.clear();
+  set.take(got);
+  EXPECT_EQ(got, std::vector<VoxelKey>{want[7]});
+  EXPECT_EQ(set.capacity(), 0u);
+  EXPECT_TRUE(set.insert(want[7]));  // and fills again from nothing
+  EXPECT_FALSE(set.insert(want[7]));
 }
 
 TEST(VoxelHashTable, ATableMadeWhereDirtyMemoryWasFreedStartsEmpty) {

@@ -302,13 +302,9 @@ void VoxelMap::track_touched() { touched_.resize(shards_.size()); }
 std::vector<VoxelKey> VoxelMap::take_touched() {
   std::vector<VoxelKey> out;
   std::size_t n = 0;
-  for (const Touched& t : touched_) n += t.keys.size();
+  for (const geometry::VoxelKeySet& t : touched_) n += t.size();
   out.reserve(n);
-  for (Touched& t : touched_) {
-    out.insert(out.end(), t.keys.begin(), t.keys.end());
-    t.keys.clear();
-    std::fill(t.recent.begin(), t.recent.end(), geometry::kNoVoxel);  // the next touch listed again
-  }
+  for (geometry::VoxelKeySet& t : touched_) t.take(out);
   return out;
 }
 
@@ -370,7 +366,7 @@ std::size_t VoxelMap::prune_remembered(const Judge& judge) {
   parallel_for(n, static_cast<int>(threads_), [&](std::size_t s) {
     for (VoxelKey key : drop[s]) shards_[s].erase(key);
     if (!touched_.empty())
-      for (const VoxelKey key : drop[s]) touched_[s].add(key);
+      for (const VoxelKey key : drop[s]) touched_[s].insert(key);
     aging_[s].swap(young_[s]);
     young_[s].clear();
   });
@@ -476,7 +472,7 @@ void VoxelMap::insert(const PointCloud& cloud) {
   if (!touched_.empty())  // the points' voxels, out of the hot loop (tracking is rare)
     for (const Vec3f& p : cloud.points)
       if (const VoxelKey key = key_of(p); key != geometry::kNoVoxel)
-        touched_[shard_of(key)].add(key);
+        touched_[shard_of(key)].insert(key);
   points_inserted_ += n - dropped;
   points_dropped_ += dropped;
 }
@@ -550,7 +546,9 @@ void VoxelMap::add_shard(const FrameVoxels& frame, std::size_t shard) {
   Table& dst = shards_[shard];
   dst.reserve(dst.size() + n);
   if (!touched_.empty())
-    for (std::size_t r = 0; r < n; ++r) touched_[shard].add(first[r].key);
+    add_in_order(
+        n, [&](std::size_t r) { touched_[shard].prefetch(first[r].key); },
+        [&](std::size_t r) { touched_[shard].insert(first[r].key); });
   if (young_.empty()) {
     add_in_order(
         n, [&](std::size_t r) { dst.prefetch(first[r].key); },

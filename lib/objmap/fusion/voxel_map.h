@@ -8,6 +8,7 @@
 
 #include "objmap/core/types.h"
 #include "objmap/geometry/voxel_key.h"
+#include "objmap/geometry/voxel_key_set.h"
 
 // The dense map (paper §3.3): every back-projected point streamed into a voxel hash that keeps, per
 // voxel, the running mean position, mean colour and point count.
@@ -96,8 +97,8 @@ class VoxelMap {
 
   // Change tracking (a live map's cloud kept up to date, pipeline/dense_snapshot.h): from now on
   // every voxel insert(), add(), add_shard() or prune_remembered() adds to, opens or drops is
-  // remembered (a key at least once, in shard order, mostly once; not what merge(), reset() or
-  // take_sorted_points() change); take_touched() hands them over and starts afresh.
+  // remembered (each key once, in shard order; not what merge(), reset() or take_sorted_points()
+  // change); take_touched() hands them over and starts afresh.
   void track_touched();
   std::vector<VoxelKey> take_touched();
 
@@ -210,22 +211,9 @@ class VoxelMap {
   std::size_t prunes_ = 0;  // calls of prune_remembered()
   std::map<std::pair<std::size_t, int>, std::vector<std::vector<VoxelKey>>> survivors_;
   std::uint64_t voxels_pruned_ = 0;
-  // A shard's touched keys; a key touched again soon after is mostly not listed again (the slot of
-  // its hash remembers it), so that a voxel seen by every keyframe between two takes is not listed
-  // once per keyframe.
-  struct Touched {
-    static constexpr int kBits = 16;  // 65536 slots, 512 KB
-    std::vector<VoxelKey> keys;
-    std::vector<VoxelKey> recent =
-        std::vector<VoxelKey>(std::size_t{1} << kBits, geometry::kNoVoxel);
-    void add(VoxelKey key) {
-      VoxelKey& slot = recent[(key * 0x9E3779B97F4A7C15ULL) >> (64 - kBits)];
-      if (slot == key) return;
-      slot = key;
-      keys.push_back(key);
-    }
-  };
-  std::vector<Touched> touched_;  // per shard (track_touched; empty: not tracked)
+  // Per shard, the voxels touched since the last take_touched(), each once (track_touched; empty:
+  // not tracked).
+  std::vector<geometry::VoxelKeySet> touched_;
 };
 
 // Number of voxels present in both maps (same voxel size), |A ∩ B| of eq 21.

@@ -41,7 +41,7 @@ std::shared_ptr<const DenseCloud> DenseSnapshot::update(fusion::VoxelMap& map) {
 }
 
 DenseChanges DenseSnapshot::take(fusion::VoxelMap& map) const {
-  // The voxels touched since the last take (mostly once each), with their points now.
+  // The voxels touched since the last take (once each), with their points now.
   const std::vector<VoxelKey> touched = map.take_touched();
   DenseChanges changes;
   changes.points.reserve(touched.size());
@@ -58,16 +58,12 @@ DenseChanges DenseSnapshot::take(fusion::VoxelMap& map) const {
 }
 
 std::shared_ptr<const DenseCloud> DenseSnapshot::apply(DenseChanges changes) {
-  // 1. The changed voxels once each, in key order (a voxel listed twice has one point).
+  // 1. The changed voxels (once each) in key order.
   std::vector<VoxelPoint>& points = changes.points;
   std::sort(points.begin(), points.end(),
             [](const VoxelPoint& a, const VoxelPoint& b) { return a.key < b.key; });
-  points.erase(std::unique(points.begin(), points.end(),
-                           [](const VoxelPoint& a, const VoxelPoint& b) { return a.key == b.key; }),
-               points.end());
   std::vector<VoxelKey>& gone = changes.gone;
   std::sort(gone.begin(), gone.end());
-  gone.erase(std::unique(gone.begin(), gone.end()), gone.end());
   last_touched_ = points.size() + gone.size();
   if (last_touched_ == 0) return cloud_;
   // 2. The cloud changed in place, unless a publish still reads it.

@@ -12,8 +12,7 @@
 namespace objmap::pipeline {
 
 // What the map changed since the last take: the touched voxels' points as they are now (in no
-// order; a voxel may be listed more than once, with the same point) and the touched voxels it no
-// longer has.
+// order, each voxel once) and the touched voxels it no longer has.
 struct DenseChanges {
   std::vector<fusion::VoxelMap::VoxelPoint> points;
   std::vector<fusion::VoxelKey> gone;
