@@ -49,41 +49,55 @@ SceneChoice choose_scene(FollowState& s, FuseMaps& maps, bool own_scene) {
 
 // The dense map's changes taken now (on the loop's thread, after the publish's thread has started
 // on the objects: their merge pass does not need the dense cloud) and, on a thread of their own,
-// folded into the cloud (`cloud`, which `made` gives); on another, when `scene` is given, the up
-// and the surfaces found on that cloud. One apply at a time and one scene at a time, each after
-// the one before; an apply does not wait for the scene of the cloud before (it copies that cloud
-// if the scene still reads it).
+// folded into the cloud (`cloud`); when `scene` is given, that thread then takes what the up and
+// the surfaces read of the cloud (scene::SceneSample) and, on another thread, they are found on
+// it. One apply at a time and one scene at a time, each after the one before. Only the publish
+// reads the cloud besides the apply that made it, so the next apply changes it in place.
 void start_dense_apply(FollowState& s, std::promise<std::shared_ptr<const DenseCloud>> cloud,
-                       std::shared_future<std::shared_ptr<const DenseCloud>> made,
                        std::optional<ScenePromise> scene) {
-  s.dense_apply =
-      std::async(std::launch::async,
-                 [snapshot = &*s.dense_snapshot, changes = s.dense_snapshot->take(s.maps->dense),
-                  cloud_promise = std::move(cloud), before = std::move(s.dense_apply)]() mutable {
-                   try {
-                     if (before.valid()) before.get();  // the apply before done
-                     cloud_promise.set_value(snapshot->apply(std::move(changes)));
-                   } catch (...) {
-                     cloud_promise.set_exception(std::current_exception());
-                   }
-                 });
-  if (!scene) return;
+  std::optional<std::promise<scene::SceneSample>> sample;
+  std::future<scene::SceneSample> sampled;
   std::vector<Pose> cameras;
-  for (const Keyframe& k : s.result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
-  s.scene_making = std::async(
+  if (scene) {
+    sampled = sample.emplace().get_future();
+    for (const Keyframe& k : s.result.keyframes.keyframes) cameras.push_back(k.world_from_cam);
+  }
+  s.dense_apply = std::async(
       std::launch::async,
-      [made = std::move(made), scene_promise = std::move(*scene), cameras = std::move(cameras),
-       before = std::move(s.scene_making), options = &s.options.fuse.scene]() mutable {
+      [snapshot = &*s.dense_snapshot, changes = s.dense_snapshot->take(s.maps->dense),
+       cloud_promise = std::move(cloud), sample = std::move(sample), cameras = std::move(cameras),
+       options = &s.options.fuse.scene, before = std::move(s.dense_apply)]() mutable {
+        std::shared_ptr<const DenseCloud> made;
         try {
-          if (before.valid()) before.get();  // the scene before done
-          auto graph = std::make_shared<scene::SceneGraph>();
-          scene::find_up_and_surfaces(cameras, made.get()->cloud.points, *options, *graph);
-          made = {};  // the cloud let go: the next apply changes it in place
-          scene_promise.set_value(std::move(graph));
+          if (before.valid()) before.get();  // the apply before done
+          made = snapshot->apply(std::move(changes));
         } catch (...) {
-          scene_promise.set_exception(std::current_exception());
+          cloud_promise.set_exception(std::current_exception());
+          if (sample) sample->set_exception(std::current_exception());
+          return;
+        }
+        cloud_promise.set_value(made);
+        if (!sample) return;
+        try {
+          sample->set_value(scene::SceneSample(cameras, made->cloud.points, *options));
+        } catch (...) {
+          sample->set_exception(std::current_exception());
         }
       });
+  if (!scene) return;
+  s.scene_making =
+      std::async(std::launch::async,
+                 [sampled = std::move(sampled), scene_promise = std::move(*scene),
+                  before = std::move(s.scene_making), options = &s.options.fuse.scene]() mutable {
+                   try {
+                     if (before.valid()) before.get();  // the scene before done
+                     auto graph = std::make_shared<scene::SceneGraph>();
+                     scene::find_up_and_surfaces(sampled.get(), *options, *graph);
+                     scene_promise.set_value(std::move(graph));
+                   } catch (...) {
+                     scene_promise.set_exception(std::current_exception());
+                   }
+                 });
 }
 
 }  // namespace
@@ -135,8 +149,7 @@ void start_publish(FollowState& s, bool own_scene) {
     staging.commit();
     return PublishDone{result->objects.size(), staging.committed_at(), scene_keyframes, complete};
   });
-  if (s.dense_snapshot)
-    start_dense_apply(s, std::move(cloud), maps->dense_cloud, std::move(choice.make));
+  if (s.dense_snapshot) start_dense_apply(s, std::move(cloud), std::move(choice.make));
 }
 
 bool publish_done(const FollowState& s) {

@@ -1,4 +1,5 @@
 #pragma once
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -194,6 +195,25 @@ struct SceneGraph {
 // graph.surfaces and their seconds (the sample counts to the up's).
 void find_up_and_surfaces(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
                           const SceneOptions& options, SceneGraph& graph);
+
+// What find_up_and_surfaces reads of the dense map, taken where the map is at hand, so that the map
+// may change or go before the step runs (objmap follow): its sample on the cameras' grid when the
+// up and the surfaces share one (the defaults), else a copy of its points. Cheap to copy.
+class SceneSample {
+ public:
+  SceneSample(const std::vector<Pose>& cameras, const std::vector<Vec3f>& map_points,
+              const SceneOptions& options);
+  struct Taken;  // up_and_surfaces.cpp
+
+ private:
+  std::shared_ptr<const Taken> taken_;
+  friend void find_up_and_surfaces(const SceneSample& sample, const SceneOptions& options,
+                                   SceneGraph& graph);
+};
+// find_up_and_surfaces on a sample taken with the same options: the same results (the sample's
+// time counts to the up's).
+void find_up_and_surfaces(const SceneSample& sample, const SceneOptions& options,
+                          SceneGraph& graph);
 
 // Surfaces of the map given the up direction (ids 1.. by area, labelled "surface"): the map alone,
 // so that it can run beside the objects' filtering.
