@@ -299,11 +299,15 @@ void VoxelMap::reset() {
 
 void VoxelMap::track_touched() { touched_.resize(shards_.size()); }
 
-std::vector<VoxelKey> VoxelMap::take_touched() {
-  std::vector<VoxelKey> out;
+std::size_t VoxelMap::touched_count() const {
   std::size_t n = 0;
   for (const geometry::VoxelKeySet& t : touched_) n += t.size();
-  out.reserve(n);
+  return n;
+}
+
+std::vector<VoxelKey> VoxelMap::take_touched() {
+  std::vector<VoxelKey> out;
+  out.reserve(touched_count());
   for (geometry::VoxelKeySet& t : touched_) t.take(out);
   return out;
 }

@@ -101,6 +101,12 @@ class VoxelMap {
   // change); take_touched() hands them over and starts afresh.
   void track_touched();
   std::vector<VoxelKey> take_touched();
+  // take_touched() one key at a time: f(key) for each, without a list of them all.
+  template <typename F>
+  void take_touched(F&& f) {
+    for (geometry::VoxelKeySet& t : touched_) t.drain(f);
+  }
+  std::size_t touched_count() const;  // what take_touched() would give now
 
   // Room for this many voxels without rehashing (e.g. a per-frame map: ~1/4 of the pixels).
   void reserve(std::size_t voxels);

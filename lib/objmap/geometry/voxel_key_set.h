@@ -35,18 +35,23 @@ class VoxelKeySet {
     if (!slots_.empty()) __builtin_prefetch(&slots_[index(key)], 1);
   }
 
-  // Appends the keys to `out` (in slot order) and empties the set. The slots are kept for the next
-  // fill unless they are more than 8 times what these keys needed.
-  void take(std::vector<VoxelKey>& out) {
-    out.reserve(out.size() + size_);
+  // f(key) for each key (in slot order), emptying the set as it goes. The slots are kept for the
+  // next fill unless they are more than 8 times what these keys needed.
+  template <typename F>
+  void drain(F&& f) {
     for (VoxelKey& s : slots_)
       if (s != 0) {
-        out.push_back(s ^ kNoVoxel);
+        f(s ^ kNoVoxel);
         s = 0;
       }
     if (slots_.size() > 64 && slots_.size() > 8 * (size_ * 4 / 3 + 1))
       std::vector<VoxelKey>().swap(slots_);
     size_ = 0;
+  }
+  // drain() into `out` (appended).
+  void take(std::vector<VoxelKey>& out) {
+    out.reserve(out.size() + size_);
+    drain([&out](VoxelKey key) { out.push_back(key); });
   }
 
  private:

@@ -1,6 +1,7 @@
 #include "objmap/pipeline/dense_snapshot.h"
 
 #include <algorithm>
+#include <array>
 
 #include "objmap/core/error.h"
 #include "objmap/fusion/voxel_map.h"
@@ -41,19 +42,25 @@ std::shared_ptr<const DenseCloud> DenseSnapshot::update(fusion::VoxelMap& map) {
 }
 
 DenseChanges DenseSnapshot::take(fusion::VoxelMap& map) const {
-  // The voxels touched since the last take (once each), with their points now.
-  const std::vector<VoxelKey> touched = map.take_touched();
+  // The voxels touched since the last take (once each), with their points now; each key's slot
+  // prefetched kAhead keys before it is read (cache misses overlap), without a list of the keys.
   DenseChanges changes;
-  changes.points.reserve(touched.size());
-  constexpr std::size_t kAhead = 8;  // the slots of later keys prefetched (cache misses overlap)
-  for (std::size_t i = 0; i < touched.size(); ++i) {
-    if (i + kAhead < touched.size()) map.prefetch(touched[i + kAhead]);
-    const fusion::VoxelData* voxel = map.find(touched[i]);
-    if (voxel)
-      changes.points.push_back(map.voxel_point(touched[i], *voxel));
+  changes.points.reserve(map.touched_count());
+  constexpr std::size_t kAhead = 8;
+  std::array<VoxelKey, kAhead> ahead;
+  std::size_t met = 0;
+  auto read = [&](VoxelKey key) {
+    if (const fusion::VoxelData* voxel = map.find(key))
+      changes.points.push_back(map.voxel_point(key, *voxel));
     else
-      changes.gone.push_back(touched[i]);
-  }
+      changes.gone.push_back(key);
+  };
+  map.take_touched([&](VoxelKey key) {
+    map.prefetch(key);
+    if (met >= kAhead) read(ahead[met % kAhead]);
+    ahead[met++ % kAhead] = key;
+  });
+  for (std::size_t k = met > kAhead ? met - kAhead : 0; k < met; ++k) read(ahead[k % kAhead]);
   return changes;
 }
 
@@ -70,25 +77,25 @@ std::shared_ptr<const DenseCloud> DenseSnapshot::apply(DenseChanges changes) {
   if (cloud_.use_count() > 1) cloud_ = std::make_shared<DenseCloud>(*cloud_);
   DenseCloud& c = *cloud_;
   if (!gone.empty()) drop_gone(c, gone);
-  // 3. The voxels the cloud has take their points now; the new ones are merged in from the back
-  //    (one pass, no second copy of the cloud).
+  // 3. The voxels the cloud has take their points now; the new ones are moved, in their order, to
+  //    the front of `points`, then merged into the cloud from the back (one pass each, no second
+  //    copy of the cloud, no list of them).
   const std::size_t n = c.keys.size();
-  std::vector<std::size_t> fresh;  // indices into `points` of keys the cloud lacks
-  std::size_t i = 0;
+  std::size_t fresh = 0, i = 0;
   for (std::size_t j = 0; j < points.size(); ++j) {
     while (i < n && c.keys[i] < points[j].key) ++i;
     if (i < n && c.keys[i] == points[j].key)
       put(c, i, points[j]);
     else
-      fresh.push_back(j);
+      points[fresh++] = points[j];
   }
-  if (fresh.empty()) return cloud_;
-  c.keys.resize(n + fresh.size());
-  c.cloud.points.resize(n + fresh.size());
-  c.cloud.colors.resize(n + fresh.size());
-  std::size_t old = n, w = n + fresh.size();
-  for (std::size_t f = fresh.size(); f-- > 0;) {
-    const VoxelPoint& p = points[fresh[f]];
+  if (fresh == 0) return cloud_;
+  c.keys.resize(n + fresh);
+  c.cloud.points.resize(n + fresh);
+  c.cloud.colors.resize(n + fresh);
+  std::size_t old = n, w = n + fresh;
+  for (std::size_t f = fresh; f-- > 0;) {
+    const VoxelPoint& p = points[f];
     for (; old > 0 && c.keys[old - 1] > p.key; --w, --old) {
       c.keys[w - 1] = c.keys[old - 1];
       c.cloud.points[w - 1] = c.cloud.points[old - 1];

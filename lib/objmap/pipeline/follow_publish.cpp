@@ -203,6 +203,9 @@ void publish(FollowState& s, const FollowEvents& events) {
     return;
   }
   start_publish(s, true);
+  // Nothing is fused after the last take: the live dense map's tables go before that map is
+  // finished (the cloud the take's apply makes is the map from here on).
+  if (s.maps) s.maps->dense = fusion::VoxelMap(s.maps->dense_options);
   finish_publish(s, events, true);
 }
 
