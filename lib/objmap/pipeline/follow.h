@@ -75,6 +75,9 @@ struct FollowStatus {
   double report_seconds_last = 0.0;  // the last report's time
   double seconds = 0.0;              // since the start
   long peak_rss_kb = 0;
+  // The pixels of the observations kept for a loop closure (docs/follow.md, "Memory"): the part
+  // of follow's memory that grows with the recording's keyframes rather than with the map.
+  long kept_pixels_kb = 0;
 };
 
 // What the command prints as it goes: a warning line (a malformed trajectory line, a frame

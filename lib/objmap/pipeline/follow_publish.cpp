@@ -243,7 +243,8 @@ void write_status(FollowState& s) {
                                 {"report_publish", st.report_publish},
                                 {"report_seconds_last", st.report_seconds_last},
                                 {"seconds", st.seconds},
-                                {"peak_rss_kb", st.peak_rss_kb}};
+                                {"peak_rss_kb", st.peak_rss_kb},
+                                {"kept_pixels_kb", st.kept_pixels_kb}};
   io::write_file_atomic(s.options.out / "status.json", doc.dump(2) + "\n");
 }
 

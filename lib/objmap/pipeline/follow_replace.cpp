@@ -21,6 +21,8 @@ void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
   // The points themselves are let go: the runs hold 5 bytes a point against 15 (docs/follow.md,
   // "Memory").
   for (fusion::Observation& o : observations) o.points_in_world = PointCloud{};
+  for (const geometry::PixelRuns& p : pixels) s.kept_pixels_bytes += p.bytes();
+  s.status.kept_pixels_kb = static_cast<long>(s.kept_pixels_bytes / 1024);
   s.kept.push_back({keyframe, std::move(observations), std::move(pixels), view_depth});
 }
 

@@ -90,6 +90,7 @@ struct FollowState {
   std::unique_ptr<LiveKeyframes> live;
   double retried_timestamp = -1.0;        // the keyframe whose read failed last
   std::deque<KeptKeyframe> kept;          // every keyframe mapped (loop closures; never copied)
+  std::size_t kept_pixels_bytes = 0;      // their pixels' (status.kept_pixels_kb)
   bool rewrite_pending = false;           // the trajectory's past poses changed since the last turn
   std::size_t empty_by_add = 0;           // instances_empty counted by the association
   std::vector<WaitingKeyframe> waiting;   // selected, not yet fused, in order
