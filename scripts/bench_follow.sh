@@ -23,16 +23,20 @@
 #   walkhalf954_gt  the same with its groundtruth.txt streamed (case walkhalfgt)
 #   walk954_gt      the live issue's recording at the preset's own 640x480, its groundtruth.txt
 #                   streamed (case walkgt)
-# Environment: BENCH_FOLLOW_CASES ("fr1_rpy_every4 7scenes walk walkhalf walkhalfgt walkgt"),
+#   circle<N>       `objmap synth --preset tabletop --orbit-speed 36 --frames N --seed 5`: one
+#                   table circled, one turn in 300 frames, its groundtruth.txt streamed (case
+#                   circle): the recording grows, the map nearly not; N in BENCH_FOLLOW_FRAMES
+# Environment: BENCH_FOLLOW_CASES ("fr1_rpy_every4 7scenes walk walkhalf walkhalfgt walkgt circle"),
 # BENCH_FOLLOW_FRAMES ("300 1200"),
 # BENCH_FOLLOW_MODEL (DATA/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx, as objmap run takes
 # it), BENCH_FOLLOW_ARGS (more follow options, e.g. "--publish-every 1"). The synthetic scenes are
-# kept in OUT/walkthrough_s5_f<N>/ and made only when missing (1200 frames: ~3 minutes, 1.2 GB).
+# kept in OUT/walkthrough_s5_f<N>/ and OUT/tabletop_s5_f<N>/ and made only when missing (1200
+# frames: ~3 minutes, 1.2 GB).
 set -euo pipefail
 objmap=${1:?usage: bench_follow.sh OBJMAP DATA [OUT]}
 data=${2:?usage: bench_follow.sh OBJMAP DATA [OUT]}
 out=${3:-out/bench_follow}
-cases=${BENCH_FOLLOW_CASES-fr1_rpy_every4 7scenes walk walkhalf walkhalfgt walkgt}
+cases=${BENCH_FOLLOW_CASES-fr1_rpy_every4 7scenes walk walkhalf walkhalfgt walkgt circle}
 frames=${BENCH_FOLLOW_FRAMES-300 1200}
 model=${BENCH_FOLLOW_MODEL:-$data/../models/yolov5n-seg_coco/yolov5n-seg_480x640.onnx}
 read -r -a follow_args <<<"${BENCH_FOLLOW_ARGS:-}"
@@ -157,22 +161,38 @@ for c in $cases; do
           >"$out/synth_f954.log" 2>&1
       fi
       follow_one walk954_gt "$scene" groundtruth.txt "" || true ;;
+    circle)  # one table circled: the recording grows, the map nearly not
+      for n in $frames; do
+        scene=$out/tabletop_s5_f$n
+        if [ ! -f "$scene/synth.json" ] || ! grep -q "\"frames\": $n," "$scene/synth.json"; then
+          echo "bench_follow: objmap synth --preset tabletop --orbit-speed 36 --frames $n --seed 5" >&2
+          "$objmap" synth --preset tabletop --orbit-speed 36 --frames "$n" --seed 5 --threads 2 \
+            --out "$scene" >"$out/synth_tabletop_f$n.log" 2>&1
+        fi
+        follow_one "circle$n" "$scene" groundtruth.txt "" || true
+      done ;;
     *) echo "bench_follow: unknown recording $c" >&2; exit 2 ;;
   esac
 done
-# Peak memory against the recording's length: the longest walk-through's over the shortest's.
+# Peak memory against the recording's length: the longest walk-through's and circling's over the
+# shortest's, follow's beside the reference fuse's, and what follow holds beyond that fuse.
 read -r -a frame_list <<<"$frames"
-if [[ " $cases " == *" walk "* ]] && [ ${#frame_list[@]} -ge 2 ]; then
+if [ ${#frame_list[@]} -ge 2 ]; then
   short=${frame_list[0]} long=${frame_list[${#frame_list[@]} - 1]}
-  if [ -f "$out/walk$short/live/status.json" ] && [ -f "$out/walk$long/live/status.json" ]; then
-    python3 - "$out/walk$short/live/status.json" "$out/walk$long/live/status.json" "$short" \
-      "$long" <<'EOF2'
+  for kind in walk circle; do
+    a=$out/$kind$short b=$out/$kind$long
+    [ -f "$a/live/status.json" ] && [ -f "$b/live/status.json" ] || continue
+    python3 - "$a" "$b" "$short" "$long" "$kind" <<'EOF2'
 import json, sys
-a, b = (json.load(open(f))["peak_rss_kb"] for f in sys.argv[1:3])
-print("\npeak memory, %s vs %s synthetic frames: %.2fx (%d vs %d MB)"
-      % (sys.argv[4], sys.argv[3], b / a, b // 1024, a // 1024))
+a, b, short, long, kind = sys.argv[1:6]
+fa, fb = (json.load(open(d + "/live/status.json"))["peak_rss_kb"] // 1024 for d in (a, b))
+ra, rb = (json.load(open(d + "/fuse/run.json"))["performance"]["peak_rss_mb"] for d in (a, b))
+what = "synthetic walk-through frames" if kind == "walk" else "frames circling one table"
+print("\npeak memory, %s vs %s %s: follow %.2fx (%d vs %d MB), its fuse %.2fx (%d vs %d MB);"
+      " follow beyond its fuse %+d MB at %s frames, %+d MB at %s"
+      % (long, short, what, fb / fa, fb, fa, rb / ra, rb, ra, fa - ra, short, fb - rb, long))
 EOF2
-  fi
+  done
 fi
 echo
 uptime
