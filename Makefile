@@ -62,9 +62,9 @@ bench-detect: deps build
 
 # make bench-follow [DATA=DIR]: objmap follow while objmap replay writes a recording at 1x speed:
 # fr1_rpy_every4 and the 7-Scenes clip (detect with YOLOv5n-seg; against objmap run with the same
-# model) and the synthetic walk-through at 300 and 1200 frames (against objmap fuse): lag median and
-# max, keyframes skipped by detect, objects, peak memory and its ratio 1200 vs 300 frames
-# (scripts/bench_follow.sh; about 6 minutes on 2 cores the first time, the scenes are kept in
+# model), the synthetic walk-through and one table circled at 300 and 1200 frames (against objmap
+# fuse): lag median and max, keyframes skipped by detect, objects, peak memory and its ratio 1200 vs
+# 300 frames (scripts/bench_follow.sh; about 13 minutes on 2 cores the first time, the scenes are kept in
 # out/bench_follow/; also the end of make bench, BENCH_FOLLOW=0 leaves it out).
 # docs/benchmarks.md, "Following a recording".
 bench-follow: build
