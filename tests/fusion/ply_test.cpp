@@ -46,7 +46,8 @@ TEST(Ply, BinaryRoundTripIsExact) {
 }
 
 TEST(Ply, LargeCloudsAndSeparateColoursRoundTrip) {
-  // More points than one piece of the writer's buffer (65536), not a multiple of it.
+  // More points than one piece of the writer's buffer and one block of the reader (65536 each),
+  // not a multiple of it.
   TempDir dir;
   PointCloud c;
   std::vector<Rgb> other;

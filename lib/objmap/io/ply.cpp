@@ -299,25 +299,33 @@ void check_count(PlyReader& r, const PlyHeader& h) {
 
 std::uint8_t to_byte(double v) { return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v); }
 
-// Step 4, binary: the rows in one read.
+// Step 4, binary: the rows, a block at a time.
 void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud,
                       std::vector<Vec3f>* normals = nullptr) {
-  std::vector<char> body(h.vertices * h.stride);
-  r.f.read(body.data(), static_cast<std::streamsize>(body.size()));
-  if (static_cast<std::size_t>(r.f.gcount()) != body.size())
-    throw InputError(r.where, "file ends after " +
-                                  std::to_string(r.f.gcount() / (h.stride ? h.stride : 1)) +
-                                  " of " + std::to_string(h.vertices) + " vertices (truncated)");
-  for (std::size_t i = 0; i < h.vertices; ++i) {
-    const char* row = body.data() + i * h.stride;
-    auto value = [&](int k) { return read_binary(row + h.offset[k], h.props[k]); };
-    cloud.points[i] = Vec3f(static_cast<float>(value(h.ix)), static_cast<float>(value(h.iy)),
-                            static_cast<float>(value(h.iz)));
-    if (h.colour())
-      cloud.colors[i] = Rgb{to_byte(value(h.ir)), to_byte(value(h.ig)), to_byte(value(h.ib))};
-    if (normals)
-      (*normals)[i] = Vec3f(static_cast<float>(value(h.inx)), static_cast<float>(value(h.iny)),
-                            static_cast<float>(value(h.inz)));
+  // Read in blocks of rows, so that a large map never sits in memory twice (its bytes and its
+  // points).
+  constexpr std::size_t kBlockRows = 65536;
+  std::vector<char> body(std::min(h.vertices, kBlockRows) * h.stride);
+  for (std::size_t first = 0; first < h.vertices; first += kBlockRows) {
+    const std::size_t rows = std::min(kBlockRows, h.vertices - first);
+    r.f.read(body.data(), static_cast<std::streamsize>(rows * h.stride));
+    if (static_cast<std::size_t>(r.f.gcount()) != rows * h.stride)
+      throw InputError(
+          r.where, "file ends after " +
+                       std::to_string(first + static_cast<std::size_t>(r.f.gcount()) / h.stride) +
+                       " of " + std::to_string(h.vertices) + " vertices (truncated)");
+    for (std::size_t j = 0; j < rows; ++j) {
+      const std::size_t i = first + j;
+      const char* row = body.data() + j * h.stride;
+      auto value = [&](int k) { return read_binary(row + h.offset[k], h.props[k]); };
+      cloud.points[i] = Vec3f(static_cast<float>(value(h.ix)), static_cast<float>(value(h.iy)),
+                              static_cast<float>(value(h.iz)));
+      if (h.colour())
+        cloud.colors[i] = Rgb{to_byte(value(h.ir)), to_byte(value(h.ig)), to_byte(value(h.ib))};
+      if (normals)
+        (*normals)[i] = Vec3f(static_cast<float>(value(h.inx)), static_cast<float>(value(h.iny)),
+                              static_cast<float>(value(h.inz)));
+    }
   }
 }
 

@@ -54,15 +54,16 @@ struct Extent {
 Extent map_extent(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
                   const std::vector<TopViewPath>& paths, const TopViewOptions& options, int a,
                   int b) {
-  std::vector<float> va, vb;
-  va.reserve(cloud.size());
-  vb.reserve(cloud.size());
-  for (const auto& p : cloud.points) {
-    va.push_back(p[a]);
-    vb.push_back(p[b]);
-  }
-  double a0 = percentile(va, options.clip_percent), a1 = percentile(va, 100 - options.clip_percent);
-  double b0 = percentile(vb, options.clip_percent), b1 = percentile(vb, 100 - options.clip_percent);
+  // One axis at a time, so that the map's coordinates are copied once, not twice.
+  std::vector<float> v(cloud.size());
+  auto clipped = [&](int axis, double& lo, double& hi) {
+    for (std::size_t i = 0; i < cloud.size(); ++i) v[i] = cloud.points[i][axis];
+    lo = percentile(v, options.clip_percent);
+    hi = percentile(v, 100 - options.clip_percent);
+  };
+  double a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  clipped(a, a0, a1);
+  clipped(b, b0, b1);
   for (const auto& o : objects) {  // objects always in view
     a0 = std::min(a0, o.obb.center[a] - 0.2);
     a1 = std::max(a1, o.obb.center[a] + 0.2);
