@@ -10,18 +10,19 @@
 #include "objmap/io/trajectory.h"
 #include "objmap/pipeline/follow_state.h"
 #include "objmap/pipeline/fuse_keyframes.h"
+#include "objmap/pipeline/packed_pixels.h"
 
 namespace objmap::pipeline {
 
 void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
                         std::vector<fusion::Observation> observations,
-                        std::vector<geometry::PixelRuns> pixels, const cv::Mat& view_depth) {
+                        std::vector<PackedPixelRuns> pixels, const cv::Mat& view_depth) {
   require(pixels.size() == observations.size(), "follow",
           "a keyframe's observations came without their pixels");
-  // The points themselves are let go: the runs hold 5 bytes a point against 15 (docs/follow.md,
-  // "Memory").
+  // The points themselves are let go: the packed runs hold ~2-2.5 bytes a point against 15
+  // (docs/follow.md, "Memory").
   for (fusion::Observation& o : observations) o.points_in_world = PointCloud{};
-  for (const geometry::PixelRuns& p : pixels) s.kept_pixels_bytes += p.bytes();
+  for (const PackedPixelRuns& p : pixels) s.kept_pixels_bytes += p.bytes();
   s.status.kept_pixels_kb = static_cast<long>(s.kept_pixels_bytes / 1024);
   s.kept.push_back({keyframe, std::move(observations), std::move(pixels), view_depth});
 }
@@ -57,8 +58,8 @@ void replace_after_loop_closure(FollowState& s) {
       view_log->add(k.keyframe.timestamp, k.view_depth.clone(), k.keyframe.world_from_cam);
     std::vector<fusion::Observation> observations = k.observations;
     for (std::size_t j = 0; j < observations.size(); ++j)
-      observations[j].points_in_world =
-          geometry::points_from_runs(*s.rays, k.pixels[j], k.keyframe.world_from_cam);
+      observations[j].points_in_world = geometry::points_from_runs(
+          *s.rays, unpack_pixel_runs(k.pixels[j]), k.keyframe.world_from_cam);
     count_added(objects.add_frame(observations), counts);
   }
   s.maps->objects = std::move(objects);

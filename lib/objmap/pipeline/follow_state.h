@@ -39,7 +39,7 @@ struct WaitingKeyframe {
 struct KeptKeyframe {
   Keyframe keyframe;
   std::vector<fusion::Observation> observations;  // points_in_world empty
-  std::vector<geometry::PixelRuns> pixels;        // per observation
+  std::vector<PackedPixelRuns> pixels;            // per observation
   cv::Mat view_depth;
 };
 
@@ -139,7 +139,7 @@ void fuse_waiting_keyframes(FollowState& s, bool ending, const FollowEvents& eve
 // 3b. A keyframe mapped kept for a loop closure (follow_replace.cpp).
 void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
                         std::vector<fusion::Observation> observations,
-                        std::vector<geometry::PixelRuns> pixels, const cv::Mat& view_depth);
+                        std::vector<PackedPixelRuns> pixels, const cv::Mat& view_depth);
 
 // 3c. After a loop closure (the trajectory's past poses changed), the kept keyframes' observations
 //     made again from their pixels with their new poses and the object map made again from them (no

@@ -115,7 +115,7 @@ struct FrameWork {
   std::vector<PointCloud> model_points;  // per observation, its object model's (--mesh objects)
   cv::Mat depth;       // the raw depth image, for the dense map's pruning (fusion/dense_prune.h)
   cv::Mat view_depth;  // its thinned copy for the view log (fusion/visibility.h)
-  std::vector<geometry::PixelRuns> pixels;  // per observation, its pixels (KeyframeContext)
+  std::vector<PackedPixelRuns> pixels;  // per observation, its pixels (KeyframeContext)
   std::unique_ptr<fusion::FrameVoxels> dense_voxels;  // summed, not yet in the dense map
   bool segmented = false;  // made with a segmentation frame (none: the dense map only)
   std::uint64_t dense_points = 0;
@@ -230,8 +230,8 @@ FrameWork process_keyframe(const KeyframeContext& ctx, const io::FramePair& fram
     obs.class_name = m.instance->class_name;
     obs.score = m.instance->score;
     if (ctx.keep_pixels)
-      work.pixels.push_back(geometry::make_pixel_runs(
-          points.pixel_index, depth, points.points_in_world.colors, instance_options.stride));
+      work.pixels.push_back(pack_pixel_runs(geometry::make_pixel_runs(
+          points.pixel_index, depth, points.points_in_world.colors, instance_options.stride)));
     obs.points_in_world = std::move(points.points_in_world);
     obs.keyframe_index = keyframe_index;
     obs.centroid_in_cam = points.centroid_in_cam;

@@ -9,9 +9,9 @@
 #include "objmap/fusion/visibility.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/backproject.h"
-#include "objmap/geometry/pixel_runs.h"
 #include "objmap/pipeline/fuse.h"
 #include "objmap/pipeline/fuse_inputs.h"
+#include "objmap/pipeline/packed_pixels.h"
 
 // Step 3 of `objmap fuse`: the keyframe loop. Workers decode and back-project keyframes ahead
 // (a pool of frame buffers, the dense map merged shard by shard in keyframe order); the calling
@@ -49,7 +49,7 @@ void count_added(const std::vector<fusion::AddResult>& added, FuseResult& result
 // fuse's order. The options, camera, rays and dense map given must outlive it.
 struct LiveKeyframe {
   std::vector<fusion::Observation> observations;  // not yet associated
-  std::vector<geometry::PixelRuns> pixels;        // each observation's pixels (pixel_runs.h)
+  std::vector<PackedPixelRuns> pixels;            // each observation's pixels (packed_pixels.h)
   cv::Mat view_depth;                             // the thinned depth, for the view log
   bool segmented = false;                         // made with a segmentation frame
 };
