@@ -42,6 +42,14 @@ void replace_after_loop_closure(FollowState& s) {
     k.keyframe.world_from_cam = *pose;
     s.result.keyframes.keyframes[i].world_from_cam = *pose;
   }
+  //    The keyframes selected and not fused yet are fused with theirs, and the motion rule goes on
+  //    from the last one's.
+  for (WaitingKeyframe& w : s.waiting)
+    if (const auto pose = io::lookup_pose(s.trajectory, w.keyframe.timestamp, lookup))
+      w.keyframe.world_from_cam = *pose;
+  if (s.last_keyframe)
+    if (const auto pose = io::lookup_pose(s.trajectory, s.last_keyframe->timestamp, lookup))
+      s.last_keyframe->world_from_cam = *pose;
   // 2. The object map (and the view log) made again, keyframe by keyframe in their order, from
   //    the observations with their points made from their pixels with the keyframe's pose; the
   //    counts of the association replaced by the new ones.
