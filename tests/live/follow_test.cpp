@@ -24,6 +24,18 @@ nlohmann::json read_json_file(const fs::path& file) {
   return nlohmann::json::parse(read_text(file));
 }
 
+// The distance from object `o` (objects.json) to the nearest of `objects` of its class (1e9: none).
+double nearest_of_its_class(const nlohmann::json& o, const nlohmann::json& objects) {
+  const auto position = [](const nlohmann::json& x) {
+    return Eigen::Vector3d(x.at("position")[0], x.at("position")[1], x.at("position")[2]);
+  };
+  double nearest = 1e9;
+  for (const auto& f : objects)
+    if (f.at("class") == o.at("class"))
+      nearest = std::min(nearest, (position(f) - position(o)).norm());
+  return nearest;
+}
+
 // The reference objects matched by `objmap eval objects` (ids) and the map objects left unmatched.
 struct Matched {
   std::set<std::string> reference;
@@ -130,6 +142,7 @@ using follow_live::follow_a_replay;
 using follow_live::fuse_the_recording;
 using follow_live::LiveRun;
 using follow_live::matched_objects;
+using follow_live::nearest_of_its_class;
 using follow_live::read_json_file;
 using follow_live::start_replay;
 using follow_live::wait_for;
@@ -365,14 +378,7 @@ TEST(Follow, ALoopClosureMovesTheObjectsWhereFuseOnTheRewrittenTrajectoryPutsThe
   EXPECT_LE(std::abs(static_cast<double>(live.size()) - static_cast<double>(fused.size())),
             0.1 * static_cast<double>(fused.size()));
   for (const auto& o : live) {
-    const Eigen::Vector3d p(o.at("position")[0], o.at("position")[1], o.at("position")[2]);
-    double nearest = 1e9;
-    for (const auto& f : fused)
-      if (f.at("class") == o.at("class"))
-        nearest = std::min(
-            nearest,
-            (Eigen::Vector3d(f.at("position")[0], f.at("position")[1], f.at("position")[2]) - p)
-                .norm());
+    const double nearest = nearest_of_its_class(o, fused);
     EXPECT_LE(nearest, 0.02) << o.at("class") << " " << o.at("id");
   }
 }
@@ -476,14 +482,7 @@ TEST(Follow, KeyframesWaitingForTheirSegmentationAcrossALoopClosureAreFusedWithT
   EXPECT_EQ(live.size(), fused.size());
   double worst = 0.0;
   for (const auto& o : live) {
-    const Eigen::Vector3d p(o.at("position")[0], o.at("position")[1], o.at("position")[2]);
-    double nearest = 1e9;
-    for (const auto& f : fused)
-      if (f.at("class") == o.at("class"))
-        nearest = std::min(
-            nearest,
-            (Eigen::Vector3d(f.at("position")[0], f.at("position")[1], f.at("position")[2]) - p)
-                .norm());
+    const double nearest = nearest_of_its_class(o, fused);
     worst = std::max(worst, nearest);
     EXPECT_LE(nearest, 0.002) << o.at("class") << " " << o.at("id");
   }
