@@ -60,6 +60,18 @@ TEST(Ply, LargeCloudsAndSeparateColoursRoundTrip) {
   PointCloud back = read_ply(dir / "big.ply");
   EXPECT_EQ(back.points, c.points);
   EXPECT_EQ(back.colors, c.colors);
+  // Read a block at a time: blocks of 65536, the last one shorter, the same points in order.
+  std::vector<std::size_t> sizes;
+  PointCloud joined;
+  read_ply_blocks(dir / "big.ply", [&](const PointCloud& block) {
+    sizes.push_back(block.size());
+    joined.points.insert(joined.points.end(), block.points.begin(), block.points.end());
+    joined.colors.insert(joined.colors.end(), block.colors.begin(), block.colors.end());
+  });
+  EXPECT_EQ(sizes, (std::vector<std::size_t>{65536, 65536, 18929}));
+  EXPECT_EQ(joined.points, c.points);
+  EXPECT_EQ(joined.colors, c.colors);
+  EXPECT_EQ(ply_vertex_count(dir / "big.ply"), 150001u);
   // The same points with other colours (the semantic map's way).
   write_ply(dir / "other.ply", c, other);
   back = read_ply(dir / "other.ply");
@@ -144,6 +156,8 @@ TEST(Ply, MalformedFilesSayWhatIsWrong) {
     EXPECT_EQ(e.where(), (dir / "be.ply").string() + ":2");
     EXPECT_NE(e.reason().find("binary_big_endian"), std::string::npos);
   }
+  EXPECT_THROW(read_ply_blocks(dir / "be.ply", [](const PointCloud&) {}), InputError);
+  EXPECT_THROW(ply_vertex_count(dir / "be.ply"), InputError);
   write_ply(dir / "t.ply", sample(true));
   const std::string full = read_text(dir / "t.ply");
   write_text(dir / "t.ply", full.substr(0, full.size() - 100));

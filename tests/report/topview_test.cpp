@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -44,6 +46,45 @@ TEST(TopView, HighestPointWinsAndObjectsAreDrawn) {
   EXPECT_GT(cv::norm(drawn.image(cv::Rect(0, 0, bare.image.cols, bare.image.rows)), bare.image,
                      cv::NORM_L1),
             0.0);
+}
+
+// `cloud` handed over in blocks of `size` points (the last one shorter), as a file read in
+// blocks hands it.
+PointBlocks in_blocks(const PointCloud& cloud, std::size_t size) {
+  return [&cloud, size](const std::function<void(const PointCloud&)>& take) {
+    for (std::size_t first = 0; first < cloud.size(); first += size) {
+      PointCloud block;
+      for (std::size_t i = first; i < std::min(cloud.size(), first + size); ++i)
+        block.push_back(cloud.points[i], cloud.colors[i]);
+      take(block);
+    }
+  };
+}
+
+TEST(TopView, AMapReadInBlocksGivesTheViewOfTheWholeMap) {
+  // A noisy floor with stray points (the extent clips them) and overlapping heights, 7 blocks.
+  PointCloud cloud;
+  for (int i = 0; i < 20000; ++i) {
+    const float x = 0.0001f * static_cast<float>((i * 7919) % 20000);
+    const float y = 0.0001f * static_cast<float>((i * 104729) % 17389);
+    cloud.push_back(Vec3f(x, y, 0.001f * static_cast<float>(i % 97)),
+                    Rgb{static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(i / 256), 40});
+  }
+  cloud.push_back(Vec3f(30.0f, -20.0f, 1.0f), Rgb{0, 0, 0});
+  TopViewOptions options;
+  options.pixel_m = 0.01;
+  options.point_size_m = 0.02;
+  TopViewObject block;
+  block.id = 1;
+  block.label = "1 cup";
+  block.obb.center = Vec3(1.0, 0.8, 0.1);
+  block.obb.half_extent = Vec3(0.05, 0.05, 0.05);
+  const TopView whole = render_top_view(cloud, {block}, options);
+  const TopView blocks = render_top_view(in_blocks(cloud, 3000), cloud.size(), {block}, options);
+  ASSERT_EQ(blocks.image.size(), whole.image.size());
+  EXPECT_EQ(cv::norm(blocks.image, whole.image, cv::NORM_L1), 0.0);
+  EXPECT_EQ(blocks.origin_a, whole.origin_a);
+  EXPECT_EQ(blocks.origin_b, whole.origin_b);
 }
 
 // 31 chairs round two tables 1.6 m apart (16 and 15 on circles of 0.7 m), as on a real

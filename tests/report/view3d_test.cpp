@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "objmap/core/error.h"
@@ -98,6 +100,20 @@ TEST(View3d, TheMapIsThinnedToTheLimit) {
   EXPECT_GE(thin.size(), 100000u);  // every 2nd point
   EXPECT_TRUE(thin.has_colors());
   EXPECT_EQ(thin_points(big, 300000).size(), big.size());
+  // Read in blocks of 65536 (not a multiple of the step 2... nor of 3 at 100000): the same points.
+  const PointBlocks blocks = [&](const std::function<void(const PointCloud&)>& take) {
+    for (std::size_t first = 0; first < big.size(); first += 65536) {
+      PointCloud block;
+      for (std::size_t i = first; i < std::min(big.size(), first + 65536); ++i)
+        block.push_back(big.points[i], big.colors[i]);
+      take(block);
+    }
+  };
+  for (std::size_t limit : {200000u, 100000u, 300000u}) {
+    const PointCloud whole = thin_points(big, limit), read = thin_points(blocks, big.size(), limit);
+    EXPECT_EQ(read.points, whole.points) << limit;
+    EXPECT_EQ(read.colors, whole.colors) << limit;
+  }
   View3dOptions options;
   options.max_map_points = 10;
   EXPECT_THROW(options.check(), InputError);

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -299,13 +300,26 @@ void check_count(PlyReader& r, const PlyHeader& h) {
 
 std::uint8_t to_byte(double v) { return static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v); }
 
+// The vertices read so far: a block of at most kBlockRows of them (its points, colours when the
+// file has them, normals when asked for and present), handed on to a BlockSink with the index of
+// its first vertex. Read a block at a time, a large map never sits in memory twice (its bytes and
+// its points).
+constexpr std::size_t kBlockRows = 65536;
+struct VertexBlock {
+  PointCloud cloud;
+  std::vector<Vec3f> normals;
+  void resize(const PlyHeader& h, std::size_t rows, bool with_normals) {
+    cloud.points.resize(rows);
+    cloud.colors.resize(h.colour() ? rows : 0);
+    normals.resize(with_normals ? rows : 0);
+  }
+};
+using BlockSink = std::function<void(const VertexBlock& block, std::size_t first)>;
+
 // Step 4, binary: the rows, a block at a time.
-void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud,
-                      std::vector<Vec3f>* normals = nullptr) {
-  // Read in blocks of rows, so that a large map never sits in memory twice (its bytes and its
-  // points).
-  constexpr std::size_t kBlockRows = 65536;
+void read_binary_body(PlyReader& r, const PlyHeader& h, bool with_normals, const BlockSink& sink) {
   std::vector<char> body(std::min(h.vertices, kBlockRows) * h.stride);
+  VertexBlock block;
   for (std::size_t first = 0; first < h.vertices; first += kBlockRows) {
     const std::size_t rows = std::min(kBlockRows, h.vertices - first);
     r.f.read(body.data(), static_cast<std::streamsize>(rows * h.stride));
@@ -314,40 +328,49 @@ void read_binary_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud,
           r.where, "file ends after " +
                        std::to_string(first + static_cast<std::size_t>(r.f.gcount()) / h.stride) +
                        " of " + std::to_string(h.vertices) + " vertices (truncated)");
+    block.resize(h, rows, with_normals);
     for (std::size_t j = 0; j < rows; ++j) {
-      const std::size_t i = first + j;
       const char* row = body.data() + j * h.stride;
       auto value = [&](int k) { return read_binary(row + h.offset[k], h.props[k]); };
-      cloud.points[i] = Vec3f(static_cast<float>(value(h.ix)), static_cast<float>(value(h.iy)),
-                              static_cast<float>(value(h.iz)));
+      block.cloud.points[j] =
+          Vec3f(static_cast<float>(value(h.ix)), static_cast<float>(value(h.iy)),
+                static_cast<float>(value(h.iz)));
       if (h.colour())
-        cloud.colors[i] = Rgb{to_byte(value(h.ir)), to_byte(value(h.ig)), to_byte(value(h.ib))};
-      if (normals)
-        (*normals)[i] = Vec3f(static_cast<float>(value(h.inx)), static_cast<float>(value(h.iny)),
-                              static_cast<float>(value(h.inz)));
+        block.cloud.colors[j] =
+            Rgb{to_byte(value(h.ir)), to_byte(value(h.ig)), to_byte(value(h.ib))};
+      if (with_normals)
+        block.normals[j] = Vec3f(static_cast<float>(value(h.inx)), static_cast<float>(value(h.iny)),
+                                 static_cast<float>(value(h.inz)));
     }
+    sink(block, first);
   }
 }
 
-// Step 4, ascii: a line per vertex.
-void read_ascii_body(PlyReader& r, const PlyHeader& h, PointCloud& cloud,
-                     std::vector<Vec3f>* normals = nullptr) {
+// Step 4, ascii: a line per vertex, a block of lines at a time.
+void read_ascii_body(PlyReader& r, const PlyHeader& h, bool with_normals, const BlockSink& sink) {
   std::vector<double> v(h.props.size());
-  for (std::size_t i = 0; i < h.vertices; ++i) {
-    if (!r.next_line())
-      throw InputError(r.where, "file ends after " + std::to_string(i) + " of " +
-                                    std::to_string(h.vertices) + " vertices (truncated)");
-    std::istringstream ls(r.line);
-    for (double& x : v) ls >> x;
-    if (!ls)
-      throw InputError(r.where + ":" + std::to_string(r.line_no),
-                       "expected " + std::to_string(h.props.size()) + " numbers per vertex");
-    cloud.points[i] = Vec3f(static_cast<float>(v[h.ix]), static_cast<float>(v[h.iy]),
-                            static_cast<float>(v[h.iz]));
-    if (h.colour()) cloud.colors[i] = Rgb{to_byte(v[h.ir]), to_byte(v[h.ig]), to_byte(v[h.ib])};
-    if (normals)
-      (*normals)[i] = Vec3f(static_cast<float>(v[h.inx]), static_cast<float>(v[h.iny]),
-                            static_cast<float>(v[h.inz]));
+  VertexBlock block;
+  for (std::size_t first = 0; first < h.vertices; first += kBlockRows) {
+    const std::size_t rows = std::min(kBlockRows, h.vertices - first);
+    block.resize(h, rows, with_normals);
+    for (std::size_t j = 0; j < rows; ++j) {
+      if (!r.next_line())
+        throw InputError(r.where, "file ends after " + std::to_string(first + j) + " of " +
+                                      std::to_string(h.vertices) + " vertices (truncated)");
+      std::istringstream ls(r.line);
+      for (double& x : v) ls >> x;
+      if (!ls)
+        throw InputError(r.where + ":" + std::to_string(r.line_no),
+                         "expected " + std::to_string(h.props.size()) + " numbers per vertex");
+      block.cloud.points[j] = Vec3f(static_cast<float>(v[h.ix]), static_cast<float>(v[h.iy]),
+                                    static_cast<float>(v[h.iz]));
+      if (h.colour())
+        block.cloud.colors[j] = Rgb{to_byte(v[h.ir]), to_byte(v[h.ig]), to_byte(v[h.ib])};
+      if (with_normals)
+        block.normals[j] = Vec3f(static_cast<float>(v[h.inx]), static_cast<float>(v[h.iny]),
+                                 static_cast<float>(v[h.inz]));
+    }
+    sink(block, first);
   }
 }
 
@@ -406,10 +429,8 @@ void read_faces(PlyReader& r, const PlyHeader& h, TriangleMesh& mesh) {
 
 namespace {
 
-// Steps 1-4 of both readers: the header, then the vertices (points, colours, and `normals` when
-// given and the file has them); the reader is left at the elements after `vertex`.
-PointCloud read_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool mesh,
-                         std::vector<Vec3f>* normals) {
+// Steps 1-3 of every reader: the header checked; the reader is left at the vertices.
+void open_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool mesh) {
   r.where = path.string();
   r.f.open(path, std::ios::binary);
   if (!r.f) throw InputError(r.where, "cannot open for reading");
@@ -420,6 +441,20 @@ PointCloud read_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool 
   if (mesh && h.face_other_props > 0)
     throw InputError(r.where, "element face has properties besides vertex_indices; not supported");
   check_count(r, h);
+}
+
+void read_body(PlyReader& r, const PlyHeader& h, bool with_normals, const BlockSink& sink) {
+  if (h.format == "binary_little_endian")
+    read_binary_body(r, h, with_normals, sink);
+  else
+    read_ascii_body(r, h, with_normals, sink);
+}
+
+// Steps 1-4 of both whole readers: the header, then the vertices (points, colours, and `normals`
+// when given and the file has them); the reader is left at the elements after `vertex`.
+PointCloud read_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool mesh,
+                         std::vector<Vec3f>* normals) {
+  open_vertices(r, h, path, mesh);
   PointCloud cloud;
   cloud.points.resize(h.vertices);
   if (h.colour()) cloud.colors.resize(h.vertices);
@@ -427,10 +462,11 @@ PointCloud read_vertices(PlyReader& r, PlyHeader& h, const fs::path& path, bool 
     normals->resize(h.vertices);
   else
     normals = nullptr;
-  if (h.format == "binary_little_endian")
-    read_binary_body(r, h, cloud, normals);
-  else
-    read_ascii_body(r, h, cloud, normals);
+  read_body(r, h, normals != nullptr, [&](const VertexBlock& block, std::size_t first) {
+    std::copy(block.cloud.points.begin(), block.cloud.points.end(), cloud.points.begin() + first);
+    std::copy(block.cloud.colors.begin(), block.cloud.colors.end(), cloud.colors.begin() + first);
+    if (normals) std::copy(block.normals.begin(), block.normals.end(), normals->begin() + first);
+  });
   return cloud;
 }
 
@@ -440,6 +476,20 @@ PointCloud read_ply(const fs::path& path) {
   PlyReader r;
   PlyHeader h;
   return read_vertices(r, h, path, false, nullptr);
+}
+
+std::size_t ply_vertex_count(const fs::path& path) {
+  PlyReader r;
+  PlyHeader h;
+  open_vertices(r, h, path, false);
+  return h.vertices;
+}
+
+void read_ply_blocks(const fs::path& path, const std::function<void(const PointCloud&)>& take) {
+  PlyReader r;
+  PlyHeader h;
+  open_vertices(r, h, path, false);
+  read_body(r, h, false, [&](const VertexBlock& block, std::size_t) { take(block.cloud); });
 }
 
 void write_mesh_ply(const fs::path& path, const TriangleMesh& mesh,

@@ -1,5 +1,7 @@
 #pragma once
+#include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "objmap/core/mesh.h"
@@ -27,6 +29,14 @@ void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
 // after `vertex` are ignored. Throws InputError "<path>: <what>" for anything else (big-endian,
 // missing x/y/z, a list property in vertex, a truncated file, ...).
 PointCloud read_ply(const std::filesystem::path& path);
+
+// The same points read a block of at most 65536 at a time, each block handed to `take` in the
+// file's order (a map read without holding it whole); throws as read_ply.
+void read_ply_blocks(const std::filesystem::path& path,
+                     const std::function<void(const PointCloud&)>& take);
+
+// The vertex count of a PLY file's header, checked as read_ply checks it.
+std::size_t ply_vertex_count(const std::filesystem::path& path);
 
 // Writes a triangle mesh as binary little-endian PLY (objects/<id>_<class>_mesh.ply, map_mesh.ply):
 // `element vertex` with float x, y, z, then float nx, ny, nz and uchar red, green, blue when the

@@ -436,23 +436,45 @@ std::vector<Vec3> camera_path(const ReportOptions& options, const Trajectories& 
   return out;
 }
 
-// Step 5: the top view with the objects and the camera path, in the map's frame: the run's
-// estimate, or the corrected trajectory for a corrected run (fused with it). A run fused with
-// --dense-map false has no semantic map: the objects-only map is drawn.
-// Returns the map in the gravity frame (for the 3D view).
-PointCloud add_top_view(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
-                        int up_axis, const std::optional<Eigen::Matrix3d>& gravity,
-                        report::PageContent& page) {
+// The map the page shows (map_semantic.ply, else map_objects.ply): read a block at a time, its
+// points turned into the gravity frame when there is one.
+struct PageMap {
+  std::string name;
+  std::size_t points = 0;
+  report::PointBlocks blocks;
+  PointCloud thin;  // thinned for the 3D view
+};
+
+PageMap page_map(const ReportOptions& options, const std::optional<Eigen::Matrix3d>& gravity) {
   const bool has_semantic = fs::exists(options.run / "map_semantic.ply");
-  const std::string map_name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
-  require(fs::exists(options.run / map_name), (options.run / "map_semantic.ply").string(),
+  PageMap map;
+  map.name = has_semantic ? "map_semantic.ply" : "map_objects.ply";
+  const fs::path file = options.run / map.name;
+  require(fs::exists(file), (options.run / "map_semantic.ply").string(),
           "missing, and so is map_objects.ply; expected the maps objmap fuse writes (the "
           "semantic map, or the objects-only map of a run fused with --dense-map false)");
-  PointCloud map = io::read_ply(options.run / map_name);
-  if (gravity) {
-    const Eigen::Matrix3f r = gravity->cast<float>();
-    for (Vec3f& p : map.points) p = r * p;
-  }
+  map.points = io::ply_vertex_count(file);
+  const std::optional<Eigen::Matrix3f> r =
+      gravity ? std::optional<Eigen::Matrix3f>(gravity->cast<float>()) : std::nullopt;
+  map.blocks = [file, r](const std::function<void(const PointCloud&)>& take) {
+    if (!r) return io::read_ply_blocks(file, take);
+    io::read_ply_blocks(file, [&](const PointCloud& block) {
+      PointCloud turned = block;
+      for (Vec3f& p : turned.points) p = *r * p;
+      take(turned);
+    });
+  };
+  return map;
+}
+
+// Step 5: the top view with the objects and the camera path, in the map's frame: the run's
+// estimate, or the corrected trajectory for a corrected run (fused with it). A run fused with
+// --dense-map false has no semantic map: the objects-only map is drawn. The map is read as it is
+// drawn, never whole; returned with its sample for the 3D view (in the gravity frame).
+PageMap add_top_view(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
+                     int up_axis, const std::optional<Eigen::Matrix3d>& gravity,
+                     report::PageContent& page) {
+  PageMap map = page_map(options, gravity);
   report::TopViewOptions view_options;
   view_options.up_axis = up_axis;
   view_options.pixel_m = options.pixel_m;
@@ -471,7 +493,8 @@ PointCloud add_top_view(const ReportOptions& options, const RunFiles& files, con
     for (const Vec3& p : cameras) path.points_in_world.push_back(gravity ? Vec3(*gravity * p) : p);
     paths.push_back(path);
   }
-  const report::TopView view = report::render_top_view(map, drawn, view_options, paths);
+  const report::TopView view =
+      report::render_top_view(map.blocks, map.points, drawn, view_options, paths);
   page.topview.file = "topview.png";
   page.topview.bytes = png_bytes(view.image);
   page.topview.width_px = view.image.cols;
@@ -482,9 +505,10 @@ PointCloud add_top_view(const ReportOptions& options, const RunFiles& files, con
                 "object's oriented box outlined in its class colour and labelled \"id class\" "
                 "(\"(dup N)\": a suspected duplicate of object N; where objects crowd, the id "
                 "alone or nothing, and the label in the list on the right)%s; the bar is 1 m.",
-                map_name.c_str(), up_text(options, gravity).c_str(), view.pixel_m * 1000,
-                map.size(), t.est ? ", the camera path in magenta (ring: start)" : "");
+                map.name.c_str(), up_text(options, gravity).c_str(), view.pixel_m * 1000,
+                map.points, t.est ? ", the camera path in magenta (ring: start)" : "");
   page.topview.caption = caption;
+  map.thin = report::thin_points(map.blocks, map.points, options.view_points);
   return map;
 }
 
@@ -585,7 +609,7 @@ std::vector<TriangleMesh> object_meshes(const ReportOptions& options, const RunF
 // Step 7: the 3D view: the map, the objects' points and boxes, the surfaces, the camera path and
 // the answers of `objmap query` to every phrase of the map's classes.
 void add_view3d(const ReportOptions& options, const RunFiles& files, const Trajectories& t,
-                const std::optional<Eigen::Matrix3d>& gravity, const PointCloud& map,
+                const std::optional<Eigen::Matrix3d>& gravity, const PageMap& map,
                 std::vector<PointCloud> clouds, const std::vector<TriangleMesh>& meshes,
                 report::PageContent& page) {
   View3dInputs in;
@@ -596,8 +620,8 @@ void add_view3d(const ReportOptions& options, const RunFiles& files, const Traje
                            : 0);
   in.clouds = std::move(clouds);
   in.meshes = meshes;
-  in.map = report::thin_points(map, options.view_points);
-  in.map_points_total = map.size();
+  in.map = map.thin;
+  in.map_points_total = map.points;
   if (const auto voxel_m = run_voxel_m(files.run, "map")) in.map_point_size_m = *voxel_m;
   in.camera_path = camera_path(options, t);
   try {
@@ -648,7 +672,7 @@ ReportResult run_report(const ReportOptions& options) {
   // 4. Tables 3-5 against ground-truth objects.
   add_object_tables(options, files, page);
   // 5. The top view with the objects and the camera path.
-  const PointCloud map = add_top_view(options, files, trajectories, up_axis, gravity, page);
+  const PageMap map = add_top_view(options, files, trajectories, up_axis, gravity, page);
   add_scene_graph(options, page);
   // 6. A thumbnail per object.
   const std::vector<TriangleMesh> meshes = object_meshes(options, files, page);

@@ -51,13 +51,17 @@ struct Extent {
 
 // Step 1: the extent of the map on the two horizontal axes (stray points clipped), widened so that
 // every object and every path is in view.
-Extent map_extent(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
-                  const std::vector<TopViewPath>& paths, const TopViewOptions& options, int a,
-                  int b) {
-  // One axis at a time, so that the map's coordinates are copied once, not twice.
-  std::vector<float> v(cloud.size());
+Extent map_extent(const PointBlocks& blocks, std::size_t points,
+                  const std::vector<TopViewObject>& objects, const std::vector<TopViewPath>& paths,
+                  const TopViewOptions& options, int a, int b) {
+  // One axis at a time, so that the map's coordinates are held once: one float a point.
+  std::vector<float> v;
   auto clipped = [&](int axis, double& lo, double& hi) {
-    for (std::size_t i = 0; i < cloud.size(); ++i) v[i] = cloud.points[i][axis];
+    v.clear();
+    v.reserve(points);
+    blocks([&](const PointCloud& block) {
+      for (const Vec3f& p : block.points) v.push_back(p[axis]);
+    });
     lo = percentile(v, options.clip_percent);
     hi = percentile(v, 100 - options.clip_percent);
   };
@@ -100,27 +104,29 @@ TopView blank_view(const Extent& e, const TopViewOptions& options) {
 
 // Step 2: z-buffer: the highest point of each pixel; each point a square of point_size_m. Then
 // faded towards white, so that boxes, labels and paths stand out.
-void draw_points(TopView& view, const PointCloud& cloud, const TopViewOptions& options, int a,
+void draw_points(TopView& view, const PointBlocks& blocks, const TopViewOptions& options, int a,
                  int b, int up) {
   const int width = view.image.cols, height = view.image.rows;
   cv::Mat top(height, width, CV_32F, cv::Scalar(-std::numeric_limits<float>::infinity()));
-  const bool colors = cloud.has_colors();
   const int half =
       std::clamp(static_cast<int>(std::lround(options.point_size_m / view.pixel_m / 2)), 0, 8);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const auto& p = cloud.points[i];
-    const cv::Point2d px = to_pixel(view, p[a], p[b]);
-    const int u = static_cast<int>(px.x), v = static_cast<int>(px.y);
-    if (u + half < 0 || v + half < 0 || u - half >= width || v - half >= height) continue;
-    const Rgb c = colors ? cloud.colors[i] : Rgb{90, 90, 90};
-    for (int vv = std::max(0, v - half); vv <= std::min(height - 1, v + half); ++vv)
-      for (int uu = std::max(0, u - half); uu <= std::min(width - 1, u + half); ++uu) {
-        float& z = top.at<float>(vv, uu);
-        if (p[up] <= z) continue;
-        z = p[up];
-        view.image.at<cv::Vec3b>(vv, uu) = cv::Vec3b(c.b, c.g, c.r);
-      }
-  }
+  blocks([&](const PointCloud& cloud) {
+    const bool colors = cloud.has_colors();
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const auto& p = cloud.points[i];
+      const cv::Point2d px = to_pixel(view, p[a], p[b]);
+      const int u = static_cast<int>(px.x), v = static_cast<int>(px.y);
+      if (u + half < 0 || v + half < 0 || u - half >= width || v - half >= height) continue;
+      const Rgb c = colors ? cloud.colors[i] : Rgb{90, 90, 90};
+      for (int vv = std::max(0, v - half); vv <= std::min(height - 1, v + half); ++vv)
+        for (int uu = std::max(0, u - half); uu <= std::min(width - 1, u + half); ++uu) {
+          float& z = top.at<float>(vv, uu);
+          if (p[up] <= z) continue;
+          z = p[up];
+          view.image.at<cv::Vec3b>(vv, uu) = cv::Vec3b(c.b, c.g, c.r);
+        }
+    }
+  });
   if (options.fade > 0)
     view.image.convertTo(view.image, CV_8UC3, 1.0 - options.fade, 255.0 * options.fade);
 }
@@ -304,15 +310,22 @@ void draw_scale_bar(TopView& view, const TopViewOptions& options) {
 
 TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
                         const TopViewOptions& options, const std::vector<TopViewPath>& paths) {
+  return render_top_view([&](const std::function<void(const PointCloud&)>& take) { take(cloud); },
+                         cloud.size(), objects, options, paths);
+}
+
+TopView render_top_view(const PointBlocks& blocks, std::size_t points,
+                        const std::vector<TopViewObject>& objects, const TopViewOptions& options,
+                        const std::vector<TopViewPath>& paths) {
   options.check();
   int a = 0, b = 1;
   horizontal_axes(options.up_axis, a, b);
   const int up = options.up_axis;
 
   // 1. Extent of the map on the two horizontal axes (stray points clipped), objects and paths in.
-  TopView view = blank_view(map_extent(cloud, objects, paths, options, a, b), options);
+  TopView view = blank_view(map_extent(blocks, points, objects, paths, options, a, b), options);
   // 2. Z-buffer: the highest point of each pixel, faded towards white.
-  draw_points(view, cloud, options, a, b, up);
+  draw_points(view, blocks, options, a, b, up);
   // 3. Paths (the camera), under the objects.
   for (const TopViewPath& path : paths) draw_path(view, path.points_in_world, path.color, up);
   if (options.draw_objects) {

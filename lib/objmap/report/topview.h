@@ -1,4 +1,6 @@
 #pragma once
+#include <cstddef>
+#include <functional>
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
@@ -59,6 +61,17 @@ struct TopView {
 // The view covers the map (clip_percent aside), every object and every path; paths are drawn over
 // the points and under the objects.
 TopView render_top_view(const PointCloud& cloud, const std::vector<TopViewObject>& objects,
+                        const TopViewOptions& options = {},
+                        const std::vector<TopViewPath>& paths = {});
+
+// A map handed over a block of points at a time: each call hands every block (points, with their
+// colours or none) to `take`, in the same order every time (io::read_ply_blocks of a file).
+using PointBlocks = std::function<void(const std::function<void(const PointCloud&)>& take)>;
+
+// The same view of a map of `points` points read from `blocks` three times (each horizontal axis
+// for the extent, then the drawing), holding one float a point instead of the map.
+TopView render_top_view(const PointBlocks& blocks, std::size_t points,
+                        const std::vector<TopViewObject>& objects,
                         const TopViewOptions& options = {},
                         const std::vector<TopViewPath>& paths = {});
 

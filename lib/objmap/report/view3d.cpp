@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 
@@ -153,15 +154,25 @@ void View3dOptions::check() const {
 
 PointCloud thin_points(const PointCloud& cloud, std::size_t max_points) {
   if (cloud.size() <= max_points || max_points == 0) return cloud;
-  const std::size_t k = (cloud.size() + max_points - 1) / max_points;
+  return thin_points([&](const std::function<void(const PointCloud&)>& take) { take(cloud); },
+                     cloud.size(), max_points);
+}
+
+PointCloud thin_points(const PointBlocks& blocks, std::size_t points, std::size_t max_points) {
+  const std::size_t k =
+      points <= max_points || max_points == 0 ? 1 : (points + max_points - 1) / max_points;
   PointCloud out;
-  out.reserve(cloud.size() / k + 1);
-  for (std::size_t i = 0; i < cloud.size(); i += k) {
-    if (cloud.has_colors())
-      out.push_back(cloud.points[i], cloud.colors[i]);
-    else
-      out.push_back(cloud.points[i]);
-  }
+  out.reserve(points / k + 1);
+  std::size_t i = 0;  // the map's index of the block's first point
+  blocks([&](const PointCloud& block) {
+    for (std::size_t j = (k - i % k) % k; j < block.size(); j += k) {
+      if (block.has_colors())
+        out.push_back(block.points[j], block.colors[j]);
+      else
+        out.push_back(block.points[j]);
+    }
+    i += block.size();
+  });
   return out;
 }
 

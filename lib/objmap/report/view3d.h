@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "objmap/core/types.h"
+#include "objmap/report/topview.h"
 
 // The report's interactive 3D view (three.js, inlined: report.html works offline from the file
 // system): the semantic map thinned to what a browser draws smoothly, every object's points in its
@@ -79,6 +80,8 @@ struct View3dOptions {
 
 // The map thinned to at most `max_points` (every k-th point, k the smallest that fits).
 PointCloud thin_points(const PointCloud& cloud, std::size_t max_points);
+// The same of a map of `points` points read from `blocks` (topview.h) once.
+PointCloud thin_points(const PointBlocks& blocks, std::size_t points, std::size_t max_points);
 
 // The view's data as JSON, safe inside a <script> element: '<', '>' and '&' written as \u003c,
 // \u003e, \u0026 (no "</script>" or "<!--" of a run's names can end it). Points are base64 of
