@@ -1,6 +1,7 @@
 #include "objmap/pipeline/packed_pixels.h"
 
 #include <stdexcept>
+#include <utility>
 
 #include "objmap/io/deflate.h"
 
@@ -10,11 +11,11 @@ std::size_t PackedPixelRuns::bytes() const {
   return (first.size() + end.size()) * sizeof(std::uint32_t) + planes.size();
 }
 
-PackedPixelRuns pack_pixel_runs(const geometry::PixelRuns& runs) {
+PackedPixelRuns pack_pixel_runs(geometry::PixelRuns runs) {
   PackedPixelRuns p;
   p.stride = runs.stride;
-  p.first = runs.first;
-  p.end = runs.end;
+  p.first = std::move(runs.first);
+  p.end = std::move(runs.end);
   p.points = runs.size();
   p.colors = !runs.colors.empty();
   const std::size_t n = p.points;

@@ -23,7 +23,8 @@ struct PackedPixelRuns {
   std::size_t bytes() const;  // what they hold
 };
 
-PackedPixelRuns pack_pixel_runs(const geometry::PixelRuns& runs);
+// `runs` packed; their run starts and ends are moved, not copied.
+PackedPixelRuns pack_pixel_runs(geometry::PixelRuns runs);
 
 // The runs `packed` was made of. Throws std::logic_error when its planes do not inflate to its
 // points (memory corrupted: it is never read from a file).
