@@ -102,7 +102,7 @@ void start_dense_apply(FollowState& s, std::promise<std::shared_ptr<const DenseC
 
 }  // namespace
 
-void start_publish(FollowState& s, bool own_scene) {
+void start_publish(FollowState& s, bool own_scene, bool last) {
   require(!s.result.keyframes.keyframes.empty(), s.options.dataset.string(),
           "no keyframe to map: " + std::to_string(s.status.frames_seen) + " frames seen, " +
               std::to_string(s.status.frames_with_pose) +
@@ -121,14 +121,17 @@ void start_publish(FollowState& s, bool own_scene) {
   auto result = std::make_shared<FuseResult>(s.result);
   result->frames = s.dataset.frames.size();
   result->keyframes.frames_with_pose = s.status.frames_with_pose;
-  auto maps = std::make_shared<FuseMaps>(FuseMaps{s.maps->dense_options,
-                                                  fusion::VoxelMap(s.maps->dense_options),
-                                                  s.maps->objects,
-                                                  std::nullopt,
-                                                  std::nullopt,
-                                                  s.maps->view_log,
-                                                  {},
-                                                  {}});
+  // The last publish takes the live object map and view log: nothing is fused after it, and its
+  // merges and filters then change the objects' voxels in place rather than copying them.
+  auto maps =
+      std::make_shared<FuseMaps>(FuseMaps{s.maps->dense_options,
+                                          fusion::VoxelMap(s.maps->dense_options),
+                                          last ? std::move(s.maps->objects) : s.maps->objects,
+                                          std::nullopt,
+                                          std::nullopt,
+                                          last ? std::move(s.maps->view_log) : s.maps->view_log,
+                                          {},
+                                          {}});
   std::promise<std::shared_ptr<const DenseCloud>> cloud;
   const std::size_t keyframes = s.result.keyframes.keyframes.size();
   SceneChoice choice{keyframes, std::nullopt};
@@ -202,9 +205,11 @@ void publish(FollowState& s, const FollowEvents& events) {
     write_status(s);
     return;
   }
-  start_publish(s, true);
-  // Nothing is fused after the last take: the live dense map's tables go before that map is
-  // finished (the cloud the take's apply makes is the map from here on).
+  // Nothing is fused or made again after the last publish: the kept keyframes go before it, it
+  // takes the live object map, and the live dense map's tables go once their changes are taken
+  // (the cloud the take's apply makes is the map from here on).
+  s.kept = {};
+  start_publish(s, true, true);
   if (s.maps) s.maps->dense = fusion::VoxelMap(s.maps->dense_options);
   finish_publish(s, events, true);
 }

@@ -152,8 +152,9 @@ void replace_after_loop_closure(FollowState& s);
 //    with the lag. publish: every keyframe published, to its end (the one in flight may do if
 //    its up and surfaces were of its own dense map). A publish takes the up and surfaces last
 //    found, on the dense cloud of a publish before, off its way (found again every
-//    scene_every_s); `own_scene` (the last publish) waits for those of its own.
-void start_publish(FollowState& s, bool own_scene = false);
+//    scene_every_s); `own_scene` (the last publish) waits for those of its own. The `last`
+//    publish takes the live object map and view log instead of copying them (none is fused after).
+void start_publish(FollowState& s, bool own_scene = false, bool last = false);
 bool finish_publish(FollowState& s, const FollowEvents& events, bool wait);
 bool publish_done(const FollowState& s);  // a publish in flight has its map in place
 void publish(FollowState& s, const FollowEvents& events);
