@@ -1,9 +1,12 @@
 // objmap follow: the map of a recording kept up to date while it is written (docs/follow.md).
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
 #include "command.h"
+#include "objmap/core/memory.h"
 #include "objmap/pipeline/follow.h"
+#include "objmap/pipeline/fuse_keyframes.h"
 
 namespace objmap::app {
 namespace {
@@ -17,6 +20,9 @@ void follow_and_print(const pipeline::FollowOptions& options) {
     std::fprintf(stderr, "published     %zu objects, %zu keyframes of %zu frames, lag %.2f s\n",
                  s.objects, s.keyframes_mapped, s.frames_seen, s.lag_last_s);
   };
+  // As many heaps as workers: freed memory kept in a heap per short-lived thread (the publishes',
+  // the dense applies', the reports') is what grew follow's peak with the recording.
+  limit_malloc_arenas(std::max(2, pipeline::fuse_threads(options.fuse.threads)));
   const pipeline::FollowStatus s = pipeline::run_follow(options, events);
   std::printf("followed      %zu frames, %zu with a pose, %zu keyframes mapped (%zu dropped)\n",
               s.frames_seen, s.frames_with_pose, s.keyframes_mapped, s.keyframes_dropped);

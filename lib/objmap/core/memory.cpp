@@ -11,4 +11,6 @@ bool keep_freed_memory() {
          mallopt(M_TRIM_THRESHOLD, 1024 * 1024 * 1024) == 1;
 }
 
+bool limit_malloc_arenas(int arenas) { return arenas > 0 && mallopt(M_ARENA_MAX, arenas) == 1; }
+
 }  // namespace objmap

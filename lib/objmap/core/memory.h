@@ -12,4 +12,11 @@ namespace objmap {
 // False when the allocator refused a setting.
 bool keep_freed_memory();
 
+// At most `arenas` malloc arenas (heaps) for the threads (glibc's default: 8 a core). Each arena
+// keeps what its threads free (keep_freed_memory), so a process whose many short-lived threads
+// allocate on a growing map (objmap follow's publishes, dense applies, scenes and reports) holds
+// freed memory in each: follow limits them to its worker threads' count (docs/follow.md,
+// "Memory"). Call before the threads start. False when the allocator refused it.
+bool limit_malloc_arenas(int arenas);
+
 }  // namespace objmap
