@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "objmap/core/error.h"
 #include "objmap/geometry/backproject.h"
 #include "objmap/io/deflate.h"
 #include "objmap/io/image.h"
@@ -109,6 +110,65 @@ TEST(PackedPixelRuns, PlanesThatDoNotInflateToTheirPointsAreRefused) {
   EXPECT_TRUE(io::inflate_bytes(io::deflate_bytes(ten, 10), out.data(), out.size()));
   EXPECT_EQ(out, std::vector<std::uint8_t>(ten, ten + 10));
   EXPECT_FALSE(io::inflate_bytes(io::deflate_bytes(ten, 10), out.data(), 9));
+}
+
+TEST(PackedPixelFile, RunsComeBackFromTheFileAsWrittenAndTheFolderShowsNoFile) {
+  test::TempDir dir;
+  cv::Mat depth(480, 640, CV_16UC1), bgr(480, 640, CV_8UC3);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      depth.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(1000 + (u * 7 + v * 3) % 4000);
+      bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(u % 256, v % 256, (u + v) % 256);
+    }
+  std::vector<PackedPixelRuns> packed = {pack_pixel_runs(disc_runs(depth, &bgr, 1)),
+                                         pack_pixel_runs(geometry::PixelRuns{}),
+                                         pack_pixel_runs(disc_runs(depth, nullptr, 2))};
+  std::vector<PackedPixelFile::Entry> entries;
+  std::uint64_t bytes = 0;
+  {
+    PackedPixelFile file(dir.path());
+    for (const PackedPixelRuns& p : packed) {
+      entries.push_back(file.append(p));
+      bytes += p.bytes();
+    }
+    EXPECT_EQ(file.bytes(), bytes);
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path()));  // unnamed
+    // In any order, bit for bit.
+    for (std::size_t i = packed.size(); i-- > 0;) {
+      const PackedPixelRuns back = file.read(entries[i]);
+      EXPECT_EQ(back.stride, packed[i].stride);
+      EXPECT_EQ(back.points, packed[i].points);
+      EXPECT_EQ(back.colors, packed[i].colors);
+      EXPECT_EQ(back.first, packed[i].first);
+      EXPECT_EQ(back.end, packed[i].end);
+      EXPECT_EQ(back.planes, packed[i].planes);
+      expect_same_runs(unpack_pixel_runs(back), unpack_pixel_runs(packed[i]));
+    }
+    // An entry past the file's end.
+    PackedPixelFile::Entry beyond = entries[0];
+    beyond.offset = file.bytes() - 10;
+    try {
+      file.read(beyond);
+      ADD_FAILURE() << "read past the end";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                dir.path().string() + ": cannot read the kept pixels' file back: it ends early");
+    }
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+TEST(PackedPixelFile, AFolderThatIsNotThereIsNamed) {
+  test::TempDir dir;
+  try {
+    PackedPixelFile file(dir.path() / "gone");
+    ADD_FAILURE() << "made a file in a missing folder";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir.path() / "gone").string() +
+                  ": cannot make the file of the kept pixels there: No such file or directory; "
+                  "expected a writable folder");
+  }
 }
 
 }  // namespace

@@ -209,6 +209,7 @@ void publish(FollowState& s, const FollowEvents& events) {
   // takes the live object map, and the live dense map's tables go once their changes are taken
   // (the cloud the take's apply makes is the map from here on).
   s.kept = {};
+  s.kept_pixels.reset();
   start_publish(s, true, true);
   if (s.maps) s.maps->dense = fusion::VoxelMap(s.maps->dense_options);
   finish_publish(s, events, true);

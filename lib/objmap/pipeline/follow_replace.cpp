@@ -2,7 +2,9 @@
 // keyframes mapped so far are made again from their pixels (kept as runs: each pixel's raw depth
 // and colour) with their keyframes' new poses, so that they stay where they were in their camera's
 // frame, and the object map is made again from them in keyframe order, as objmap fuse would make
-// it with the new poses. No image is read again. The dense map keeps the poses it was fused with.
+// it with the new poses. No image is read again: the pixels are read back from follow's file. The
+// dense map keeps the poses it was fused with.
+#include <memory>
 #include <utility>
 
 #include "objmap/core/error.h"
@@ -19,12 +21,15 @@ void keep_for_replacing(FollowState& s, const Keyframe& keyframe,
                         std::vector<PackedPixelRuns> pixels, const cv::Mat& view_depth) {
   require(pixels.size() == observations.size(), "follow",
           "a keyframe's observations came without their pixels");
-  // The points themselves are let go: the packed runs hold ~2-2.5 bytes a point against 15
-  // (docs/follow.md, "Memory").
+  // The points themselves are let go: the packed runs hold ~2-2.5 bytes a point against 15, in a
+  // file (docs/follow.md, "Memory").
   for (fusion::Observation& o : observations) o.points_in_world = PointCloud{};
-  for (const PackedPixelRuns& p : pixels) s.kept_pixels_bytes += p.bytes();
-  s.status.kept_pixels_kb = static_cast<long>(s.kept_pixels_bytes / 1024);
-  s.kept.push_back({keyframe, std::move(observations), std::move(pixels), view_depth});
+  if (!s.kept_pixels) s.kept_pixels = std::make_unique<PackedPixelFile>(s.options.out);
+  std::vector<PackedPixelFile::Entry> entries;
+  entries.reserve(pixels.size());
+  for (const PackedPixelRuns& p : pixels) entries.push_back(s.kept_pixels->append(p));
+  s.status.kept_pixels_kb = static_cast<long>(s.kept_pixels->bytes() / 1024);
+  s.kept.push_back({keyframe, std::move(observations), std::move(entries), view_depth});
 }
 
 void replace_after_loop_closure(FollowState& s) {
@@ -67,7 +72,7 @@ void replace_after_loop_closure(FollowState& s) {
     std::vector<fusion::Observation> observations = k.observations;
     for (std::size_t j = 0; j < observations.size(); ++j)
       observations[j].points_in_world = geometry::points_from_runs(
-          *s.rays, unpack_pixel_runs(k.pixels[j]), k.keyframe.world_from_cam);
+          *s.rays, unpack_pixel_runs(s.kept_pixels->read(k.pixels[j])), k.keyframe.world_from_cam);
     count_added(objects.add_frame(observations), counts);
   }
   s.maps->objects = std::move(objects);

@@ -20,6 +20,7 @@
 #include "objmap/pipeline/follow_detect.h"
 #include "objmap/pipeline/fuse_keyframes.h"
 #include "objmap/pipeline/fuse_maps.h"
+#include "objmap/pipeline/packed_pixels.h"
 #include "objmap/scene/scene.h"
 #include "objmap/segmentation/class_sizes.h"
 #include "objmap/segmentation/read.h"
@@ -34,12 +35,12 @@ struct WaitingKeyframe {
 };
 
 // A keyframe mapped, kept for a loop closure: its observations as they were added, without their
-// points, which are kept as the pixels they came from (made again with the keyframe's new pose),
-// and its thinned depth for the view log.
+// points, which are kept as the pixels they came from (made again with the keyframe's new pose; in
+// FollowState::kept_pixels), and its thinned depth for the view log.
 struct KeptKeyframe {
   Keyframe keyframe;
   std::vector<fusion::Observation> observations;  // points_in_world empty
-  std::vector<PackedPixelRuns> pixels;            // per observation
+  std::vector<PackedPixelFile::Entry> pixels;     // per observation
   cv::Mat view_depth;
 };
 
@@ -88,9 +89,9 @@ struct FollowState {
   // The keyframes decoding ahead (on s.options.fuse, result.camera, rays, maps->dense): declared
   // after them, so that its workers stop before they go.
   std::unique_ptr<LiveKeyframes> live;
-  double retried_timestamp = -1.0;        // the keyframe whose read failed last
-  std::deque<KeptKeyframe> kept;          // every keyframe mapped (loop closures; never copied)
-  std::size_t kept_pixels_bytes = 0;      // their pixels' (status.kept_pixels_kb)
+  double retried_timestamp = -1.0;  // the keyframe whose read failed last
+  std::deque<KeptKeyframe> kept;    // every keyframe mapped (loop closures; never copied)
+  std::unique_ptr<PackedPixelFile> kept_pixels;  // their pixels, in OUT (made with the first)
   bool rewrite_pending = false;           // the trajectory's past poses changed since the last turn
   std::size_t empty_by_add = 0;           // instances_empty counted by the association
   std::vector<WaitingKeyframe> waiting;   // selected, not yet fused, in order

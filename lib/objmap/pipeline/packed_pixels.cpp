@@ -1,8 +1,15 @@
 #include "objmap/pipeline/packed_pixels.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
+#include "objmap/core/error.h"
 #include "objmap/io/deflate.h"
 
 namespace objmap::pipeline {
@@ -62,6 +69,98 @@ geometry::PixelRuns unpack_pixel_runs(const PackedPixelRuns& packed) {
     runs.colors[i] = c;
   }
   return runs;
+}
+
+namespace {
+
+// An unnamed file open for reading and writing in `folder`, or -1 (errno set).
+int open_unnamed_file(const std::filesystem::path& folder) {
+#ifdef O_TMPFILE
+  const int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+  if (fd >= 0 || (errno != EOPNOTSUPP && errno != EISDIR)) return fd;
+#endif
+  // A file system without O_TMPFILE: a named file, unlinked at once.
+  std::string name = (folder / ".kept_pixels.XXXXXX").string();
+  const int named = ::mkostemp(name.data(), O_CLOEXEC);
+  if (named >= 0) ::unlink(name.c_str());
+  return named;
+}
+
+}  // namespace
+
+PackedPixelFile::PackedPixelFile(const std::filesystem::path& folder)
+    : folder_(folder), fd_(open_unnamed_file(folder)) {
+  require(fd_ >= 0, folder_.string(),
+          std::string("cannot make the file of the kept pixels there: ") + std::strerror(errno) +
+              "; expected a writable folder");
+}
+
+PackedPixelFile::~PackedPixelFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+PackedPixelFile::Entry PackedPixelFile::append(const PackedPixelRuns& packed) {
+  const Entry entry{end_,
+                    static_cast<std::uint32_t>(packed.first.size()),
+                    packed.planes.size(),
+                    packed.points,
+                    packed.stride,
+                    packed.colors};
+  const std::size_t run_bytes = packed.first.size() * sizeof(std::uint32_t);
+  const struct {
+    const void* data;
+    std::size_t size;
+  } parts[] = {{packed.first.data(), run_bytes},
+               {packed.end.data(), run_bytes},
+               {packed.planes.data(), packed.planes.size()}};
+  for (const auto& part : parts) {
+    const auto* at = static_cast<const char*>(part.data);
+    for (std::size_t left = part.size; left > 0;) {
+      const ssize_t n = ::pwrite(fd_, at, left, static_cast<off_t>(end_));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0)
+        throw InputError(folder_.string(),
+                         std::string("cannot write the kept pixels' file there: ") +
+                             (n < 0 ? std::strerror(errno) : "nothing written") +
+                             "; expected room on its disk");
+      at += n;
+      left -= static_cast<std::size_t>(n);
+      end_ += static_cast<std::uint64_t>(n);
+    }
+  }
+  return entry;
+}
+
+PackedPixelRuns PackedPixelFile::read(const Entry& entry) const {
+  PackedPixelRuns packed;
+  packed.stride = entry.stride;
+  packed.points = entry.points;
+  packed.colors = entry.colors;
+  packed.first.resize(entry.runs);
+  packed.end.resize(entry.runs);
+  packed.planes.resize(entry.planes_bytes);
+  const std::size_t run_bytes = std::size_t{entry.runs} * sizeof(std::uint32_t);
+  const struct {
+    void* data;
+    std::size_t size;
+  } parts[] = {{packed.first.data(), run_bytes},
+               {packed.end.data(), run_bytes},
+               {packed.planes.data(), packed.planes.size()}};
+  std::uint64_t offset = entry.offset;
+  for (const auto& part : parts) {
+    auto* at = static_cast<char*>(part.data);
+    for (std::size_t left = part.size; left > 0;) {
+      const ssize_t n = ::pread(fd_, at, left, static_cast<off_t>(offset));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0)
+        throw InputError(folder_.string(), std::string("cannot read the kept pixels' file back: ") +
+                                               (n < 0 ? std::strerror(errno) : "it ends early"));
+      at += n;
+      left -= static_cast<std::size_t>(n);
+      offset += static_cast<std::uint64_t>(n);
+    }
+  }
+  return packed;
 }
 
 }  // namespace objmap::pipeline
