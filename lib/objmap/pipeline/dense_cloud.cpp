@@ -1,6 +1,9 @@
 #include "objmap/pipeline/dense_cloud.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "objmap/fusion/voxel_map.h"
 
@@ -22,18 +25,44 @@ DenseCloud take_dense_cloud(fusion::VoxelMap& dense, const fusion::VoxelMapOptio
   return out;
 }
 
+namespace {
+
+// f(index in dense.keys, slot) for each voxel of `owner` that the dense cloud holds. The owned
+// voxels (tens to hundreds of thousands) are sorted and walked along the dense keys (sorted,
+// unique: millions), each found by a galloping search from the one before: the search stays near
+// where it was, rather than starting each of them at the middle of the whole array.
+template <typename F>
+void for_each_dense_voxel_of(const DenseCloud& dense,
+                             const geometry::VoxelHashTable<std::uint32_t>& owner, F&& f) {
+  std::vector<std::pair<fusion::VoxelKey, std::uint32_t>> owned;
+  owned.reserve(owner.size());
+  owner.for_each([&](fusion::VoxelKey key, std::uint32_t slot) { owned.emplace_back(key, slot); });
+  std::sort(owned.begin(), owned.end());
+  const auto end = dense.keys.end();
+  auto at = dense.keys.begin();  // every key before it is below the next owned key
+  for (const auto& [key, slot] : owned) {
+    std::size_t step = 1;
+    auto bound = at;  // end, or a key not below `key`
+    while (bound != end && *bound < key) {
+      at = bound + 1;
+      bound =
+          static_cast<std::size_t>(end - at) > step ? at + static_cast<std::ptrdiff_t>(step) : end;
+      step *= 2;
+    }
+    at = std::lower_bound(at, bound, key);
+    if (at != end && *at == key) f(static_cast<std::size_t>(at - dense.keys.begin()), slot);
+  }
+}
+
+}  // namespace
+
 std::vector<Rgb> semantic_colors(const DenseCloud& dense, double voxel_m,
                                  const std::vector<fusion::ObjectRecord>& records,
                                  const std::vector<Rgb>& record_color) {
   const geometry::VoxelHashTable<std::uint32_t> owner = fusion::voxel_owners(records, voxel_m);
-  // The owned voxels (tens of thousands) are looked up in the dense keys (sorted, unique), rather
-  // than each of the millions of dense voxels in `owner`.
   std::vector<Rgb> colors = dense.cloud.colors;
-  owner.for_each([&](fusion::VoxelKey key, std::uint32_t slot) {
-    const auto it = std::lower_bound(dense.keys.begin(), dense.keys.end(), key);
-    if (it != dense.keys.end() && *it == key)
-      colors[static_cast<std::size_t>(it - dense.keys.begin())] = record_color[slot - 1];
-  });
+  for_each_dense_voxel_of(
+      dense, owner, [&](std::size_t i, std::uint32_t slot) { colors[i] = record_color[slot - 1]; });
   return colors;
 }
 
@@ -44,11 +73,8 @@ std::size_t drop_sighting_voxels(DenseCloud& dense,
   const geometry::VoxelHashTable<std::uint32_t> moving = fusion::voxel_owners(sightings, voxel_m);
   const geometry::VoxelHashTable<std::uint32_t> staying = fusion::voxel_owners(objects, voxel_m);
   std::vector<char> drop(dense.keys.size(), 0);
-  moving.for_each([&](fusion::VoxelKey key, std::uint32_t) {
-    if (staying.contains(key)) return;
-    const auto it = std::lower_bound(dense.keys.begin(), dense.keys.end(), key);
-    if (it != dense.keys.end() && *it == key)
-      drop[static_cast<std::size_t>(it - dense.keys.begin())] = 1;
+  for_each_dense_voxel_of(dense, moving, [&](std::size_t i, std::uint32_t) {
+    if (!staying.contains(dense.keys[i])) drop[i] = 1;
   });
   return drop_points(dense, drop);
 }
