@@ -86,6 +86,34 @@ int open_unnamed_file(const std::filesystem::path& folder) {
   return named;
 }
 
+// `size` bytes at `offset` of `fd` written from `data` (pwrite) or read into it (pread), through
+// short counts and interruptions; the reason as a line when it fails.
+std::string write_at(int fd, const void* data, std::size_t size, std::uint64_t offset) {
+  const auto* at = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::pwrite(fd, at, size, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return n < 0 ? std::strerror(errno) : "nothing written";
+    at += n;
+    size -= static_cast<std::size_t>(n);
+    offset += static_cast<std::uint64_t>(n);
+  }
+  return {};
+}
+
+std::string read_at(int fd, void* data, std::size_t size, std::uint64_t offset) {
+  auto* at = static_cast<char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::pread(fd, at, size, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return n < 0 ? std::strerror(errno) : "it ends early";
+    at += n;
+    size -= static_cast<std::size_t>(n);
+    offset += static_cast<std::uint64_t>(n);
+  }
+  return {};
+}
+
 }  // namespace
 
 PackedPixelFile::PackedPixelFile(const std::filesystem::path& folder)
@@ -107,27 +135,14 @@ PackedPixelFile::Entry PackedPixelFile::append(const PackedPixelRuns& packed) {
                     packed.stride,
                     packed.colors};
   const std::size_t run_bytes = packed.first.size() * sizeof(std::uint32_t);
-  const struct {
-    const void* data;
-    std::size_t size;
-  } parts[] = {{packed.first.data(), run_bytes},
-               {packed.end.data(), run_bytes},
-               {packed.planes.data(), packed.planes.size()}};
-  for (const auto& part : parts) {
-    const auto* at = static_cast<const char*>(part.data);
-    for (std::size_t left = part.size; left > 0;) {
-      const ssize_t n = ::pwrite(fd_, at, left, static_cast<off_t>(end_));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0)
-        throw InputError(folder_.string(),
-                         std::string("cannot write the kept pixels' file there: ") +
-                             (n < 0 ? std::strerror(errno) : "nothing written") +
-                             "; expected room on its disk");
-      at += n;
-      left -= static_cast<std::size_t>(n);
-      end_ += static_cast<std::uint64_t>(n);
-    }
-  }
+  std::string error = write_at(fd_, packed.first.data(), run_bytes, end_);
+  if (error.empty()) error = write_at(fd_, packed.end.data(), run_bytes, end_ + run_bytes);
+  if (error.empty())
+    error = write_at(fd_, packed.planes.data(), packed.planes.size(), end_ + 2 * run_bytes);
+  if (!error.empty())
+    throw InputError(folder_.string(), "cannot write the kept pixels' file there: " + error +
+                                           "; expected room on its disk");
+  end_ += 2 * run_bytes + packed.planes.size();
   return entry;
 }
 
@@ -140,26 +155,12 @@ PackedPixelRuns PackedPixelFile::read(const Entry& entry) const {
   packed.end.resize(entry.runs);
   packed.planes.resize(entry.planes_bytes);
   const std::size_t run_bytes = std::size_t{entry.runs} * sizeof(std::uint32_t);
-  const struct {
-    void* data;
-    std::size_t size;
-  } parts[] = {{packed.first.data(), run_bytes},
-               {packed.end.data(), run_bytes},
-               {packed.planes.data(), packed.planes.size()}};
-  std::uint64_t offset = entry.offset;
-  for (const auto& part : parts) {
-    auto* at = static_cast<char*>(part.data);
-    for (std::size_t left = part.size; left > 0;) {
-      const ssize_t n = ::pread(fd_, at, left, static_cast<off_t>(offset));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0)
-        throw InputError(folder_.string(), std::string("cannot read the kept pixels' file back: ") +
-                                               (n < 0 ? std::strerror(errno) : "it ends early"));
-      at += n;
-      left -= static_cast<std::size_t>(n);
-      offset += static_cast<std::uint64_t>(n);
-    }
-  }
+  std::string error = read_at(fd_, packed.first.data(), run_bytes, entry.offset);
+  if (error.empty()) error = read_at(fd_, packed.end.data(), run_bytes, entry.offset + run_bytes);
+  if (error.empty())
+    error = read_at(fd_, packed.planes.data(), packed.planes.size(), entry.offset + 2 * run_bytes);
+  if (!error.empty())
+    throw InputError(folder_.string(), "cannot read the kept pixels' file back: " + error);
   return packed;
 }
 

@@ -28,7 +28,7 @@ struct PackedPixelRuns {
 PackedPixelRuns pack_pixel_runs(geometry::PixelRuns runs);
 
 // The runs `packed` was made of. Throws std::logic_error when its planes do not inflate to its
-// points (memory corrupted: it is never read from a file).
+// points (corrupted memory, or follow's own file damaged: never a user's input).
 geometry::PixelRuns unpack_pixel_runs(const PackedPixelRuns& packed);
 
 // Packed runs kept in a file rather than in memory, so that what follow holds does not grow with
