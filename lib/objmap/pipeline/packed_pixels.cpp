@@ -86,14 +86,15 @@ int open_unnamed_file(const std::filesystem::path& folder) {
   return named;
 }
 
-// `size` bytes at `offset` of `fd` written from `data` (pwrite) or read into it (pread), through
-// short counts and interruptions; the reason as a line when it fails.
-std::string write_at(int fd, const void* data, std::size_t size, std::uint64_t offset) {
-  const auto* at = static_cast<const char*>(data);
+// `size` bytes at `offset` of `fd` moved by `op` (pwrite from `data`, or pread into it), through
+// short counts and interruptions; the reason as a line when it fails (`short_count`: none moved).
+template <typename Op, typename Byte>
+std::string transfer_at(Op op, int fd, Byte* at, std::size_t size, std::uint64_t offset,
+                        const char* short_count) {
   while (size > 0) {
-    const ssize_t n = ::pwrite(fd, at, size, static_cast<off_t>(offset));
+    const ssize_t n = op(fd, at, size, static_cast<off_t>(offset));
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return n < 0 ? std::strerror(errno) : "nothing written";
+    if (n <= 0) return n < 0 ? std::strerror(errno) : short_count;
     at += n;
     size -= static_cast<std::size_t>(n);
     offset += static_cast<std::uint64_t>(n);
@@ -101,17 +102,12 @@ std::string write_at(int fd, const void* data, std::size_t size, std::uint64_t o
   return {};
 }
 
+std::string write_at(int fd, const void* data, std::size_t size, std::uint64_t offset) {
+  return transfer_at(::pwrite, fd, static_cast<const char*>(data), size, offset, "nothing written");
+}
+
 std::string read_at(int fd, void* data, std::size_t size, std::uint64_t offset) {
-  auto* at = static_cast<char*>(data);
-  while (size > 0) {
-    const ssize_t n = ::pread(fd, at, size, static_cast<off_t>(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return n < 0 ? std::strerror(errno) : "it ends early";
-    at += n;
-    size -= static_cast<std::size_t>(n);
-    offset += static_cast<std::uint64_t>(n);
-  }
-  return {};
+  return transfer_at(::pread, fd, static_cast<char*>(data), size, offset, "it ends early");
 }
 
 }  // namespace
