@@ -1,14 +1,12 @@
 #include "objmap/filters/outlier.h"
 
-#include <flann/flann.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
-#include <thread>
 
 #include "objmap/core/error.h"
+#include "objmap/filters/neighbour_distances.h"
 
 namespace objmap::filters {
 
@@ -32,47 +30,9 @@ OutlierResult remove_outliers(const PointCloud& cloud, const OutlierOptions& opt
     return result;
   }
 
-  // FLANN's single kd-tree (the one PCL's KdTreeFLANN builds: leaves of 15 points, exact search,
-  // neighbours sorted by distance), queried a block of points at a time: PCL's one-point
-  // nearestKSearch costs an OpenMP region and allocations per query (docs/fusion.md, "Filters").
-  static_assert(sizeof(Vec3f) == 3 * sizeof(float), "points must be packed xyz floats");
-  flann::Matrix<float> data(const_cast<float*>(cloud.points.front().data()), n, 3);
-  flann::Index<flann::L2_Simple<float>> tree(data, flann::KDTreeSingleIndexParams(15));
-  tree.buildIndex();
-
-  // 1. d_i: mean distance to the K nearest neighbours (the first hit, the point itself, skipped).
-  std::vector<double> mean_distance(n);
-  auto work = [&](std::size_t begin, std::size_t end) {
-    constexpr std::size_t kBlock = 4096;
-    const std::size_t kk = static_cast<std::size_t>(k) + 1;
-    std::vector<int> idx(kBlock * kk);
-    std::vector<float> sq(kBlock * kk);
-    const flann::SearchParams params(-1, 0.0f, /*sorted=*/true);
-    for (std::size_t b = begin; b < end; b += kBlock) {
-      const std::size_t rows = std::min(kBlock, end - b);
-      flann::Matrix<float> queries(data[b], rows, 3);
-      flann::Matrix<int> idx_m(idx.data(), rows, kk);
-      flann::Matrix<float> sq_m(sq.data(), rows, kk);
-      tree.knnSearch(queries, idx_m, sq_m, kk, params);
-      for (std::size_t r = 0; r < rows; ++r) {
-        const float* d = sq.data() + r * kk;
-        double sum = 0.0;
-        for (std::size_t j = 1; j < kk; ++j) sum += std::sqrt(static_cast<double>(d[j]));
-        mean_distance[b + r] = sum / static_cast<double>(kk - 1);
-      }
-    }
-  };
-  const int threads = std::max(1, std::min<int>(options.threads, static_cast<int>(n / 1024) + 1));
-  if (threads == 1) {
-    work(0, n);
-  } else {
-    std::vector<std::thread> pool;
-    const std::size_t chunk = (n + threads - 1) / threads;
-    for (int t = 1; t < threads; ++t)
-      pool.emplace_back(work, std::min(n, t * chunk), std::min(n, (t + 1) * chunk));
-    work(0, std::min(n, chunk));
-    for (auto& th : pool) th.join();
-  }
+  // 1. d_i: mean distance to the K nearest neighbours, the point itself excluded (the grid search
+  // of neighbour_distances.h, bit for bit FLANN's exact kd-tree's).
+  const std::vector<double> mean_distance = mean_neighbour_distances(cloud, k, options.threads);
 
   // 2. Eq 18: m, s over the cloud (in index order, so the sums do not depend on threads), t = m +
   // k·s.
