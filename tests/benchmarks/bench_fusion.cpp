@@ -16,6 +16,7 @@
 
 #include "bench_data.h"
 #include "objmap/core/memory.h"
+#include "objmap/filters/neighbour_distances.h"
 #include "objmap/filters/outlier.h"
 #include "objmap/fusion/frame_voxels.h"
 #include "objmap/fusion/object_map.h"
@@ -229,6 +230,27 @@ void BM_OutlierObjmap100k(benchmark::State& state) {
   state.counters["kept"] = static_cast<double>(kept);
 }
 BENCHMARK(BM_OutlierObjmap100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The filter's k nearest (k = 20, 1 thread): the grid search against FLANN's kd-tree alone, on
+// the 100k-point cloud above (Arg 0) and on one object's record (Arg 1, voxel_record_cloud).
+PointCloud neighbour_bench_cloud(std::int64_t which) {
+  return which == 0 ? bench::surface_cloud(100000) : bench::voxel_record_cloud();
+}
+void BM_NeighbourDistancesGrid(benchmark::State& state) {
+  const PointCloud c = neighbour_bench_cloud(state.range(0));
+  filters::NeighbourSearchStats stats;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(filters::mean_neighbour_distances(c, 20, 1, &stats));
+  state.counters["points"] = static_cast<double>(c.size());
+  state.counters["by_kdtree"] = static_cast<double>(stats.by_kdtree);
+}
+BENCHMARK(BM_NeighbourDistancesGrid)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+void BM_NeighbourDistancesKdTree(benchmark::State& state) {
+  const PointCloud c = neighbour_bench_cloud(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(filters::mean_neighbour_distances_kdtree(c, 20, 1));
+  state.counters["points"] = static_cast<double>(c.size());
+}
+BENCHMARK(BM_NeighbourDistancesKdTree)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Segmentation: masks from boxes, and reading a long box sequence.

@@ -85,6 +85,7 @@ void kdtree_distances(const PointCloud& cloud, const std::vector<std::uint32_t>&
 
 constexpr int kAxisBits = 21;
 constexpr std::int64_t kAxisCells = std::int64_t{1} << kAxisBits;
+constexpr int kWidestRing = 4;  // rings searched before the kd-tree
 
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
   return (static_cast<std::uint64_t>(x) << (2 * kAxisBits)) |
@@ -136,32 +137,6 @@ Grid build_grid(const PointCloud& cloud, double cell, const Eigen::Vector3d& lo)
     std::copy_n(cloud.points[sorted[i].second].data(), 3, &g.xyz[3 * i]);
   }
   g.begin.push_back(static_cast<std::uint32_t>(n));
-  return g;
-}
-
-// A cell of about (k + 1) / 2 points where the cloud is a surface (on a surface of evenly spaced
-// points the (k+1)-th nearest then lies about a cell away): first guessed from the cloud's
-// extent (n points over its largest face), then corrected once by the points per occupied cell.
-Grid grid_for(const PointCloud& cloud, int k) {
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3d p = cloud.points[i].cast<double>();
-    require(p.allFinite(), "mean_neighbour_distances",
-            "point " + std::to_string(i) + " is not finite");
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  const double target = 0.5 * (k + 1);
-  const double n = static_cast<double>(cloud.size());
-  const double extent = std::max((hi - lo).maxCoeff(), 1e-9);
-  const double finest = extent / static_cast<double>(kAxisCells - 4);
-  double cell = std::max(finest, extent * std::sqrt(target / n));
-  Grid g = build_grid(cloud, cell, lo);
-  const double per_cell = n / static_cast<double>(g.keys.size());
-  if (per_cell < 0.5 * target || per_cell > 2.0 * target) {
-    cell = std::max(finest, cell * std::clamp(std::sqrt(target / per_cell), 0.125, 8.0));
-    g = build_grid(cloud, cell, lo);
-  }
   return g;
 }
 
@@ -218,10 +193,14 @@ class RingSearch {
     if (count < kk) count = within(reach_sq);
     if (count < kk) return false;
     keep_nearest(near_.data(), count, kk);
-    guess_sq_ = near_[kk - 1] * 1.3f;
+    kth_sq_ = near_[kk - 1];
+    guess_sq_ = kth_sq_ * 1.3f;
     mean = mean_of_nearest(near_.data(), k_);
     return true;
   }
+
+  // The (k+1)-th nearest squared distance of the last query settled.
+  float kth_sq() const { return kth_sq_; }
 
   // Sorts the kk smallest of a[0, count) to its front, nearest first (an insertion sort that
   // passes over what is not nearer than the kk-th so far: count is ~1.3 kk).
@@ -251,7 +230,49 @@ class RingSearch {
   const int k_;
   std::vector<float> cx_, cy_, cz_, all_, near_;
   float guess_sq_ = 0.0f;
+  float kth_sq_ = 0.0f;
 };
+
+// The grid's cell: 1.25 times the median distance of a point's (k+1)-th nearest, so that most
+// queries settle in their cell's neighbours. A first grid has cells of about (k + 1) / 2 points
+// where the cloud is a surface (n points over its largest face); the (k+1)-th nearest of 64 points
+// spread over the cloud, found on it, give the cell of the grid used when it is more than 20 % off
+// the first.
+Grid grid_for(const PointCloud& cloud, int k) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d p = cloud.points[i].cast<double>();
+    require(p.allFinite(), "mean_neighbour_distances",
+            "point " + std::to_string(i) + " is not finite");
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double n = static_cast<double>(cloud.size());
+  const double extent = std::max((hi - lo).maxCoeff(), 1e-9);
+  const double finest = extent / static_cast<double>(kAxisCells - 4);
+  const double first = std::max(finest, extent * std::sqrt(0.5 * (k + 1) / n));
+  Grid g = build_grid(cloud, first, lo);
+  RingSearch search(g, k);
+  std::vector<double> kth;
+  for (std::size_t s = 0; s < 64; ++s) {
+    const std::size_t p = s * cloud.size() / 64;
+    const float* q = &g.xyz[3 * p];
+    const std::int64_t cell[3] = {g.axis_cell(q[0], 0), g.axis_cell(q[1], 1), g.axis_cell(q[2], 2)};
+    double mean = 0.0;
+    for (int ring = 1; ring <= kWidestRing; ++ring) {
+      search.gather(cell[0], cell[1], cell[2], ring);
+      if (search.settle(q, cell, ring, mean)) {
+        kth.push_back(std::sqrt(static_cast<double>(search.kth_sq())));
+        break;
+      }
+    }
+  }
+  if (kth.size() < 16) return g;
+  std::nth_element(kth.begin(), kth.begin() + kth.size() / 2, kth.end());
+  const double cell = std::max(finest, 1.25 * kth[kth.size() / 2]);
+  if (cell > 1.2 * first || cell < first / 1.2) g = build_grid(cloud, cell, lo);
+  return g;
+}
 
 }  // namespace
 
@@ -275,7 +296,6 @@ std::vector<double> mean_neighbour_distances(const PointCloud& cloud, int k, int
 
   // Cells in chunks of about 4096 points, each chunk on one thread with its own scratch. Every
   // query writes only its own d_i, so the result does not depend on the threads.
-  constexpr int kWidestRing = 4;
   std::vector<std::size_t> chunk_begin{0};
   for (std::size_t c = 0; c < g.keys.size(); ++c)
     if (g.begin[c + 1] - g.begin[chunk_begin.back()] >= 4096) chunk_begin.push_back(c + 1);

@@ -17,11 +17,12 @@ struct NeighbourSearchStats {
 
 // d_i of eq 18 for every point: the mean distance to its k nearest neighbours, the point itself
 // excluded (as the first of k + 1 hits). The k + 1 nearest come from a grid of the points (cells
-// of about k/2 points): the cells around a query hold its neighbours when the (k+1)-th nearest is
-// nearer than any cell not searched can be; the queries that this does not settle (points far
-// from the rest) go to FLANN's exact kd-tree. Distances are computed as FLANN's L2_Simple<float>
-// computes them and summed nearest first, so the result is bit for bit that of the kd-tree alone
-// (`mean_neighbour_distances_kdtree`), for any `threads`. Points must be finite (InputError).
+// of about the (k+1)-th nearest's distance): the cells around a query hold its neighbours when
+// the (k+1)-th nearest is nearer than any cell not searched can be; the queries that this does
+// not settle (points far from the rest) go to FLANN's exact kd-tree. Distances are computed as
+// FLANN's L2_Simple<float> computes them and summed nearest first, so the result is bit for bit
+// that of the kd-tree alone (`mean_neighbour_distances_kdtree`), for any `threads`. Points must
+// be finite (InputError).
 std::vector<double> mean_neighbour_distances(const PointCloud& cloud, int k, int threads,
                                              NeighbourSearchStats* stats = nullptr);
 
