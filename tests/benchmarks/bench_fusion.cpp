@@ -22,6 +22,7 @@
 #include "objmap/fusion/object_map.h"
 #include "objmap/fusion/voxel_map.h"
 #include "objmap/geometry/backproject.h"
+#include "objmap/io/ply.h"
 #include "objmap/io/png_fast.h"
 #include "objmap/io/tum_dataset.h"
 #include "objmap/segmentation/box_mask.h"
@@ -232,25 +233,45 @@ void BM_OutlierObjmap100k(benchmark::State& state) {
 BENCHMARK(BM_OutlierObjmap100k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The filter's k nearest (k = 20, 1 thread): the grid search against FLANN's kd-tree alone, on
-// the 100k-point cloud above (Arg 0) and on one object's record (Arg 1, voxel_record_cloud).
-PointCloud neighbour_bench_cloud(std::int64_t which) {
-  return which == 0 ? bench::surface_cloud(100000) : bench::voxel_record_cloud();
+// the 100k-point cloud above (Arg 0), on one object's record (Arg 1, voxel_record_cloud) and on
+// the object PLYs of a fuse run, one call each (Arg 2: OBJMAP_BENCH_RECORDS=RUN/objects).
+std::vector<PointCloud> neighbour_bench_clouds(std::int64_t which) {
+  if (which == 0) return {bench::surface_cloud(100000)};
+  if (which == 1) return {bench::voxel_record_cloud()};
+  std::vector<PointCloud> clouds;
+  const char* dir = std::getenv("OBJMAP_BENCH_RECORDS");
+  if (!dir) return clouds;
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".ply") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& f : files) clouds.push_back(io::read_ply(f));
+  return clouds;
+}
+template <typename Search>
+void neighbour_bench(benchmark::State& state, Search&& search) {
+  const std::vector<PointCloud> clouds = neighbour_bench_clouds(state.range(0));
+  if (clouds.empty()) {
+    state.SkipWithError("no clouds: OBJMAP_BENCH_RECORDS=RUN/objects");
+    return;
+  }
+  std::size_t points = 0;
+  for (const auto& c : clouds) points += c.size();
+  for (auto _ : state)
+    for (const auto& c : clouds) benchmark::DoNotOptimize(search(c));
+  state.counters["points"] = static_cast<double>(points);
 }
 void BM_NeighbourDistancesGrid(benchmark::State& state) {
-  const PointCloud c = neighbour_bench_cloud(state.range(0));
-  filters::NeighbourSearchStats stats;
-  for (auto _ : state)
-    benchmark::DoNotOptimize(filters::mean_neighbour_distances(c, 20, 1, &stats));
-  state.counters["points"] = static_cast<double>(c.size());
-  state.counters["by_kdtree"] = static_cast<double>(stats.by_kdtree);
+  neighbour_bench(state,
+                  [](const PointCloud& c) { return filters::mean_neighbour_distances(c, 20, 1); });
 }
-BENCHMARK(BM_NeighbourDistancesGrid)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NeighbourDistancesGrid)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 void BM_NeighbourDistancesKdTree(benchmark::State& state) {
-  const PointCloud c = neighbour_bench_cloud(state.range(0));
-  for (auto _ : state) benchmark::DoNotOptimize(filters::mean_neighbour_distances_kdtree(c, 20, 1));
-  state.counters["points"] = static_cast<double>(c.size());
+  neighbour_bench(state, [](const PointCloud& c) {
+    return filters::mean_neighbour_distances_kdtree(c, 20, 1);
+  });
 }
-BENCHMARK(BM_NeighbourDistancesKdTree)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NeighbourDistancesKdTree)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // ---------------------------------------------------------------------------------------------
 // Segmentation: masks from boxes, and reading a long box sequence.
