@@ -50,7 +50,8 @@ double obb_containment(const Obb& small, const Obb& large, int samples_per_axis)
 
 namespace {
 
-// FLANN's single kd-tree over one record's cloud (exact search, as filters/outlier.cpp).
+// FLANN's single kd-tree over one record's cloud (exact search, as
+// filters/neighbour_distances.cpp).
 using KdIndex = flann::Index<flann::L2_Simple<float>>;
 
 std::unique_ptr<KdIndex> make_tree(const PointCloud& cloud) {
