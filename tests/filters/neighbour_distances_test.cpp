@@ -71,6 +71,11 @@ TEST(NeighbourDistances, TheGridGivesTheKdTreesDistancesBitForBit) {
   for (int i = 0; i < 50; ++i) same.push_back(Vec3f(1.f, 2.f, 3.f));
   expect_same_bits(line, 20, 2);
   expect_same_bits(same, 20, 1);
+  // Mostly one repeated point (the sampled (k+1)-th distances are 0), and a few spread out.
+  PointCloud mostly_same = same;
+  for (int i = 0; i < 150; ++i) mostly_same.push_back(Vec3f(1.f, 2.f, 3.f));
+  for (int i = 0; i < 30; ++i) mostly_same.push_back(Vec3f(1.f + 0.01f * i, 2.f, 3.f - 0.02f * i));
+  expect_same_bits(mostly_same, 20, 2);
 }
 
 TEST(NeighbourDistances, TheSurfaceSettlesInTheFirstRingTheScatterBeyond) {

@@ -269,6 +269,7 @@ Grid grid_for(const PointCloud& cloud, int k) {
   }
   if (kth.size() < 16) return g;
   std::nth_element(kth.begin(), kth.begin() + kth.size() / 2, kth.end());
+  if (kth[kth.size() / 2] <= 0.0) return g;  // mostly repeated points: the first grid is as good
   const double cell = std::max(finest, 1.25 * kth[kth.size() / 2]);
   if (cell > 1.2 * first || cell < first / 1.2) g = build_grid(cloud, cell, lo);
   return g;
