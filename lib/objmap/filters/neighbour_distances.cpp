@@ -295,11 +295,12 @@ std::vector<double> mean_neighbour_distances(const PointCloud& cloud, int k, int
           "more than 2^32 - 1 points: " + std::to_string(n));
   const Grid g = grid_for(cloud, k);
 
-  // Cells in chunks of about 4096 points, each chunk on one thread with its own scratch. Every
-  // query writes only its own d_i, so the result does not depend on the threads.
+  // Cells in chunks of about 1024 points (a record of a few thousand still splits), each chunk on
+  // one thread with its own scratch. Every query writes only its own d_i, so the result does not
+  // depend on the threads.
   std::vector<std::size_t> chunk_begin{0};
   for (std::size_t c = 0; c < g.keys.size(); ++c)
-    if (g.begin[c + 1] - g.begin[chunk_begin.back()] >= 4096) chunk_begin.push_back(c + 1);
+    if (g.begin[c + 1] - g.begin[chunk_begin.back()] >= 1024) chunk_begin.push_back(c + 1);
   if (chunk_begin.back() != g.keys.size()) chunk_begin.push_back(g.keys.size());
   std::vector<std::vector<std::uint32_t>> unsettled(chunk_begin.size() - 1);
   std::vector<std::size_t> wider(chunk_begin.size() - 1, 0);
