@@ -11,6 +11,7 @@
 
 #include "objmap/core/error.h"
 #include "objmap/core/parallel.h"
+#include "objmap/geometry/voxel_key.h"
 
 namespace objmap::filters {
 namespace {
@@ -83,13 +84,16 @@ void kdtree_distances(const PointCloud& cloud, const std::vector<std::uint32_t>&
 // ---------------------------------------------------------------------------------------------
 // The grid: the points sorted by cell (x, then y, then z), each cell's range found by its key.
 
-constexpr int kAxisBits = 21;
-constexpr std::int64_t kAxisCells = std::int64_t{1} << kAxisBits;
+// Cell indices count from the grid's origin, 0 .. 2^21 - 1 on each axis; a cell's key is its
+// geometry::VoxelKey (3 x 21 bits, so sorting keys sorts by x, then y, then z).
+constexpr std::int64_t kAxisCells = 2 * std::int64_t{geometry::kVoxelCoordLimit};
 constexpr int kWidestRing = 4;  // rings searched before the kd-tree
 
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
-  return (static_cast<std::uint64_t>(x) << (2 * kAxisBits)) |
-         (static_cast<std::uint64_t>(y) << kAxisBits) | static_cast<std::uint64_t>(z);
+  const auto centred = [](std::int64_t i) {
+    return static_cast<std::int32_t>(i - geometry::kVoxelCoordLimit);
+  };
+  return geometry::pack_voxel(centred(x), centred(y), centred(z));
 }
 
 struct Grid {
@@ -307,11 +311,10 @@ std::vector<double> mean_neighbour_distances(const PointCloud& cloud, int k, int
   parallel_for(chunk_begin.size() - 1, threads, [&](std::size_t chunk) {
     RingSearch first(g, k), wide(g, k);
     for (std::size_t c = chunk_begin[chunk]; c < chunk_begin[chunk + 1]; ++c) {
-      const std::uint64_t key = g.keys[c];
-      const std::int64_t cell[3] = {
-          static_cast<std::int64_t>(key >> (2 * kAxisBits)),
-          static_cast<std::int64_t>((key >> kAxisBits) & (kAxisCells - 1)),
-          static_cast<std::int64_t>(key & (kAxisCells - 1))};
+      const Eigen::Vector3i centred = geometry::unpack_voxel(g.keys[c]);
+      const std::int64_t cell[3] = {centred.x() + std::int64_t{geometry::kVoxelCoordLimit},
+                                    centred.y() + std::int64_t{geometry::kVoxelCoordLimit},
+                                    centred.z() + std::int64_t{geometry::kVoxelCoordLimit}};
       first.gather(cell[0], cell[1], cell[2], 1);
       int wide_ring = 0;  // the ring `wide` holds for this cell (gathered once per cell and ring)
       for (std::size_t p = g.begin[c]; p < g.begin[c + 1]; ++p) {
