@@ -1,6 +1,9 @@
 #include "objmap/core/memory.h"
 
 #include <malloc.h>
+#include <sys/mman.h>
+
+#include <cstdint>
 
 namespace objmap {
 
@@ -12,5 +15,17 @@ bool keep_freed_memory() {
 }
 
 bool limit_malloc_arenas(int arenas) { return arenas > 0 && mallopt(M_ARENA_MAX, arenas) == 1; }
+
+void advise_huge_pages(void* p, std::size_t bytes) {
+#ifdef MADV_HUGEPAGE
+  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(p);
+  const std::uintptr_t first = (at + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+  const std::uintptr_t end = (at + bytes) / kHugePageBytes * kHugePageBytes;
+  if (end > first) madvise(reinterpret_cast<void*>(first), end - first, MADV_HUGEPAGE);
+#else
+  (void)p;
+  (void)bytes;
+#endif
+}
 
 }  // namespace objmap

@@ -1,6 +1,7 @@
 #pragma once
+#include <cstddef>
 
-// How the process's allocator treats memory it frees (glibc malloc).
+// How the process's allocator treats memory it frees (glibc malloc), and huge pages.
 namespace objmap {
 
 // Freed memory is kept for the next allocation instead of going back to the kernel: blocks up to
@@ -18,5 +19,15 @@ bool keep_freed_memory();
 // freed memory in each: follow limits them to its worker threads' count (docs/follow.md,
 // "Memory"). Call before the threads start. False when the allocator refused it.
 bool limit_malloc_arenas(int arenas);
+
+// A transparent huge page (x86-64, and arm64 with 4 KB pages).
+constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
+
+// Asks the kernel for transparent huge pages (madvise MADV_HUGEPAGE) for the whole 2 MB pages
+// inside [p, p + bytes); nothing for a block that holds none. A hint: where THP is off it does
+// nothing, and memory works the same either way. Pages not yet written then come 2 MB at a time,
+// one fault and one page-table entry each instead of 512. The objmap executables ask it for every
+// block of 2 MB and more they allocate (core/huge_page_new.cpp).
+void advise_huge_pages(void* p, std::size_t bytes);
 
 }  // namespace objmap

@@ -5,11 +5,13 @@
 
 #include <cstdint>
 
+#include "objmap/core/memory.h"
+
 namespace objmap::geometry {
 
 namespace {
 
-constexpr std::size_t kHugePage = std::size_t{2} << 20;
+constexpr std::size_t kHugePage = kHugePageBytes;
 
 std::size_t page_rounded(std::size_t bytes) {
   const std::size_t page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
@@ -32,9 +34,7 @@ void* map_zeroed(std::size_t bytes) {
   if (at + room > start + size)
     munmap(reinterpret_cast<void*>(start + size), at + room - (start + size));
   void* table = reinterpret_cast<void*>(start);
-#ifdef MADV_HUGEPAGE
-  madvise(table, size, MADV_HUGEPAGE);  // a hint: without huge pages the table works the same
-#endif
+  advise_huge_pages(table, size);  // a hint: without huge pages the table works the same
 #ifdef MADV_POPULATE_WRITE
   // Its pages made now, written: a hash table is touched all over anyway, and a page first read
   // (a probe) maps the shared zero page, whose replacement on the write is a second fault and a
