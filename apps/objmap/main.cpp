@@ -74,6 +74,15 @@ void take_interrupts() {
   }).detach();
 }
 
+// Once the interrupt's thread has started removing the unfinished outputs it ends the process by
+// the signal (exit status 128 + the signal). The error that removal may cause on this thread (its
+// output folder gone) is not reported, and this thread does not exit first with a code of its
+// own: it waits for the signal (blocked here, so pause() never returns).
+void wait_if_interrupted() {
+  if (!io::interrupt_started()) return;
+  for (;;) pause();
+}
+
 }  // namespace
 
 void check_naming_flags(const std::function<void()>& check,
@@ -140,27 +149,35 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
+    objmap::app::wait_if_interrupted();
     return help_or_unknown(e);
   } catch (const CLI::CallForAllHelp& e) {
+    objmap::app::wait_if_interrupted();
     return help_or_unknown(e);
   } catch (const CLI::CallForVersion& e) {
+    objmap::app::wait_if_interrupted();
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    objmap::app::wait_if_interrupted();
     const std::string unknown = objmap::app::unknown_command(app, argc, argv);
     std::cerr << "objmap: usage error: " << (unknown.empty() ? std::string(e.what()) : unknown)
               << " (see 'objmap --help')\n";
     return 2;
   } catch (const objmap::InputError& e) {
+    objmap::app::wait_if_interrupted();
     std::cerr << "objmap: error: " << e.what() << "\n";
     return 2;
   } catch (const std::filesystem::filesystem_error& e) {
     // A path the system cannot resolve or read (a symbolic link loop, no permission): bad input.
+    objmap::app::wait_if_interrupted();
     std::cerr << "objmap: error: " << e.path1().string() << ": " << e.code().message()
               << "; expected a path objmap can read or write\n";
     return 2;
   } catch (const std::exception& e) {
+    objmap::app::wait_if_interrupted();
     std::cerr << "objmap: internal error: " << e.what() << "\n";
     return 1;
   }
+  objmap::app::wait_if_interrupted();
   return 0;
 }

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <string>
+#include <vector>
+
 #include "objmap/core/error.h"
 #include "support/test_support.h"
 
@@ -94,6 +98,32 @@ TEST(StagingDir, NotCommittedLeavesNoTraceAndKeepsOldOutput) {
   EXPECT_EQ(read_text(out / "old.txt"), "old");
   EXPECT_EQ(entries(dir.path()), 1u);
   EXPECT_EQ(entries(out), 2u);
+}
+
+// The interrupt's removal, in a child process (death-test fork): it closes the registry for good.
+TEST(RemoveUnfinishedOutputs, RemovesTheStagingFolderThenRefusesNewFoldersAndSaysSo) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  TempDir dir;
+  const fs::path out = dir / "run";
+  EXPECT_EXIT(
+      {
+        StagingDir staging(out, kRunFolder);
+        write_file_atomic(staging.path() / "half.txt", "half");
+        const bool before = interrupt_started();
+        const std::vector<fs::path> removed = remove_unfinished_outputs();
+        bool refused = false;
+        try {
+          create_output_folders(staging.path() / "again");
+        } catch (const InputError& e) {
+          refused = std::string(e.what()).find("the process is interrupted") != std::string::npos;
+        }
+        const bool ok = !before && interrupt_started() && removed.size() == 1 &&
+                        removed[0] == staging.path() && !fs::exists(staging.path()) && refused;
+        std::_Exit(ok ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), "");
+  EXPECT_FALSE(interrupt_started());  // this process's registry is untouched
+  EXPECT_EQ(entries(dir.path()), 0u);
 }
 
 TEST(StagingDir, RefusesAFileAsOutput) {

@@ -95,6 +95,12 @@ std::vector<fs::path> remove_unfinished_outputs() {
   return removed;
 }
 
+bool interrupt_started() {
+  Registry& r = registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  return r.closed;
+}
+
 void write_file_atomic(const fs::path& file, const std::string& bytes) {
   AtomicFile out(file);
   out.write(bytes.data(), bytes.size());

@@ -33,6 +33,11 @@ class UnfinishedOutput {
 // waits for the commit to end). Afterwards nothing more is registered.
 std::vector<std::filesystem::path> remove_unfinished_outputs();
 
+// True once remove_unfinished_outputs() has started: the process is being interrupted and ends by
+// its signal. An error another thread meets from then on (a folder removed under it, a folder
+// refused) is the interrupt's doing: the objmap command does not report it or exit by it.
+bool interrupt_started();
+
 // Creates `folder` and its parents, as std::filesystem::create_directories, unless the process is
 // being interrupted: after remove_unfinished_outputs() it throws InputError instead, so that no
 // thread makes again a folder inside an unfinished output that the interrupt has just removed.
