@@ -48,4 +48,12 @@ bool inflate_bytes(const std::vector<std::uint8_t>& packed, std::uint8_t* out, s
          written == size;
 }
 
+bool inflate_zlib(const std::uint8_t* packed, std::size_t packed_size, std::uint8_t* out,
+                  std::size_t size) {
+  std::size_t written = 0;
+  return libdeflate_zlib_decompress(decompressor(), packed, packed_size, out, size, &written) ==
+             LIBDEFLATE_SUCCESS &&
+         written == size;
+}
+
 }  // namespace objmap::io

@@ -5,10 +5,11 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <memory>
 #include <vector>
 
 #include <opencv2/core.hpp>
+
+#include "objmap/io/deflate.h"
 
 namespace objmap::io {
 
@@ -19,14 +20,9 @@ std::uint32_t be32(const unsigned char* p) {
          std::uint32_t{p[3]};
 }
 
-struct DecompressorDeleter {
-  void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
-};
-
-// One decompressor and one scratch buffer per thread (fuse decodes on every worker).
+// One scratch buffer per thread (fuse decodes on every worker; the decompressor is deflate.h's,
+// one per thread too).
 struct Scratch {
-  std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> inflater{
-      libdeflate_alloc_decompressor()};
   std::vector<unsigned char> idat;      // the concatenated IDAT payloads
   std::vector<unsigned char> filtered;  // inflated: per row a filter byte and the row's bytes
 };
@@ -175,11 +171,8 @@ int channels_of(const Header& header) {
 bool inflate(Scratch& scratch, std::size_t filtered_bytes) {
   if (filtered_bytes / 1032 > scratch.idat.size() + 64) return false;
   scratch.filtered.resize(filtered_bytes);
-  std::size_t actual = 0;
-  return libdeflate_zlib_decompress(scratch.inflater.get(), scratch.idat.data(),
-                                    scratch.idat.size(), scratch.filtered.data(), filtered_bytes,
-                                    &actual) == LIBDEFLATE_SUCCESS &&
-         actual == filtered_bytes;
+  return inflate_zlib(scratch.idat.data(), scratch.idat.size(), scratch.filtered.data(),
+                      filtered_bytes);
 }
 
 // A Sub row unfiltered and converted into OpenCV's layout in one pass.
@@ -257,7 +250,6 @@ bool png_size(const unsigned char* data, std::size_t size, std::uint32_t& width,
 cv::Mat decode_png_fast(const unsigned char* data, std::size_t size) {
   if (size < 8 + 25 || std::memcmp(data, kSignature, 8) != 0) return {};
   thread_local Scratch scratch;
-  if (!scratch.inflater) return {};
   Header header;
   if (!read_chunks(data, size, header, scratch.idat)) return {};
   const int channels = channels_of(header);
