@@ -11,8 +11,6 @@ namespace objmap::geometry {
 
 namespace {
 
-constexpr std::size_t kHugePage = kHugePageBytes;
-
 std::size_t page_rounded(std::size_t bytes) {
   const std::size_t page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
   return (bytes + page - 1) / page * page;
@@ -25,11 +23,11 @@ std::size_t page_rounded(std::size_t bytes) {
 // beyond the table).
 void* map_zeroed(std::size_t bytes) {
   const std::size_t size = page_rounded(bytes);
-  const std::size_t room = size + kHugePage;
+  const std::size_t room = size + kHugePageBytes;
   void* p = mmap(nullptr, room, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
   if (p == MAP_FAILED) return nullptr;
   const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(p);
-  const std::uintptr_t start = (at + kHugePage - 1) / kHugePage * kHugePage;
+  const std::uintptr_t start = (at + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
   if (start > at) munmap(p, start - at);
   if (at + room > start + size)
     munmap(reinterpret_cast<void*>(start + size), at + room - (start + size));
