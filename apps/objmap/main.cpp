@@ -125,6 +125,48 @@ std::string unknown_command(CLI::App& app, int argc, char** argv) {
   return "";
 }
 
+namespace {
+
+// The exception `app.parse` threw, said on stderr (help and version on stdout), as an exit code:
+// 2 for bad input or usage, 1 for an internal error.
+int exit_code_of_current_exception(CLI::App& app, int argc, char** argv) {
+  // A word that names no command is a usage error even beside --help, which CLI11 honours first
+  // (`objmap NOSUCHCOMMAND --help` printed the main help and exited 0).
+  const auto help_or_unknown = [&](const CLI::ParseError& e) {
+    const std::string unknown = unknown_command(app, argc, argv);
+    if (unknown.empty()) return app.exit(e);
+    std::cerr << "objmap: usage error: " << unknown << " (see 'objmap --help')\n";
+    return 2;
+  };
+  try {
+    throw;
+  } catch (const CLI::CallForHelp& e) {
+    return help_or_unknown(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return help_or_unknown(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    const std::string unknown = unknown_command(app, argc, argv);
+    std::cerr << "objmap: usage error: " << (unknown.empty() ? std::string(e.what()) : unknown)
+              << " (see 'objmap --help')\n";
+    return 2;
+  } catch (const InputError& e) {
+    std::cerr << "objmap: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the system cannot resolve or read (a symbolic link loop, no permission): bad input.
+    std::cerr << "objmap: error: " << e.path1().string() << ": " << e.code().message()
+              << "; expected a path objmap can read or write\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "objmap: internal error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace
+
 }  // namespace objmap::app
 
 int main(int argc, char** argv) {
@@ -138,45 +180,11 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("objmap ") + objmap::version());
   app.require_subcommand(1);
   objmap::app::setup_all(app);
-  // A word that names no command is a usage error even beside --help, which CLI11 honours first
-  // (`objmap NOSUCHCOMMAND --help` printed the main help and exited 0).
-  const auto help_or_unknown = [&](const CLI::ParseError& e) {
-    const std::string unknown = objmap::app::unknown_command(app, argc, argv);
-    if (unknown.empty()) return app.exit(e);
-    std::cerr << "objmap: usage error: " << unknown << " (see 'objmap --help')\n";
-    return 2;
-  };
   try {
     app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
+  } catch (...) {
     objmap::app::wait_if_interrupted();
-    return help_or_unknown(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    objmap::app::wait_if_interrupted();
-    return help_or_unknown(e);
-  } catch (const CLI::CallForVersion& e) {
-    objmap::app::wait_if_interrupted();
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    objmap::app::wait_if_interrupted();
-    const std::string unknown = objmap::app::unknown_command(app, argc, argv);
-    std::cerr << "objmap: usage error: " << (unknown.empty() ? std::string(e.what()) : unknown)
-              << " (see 'objmap --help')\n";
-    return 2;
-  } catch (const objmap::InputError& e) {
-    objmap::app::wait_if_interrupted();
-    std::cerr << "objmap: error: " << e.what() << "\n";
-    return 2;
-  } catch (const std::filesystem::filesystem_error& e) {
-    // A path the system cannot resolve or read (a symbolic link loop, no permission): bad input.
-    objmap::app::wait_if_interrupted();
-    std::cerr << "objmap: error: " << e.path1().string() << ": " << e.code().message()
-              << "; expected a path objmap can read or write\n";
-    return 2;
-  } catch (const std::exception& e) {
-    objmap::app::wait_if_interrupted();
-    std::cerr << "objmap: internal error: " << e.what() << "\n";
-    return 1;
+    return objmap::app::exit_code_of_current_exception(app, argc, argv);
   }
   objmap::app::wait_if_interrupted();
   return 0;
